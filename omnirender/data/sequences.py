@@ -66,10 +66,7 @@ def _convert(x: Any, where: str) -> np.ndarray:
     try:
         a = np.asarray(x)
     except (ValueError, TypeError) as exc:
-        raise ValueError(
-            f"{where} is not a regular array (ragged vectors or mixed element "
-            f"types?): {exc}"
-        ) from None
+        raise ValueError(f"{where} is not a regular array (ragged vectors or mixed element types?): {exc}") from None
     if a.dtype == object:
         raise ValueError(
             f"{where} is not a regular array of numbers or strings (ragged "
@@ -93,9 +90,7 @@ def as_array(x: Any, dtype: Any = None, *, name: str = "data") -> np.ndarray:
         try:
             a = a.astype(dtype, copy=False)
         except (ValueError, TypeError) as exc:
-            raise ValueError(
-                f"{name} cannot be converted to {np.dtype(dtype)}: {exc}"
-            ) from None
+            raise ValueError(f"{name} cannot be converted to {np.dtype(dtype)}: {exc}") from None
     return a
 
 
@@ -163,17 +158,12 @@ class Sequence(ABC):
         try:
             i = operator.index(index)
         except TypeError:
-            raise TypeError(
-                f"{type(self).__name__} indices must be integers, not "
-                f"{type(index).__name__}"
-            ) from None
+            raise TypeError(f"{type(self).__name__} indices must be integers, not {type(index).__name__}") from None
         n = self._length
         if i < 0:
             i += n
         if not 0 <= i < n:
-            raise IndexError(
-                f"{type(self).__name__} index {index} out of range for length {n}"
-            )
+            raise IndexError(f"{type(self).__name__} index {index} out of range for length {n}")
         return self._item(i)
 
     def __iter__(self) -> Iterator[Any]:
@@ -215,10 +205,7 @@ class Array(Sequence):
 
     def _init(self, a: np.ndarray, where: str) -> None:
         if a.ndim == 0:
-            raise ValueError(
-                f"{where} must be a sequence of elements (at least 1-D), "
-                f"got a scalar {a!r}"
-            )
+            raise ValueError(f"{where} must be a sequence of elements (at least 1-D), got a scalar {a!r}")
         self._data = a
         self._length = a.shape[0]
         self._shape = a.shape[1:]
@@ -326,17 +313,13 @@ class Repeat(Sequence):
 
     __slots__ = ("_source", "_start", "_stop", "_times")
 
-    def __init__(
-        self, source: Any, start: int = 0, stop: int | None = None, times: int = 1
-    ) -> None:
+    def __init__(self, source: Any, start: int = 0, stop: int | None = None, times: int = 1) -> None:
         src = _as_source(source, "Repeat: source")
         n = len(src)
         start = _count("Repeat", "start", start)
         stop = n if stop is None else _count("Repeat", "stop", stop)
         if stop > n:
-            raise ValueError(
-                f"Repeat: stop = {stop} is out of range for a source of length {n}"
-            )
+            raise ValueError(f"Repeat: stop = {stop} is out of range for a source of length {n}")
         if start > stop:
             raise ValueError(f"Repeat: start = {start} must not exceed stop = {stop}")
         self._source = src
@@ -380,10 +363,7 @@ class Repeat(Sequence):
         return np.tile(part, (self._times,) + (1,) * (part.ndim - 1))
 
     def __repr__(self) -> str:
-        return (
-            f"Repeat({self._source!r}, start={self._start}, stop={self._stop}, "
-            f"times={self._times})"
-        )
+        return f"Repeat({self._source!r}, start={self._start}, stop={self._stop}, times={self._times})"
 
 
 class Skip(Sequence):
@@ -446,23 +426,16 @@ class Indexed(Sequence):
         src = _as_source(source, "Indexed: source")
         idx = _convert(indices, "Indexed: indices")
         if idx.ndim != 1:
-            raise ValueError(
-                f"Indexed: indices must be 1-D, got an array of shape {idx.shape}"
-            )
+            raise ValueError(f"Indexed: indices must be 1-D, got an array of shape {idx.shape}")
         if idx.size == 0:
             idx = np.empty(0, dtype=np.intp)
         elif idx.dtype.kind not in "iu":
-            raise ValueError(
-                f"Indexed: indices must be integers, got dtype {idx.dtype}"
-            )
+            raise ValueError(f"Indexed: indices must be integers, got dtype {idx.dtype}")
         n = len(src)
         bad = np.flatnonzero((idx < 0) | (idx >= n))
         if bad.size:
             k = int(bad[0])
-            raise ValueError(
-                f"Indexed: indices[{k}] = {int(idx[k])} is out of range for a "
-                f"source of length {n}"
-            )
+            raise ValueError(f"Indexed: indices[{k}] = {int(idx[k])} is out of range for a source of length {n}")
         idx = idx.astype(np.intp)  # private copy: later edits cannot invalidate
         idx.flags.writeable = False
         self._indices = idx
@@ -508,27 +481,21 @@ class Composite(Sequence):
     def __init__(self, *sources: Any) -> None:
         if not sources:
             raise ValueError("Composite: sources must not be empty; give at least one")
-        srcs = tuple(
-            _as_source(s, f"Composite: sources[{k}]") for k, s in enumerate(sources)
-        )
+        srcs = tuple(_as_source(s, f"Composite: sources[{k}]") for k, s in enumerate(sources))
         first = srcs[0]
         for k, s in enumerate(srcs[1:], 1):
             if s.shape != first.shape:
                 raise ValueError(
-                    f"Composite: sources[{k}] has element shape {s.shape}, "
-                    f"expected {first.shape} like sources[0]"
+                    f"Composite: sources[{k}] has element shape {s.shape}, expected {first.shape} like sources[0]"
                 )
             if (s.dtype.kind in "US") != (first.dtype.kind in "US"):
                 raise ValueError(
-                    f"Composite: sources[{k}] has dtype {s.dtype}, incompatible "
-                    f"with dtype {first.dtype} of sources[0]"
+                    f"Composite: sources[{k}] has dtype {s.dtype}, incompatible with dtype {first.dtype} of sources[0]"
                 )
         try:
             dtype = np.result_type(*(s.dtype for s in srcs))
         except TypeError as exc:
-            raise ValueError(
-                f"Composite: sources have incompatible dtypes: {exc}"
-            ) from None
+            raise ValueError(f"Composite: sources have incompatible dtypes: {exc}") from None
         offsets = [0]
         for s in srcs:
             offsets.append(offsets[-1] + len(s))
@@ -552,9 +519,7 @@ class Composite(Sequence):
     def array(self) -> np.ndarray:
         if len(self._sources) == 1:
             return self._sources[0].array()
-        return np.concatenate(
-            [s.array() for s in self._sources], axis=0, dtype=self._dtype
-        )
+        return np.concatenate([s.array() for s in self._sources], axis=0, dtype=self._dtype)
 
     def __repr__(self) -> str:
         return "Composite(" + ", ".join(repr(s) for s in self._sources) + ")"

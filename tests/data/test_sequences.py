@@ -238,9 +238,7 @@ def test_is_sequence_and_numpy_interop():
     for seq in seqs:
         assert isinstance(seq, Sequence)
         np.testing.assert_array_equal(np.asarray(seq), seq.array())
-    np.testing.assert_array_equal(
-        np.asarray(Replicate([1, 2], 2), dtype=float), [1.0, 1.0, 2.0, 2.0]
-    )
+    np.testing.assert_array_equal(np.asarray(Replicate([1, 2], 2), dtype=float), [1.0, 1.0, 2.0, 2.0])
     with pytest.raises(TypeError):
         Sequence()
 
@@ -381,9 +379,7 @@ def _random_sequence(rng, depth, width):
         k = int(rng.integers(0, 10))
         idx = rng.integers(0, n, size=k) if n else np.empty(0, dtype=int)
         return Indexed(idx, src)
-    parts = [src] + [
-        _random_sequence(rng, depth - 1, width) for _ in range(rng.integers(0, 3))
-    ]
+    parts = [src] + [_random_sequence(rng, depth - 1, width) for _ in range(rng.integers(0, 3))]
     return Composite(*parts)
 
 

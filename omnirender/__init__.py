@@ -1,0 +1,90 @@
+"""omnirender: one scene graph, many engines.
+
+``import omnirender as om`` gives the scene graph, shapes, attributes, the
+generic engine and the convenience functions (``om.render``, ``om.pick``,
+``om.bounds``...).  Adapters (``om.gl``, ``om.povray``, ``om.mitsuba``) and
+functions that need them are imported lazily on first use, so importing
+omnirender stays cheap and works without any graphics library.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from . import data, export
+from .attributes import *  # noqa: F403
+from .attributes import __all__ as _attributes_all
+from .core import *  # noqa: F403
+from .core import __all__ as _core_all
+from .image import Image
+from .render import engines, exporters, register_engine, register_exporter, render
+from .scene import Node, Statistics, TraceEngine, Visitor, register_statistic, statistics, trace
+from .shapes import *  # noqa: F403
+from .shapes import __all__ as _shapes_all
+
+__version__ = "0.1.0"
+
+# Subpackages imported on first attribute access (om.gl, om.povray, ...).
+_LAZY_MODULES = {
+    "gl",
+    "povray",
+    "mitsuba",
+    "compositing",
+    "viewer",
+    "techniques",
+    "geometry",
+    "rib",
+    "cli",
+}
+
+# Public functions and classes that live in lazily imported modules.
+_LAZY_NAMES = {
+    "pick": "techniques",
+    "bounds": "techniques",
+    "collisions": "techniques",
+    "attribute_search": "techniques",
+    "image_info": "techniques",
+    "Hit": "techniques",
+    "Viewer": "viewer",
+    "view": "viewer",
+    "RenderList": "viewer",
+    "AxisAlignedRotation": "viewer",
+    "IsRenderable": "viewer",
+    "load": "scene.files",
+    "save": "scene.files",
+    "register_type": "scene.files",
+}
+
+__all__ = [
+    *_core_all,
+    *_shapes_all,
+    *_attributes_all,
+    "data",
+    "Node",
+    "Visitor",
+    "trace",
+    "statistics",
+    "Statistics",
+    "TraceEngine",
+    "register_statistic",
+    "Image",
+    "render",
+    "export",
+    "engines",
+    "exporters",
+    "register_engine",
+    "register_exporter",
+]
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY_MODULES:
+        module = importlib.import_module(f".{name}", __name__)
+        globals()[name] = module
+        return module
+    if name in _LAZY_NAMES:
+        value = getattr(importlib.import_module(f".{_LAZY_NAMES[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'omnirender' has no attribute {name!r}")

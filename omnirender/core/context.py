@@ -1,0 +1,105 @@
+"""The rendering context: attribute stacks, attribute sets and handler stacks.
+
+Containers are created on first use, so a context costs nothing for categories
+it never sees.  The ``Transform`` category is special: its entry is the
+accumulated model matrix, composed lazily (only when somebody asks for it), so
+pushing and popping transforms during a traversal is a plain list operation.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .transform import Transform
+
+__all__ = ["RenderingContext"]
+
+_IDENTITY = np.eye(4)
+_IDENTITY.setflags(write=False)
+
+
+class RenderingContext:
+    """Per-category mono stacks, per-category poly sets and the handler table."""
+
+    __slots__ = ("_mono", "_poly", "_handlers", "_matrices", "_transforms")
+
+    def __init__(self) -> None:
+        self._mono: dict[type, list[Any]] = {}
+        self._poly: dict[type, list[Any]] = {}
+        self._handlers: dict[tuple[str, type], list[Any]] = {}
+        self._transforms: list[Transform] = []
+        self._mono[Transform] = self._transforms
+        # _matrices[i] is the accumulated matrix of the first i transforms.
+        self._matrices: list[np.ndarray] = [_IDENTITY]
+
+    # -- mono stacks -------------------------------------------------------
+    def mono_stack(self, category: type) -> list[Any]:
+        """The stack of ``category`` (created empty on first use)."""
+        stack = self._mono.get(category)
+        if stack is None:
+            stack = self._mono[category] = []
+        return stack
+
+    def mono(self, category: type, default: Any = None) -> Any:
+        """The active (top) attribute of ``category``, or ``default``.
+
+        For the ``Transform`` category this is the accumulated model matrix.
+        """
+        if category is Transform:
+            return self.model_matrix()
+        stack = self._mono.get(category)
+        if stack:
+            return stack[-1]
+        return default
+
+    def model_matrix(self) -> np.ndarray:
+        """The accumulated model matrix (4x4 float64, read-only)."""
+        transforms = self._transforms
+        matrices = self._matrices
+        n = len(transforms)
+        if len(matrices) > n + 1:
+            del matrices[n + 1 :]
+        while len(matrices) <= n:
+            m = matrices[-1] @ transforms[len(matrices) - 1].matrix
+            m.setflags(write=False)
+            matrices.append(m)
+        return matrices[n]
+
+    # -- poly sets ---------------------------------------------------------
+    def poly_set(self, category: type) -> list[Any]:
+        """The ordered set of ``category`` (created empty on first use)."""
+        items = self._poly.get(category)
+        if items is None:
+            items = self._poly[category] = []
+        return items
+
+    def poly(self, category: type) -> tuple[Any, ...]:
+        """The active attributes of ``category`` in the order they were added."""
+        items = self._poly.get(category)
+        return tuple(items) if items else ()
+
+    # -- handlers ----------------------------------------------------------
+    def handler_stack(self, service: str, target: type) -> list[Any]:
+        key = (service, target)
+        stack = self._handlers.get(key)
+        if stack is None:
+            stack = self._handlers[key] = []
+        return stack
+
+    def handler(self, service: str, target: type) -> Any:
+        """The top installed handler for (service, target), or None."""
+        stack = self._handlers.get((service, target))
+        return stack[-1] if stack else None
+
+    # -- inspection --------------------------------------------------------
+    def categories(self) -> list[type]:
+        """Categories that currently have at least one active attribute."""
+        cats = [c for c, s in self._mono.items() if s]
+        cats += [c for c, s in self._poly.items() if s and c not in cats]
+        return cats
+
+    def is_empty(self) -> bool:
+        """True when no attribute is pushed or added and no handler installed."""
+        return not any(self._mono.values()) and not any(self._poly.values()) and not any(self._handlers.values())

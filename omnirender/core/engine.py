@@ -1,0 +1,519 @@
+"""The engine: the state machine every node and application talks to.
+
+An engine owns a :class:`RenderingContext` and an active :class:`Technique`.
+Its interface is the paper's micro program: ``push``/``pop`` mono attributes,
+``add``/``remove`` poly attributes, ``install``/``deinstall`` handlers and
+``eval`` shapes.  Handlers are resolved per class once and cached; the cache is
+dropped by install/deinstall and when new defaults are registered.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import warnings
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
+
+import numpy as np
+
+from .camera import Camera
+from .component import Attribute, Shape
+from .context import RenderingContext
+from .errors import EvaluationError, NoHandlerError
+from .handler import SIMPLIFY, Handler, registry
+from .light import Light, LightSwitch
+from .program import compile_components
+from .technique import Technique
+from .transform import Transform
+
+__all__ = ["Engine"]
+
+_POLICIES = ("raise", "warn", "skip")
+
+
+class Engine:
+    """A generic engine; adapters subclass it and set ``service``.
+
+    ``on_missing`` decides what happens to a shape no handler can evaluate:
+    ``"raise"`` (:class:`NoHandlerError`), ``"warn"`` (once per class) or
+    ``"skip"``.  ``mask`` is a group-mask expression; subgraphs whose groups do
+    not match are skipped.
+    """
+
+    #: The service the default technique asks handlers for.
+    service: str = "analysis"
+
+    def __init__(
+        self,
+        *,
+        technique: Technique | None = None,
+        on_missing: str = "raise",
+        mask: str | Callable[[frozenset[str]], bool] | None = None,
+    ) -> None:
+        if on_missing not in _POLICIES:
+            raise ValueError(f"{type(self).__name__}: on_missing must be one of {_POLICIES}, got {on_missing!r}")
+        self.context = RenderingContext()
+        self.on_missing = on_missing
+        self._caches: dict[str, tuple[dict[type, Any], dict[type, Any]]] = {}
+        self._registry_generation = registry.generation
+        self._node_stack: list[Any] = []
+        self._frames: list[list[Any]] = []
+        self._poly_frames: dict[int, list[Any]] = {}
+        self._recording: list[tuple[str, Any]] | None = None
+        self._warned: set[type] = set()
+        self._light_matrices: dict[int, np.ndarray] = {}
+        self._pre_lights: dict[int, Any] = {}
+        self._running = 0
+        #: (camera, world matrix) found by pre-evaluation, or None.
+        self.camera: tuple[Camera, np.ndarray] | None = None
+        self.mask = mask
+        self._ops = (
+            self.push,
+            self.pop,
+            self.add,
+            self.remove,
+            self.install,
+            self.deinstall,
+            self.eval,
+            self._node_stack.append,
+            self._leave,
+            self._eval_node,
+            self._run_technique,
+        )
+        self._technique: Technique = technique if technique is not None else Technique()
+        self._select_caches()
+
+    # -- technique ----------------------------------------------------------
+    @property
+    def technique(self) -> Technique:
+        """The active technique."""
+        return self._technique
+
+    @technique.setter
+    def technique(self, technique: Technique) -> None:
+        if not isinstance(technique, Technique):
+            raise TypeError(f"{type(self).__name__}.technique must be a Technique, got {type(technique).__name__}")
+        self._technique = technique
+        self._select_caches()
+
+    @contextlib.contextmanager
+    def using(self, technique: Technique) -> Iterator[Technique]:
+        """Substitute ``technique`` temporarily (restored on exit)."""
+        previous = self._technique
+        self.technique = technique
+        try:
+            yield technique
+        finally:
+            self.technique = previous
+
+    @property
+    def active_service(self) -> str:
+        """The service handlers are looked up for right now."""
+        return self._technique.service or self.service
+
+    def _select_caches(self) -> None:
+        service = self._technique.service or self.service
+        caches = self._caches.get(service)
+        if caches is None:
+            caches = self._caches[service] = ({}, {})
+        self._shape_fns, self._attr_handlers = caches
+
+    def _invalidate(self) -> None:
+        for shapes, attrs in self._caches.values():
+            shapes.clear()
+            attrs.clear()
+
+    # -- handler resolution ----------------------------------------------
+    def find_handler(self, service: str, target: type) -> Any:
+        """The top installed handler for (service, target), else the registered default."""
+        h = self.context.handler(service, target)
+        if h is None:
+            h = registry.lookup(type(self), service, target)
+        return h
+
+    def _check_registry(self) -> None:
+        if self._registry_generation != registry.generation:
+            self._registry_generation = registry.generation
+            self._invalidate()
+
+    def _resolve_shape(self, cls: type) -> Callable[[Any, Engine], Any]:
+        self._check_registry()
+        service = self.active_service
+        fn = None
+        for klass in cls.__mro__:
+            if klass is object:
+                break
+            h = self.find_handler(service, klass)
+            if h is not None:
+                fn = h.exec
+                break
+            s = self.find_handler(SIMPLIFY, klass)
+            if s is not None:
+                fn = _simplifying(s)
+                break
+        if fn is None:
+            fn = self._missing(service, cls)
+        self._shape_fns[cls] = fn
+        return fn
+
+    def attribute_handler(self, cls: type) -> Any:
+        """The painter or simplifier that applies attributes of ``cls``, or None."""
+        try:
+            return self._attr_handlers[cls]
+        except KeyError:
+            pass
+        self._check_registry()
+        service = self.active_service
+        found = None
+        for klass in cls.__mro__:
+            if klass is object:
+                break
+            found = self.find_handler(service, klass) or self.find_handler(SIMPLIFY, klass)
+            if found is not None:
+                break
+        self._attr_handlers[cls] = found
+        return found
+
+    def _missing(self, service: str, cls: type) -> Callable[[Any, Engine], Any]:
+        policy = self.on_missing
+        if policy == "raise":
+
+            def fail(shape: Any, engine: Engine) -> None:
+                raise NoHandlerError(service, cls, engine.node_path, type(engine).__name__)
+
+            return fail
+        if policy == "warn":
+
+            def warn(shape: Any, engine: Engine) -> None:
+                if cls not in engine._warned:
+                    engine._warned.add(cls)
+                    warnings.warn(
+                        str(NoHandlerError(service, cls, engine.node_path, type(engine).__name__)), stacklevel=2
+                    )
+
+            return warn
+        return _skip
+
+    # -- the micro program ------------------------------------------------
+    def push(self, attribute: Attribute) -> None:
+        """Make ``attribute`` the active one of its category."""
+        rec = self._recording
+        if rec is not None:
+            rec.append(("push", attribute))
+        try:
+            h = self._attr_handlers[attribute.__class__]
+        except KeyError:
+            h = self.attribute_handler(attribute.__class__)
+        category = attribute.category
+        if h is None:
+            stack = self.context._mono.get(category)
+            if stack is None:
+                stack = self.context.mono_stack(category)
+            stack.append(attribute)
+            return
+        if h.service == SIMPLIFY:
+            record: list[tuple[str, Any]] = []
+            self._recording = record
+            try:
+                h.exec(attribute, self)
+            finally:
+                self._recording = rec
+            self._frames.append([attribute, h, len(self.context.mono_stack(category)), record])
+            return
+        self.context.mono_stack(category).append(attribute)
+        h.exec(attribute, self)
+
+    def pop(self, category: type) -> Attribute:
+        """Remove the active attribute of ``category`` and return it."""
+        stack = self.context._mono.get(category)
+        frames = self._frames
+        if frames:
+            frame = frames[-1]
+            if frame[0].category is category and len(stack or ()) == frame[2]:
+                frames.pop()
+                attribute, h, _, record = frame
+                rec = self._recording
+                self._recording = None
+                try:
+                    h.unexec(attribute, self, record)
+                finally:
+                    self._recording = rec
+                if rec is not None:
+                    rec.append(("pop", attribute))
+                return attribute
+        if not stack:
+            name = getattr(category, "__name__", repr(category))
+            where = f" in node {self.node_path}" if self._node_stack else ""
+            raise EvaluationError(f"pop({name}){where}: nothing of category {name} is pushed (unbalanced push/pop)")
+        attribute = stack.pop()
+        if category is Transform:
+            matrices = self.context._matrices
+            if len(matrices) > len(stack) + 1:
+                del matrices[len(stack) + 1 :]
+        h = self._attr_handlers.get(attribute.__class__)
+        if h is not None:
+            h.unexec(attribute, self)
+        rec = self._recording
+        if rec is not None:
+            rec.append(("pop", attribute))
+        return attribute
+
+    def add(self, attribute: Attribute) -> None:
+        """Activate a poly attribute (lights, clip planes, pick ids)."""
+        if attribute.category is Light and id(attribute) in self._pre_lights:
+            return
+        rec = self._recording
+        if rec is not None:
+            rec.append(("add", attribute))
+        h = self.attribute_handler(attribute.__class__)
+        if h is not None and h.service == SIMPLIFY:
+            record: list[tuple[str, Any]] = []
+            self._recording = record
+            try:
+                h.exec(attribute, self)
+            finally:
+                self._recording = rec
+            self._poly_frames[id(attribute)] = [attribute, h, 0, record]
+            return
+        self.context.poly_set(attribute.category).append(attribute)
+        if attribute.category is Light:
+            self._light_matrices[id(attribute)] = self.context.model_matrix()
+        if h is not None:
+            h.exec(attribute, self)
+
+    def remove(self, attribute: Attribute) -> None:
+        """Deactivate a poly attribute added before."""
+        if attribute.category is Light and id(attribute) in self._pre_lights:
+            return
+        frame = self._poly_frames.pop(id(attribute), None)
+        if frame is not None:
+            rec = self._recording
+            self._recording = None
+            try:
+                frame[1].unexec(attribute, self, frame[3])
+            finally:
+                self._recording = rec
+        else:
+            items = self.context.poly_set(attribute.category)
+            for i in range(len(items) - 1, -1, -1):
+                if items[i] is attribute:
+                    del items[i]
+                    break
+            else:
+                raise EvaluationError(f"remove({type(attribute).__name__}){self._where()}: the attribute was not added")
+            h = self._attr_handlers.get(attribute.__class__)
+            if h is not None:
+                h.unexec(attribute, self)
+        rec = self._recording
+        if rec is not None:
+            rec.append(("remove", attribute))
+
+    def install(self, handler: Handler) -> None:
+        """Put ``handler`` on top of its (service, target) stack."""
+        if not isinstance(handler, Handler):
+            raise TypeError(f"install() needs a Handler, got {type(handler).__name__}{self._where()}")
+        self.context.handler_stack(handler.service, handler.target).append(handler)
+        self._invalidate()
+        rec = self._recording
+        if rec is not None:
+            rec.append(("install", handler))
+
+    def deinstall(self, handler: Handler) -> None:
+        """Remove ``handler`` from its (service, target) stack."""
+        stack = self.context.handler_stack(handler.service, handler.target)
+        for i in range(len(stack) - 1, -1, -1):
+            if stack[i] is handler:
+                del stack[i]
+                break
+        else:
+            raise EvaluationError(f"deinstall({handler!r}){self._where()}: the handler is not installed")
+        self._invalidate()
+        rec = self._recording
+        if rec is not None:
+            rec.append(("deinstall", handler))
+
+    def eval(self, shape: Shape) -> None:
+        """Evaluate ``shape`` with the active technique."""
+        self._technique.handle_shape(shape, self)
+
+    def undo(self, record: Iterable[tuple[str, Any]]) -> None:
+        """Undo recorded (op, object) calls in reverse order."""
+        for op, obj in reversed(list(record)):
+            if op == "push":
+                self.pop(obj.category)
+            elif op == "add":
+                self.remove(obj)
+            elif op == "install":
+                self.deinstall(obj)
+
+    # -- evaluation of sequences and graphs ---------------------------------
+    def evaluate(self, components: Iterable[Any]) -> None:
+        """Evaluate components in order, scoped like a node's list."""
+        if hasattr(components, "_compile_node"):
+            self.run(components)
+            return
+        self.run_program(compile_components(components, []))
+
+    def run_program(self, program: list[tuple[int, Any]]) -> None:
+        """Execute a compiled micro program."""
+        ops = self._ops
+        for code, arg in program:
+            ops[code](arg)
+
+    def run(self, root: Any, mask: str | None = None) -> None:
+        """Pre-evaluate ``root`` (lights, camera), then evaluate it.
+
+        Nested calls (a node evaluated while another traversal runs) skip the
+        pre-evaluation and evaluate in the current state.
+        """
+        if self._running:
+            self._eval_node(root)
+            return
+        if mask is not None:
+            self.mask = mask
+        self._running += 1
+        try:
+            self.begin(root)
+            self._eval_node(root)
+        except BaseException:
+            self._reset()
+            raise
+        else:
+            self.end(root)
+        finally:
+            self._running -= 1
+
+    def begin(self, root: Any) -> None:
+        """Declarative pre-evaluation: activate every light and find the camera."""
+        self._check_registry()
+        lights, camera = root.preevaluate(self._mask_fn)
+        lights_set = self.context.poly_set(Light)
+        for light, matrix in lights:
+            if id(light) not in self._pre_lights:
+                self._pre_lights[id(light)] = light
+                self._light_matrices[id(light)] = matrix
+                lights_set.append(light)
+                h = self.attribute_handler(light.__class__)
+                if h is not None and h.service != SIMPLIFY:
+                    h.exec(light, self)
+        self.camera = camera
+
+    def end(self, root: Any) -> None:
+        """Undo the pre-evaluation after the traversal."""
+        lights_set = self.context.poly_set(Light)
+        for light in self._pre_lights.values():
+            for i in range(len(lights_set) - 1, -1, -1):
+                if lights_set[i] is light:
+                    del lights_set[i]
+                    break
+        self._pre_lights.clear()
+        self._light_matrices.clear()
+
+    def _reset(self) -> None:
+        """Drop all traversal state after an error so the engine stays usable."""
+        ctx = self.context
+        for stack in ctx._mono.values():
+            stack.clear()
+        for items in ctx._poly.values():
+            items.clear()
+        del ctx._matrices[1:]
+        for stack in ctx._handlers.values():
+            stack.clear()
+        self._invalidate()
+        self._node_stack.clear()
+        self._frames.clear()
+        self._poly_frames.clear()
+        self._recording = None
+        self._pre_lights.clear()
+        self._light_matrices.clear()
+
+    def _leave(self, node: Any) -> None:
+        self._node_stack.pop()
+
+    def _eval_node(self, node: Any) -> None:
+        groups = node.groups
+        if groups and self._mask_fn is not None and not self._mask_fn(groups):
+            return
+        self.run_program(node.program())
+
+    def _run_technique(self, arg: tuple[Technique, list[tuple[int, Any]]]) -> None:
+        technique, program = arg
+        previous = self._technique
+        self.technique = technique
+        try:
+            technique.run(program, self)
+        finally:
+            self.technique = previous
+
+    # -- mask ------------------------------------------------------------
+    @property
+    def mask(self) -> Any:
+        """The group-mask expression this engine evaluates with (None: everything)."""
+        return self._mask
+
+    @mask.setter
+    def mask(self, mask: Any) -> None:
+        self._mask = mask
+        if mask is None:
+            self._mask_fn = None
+        elif callable(mask):
+            self._mask_fn = mask
+        else:
+            from .mask import compile_mask
+
+            self._mask_fn = compile_mask(mask)
+
+    # -- queries for handlers --------------------------------------------
+    def model_matrix(self) -> np.ndarray:
+        """The accumulated model-to-world matrix (4x4 float64)."""
+        return self.context.model_matrix()
+
+    def mono(self, category: type, default: Any = None) -> Any:
+        """The active attribute of ``category`` (model matrix for ``Transform``)."""
+        return self.context.mono(category, default)
+
+    def poly(self, category: type) -> tuple[Any, ...]:
+        """The active attributes of ``category``."""
+        return self.context.poly(category)
+
+    def lights(self) -> list[tuple[Light, np.ndarray]]:
+        """Active lights with their world matrices, after the light switch."""
+        switch = self.context.mono(LightSwitch)
+        out = []
+        for light in self.context.poly(Light):
+            if switch is None or switch.allows(light):
+                out.append((light, self._light_matrices.get(id(light), np.eye(4))))
+        return out
+
+    def view_matrix(self) -> np.ndarray | None:
+        """World-to-eye matrix of the pre-evaluated camera, or None."""
+        if self.camera is None:
+            return None
+        camera, world = self.camera
+        return camera.view_matrix() @ np.linalg.inv(world)
+
+    @property
+    def node_path(self) -> str:
+        """Path of the node being evaluated ("" outside any node)."""
+        stack = self._node_stack
+        if not stack:
+            return ""
+        head = stack[0].path
+        rest = "/".join(n.name for n in stack[1:])
+        return f"{head}/{rest}" if rest else head
+
+    def _where(self) -> str:
+        return f" in node {self.node_path}" if self._node_stack else ""
+
+
+def _skip(shape: Any, engine: Engine) -> None:
+    return None
+
+
+def _simplifying(simplifier: Any) -> Callable[[Any, Engine], None]:
+    def simplify(shape: Any, engine: Engine) -> None:
+        result = simplifier.exec(shape, engine)
+        if result is not None:
+            engine.evaluate(result)
+
+    return simplify

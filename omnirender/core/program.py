@@ -1,0 +1,76 @@
+"""Compiled micro programs: a component sequence as a flat list of engine ops.
+
+A node's contents compile once (per version) into ``(opcode, argument)``
+pairs: push/pop, add/remove, install/deinstall, eval, and node enter/leave.
+Child nodes without group tags are inlined, so evaluating a whole subtree is one
+flat loop with precomputed dispatch and no per-component allocation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+from .component import Attribute, MonoAttribute, PolyAttribute, Shape
+from .handler import Handler
+from .technique import Technique
+
+__all__ = [
+    "PUSH",
+    "POP",
+    "ADD",
+    "REMOVE",
+    "INSTALL",
+    "DEINSTALL",
+    "EVAL",
+    "ENTER",
+    "LEAVE",
+    "NODE",
+    "TECHNIQUE",
+    "compile_components",
+]
+
+PUSH, POP, ADD, REMOVE, INSTALL, DEINSTALL, EVAL, ENTER, LEAVE, NODE, TECHNIQUE = range(11)
+
+Program = list[tuple[int, Any]]
+
+
+def compile_components(items: Iterable[Any], program: Program, where: str = "") -> Program:
+    """Append the ops that evaluate ``items`` in order and then undo them.
+
+    A technique among the items takes the rest of the sequence as its own
+    program (evaluated once per pass); the items before it are undone after it.
+    """
+    items = list(items)
+    undo: list[tuple[int, Any]] = []
+    append = program.append
+    for i, item in enumerate(items):
+        if isinstance(item, Shape):
+            append((EVAL, item))
+        elif isinstance(item, MonoAttribute):
+            append((PUSH, item))
+            undo.append((POP, item.category))
+        elif isinstance(item, PolyAttribute):
+            append((ADD, item))
+            undo.append((REMOVE, item))
+        elif isinstance(item, Technique):
+            rest: Program = []
+            compile_components(items[i + 1 :], rest, where)
+            append((TECHNIQUE, (item, rest)))
+            break
+        elif isinstance(item, Handler):
+            append((INSTALL, item))
+            undo.append((DEINSTALL, item))
+        elif hasattr(item, "_compile_node"):
+            item._compile_node(program)
+        elif isinstance(item, Attribute):
+            raise TypeError(
+                f"{type(item).__name__}{where}: an attribute must derive from MonoAttribute or PolyAttribute"
+            )
+        else:
+            raise TypeError(
+                f"cannot evaluate {type(item).__name__}{where}: expected a Shape, Attribute, Handler, Technique or Node"
+            )
+    undo.reverse()
+    program.extend(undo)
+    return program

@@ -1,0 +1,200 @@
+"""Modelling transforms: mono attributes of the shared category ``Transform``.
+
+The context entry of the ``Transform`` category is the *accumulated* model
+matrix: pushing composes with the current matrix, popping restores it.  The
+convention is column vectors and pre-multiplication (``p' = M @ p``), float64.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from .component import MonoAttribute
+
+__all__ = ["Transform", "Matrix", "Translation", "Rotation", "Scaling", "finite_vector"]
+
+
+def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
+    """``value`` as a float64 vector of ``size`` finite numbers, or ValueError naming it."""
+    try:
+        arr = np.array(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
+    if arr.shape != (size,):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+    return arr
+
+
+class Transform(MonoAttribute):
+    """Base of all modelling transforms; subclasses share its category."""
+
+    __slots__ = ("_matrix",)
+    shares_category = True
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 4x4 float64 matrix this transform multiplies onto the current one."""
+        return self._matrix
+
+    def _set_matrix(self, m: np.ndarray) -> None:
+        m.setflags(write=False)
+        object.__setattr__(self, "_matrix", m)
+        self.touch()
+
+
+class Matrix(Transform):
+    """An arbitrary 4x4 matrix (column vectors)."""
+
+    __slots__ = ()
+
+    def __init__(self, matrix: Sequence[Sequence[float]] | np.ndarray) -> None:
+        super().__init__()
+        m = np.array(matrix, dtype=np.float64)
+        if m.shape != (4, 4):
+            raise ValueError(f"Matrix: matrix must be 4x4, got shape {m.shape}")
+        if not np.all(np.isfinite(m)):
+            raise ValueError("Matrix: matrix must be finite")
+        self._set_matrix(m)
+
+    def parameters(self) -> dict:
+        return {"matrix": self._matrix.tolist()}
+
+
+class Translation(Transform):
+    """Move by (x, y, z)."""
+
+    __slots__ = ("_offset",)
+
+    def __init__(self, x: float | Sequence[float] = 0.0, y: float = 0.0, z: float = 0.0) -> None:
+        super().__init__()
+        self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
+
+    @property
+    def offset(self) -> tuple[float, float, float]:
+        return self._offset
+
+    @offset.setter
+    def offset(self, value: Sequence[float]) -> None:
+        v = finite_vector("Translation", "offset", value, 3)
+        object.__setattr__(self, "_offset", tuple(float(c) for c in v))
+        m = np.eye(4)
+        m[:3, 3] = v
+        self._set_matrix(m)
+
+    def parameters(self) -> dict:
+        return {"offset": list(self.offset)}
+
+
+def _axis_angle_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:
+    x, y, z = axis
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    t = 1.0 - c
+    m = np.eye(4)
+    m[:3, :3] = [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+    return m
+
+
+class Rotation(Transform):
+    """Rotate by ``angle`` degrees about ``axis`` (right-handed)."""
+
+    __slots__ = ("_angle", "_axis")
+
+    def __init__(self, angle: float, axis: Sequence[float] = (0.0, 0.0, 1.0)) -> None:
+        super().__init__()
+        self._assign(angle, axis)
+
+    def _assign(self, angle: float, axis: Sequence[float]) -> None:
+        a = finite_vector("Rotation", "axis", axis, 3)
+        n = float(np.linalg.norm(a))
+        if n == 0.0:
+            raise ValueError("Rotation: axis must not be the zero vector")
+        try:
+            angle = float(angle)
+        except (TypeError, ValueError):
+            raise ValueError(f"Rotation: angle must be a number of degrees, got {angle!r}") from None
+        if not math.isfinite(angle):
+            raise ValueError(f"Rotation: angle must be finite, got {angle!r}")
+        a = a / n
+        object.__setattr__(self, "_angle", angle)
+        object.__setattr__(self, "_axis", tuple(float(c) for c in a))
+        self._set_matrix(_axis_angle_matrix(a, math.radians(angle)))
+
+    @property
+    def angle(self) -> float:
+        """Angle in degrees."""
+        return self._angle
+
+    @angle.setter
+    def angle(self, value: float) -> None:
+        self._assign(value, self._axis)
+
+    @property
+    def axis(self) -> tuple[float, float, float]:
+        """Unit rotation axis."""
+        return self._axis
+
+    @axis.setter
+    def axis(self, value: Sequence[float]) -> None:
+        self._assign(self._angle, value)
+
+    def parameters(self) -> dict:
+        return {"angle": self._angle, "axis": list(self._axis)}
+
+    @classmethod
+    def from_quaternion(cls, w: float, x: float, y: float, z: float) -> Rotation:
+        """The rotation of the unit quaternion w + xi + yj + zk (normalised first)."""
+        q = finite_vector("Rotation", "quaternion", (w, x, y, z), 4)
+        n = float(np.linalg.norm(q))
+        if n == 0.0:
+            raise ValueError("Rotation: quaternion must not be zero")
+        w, x, y, z = q / n
+        angle = 2.0 * math.degrees(math.acos(max(-1.0, min(1.0, w))))
+        s = math.sqrt(max(0.0, 1.0 - w * w))
+        axis = (0.0, 0.0, 1.0) if s < 1e-12 else (x / s, y / s, z / s)
+        return cls(angle, axis)
+
+    @property
+    def quaternion(self) -> tuple[float, float, float, float]:
+        """(w, x, y, z) of this rotation."""
+        h = math.radians(self.angle) / 2.0
+        s = math.sin(h)
+        return (math.cos(h), self.axis[0] * s, self.axis[1] * s, self.axis[2] * s)
+
+
+class Scaling(Transform):
+    """Scale by (sx, sy, sz); a single number scales uniformly."""
+
+    __slots__ = ("_factors",)
+
+    def __init__(self, sx: float | Sequence[float] = 1.0, sy: float | None = None, sz: float | None = None) -> None:
+        super().__init__()
+        if isinstance(sx, (Sequence, np.ndarray)):
+            self.factors = sx
+        elif sy is None and sz is None:
+            self.factors = (sx, sx, sx)
+        else:
+            self.factors = (sx, 1.0 if sy is None else sy, 1.0 if sz is None else sz)
+
+    @property
+    def factors(self) -> tuple[float, float, float]:
+        return self._factors
+
+    @factors.setter
+    def factors(self, value: Sequence[float]) -> None:
+        v = finite_vector("Scaling", "factors", value, 3)
+        if np.any(v == 0.0):
+            raise ValueError(f"Scaling: factors must be non-zero, got {tuple(v)}")
+        object.__setattr__(self, "_factors", tuple(float(c) for c in v))
+        self._set_matrix(np.diag([v[0], v[1], v[2], 1.0]))
+
+    def parameters(self) -> dict:
+        return {"factors": list(self.factors)}

@@ -1,0 +1,112 @@
+"""``om.Image``: what every rendering engine returns."""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .fileio import atomic_path
+
+__all__ = ["Image"]
+
+
+class Image:
+    """A rendered image.
+
+    ``array`` is (H, W, 4) uint8 sRGB with straight alpha; ``depth`` is (H, W)
+    float32 eye-space distance along the viewing axis (``inf`` where nothing
+    was drawn) or None when the engine cannot tell; ``hdr`` is (H, W, 3 or 4)
+    float32 linear radiance for physically based engines, else None.
+    ``info`` holds engine-specific facts (timings, sample counts, file names).
+    """
+
+    __slots__ = ("array", "depth", "hdr", "engine", "info")
+
+    def __init__(
+        self,
+        array: np.ndarray,
+        depth: np.ndarray | None = None,
+        hdr: np.ndarray | None = None,
+        engine: str = "",
+        info: dict[str, Any] | None = None,
+    ) -> None:
+        array = np.asarray(array)
+        if array.ndim != 3 or array.shape[2] not in (3, 4) or array.dtype != np.uint8:
+            raise ValueError(f"Image: array must be (H, W, 3|4) uint8, got {array.shape} {array.dtype}")
+        if array.shape[2] == 3:
+            alpha = np.full(array.shape[:2] + (1,), 255, np.uint8)
+            array = np.concatenate([array, alpha], axis=2)
+        if depth is not None:
+            depth = np.asarray(depth, dtype=np.float32)
+            if depth.shape != array.shape[:2]:
+                raise ValueError(f"Image: depth must be {array.shape[:2]}, got {depth.shape}")
+        self.array = array
+        self.depth = depth
+        self.hdr = hdr
+        self.engine = engine
+        self.info = dict(info or {})
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        return (self.array.shape[1], self.array.shape[0])
+
+    @property
+    def width(self) -> int:
+        return self.array.shape[1]
+
+    @property
+    def height(self) -> int:
+        return self.array.shape[0]
+
+    @property
+    def rgb(self) -> np.ndarray:
+        """(H, W, 3) uint8 colour without alpha."""
+        return self.array[:, :, :3]
+
+    @property
+    def mask(self) -> np.ndarray:
+        """(H, W) bool: where something was drawn (finite depth, else alpha > 0)."""
+        if self.depth is not None:
+            return np.isfinite(self.depth)
+        return self.array[:, :, 3] > 0
+
+    def pixel(self, x: int, y: int) -> tuple[int, int, int, int]:
+        """RGBA at column ``x``, row ``y`` (row 0 at the top)."""
+        return tuple(int(v) for v in self.array[y, x])  # type: ignore[return-value]
+
+    def to_pil(self) -> Any:
+        from PIL import Image as PILImage
+
+        return PILImage.fromarray(self.array, "RGBA")
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the colour image (format from the extension) atomically; returns the path."""
+        target = Path(path)
+        fmt = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG", ".bmp": "BMP", ".tif": "TIFF", ".tiff": "TIFF"}.get(
+            target.suffix.lower()
+        )
+        if fmt is None:
+            raise ValueError(
+                f"Image.save: unsupported extension {target.suffix!r} in {target}; use .png, .jpg, .bmp or .tif"
+            )
+        pil = self.to_pil()
+        if fmt in ("JPEG", "BMP"):
+            pil = pil.convert("RGB")
+        with atomic_path(target) as tmp:
+            pil.save(tmp, format=fmt)
+        return target
+
+    def _repr_png_(self) -> bytes:
+        buf = io.BytesIO()
+        self.to_pil().save(buf, format="PNG")
+        return buf.getvalue()
+
+    def __repr__(self) -> str:
+        extra = ", depth" if self.depth is not None else ""
+        extra += ", hdr" if self.hdr is not None else ""
+        return f"Image({self.width}x{self.height}{extra}, engine={self.engine!r})"

@@ -1,0 +1,134 @@
+"""Engine and exporter registries behind ``om.render``, ``om.export`` and ``om.engines``.
+
+Adapters register themselves by name (engines) or file extension (exporters).
+Built-in entries are named lazily as ``"module:function"`` so that nothing is
+imported until it is used; third-party packages call :func:`register_engine`
+or :func:`register_exporter` with callables.  ``om.engines()`` reports which
+engines work on this machine and why the others do not.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "render",
+    "export",
+    "engines",
+    "register_engine",
+    "register_exporter",
+    "EngineEntry",
+    "exporters",
+]
+
+
+@dataclass
+class EngineEntry:
+    """A named engine: its render function, availability check and origin."""
+
+    name: str
+    render: str | Callable[..., Any]
+    available: str | Callable[[], tuple[bool, str]] | None
+    description: str
+    origin: str
+
+
+_engines: dict[str, EngineEntry] = {}
+_exporters: dict[str, tuple[str | Callable[..., Any], str]] = {}
+
+
+def _resolve(ref: str | Callable[..., Any]) -> Callable[..., Any]:
+    if callable(ref):
+        return ref
+    module, _, attr = ref.partition(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+def register_engine(
+    name: str,
+    render_fn: str | Callable[..., Any],
+    available: str | Callable[[], tuple[bool, str]] | None = None,
+    description: str = "",
+    *,
+    override: bool = False,
+) -> None:
+    """Make ``om.render(scene, engine=name)`` call ``render_fn(scene, size=..., **options)``."""
+    if name in _engines and not override:
+        raise ValueError(
+            f"an engine named {name!r} is already registered (from {_engines[name].origin}); pass override=True"
+        )
+    origin = render_fn if isinstance(render_fn, str) else getattr(render_fn, "__module__", "?")
+    _engines[name] = EngineEntry(name, render_fn, available, description, str(origin))
+
+
+def register_exporter(
+    extension: str, export_fn: str | Callable[..., Any], description: str = "", *, override: bool = False
+) -> None:
+    """Make ``om.export(scene, "x" + extension)`` call ``export_fn(scene, path, **options)``."""
+    ext = extension.lower() if extension.startswith(".") else "." + extension.lower()
+    if ext in _exporters and not override:
+        raise ValueError(f"an exporter for {ext!r} is already registered; pass override=True")
+    _exporters[ext] = (export_fn, description)
+
+
+def engines() -> dict[str, tuple[bool, str]]:
+    """Every registered engine name -> (available here, reason or description)."""
+    out = {}
+    for name, entry in _engines.items():
+        if entry.available is None:
+            out[name] = (True, entry.description)
+            continue
+        try:
+            ok, why = _resolve(entry.available)()
+        except Exception as exc:  # an adapter that cannot even be imported is unavailable
+            ok, why = False, f"{type(exc).__name__}: {exc}"
+        out[name] = (ok, why or entry.description)
+    return out
+
+
+def exporters() -> dict[str, str]:
+    """Supported export extensions -> description."""
+    return {ext: desc for ext, (_, desc) in sorted(_exporters.items())}
+
+
+def render(scene: Any, engine: str = "gl", size: tuple[int, int] = (640, 480), **options: Any) -> Any:
+    """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`."""
+    entry = _engines.get(engine)
+    if entry is None:
+        raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
+    size = _check_size(size)
+    return _resolve(entry.render)(scene, size=size, **options)
+
+
+def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> Path:
+    """Write ``scene`` to ``path`` with the exporter chosen by its extension."""
+    p = Path(path)
+    ext = p.suffix.lower()
+    found = _exporters.get(ext)
+    if found is None:
+        raise ValueError(f"cannot export to {p.name!r}: unknown extension {ext!r}; supported: {sorted(_exporters)}")
+    _resolve(found[0])(scene, p, **options)
+    return p
+
+
+def _check_size(size: Any) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ValueError(f"size must be (width, height), got {size!r}") from None
+    if w <= 0 or h <= 0:
+        raise ValueError(f"size must be positive, got {w}x{h}")
+    return w, h
+
+
+register_engine("gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)")
+register_engine("povray", "omnirender.povray:render", "omnirender.povray:available", "POV-Ray 3.7 ray tracer")
+register_engine("mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:available", "Mitsuba 3 path tracer")
+register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
+register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
+register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")

@@ -1,0 +1,326 @@
+"""Scene-graph nodes: ordered, inhomogeneous lists of components and child nodes.
+
+A node emits the engine micro program of its contents: attributes are applied
+in order and undone in reverse at the end, so they affect only what follows
+them in the node and its children, never siblings.  Nodes may be shared by
+several parents (a DAG); paths then name the first parent.  Every change bumps
+the node's ``version`` and its ancestors', which is how engines notice what to
+recompile.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator
+from typing import Any
+
+import numpy as np
+
+from ..core.camera import Camera
+from ..core.component import RenderingComponent
+from ..core.engine import Engine
+from ..core.handler import Handler
+from ..core.light import Light
+from ..core.program import ENTER, LEAVE, NODE, compile_components
+from ..core.technique import Technique
+from ..core.transform import Transform
+
+__all__ = ["Node", "Visitor"]
+
+
+class Visitor:
+    """Receives a walk over a graph without any engine (see :meth:`Node.inspect`).
+
+    Return False from ``enter_node`` to skip a node's contents.
+    """
+
+    def enter_node(self, node: Node) -> bool | None:
+        return True
+
+    def leave_node(self, node: Node) -> None:
+        pass
+
+    def visit(self, component: RenderingComponent, node: Node) -> None:
+        pass
+
+
+class Node:
+    """A named scene-graph node holding components and child nodes in order."""
+
+    __slots__ = ("_name", "_items", "_parents", "_version", "_groups", "_program", "_program_version", "__weakref__")
+
+    def __init__(self, name: str = "node", items: Iterable[Any] = (), groups: Iterable[str] = ()) -> None:
+        self._name = _check_name(name)
+        self._items: list[Any] = []
+        self._parents: list[Node] = []
+        self._version = 0
+        self._groups = frozenset(_check_group(g) for g in groups)
+        self._program: list[tuple[int, Any]] | None = None
+        self._program_version = -1
+        for item in items:
+            self.add(item)
+
+    # -- identity ---------------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self._name
+
+    @name.setter
+    def name(self, value: str) -> None:
+        self._name = _check_name(value)
+        self.touch()
+
+    @property
+    def groups(self) -> frozenset[str]:
+        """Group tags tested by mask expressions (an empty set always matches)."""
+        return self._groups
+
+    @groups.setter
+    def groups(self, value: Iterable[str]) -> None:
+        self._groups = frozenset(_check_group(g) for g in value)
+        self.touch()
+
+    @property
+    def parent(self) -> Node | None:
+        """The first parent (the one paths go through), or None for a root."""
+        return self._parents[0] if self._parents else None
+
+    @property
+    def parents(self) -> tuple[Node, ...]:
+        return tuple(self._parents)
+
+    @property
+    def path(self) -> str:
+        """UNIX-style path from the root through first parents: ``/scene/body``."""
+        names = []
+        node: Node | None = self
+        while node is not None:
+            names.append(node._name)
+            node = node._parents[0] if node._parents else None
+        return "/" + "/".join(reversed(names))
+
+    @property
+    def version(self) -> int:
+        """Counter bumped when this node or anything below it changes."""
+        return self._version
+
+    def touch(self) -> None:
+        """Mark the node changed; the change propagates to every ancestor."""
+        self._version += 1
+        for parent in self._parents:
+            parent.touch()
+
+    # -- contents ---------------------------------------------------------
+    def add(self, item: Any) -> Any:
+        """Append a component or child node; returns it."""
+        return self.insert(len(self._items), item)
+
+    def insert(self, index: int, item: Any) -> Any:
+        """Insert a component or child node at ``index``; returns it."""
+        if isinstance(item, Node):
+            if item is self or item._is_ancestor_of(self):
+                raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
+            item._parents.append(self)
+        elif isinstance(item, RenderingComponent):
+            item._attach(self)
+        else:
+            raise TypeError(
+                f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
+                f"handler, technique or Node"
+            )
+        self._items.insert(index, item)
+        self.touch()
+        return item
+
+    def remove(self, item: Any) -> Any:
+        """Remove the first occurrence of ``item``; returns it."""
+        for i, existing in enumerate(self._items):
+            if existing is item:
+                del self._items[i]
+                if isinstance(item, Node):
+                    for j, p in enumerate(item._parents):
+                        if p is self:
+                            del item._parents[j]
+                            break
+                else:
+                    item._detach(self)
+                self.touch()
+                return item
+        raise ValueError(f"Node {self.path}: {item!r} is not in this node")
+
+    def clear(self) -> None:
+        """Remove every item."""
+        for item in list(self._items):
+            self.remove(item)
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __contains__(self, item: Any) -> bool:
+        return any(existing is item for existing in self._items)
+
+    @property
+    def items(self) -> tuple[Any, ...]:
+        """Components and child nodes in order."""
+        return tuple(self._items)
+
+    @property
+    def children(self) -> list[Node]:
+        """Child nodes in order."""
+        return [i for i in self._items if isinstance(i, Node)]
+
+    @property
+    def components(self) -> list[RenderingComponent]:
+        """Components (everything but child nodes) in order."""
+        return [i for i in self._items if not isinstance(i, Node)]
+
+    def child(self, name: str) -> Node:
+        """The first child node called ``name``."""
+        for c in self._items:
+            if isinstance(c, Node) and c._name == name:
+                return c
+        raise KeyError(f"Node {self.path} has no child {name!r}; children: {[c.name for c in self.children]}")
+
+    def walk(self) -> Iterator[Node]:
+        """This node and every node below it, depth first, each once."""
+        seen: set[int] = set()
+        stack = [self]
+        while stack:
+            node = stack.pop()
+            if id(node) in seen:
+                continue
+            seen.add(id(node))
+            yield node
+            stack.extend(reversed(node.children))
+
+    def _is_ancestor_of(self, other: Node) -> bool:
+        stack = list(other._parents)
+        seen: set[int] = set()
+        while stack:
+            n = stack.pop()
+            if n is self:
+                return True
+            if id(n) not in seen:
+                seen.add(id(n))
+                stack.extend(n._parents)
+        return False
+
+    # -- paths ------------------------------------------------------------
+    def __getitem__(self, path: str) -> Node:
+        """Look up a node by path: ``"/scene/body"`` (absolute) or ``"body/arm"`` (relative).
+
+        An absolute path may start with this node's name or directly with one of
+        its children.  A miss raises KeyError naming the closest existing prefix.
+        """
+        if not isinstance(path, str):
+            raise TypeError(f"node paths are strings, got {type(path).__name__}")
+        parts = [p for p in path.split("/") if p]
+        if path.startswith("/") and parts and parts[0] == self._name:
+            found = self._follow(parts[1:])
+            if isinstance(found, Node):
+                return found
+        if not parts:
+            return self
+        found = self._follow(parts)
+        if isinstance(found, Node):
+            return found
+        best = found if isinstance(found, tuple) else (self, 0)
+        node, depth = best
+        raise KeyError(
+            f"no node at {path!r}: the closest existing prefix is {node.path!r}, which has no child "
+            f"{parts[depth]!r} (children: {[c.name for c in node.children]})"
+        )
+
+    def _follow(self, parts: list[str]) -> Node | tuple[Node, int]:
+        node = self
+        for depth, name in enumerate(parts):
+            nxt = None
+            for c in node._items:
+                if isinstance(c, Node) and c._name == name:
+                    nxt = c
+                    break
+            if nxt is None:
+                return (node, depth)
+            node = nxt
+        return node
+
+    # -- evaluation -------------------------------------------------------
+    def evaluate(self, engine: Engine) -> None:
+        """Emit this node's micro program to ``engine`` (pre-evaluating when top level)."""
+        engine.run(self)
+
+    def program(self) -> list[tuple[int, Any]]:
+        """The compiled micro program of this node (enter, contents, undo, leave)."""
+        if self._program_version != self._version or self._program is None:
+            program: list[tuple[int, Any]] = [(ENTER, self)]
+            compile_components(self._items, program, f" in node {self.path}")
+            program.append((LEAVE, self))
+            self._program = program
+            self._program_version = self._version
+        return self._program
+
+    def _compile_node(self, program: list[tuple[int, Any]]) -> None:
+        if self._groups:
+            program.append((NODE, self))
+        else:
+            program.extend(self.program())
+
+    def preevaluate(
+        self, mask_fn: Any = None
+    ) -> tuple[list[tuple[Light, np.ndarray]], tuple[Camera, np.ndarray] | None]:
+        """Every light with its world matrix and the first camera, in traversal order."""
+        lights: list[tuple[Light, np.ndarray]] = []
+        camera: list[tuple[Camera, np.ndarray]] = []
+        _collect(self, np.eye(4), mask_fn, lights, camera, set())
+        return lights, (camera[0] if camera else None)
+
+    def inspect(self, visitor: Visitor) -> None:
+        """Walk components and structure in evaluation order, without an engine."""
+        if visitor.enter_node(self) is False:
+            return
+        for item in self._items:
+            if isinstance(item, Node):
+                item.inspect(visitor)
+            else:
+                visitor.visit(item, self)
+        visitor.leave_node(self)
+
+    def __repr__(self) -> str:
+        return f"Node({self._name!r}, {len(self._items)} items)"
+
+
+def _collect(node: Node, matrix: np.ndarray, mask_fn: Any, lights: list, camera: list, stack: set) -> None:
+    if node._groups and mask_fn is not None and not mask_fn(node._groups):
+        return
+    if id(node) in stack:
+        return
+    stack.add(id(node))
+    for item in node._items:
+        if isinstance(item, Node):
+            _collect(item, matrix, mask_fn, lights, camera, stack)
+        elif isinstance(item, Transform):
+            m = getattr(item, "matrix", None)
+            if m is not None:
+                matrix = matrix @ m
+        elif isinstance(item, Light):
+            lights.append((item, matrix))
+        elif isinstance(item, Camera):
+            if not camera:
+                camera.append((item, matrix))
+        elif isinstance(item, (Handler, Technique)):
+            continue
+    stack.discard(id(node))
+
+
+def _check_name(name: str) -> str:
+    if not isinstance(name, str) or not name or "/" in name:
+        raise ValueError(f"Node: name must be a non-empty string without '/', got {name!r}")
+    return name
+
+
+def _check_group(group: str) -> str:
+    if not isinstance(group, str) or not group or any(ch in group for ch in " !&|()"):
+        raise ValueError(f"Node: group names must be non-empty and free of spaces and !&|(), got {group!r}")
+    return group

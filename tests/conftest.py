@@ -1,0 +1,73 @@
+"""Shared test configuration.
+
+Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba`` or
+``window``.  When the engine is missing they are skipped, except when
+``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
+can never pass by skipping.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+REQUIRE = os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1"
+
+
+def _gl() -> tuple[bool, str]:
+    try:
+        import moderngl
+
+        ctx = moderngl.create_standalone_context(backend="egl")
+        ctx.release()
+        return True, ""
+    except Exception as exc:  # pragma: no cover - depends on the machine
+        return False, f"no headless OpenGL (moderngl + EGL): {exc}"
+
+
+def _povray() -> tuple[bool, str]:
+    import shutil
+
+    return (shutil.which("povray") is not None, "the povray program is not installed (apt-get install povray)")
+
+
+def _mitsuba() -> tuple[bool, str]:
+    try:
+        import mitsuba  # noqa: F401
+
+        return True, ""
+    except Exception as exc:  # pragma: no cover
+        return False, f"mitsuba is not importable: {exc}"
+
+
+def _window() -> tuple[bool, str]:
+    import shutil
+
+    ok = shutil.which("Xvfb") is not None
+    try:
+        import glfw  # noqa: F401
+    except Exception as exc:  # pragma: no cover
+        return False, f"glfw is not importable: {exc}"
+    return ok, "Xvfb is not installed (apt-get install xvfb)"
+
+
+_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "window": _window}
+_cache: dict[str, tuple[bool, str]] = {}
+
+
+def engine_available(name: str) -> tuple[bool, str]:
+    if name not in _cache:
+        _cache[name] = _CHECKS[name]()
+    return _cache[name]
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    for name in _CHECKS:
+        if item.get_closest_marker(name) is None:
+            continue
+        ok, why = engine_available(name)
+        if not ok:
+            if REQUIRE:
+                pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
+            pytest.skip(why)
