@@ -104,7 +104,8 @@ class Attribute(RenderingComponent):
     ``category`` is the key of the context stack or set the attribute lives in.
     It defaults to the attribute's own class; a class that sets
     ``shares_category = True`` in its body makes itself the category of all its
-    subclasses (all lights share ``Light``, all transforms share ``Transform``).
+    subclasses (all lights share ``Light``, all transforms share ``Transform``);
+    a class may also name another category explicitly (``category = Transform``).
     """
 
     __slots__ = ()
@@ -113,6 +114,8 @@ class Attribute(RenderingComponent):
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
+        if "category" in cls.__dict__:  # set explicitly in the class body
+            return
         for base in cls.__mro__:
             if base.__dict__.get("shares_category", False):
                 cls.category = base

@@ -8,6 +8,7 @@ pushing and popping transforms during a traversal is a plain list operation.
 
 from __future__ import annotations
 
+from collections import defaultdict
 from typing import Any
 
 import numpy as np
@@ -26,21 +27,18 @@ class RenderingContext:
     __slots__ = ("_mono", "_poly", "_handlers", "_matrices", "_transforms")
 
     def __init__(self) -> None:
-        self._mono: dict[type, list[Any]] = {}
+        self._mono: defaultdict[type, list[Any]] = defaultdict(list)
         self._poly: dict[type, list[Any]] = {}
         self._handlers: dict[tuple[str, type], list[Any]] = {}
         self._transforms: list[Transform] = []
         self._mono[Transform] = self._transforms
-        # _matrices[i] is the accumulated matrix of the first i transforms.
-        self._matrices: list[np.ndarray] = [_IDENTITY]
+        # _matrices[i] = (transform i-1, accumulated matrix of the first i transforms).
+        self._matrices: list[tuple[Transform | None, np.ndarray]] = [(None, _IDENTITY)]
 
     # -- mono stacks -------------------------------------------------------
     def mono_stack(self, category: type) -> list[Any]:
         """The stack of ``category`` (created empty on first use)."""
-        stack = self._mono.get(category)
-        if stack is None:
-            stack = self._mono[category] = []
-        return stack
+        return self._mono[category]
 
     def mono(self, category: type, default: Any = None) -> Any:
         """The active (top) attribute of ``category``, or ``default``.
@@ -55,17 +53,30 @@ class RenderingContext:
         return default
 
     def model_matrix(self) -> np.ndarray:
-        """The accumulated model matrix (4x4 float64, read-only)."""
+        """The accumulated model matrix (4x4 float64, read-only).
+
+        Composed lazily: ``_matrices[i]`` caches the product of the first ``i``
+        transforms together with the transform it was made from, and is trusted
+        only while that transform is still at position ``i - 1``.  Push and pop
+        therefore stay plain list operations.
+        """
         transforms = self._transforms
         matrices = self._matrices
         n = len(transforms)
-        if len(matrices) > n + 1:
-            del matrices[n + 1 :]
-        while len(matrices) <= n:
-            m = matrices[-1] @ transforms[len(matrices) - 1].matrix
-            m.setflags(write=False)
-            matrices.append(m)
-        return matrices[n]
+        valid = 1
+        limit = min(n + 1, len(matrices))
+        while valid < limit and matrices[valid][0] is transforms[valid - 1]:
+            valid += 1
+        if valid == n + 1:
+            return matrices[n][1] if n else _IDENTITY
+        del matrices[valid:]
+        current = matrices[valid - 1][1] if valid > 1 else _IDENTITY
+        for i in range(valid - 1, n):
+            t = transforms[i]
+            current = current @ t.matrix
+            current.setflags(write=False)
+            matrices.append((t, current))
+        return current
 
     # -- poly sets ---------------------------------------------------------
     def poly_set(self, category: type) -> list[Any]:

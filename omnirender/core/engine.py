@@ -29,6 +29,7 @@ from .transform import Transform
 __all__ = ["Engine"]
 
 _POLICIES = ("raise", "warn", "skip")
+_MISSING = object()
 
 
 class Engine:
@@ -59,7 +60,6 @@ class Engine:
         self._node_stack: list[Any] = []
         self._frames: list[list[Any]] = []
         self._poly_frames: dict[int, list[Any]] = {}
-        self._recording: list[tuple[str, Any]] | None = None
         self._warned: set[type] = set()
         self._light_matrices: dict[int, np.ndarray] = {}
         self._pre_lights: dict[int, Any] = {}
@@ -67,7 +67,7 @@ class Engine:
         #: (camera, world matrix) found by pre-evaluation, or None.
         self.camera: tuple[Camera, np.ndarray] | None = None
         self.mask = mask
-        self._ops = (
+        self._ops = [
             self.push,
             self.pop,
             self.add,
@@ -76,10 +76,10 @@ class Engine:
             self.deinstall,
             self.eval,
             self._node_stack.append,
-            self._leave,
+            self._node_stack.pop,
             self._eval_node,
             self._run_technique,
-        )
+        ]
         self._technique: Technique = technique if technique is not None else Technique()
         self._select_caches()
 
@@ -117,6 +117,8 @@ class Engine:
         if caches is None:
             caches = self._caches[service] = ({}, {})
         self._shape_fns, self._attr_handlers = caches
+        direct = type(self).eval is Engine.eval and type(self._technique).handle_shape is Technique.handle_shape
+        self._ops[6] = self._eval_direct if direct else self.eval
 
     def _invalidate(self) -> None:
         for shapes, attrs in self._caches.values():
@@ -197,83 +199,81 @@ class Engine:
     # -- the micro program ------------------------------------------------
     def push(self, attribute: Attribute) -> None:
         """Make ``attribute`` the active one of its category."""
-        rec = self._recording
-        if rec is not None:
-            rec.append(("push", attribute))
-        try:
-            h = self._attr_handlers[attribute.__class__]
-        except KeyError:
-            h = self.attribute_handler(attribute.__class__)
-        category = attribute.category
+        h = self._attr_handlers.get(attribute.__class__, _MISSING)
         if h is None:
-            stack = self.context._mono.get(category)
-            if stack is None:
-                stack = self.context.mono_stack(category)
-            stack.append(attribute)
+            self.context._mono[attribute.category].append(attribute)
             return
+        if h is _MISSING:
+            h = self.attribute_handler(attribute.__class__)
+            if h is None:
+                self.context._mono[attribute.category].append(attribute)
+                return
         if h.service == SIMPLIFY:
-            record: list[tuple[str, Any]] = []
-            self._recording = record
-            try:
-                h.exec(attribute, self)
-            finally:
-                self._recording = rec
-            self._frames.append([attribute, h, len(self.context.mono_stack(category)), record])
+            record = self._record(h, attribute)
+            self._frames.append([attribute, h, len(self.context._mono[attribute.category]), record])
             return
-        self.context.mono_stack(category).append(attribute)
+        self.context._mono[attribute.category].append(attribute)
         h.exec(attribute, self)
 
     def pop(self, category: type) -> Attribute:
         """Remove the active attribute of ``category`` and return it."""
-        stack = self.context._mono.get(category)
-        frames = self._frames
-        if frames:
-            frame = frames[-1]
-            if frame[0].category is category and len(stack or ()) == frame[2]:
-                frames.pop()
+        if self._frames:
+            frame = self._frames[-1]
+            if frame[0].category is category and len(self.context._mono[category]) == frame[2]:
+                self._frames.pop()
                 attribute, h, _, record = frame
-                rec = self._recording
-                self._recording = None
-                try:
-                    h.unexec(attribute, self, record)
-                finally:
-                    self._recording = rec
-                if rec is not None:
-                    rec.append(("pop", attribute))
+                h.unexec(attribute, self, record)
                 return attribute
+        stack = self.context._mono.get(category)
         if not stack:
             name = getattr(category, "__name__", repr(category))
-            where = f" in node {self.node_path}" if self._node_stack else ""
-            raise EvaluationError(f"pop({name}){where}: nothing of category {name} is pushed (unbalanced push/pop)")
+            raise EvaluationError(
+                f"pop({name}){self._where()}: nothing of category {name} is pushed (unbalanced push/pop)"
+            )
         attribute = stack.pop()
-        if category is Transform:
-            matrices = self.context._matrices
-            if len(matrices) > len(stack) + 1:
-                del matrices[len(stack) + 1 :]
-        h = self._attr_handlers.get(attribute.__class__)
-        if h is not None:
+        h = self._attr_handlers.get(attribute.__class__, _MISSING)
+        if h is None:
+            return attribute
+        if h is _MISSING:
+            h = self.attribute_handler(attribute.__class__)
+        if h is not None and h.service != SIMPLIFY:
             h.unexec(attribute, self)
-        rec = self._recording
-        if rec is not None:
-            rec.append(("pop", attribute))
         return attribute
+
+    def _record(self, simplifier: Any, attribute: Attribute) -> list[tuple[str, Any]]:
+        """Run an attribute simplifier's exec, recording what it pushes, adds and installs."""
+        record: list[tuple[str, Any]] = []
+        shadowed = {name: self.__dict__.get(name) for name in ("push", "add", "install")}
+        cls = type(self)
+
+        def recorder(name: str) -> Callable[[Any], None]:
+            method = getattr(cls, name).__get__(self)
+
+            def call(obj: Any) -> None:
+                record.append((name, obj))
+                method(obj)
+
+            return call
+
+        for name in shadowed:
+            setattr(self, name, recorder(name))
+        try:
+            simplifier.exec(attribute, self)
+        finally:
+            for name, previous in shadowed.items():
+                if previous is None:
+                    delattr(self, name)
+                else:
+                    setattr(self, name, previous)
+        return record
 
     def add(self, attribute: Attribute) -> None:
         """Activate a poly attribute (lights, clip planes, pick ids)."""
         if attribute.category is Light and id(attribute) in self._pre_lights:
             return
-        rec = self._recording
-        if rec is not None:
-            rec.append(("add", attribute))
         h = self.attribute_handler(attribute.__class__)
         if h is not None and h.service == SIMPLIFY:
-            record: list[tuple[str, Any]] = []
-            self._recording = record
-            try:
-                h.exec(attribute, self)
-            finally:
-                self._recording = rec
-            self._poly_frames[id(attribute)] = [attribute, h, 0, record]
+            self._poly_frames[id(attribute)] = [attribute, h, 0, self._record(h, attribute)]
             return
         self.context.poly_set(attribute.category).append(attribute)
         if attribute.category is Light:
@@ -287,26 +287,18 @@ class Engine:
             return
         frame = self._poly_frames.pop(id(attribute), None)
         if frame is not None:
-            rec = self._recording
-            self._recording = None
-            try:
-                frame[1].unexec(attribute, self, frame[3])
-            finally:
-                self._recording = rec
+            frame[1].unexec(attribute, self, frame[3])
+            return
+        items = self.context.poly_set(attribute.category)
+        for i in range(len(items) - 1, -1, -1):
+            if items[i] is attribute:
+                del items[i]
+                break
         else:
-            items = self.context.poly_set(attribute.category)
-            for i in range(len(items) - 1, -1, -1):
-                if items[i] is attribute:
-                    del items[i]
-                    break
-            else:
-                raise EvaluationError(f"remove({type(attribute).__name__}){self._where()}: the attribute was not added")
-            h = self._attr_handlers.get(attribute.__class__)
-            if h is not None:
-                h.unexec(attribute, self)
-        rec = self._recording
-        if rec is not None:
-            rec.append(("remove", attribute))
+            raise EvaluationError(f"remove({type(attribute).__name__}){self._where()}: the attribute was not added")
+        h = self.attribute_handler(attribute.__class__)
+        if h is not None and h.service != SIMPLIFY:
+            h.unexec(attribute, self)
 
     def install(self, handler: Handler) -> None:
         """Put ``handler`` on top of its (service, target) stack."""
@@ -314,9 +306,6 @@ class Engine:
             raise TypeError(f"install() needs a Handler, got {type(handler).__name__}{self._where()}")
         self.context.handler_stack(handler.service, handler.target).append(handler)
         self._invalidate()
-        rec = self._recording
-        if rec is not None:
-            rec.append(("install", handler))
 
     def deinstall(self, handler: Handler) -> None:
         """Remove ``handler`` from its (service, target) stack."""
@@ -328,13 +317,17 @@ class Engine:
         else:
             raise EvaluationError(f"deinstall({handler!r}){self._where()}: the handler is not installed")
         self._invalidate()
-        rec = self._recording
-        if rec is not None:
-            rec.append(("deinstall", handler))
 
     def eval(self, shape: Shape) -> None:
         """Evaluate ``shape`` with the active technique."""
         self._technique.handle_shape(shape, self)
+
+    def _eval_direct(self, shape: Shape) -> None:
+        # eval() for techniques that do not override handle_shape: one call less.
+        fn = self._shape_fns.get(shape.__class__)
+        if fn is None:
+            fn = self._resolve_shape(shape.__class__)
+        fn(shape, self)
 
     def undo(self, record: Iterable[tuple[str, Any]]) -> None:
         """Undo recorded (op, object) calls in reverse order."""
@@ -386,6 +379,7 @@ class Engine:
     def begin(self, root: Any) -> None:
         """Declarative pre-evaluation: activate every light and find the camera."""
         self._check_registry()
+        del self.context._matrices[1:]
         lights, camera = root.preevaluate(self._mask_fn)
         lights_set = self.context.poly_set(Light)
         for light, matrix in lights:
@@ -417,18 +411,15 @@ class Engine:
         for items in ctx._poly.values():
             items.clear()
         del ctx._matrices[1:]
+        ctx._transforms = ctx._mono[Transform]
         for stack in ctx._handlers.values():
             stack.clear()
         self._invalidate()
         self._node_stack.clear()
         self._frames.clear()
         self._poly_frames.clear()
-        self._recording = None
         self._pre_lights.clear()
         self._light_matrices.clear()
-
-    def _leave(self, node: Any) -> None:
-        self._node_stack.pop()
 
     def _eval_node(self, node: Any) -> None:
         groups = node.groups

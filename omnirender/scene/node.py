@@ -46,7 +46,17 @@ class Visitor:
 class Node:
     """A named scene-graph node holding components and child nodes in order."""
 
-    __slots__ = ("_name", "_items", "_parents", "_version", "_groups", "_program", "_program_version", "__weakref__")
+    __slots__ = (
+        "_name",
+        "_items",
+        "_parents",
+        "_version",
+        "_groups",
+        "_program",
+        "_program_version",
+        "_pre",
+        "__weakref__",
+    )
 
     def __init__(self, name: str = "node", items: Iterable[Any] = (), groups: Iterable[str] = ()) -> None:
         self._name = _check_name(name)
@@ -56,6 +66,7 @@ class Node:
         self._groups = frozenset(_check_group(g) for g in groups)
         self._program: list[tuple[int, Any]] | None = None
         self._program_version = -1
+        self._pre: tuple[int, Any, Any] | None = None
         for item in items:
             self.add(item)
 
@@ -217,20 +228,23 @@ class Node:
         if not isinstance(path, str):
             raise TypeError(f"node paths are strings, got {type(path).__name__}")
         parts = [p for p in path.split("/") if p]
-        if path.startswith("/") and parts and parts[0] == self._name:
+        if not parts:
+            return self
+        attempts: list[tuple[Node, int, list[str]]] = []
+        if path.startswith("/") and parts[0] == self._name:
             found = self._follow(parts[1:])
             if isinstance(found, Node):
                 return found
-        if not parts:
-            return self
+            attempts.append((found[0], found[1] + 1, parts[1:]))
         found = self._follow(parts)
         if isinstance(found, Node):
             return found
-        best = found if isinstance(found, tuple) else (self, 0)
-        node, depth = best
+        attempts.append((found[0], found[1], parts))
+        node, depth, rel = max(attempts, key=lambda a: a[1])
+        missing = rel[depth - (len(parts) - len(rel))]
         raise KeyError(
             f"no node at {path!r}: the closest existing prefix is {node.path!r}, which has no child "
-            f"{parts[depth]!r} (children: {[c.name for c in node.children]})"
+            f"{missing!r} (children: {[c.name for c in node.children]})"
         )
 
     def _follow(self, parts: list[str]) -> Node | tuple[Node, int]:
@@ -256,7 +270,7 @@ class Node:
         if self._program_version != self._version or self._program is None:
             program: list[tuple[int, Any]] = [(ENTER, self)]
             compile_components(self._items, program, f" in node {self.path}")
-            program.append((LEAVE, self))
+            program.append((LEAVE, -1))
             self._program = program
             self._program_version = self._version
         return self._program
@@ -270,11 +284,19 @@ class Node:
     def preevaluate(
         self, mask_fn: Any = None
     ) -> tuple[list[tuple[Light, np.ndarray]], tuple[Camera, np.ndarray] | None]:
-        """Every light with its world matrix and the first camera, in traversal order."""
+        """Every light with its world matrix and the first camera, in traversal order.
+
+        The result is cached while the node's version and the mask stay the same.
+        """
+        cached = self._pre
+        if cached is not None and cached[0] == self._version and cached[1] is mask_fn:
+            return cached[2]
         lights: list[tuple[Light, np.ndarray]] = []
         camera: list[tuple[Camera, np.ndarray]] = []
         _collect(self, np.eye(4), mask_fn, lights, camera, set())
-        return lights, (camera[0] if camera else None)
+        result = (lights, camera[0] if camera else None)
+        self._pre = (self._version, mask_fn, result)
+        return result
 
     def inspect(self, visitor: Visitor) -> None:
         """Walk components and structure in evaluation order, without an engine."""
