@@ -67,6 +67,7 @@ class Engine:
         #: (camera, world matrix) found by pre-evaluation, or None.
         self.camera: tuple[Camera, np.ndarray] | None = None
         self.mask = mask
+        self._saved_mask_fn = self._mask_fn
         self._ops = [
             self.push,
             self.pop,
@@ -391,6 +392,11 @@ class Engine:
                 if h is not None and h.service != SIMPLIFY:
                     h.exec(light, self)
         self.camera = camera
+        self._saved_mask_fn = self._mask_fn
+        if camera is not None and camera[0].mask and self._mask_fn is None:
+            from .mask import compile_mask
+
+            self._mask_fn = compile_mask(camera[0].mask)  # what this camera sees
 
     def end(self, root: Any) -> None:
         """Undo the pre-evaluation after the traversal."""
@@ -402,6 +408,7 @@ class Engine:
                     break
         self._pre_lights.clear()
         self._light_matrices.clear()
+        self._mask_fn = self._saved_mask_fn
 
     def _reset(self) -> None:
         """Drop all traversal state after an error so the engine stays usable."""
@@ -420,6 +427,7 @@ class Engine:
         self._poly_frames.clear()
         self._pre_lights.clear()
         self._light_matrices.clear()
+        self._mask_fn = self._saved_mask_fn
 
     def _eval_node(self, node: Any) -> None:
         groups = node.groups

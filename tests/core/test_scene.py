@@ -296,3 +296,12 @@ def test_evaluate_components_without_node():
     engine.evaluate([lamp, S("a")])
     assert engine.seen["a"] == [("l", 0.0)]
     assert engine.poly(om.Light) == ()
+
+
+def test_camera_mask_selects_what_it_sees_unless_the_engine_has_a_mask():
+    scene = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5), mask="!debug")])
+    scene.add(om.Node("dbg", [S("d")], groups=["debug"]))
+    scene.add(S("x"))
+    evals = lambda mask: [o.label for op, o in om.trace(scene, mask=mask) if op == "eval"]  # noqa: E731
+    assert evals(None) == ["x"]
+    assert evals("debug") == ["d", "x"]
