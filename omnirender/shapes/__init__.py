@@ -1,3 +1,35 @@
-"""om.shapes (filled by issue 3)."""
+"""Shape declarations (``om.Sphere``, ``om.TriangleSet``...): parameters only, validated at construction.
 
-__all__: list[str] = []
+Every shape has a default simplifier (registered for every engine in
+:mod:`omnirender.shapes.simplifiers`) that ends in TriangleSets, LineSets or
+PointSets, so any engine can show any shape; painters are optional speed-ups.
+"""
+
+from .base import DeclaredShape
+from .grids import Heightfield, TransferFunction, Volume
+from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
+from .meshfile import MeshFile
+from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
+from .text import Text
+
+__all__ = [
+    "Sphere",
+    "Box",
+    "Cylinder",
+    "Cone",
+    "Torus",
+    "Disk",
+    "Rectangle",
+    "Arrow",
+    "TriangleSet",
+    "Polygon",
+    "LineSet",
+    "Polyline",
+    "PointSet",
+    "Heightfield",
+    "Volume",
+    "TransferFunction",
+    "Text",
+    "MeshFile",
+    "DeclaredShape",
+]

@@ -1,0 +1,144 @@
+"""Validation helpers shared by the shape declarations.
+
+Every helper raises ValueError naming the shape class and the parameter, so a
+bad input is reported where it is made (construction or assignment), never
+when an engine first draws the shape.
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from typing import Any
+
+import numpy as np
+
+from ..data import as_array
+
+
+def scalar(owner: str, name: str, value: Any, *, positive: bool = False, nonnegative: bool = False) -> float:
+    """``value`` as a finite float; optionally > 0 or >= 0."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+    if positive and v <= 0.0:
+        raise ValueError(f"{owner}: {name} must be > 0, got {v}")
+    if nonnegative and v < 0.0:
+        raise ValueError(f"{owner}: {name} must be >= 0, got {v}")
+    return v
+
+
+def integer(owner: str, name: str, value: Any, minimum: int = 0) -> int:
+    """``value`` as an int >= ``minimum``."""
+    if isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}")
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}") from None
+    if n < minimum:
+        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {n}")
+    return n
+
+
+def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = False) -> tuple[float, ...]:
+    """``value`` as a tuple of ``size`` finite floats (a single number is broadcast when ``positive``)."""
+    try:
+        arr = np.array(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
+    if positive and arr.size == 1:
+        arr = np.repeat(arr, size)
+    if arr.shape != (size,):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+    if positive and np.any(arr <= 0.0):
+        raise ValueError(f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}")
+    return tuple(float(c) for c in arr)
+
+
+def float_array(
+    owner: str,
+    name: str,
+    value: Any,
+    widths: tuple[int, ...],
+    *,
+    count: int | None = None,
+    minimum: int = 0,
+) -> np.ndarray:
+    """``value`` (a data sequence or array-like) as a read-only (N, w) float32 array.
+
+    ``widths`` lists the accepted row widths; ``count`` the required N (e.g. one
+    per vertex); ``minimum`` the least N.  Non-finite entries are rejected.
+    """
+    a = as_array(value, None, name=f"{owner}: {name}")
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{owner}: {name} must hold numbers, got dtype {a.dtype}")
+    if a.ndim == 1 and len(widths) == 1 and widths[0] > 1 and a.size % widths[0] == 0 and a.size > 0:
+        a = a.reshape(-1, widths[0])
+    if widths == (1,) and a.ndim == 1:
+        a = a.reshape(-1, 1)
+    if a.ndim != 2 or a.shape[1] not in widths:
+        want = " or ".join(f"(N, {w})" for w in widths)
+        raise ValueError(f"{owner}: {name} must have shape {want}, got {a.shape}")
+    if count is not None and a.shape[0] != count:
+        raise ValueError(f"{owner}: {name} must have one row per vertex ({count}), got {a.shape[0]}")
+    if a.shape[0] < minimum:
+        raise ValueError(f"{owner}: {name} needs at least {minimum} rows, got {a.shape[0]}")
+    out = np.ascontiguousarray(a, dtype=np.float32)
+    if not np.all(np.isfinite(out)):
+        bad = int(np.argwhere(~np.isfinite(out))[0][0])
+        raise ValueError(f"{owner}: {name} must be finite (row {bad} is {a[bad].tolist()})")
+    if out is a:
+        out = out.copy()
+    out.setflags(write=False)
+    return out
+
+
+def index_array(owner: str, name: str, value: Any, width: int, vertex_count: int) -> np.ndarray:
+    """``value`` as a read-only (K, width) uint32 array of indices < ``vertex_count``."""
+    a = as_array(value, None, name=f"{owner}: {name}")
+    if a.size == 0:
+        raise ValueError(f"{owner}: {name} is empty; give at least one primitive")
+    if a.dtype.kind == "f":
+        if not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
+            raise ValueError(f"{owner}: {name} must be integers")
+    elif a.dtype.kind not in "iu":
+        raise ValueError(f"{owner}: {name} must be integers, got dtype {a.dtype}")
+    if a.ndim == 1:
+        if a.size % width:
+            raise ValueError(f"{owner}: {name} length {a.size} is not a multiple of {width}")
+        a = a.reshape(-1, width)
+    if a.ndim != 2 or a.shape[1] != width:
+        raise ValueError(f"{owner}: {name} must have shape (K, {width}), got {a.shape}")
+    lo, hi = int(a.min()), int(a.max())
+    if lo < 0 or hi >= vertex_count:
+        bad = lo if lo < 0 else hi
+        raise ValueError(
+            f"{owner}: {name} has index {bad} out of range for {vertex_count} vertices (valid: 0..{vertex_count - 1})"
+        )
+    out = np.ascontiguousarray(a, dtype=np.uint32)
+    if out is a:
+        out = out.copy()
+    out.setflags(write=False)
+    return out
+
+
+def colors(owner: str, name: str, value: Any, count: int) -> np.ndarray | None:
+    """Per-vertex colours as (count, 4) float32 RGBA; a single RGB(A) colour is broadcast."""
+    if value is None:
+        return None
+    a = as_array(value, None, name=f"{owner}: {name}")
+    if a.ndim == 1 and a.shape[0] in (3, 4):
+        a = np.broadcast_to(a, (count, a.shape[0]))
+    c = float_array(owner, name, a, (3, 4), count=count)
+    if c.shape[1] == 3:
+        c = np.concatenate([c, np.ones((count, 1), np.float32)], axis=1)
+        c.setflags(write=False)
+    return c

@@ -1,0 +1,198 @@
+"""MeshFile: a mesh stored in a file (OBJ, PLY, STL, OFF, glTF/GLB), loaded through trimesh.
+
+The file is parsed lazily on first use (``parts()``), once per version: a scene
+can name many files and pay only for those an engine actually evaluates.
+Trimesh is imported only then, so declaring a MeshFile needs no extra package.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+from .base import DeclaredShape, parameter
+from .meshes import TriangleSet
+
+__all__ = ["MeshFile"]
+
+SUFFIXES = (".obj", ".ply", ".stl", ".off", ".gltf", ".glb")
+
+
+class MeshFile(DeclaredShape):
+    """A mesh file; ``parts()`` gives, per part, its material parameters (or None) and a TriangleSet.
+
+    Supported: OBJ (+MTL), PLY, STL, OFF, glTF/GLB (node transforms applied).
+    A missing file raises FileNotFoundError at construction; an unreadable or
+    malformed one raises ValueError naming the path and the loader's reason
+    when first used (``parts()``/``load()``).
+
+    Material parameters are dicts: ``{"kind": "phong", "ambient", "diffuse",
+    "specular", "shininess", "opacity"}`` (OBJ/MTL) or ``{"kind": "pbr",
+    "base_color", "metallic", "roughness", "emission", "opacity"}`` (glTF),
+    colours as RGB tuples in [0, 1]; the simplifier turns them into
+    ``om.Material`` / ``om.PBRMaterial``.  A part's texture image, when the
+    file has one, is under ``"texture"`` as an (H, W, 4) uint8 array.
+    """
+
+    __slots__ = ("_path",)
+    _params = ("path",)
+    path = parameter("path", "Path of the mesh file.")
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        super().__init__(path=path)
+
+    def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+        path = p["path"]
+        if not isinstance(path, (str, os.PathLike)):
+            raise ValueError(f"MeshFile: path must be a str or os.PathLike, got {type(path).__name__}")
+        path = os.fspath(path)
+        if not os.path.exists(path):
+            raise FileNotFoundError(f"MeshFile: no such file {path!r}")
+        if not os.path.isfile(path):
+            raise ValueError(f"MeshFile: {path!r} is not a file")
+        if not path.lower().endswith(SUFFIXES):
+            raise ValueError(f"MeshFile: {path!r} has an unsupported extension (supported: {', '.join(SUFFIXES)})")
+        return {"path": path}, {}
+
+    def load(self) -> None:
+        """Parse the file now (otherwise done on first use); raises ValueError when it is malformed."""
+        self.parts()
+
+    def parts(self) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+        """[(material parameters or None, TriangleSet)] per part, in file order; cached per version."""
+        return self._cached("parts", lambda: _load(self._path))
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(ts.triangle_count for _, ts in self.parts())
+
+
+def _load(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"MeshFile: no such file {path!r}")
+    try:
+        import trimesh
+    except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
+        raise ValueError(f"MeshFile: loading {path!r} needs trimesh (pip install omnirender[mesh]): {exc}") from None
+    try:
+        loaded = trimesh.load(path, process=False)
+    except Exception as exc:
+        raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
+    if isinstance(loaded, trimesh.Scene):
+        try:
+            meshes = loaded.dump(concatenate=False)
+        except Exception as exc:
+            raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
+    else:
+        meshes = [loaded]
+    parts = []
+    for mesh in meshes:
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            continue  # point clouds, paths and empty geometry carry no triangles
+        try:
+            parts.append(_part(mesh))
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: {path!r} holds invalid geometry: {exc}") from None
+    if not parts:
+        raise ValueError(f"MeshFile: {path!r} contains no triangles (empty or not a mesh file)")
+    return parts
+
+
+def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
+    vertices = np.asarray(mesh.vertices, dtype=np.float32)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    normals = None
+    if "vertex_normals" in mesh._cache:  # given by the file (OBJ vn, glTF NORMAL); else computed smooth
+        vn = np.asarray(mesh.vertex_normals, dtype=np.float32)
+        if vn.shape == vertices.shape and np.all(np.isfinite(vn)):
+            normals = vn
+    colors = texcoords = None
+    material = None
+    visual = mesh.visual
+    kind = getattr(visual, "kind", None)
+    if kind == "vertex":
+        colors = np.asarray(visual.vertex_colors, dtype=np.float32) / 255.0
+    elif kind == "face":
+        fc = np.asarray(visual.face_colors, dtype=np.float32) / 255.0
+        if len(np.unique(fc, axis=0)) == 1:  # one colour for all: a material, shared vertices kept
+            material = {"kind": "phong", "diffuse": tuple(float(c) for c in fc[0, :3]), "opacity": float(fc[0, 3])}
+        else:  # faces keep their colours: every face gets its own three vertices
+            flat = faces.reshape(-1)
+            vertices = vertices[flat]
+            normals = None if normals is None else normals[flat]
+            colors = np.repeat(fc, 3, axis=0)
+            faces = np.arange(len(flat)).reshape(-1, 3)
+    elif kind == "texture" or hasattr(visual, "material"):
+        uv = getattr(visual, "uv", None)
+        if uv is not None and len(uv) == len(vertices):
+            texcoords = np.asarray(uv, dtype=np.float32)
+        material = _material(getattr(visual, "material", None))
+        if material is not None and texcoords is None:
+            material.pop("texture", None)
+    ts = TriangleSet(vertices, faces, normals=normals, colors=colors, texcoords=texcoords)
+    return material, ts
+
+
+def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:
+    if value is None:
+        return default
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 3:
+        return default
+    if a.max() > 1.0 or a.dtype.kind in "iu":
+        a = a / 255.0
+    return tuple(float(x) for x in np.clip(a[:3], 0.0, 1.0))
+
+
+def _alpha(value: Any) -> float:
+    if value is None:
+        return 1.0
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 4:
+        return 1.0
+    return float(np.clip(a[3] / 255.0 if a.max() > 1.0 else a[3], 0.0, 1.0))
+
+
+def _texture(image: Any) -> np.ndarray | None:
+    if image is None:
+        return None
+    try:
+        return np.asarray(image.convert("RGBA"), dtype=np.uint8)
+    except Exception:
+        return None
+
+
+def _material(mat: Any) -> dict[str, Any] | None:
+    if mat is None:
+        return None
+    name = type(mat).__name__
+    if name == "PBRMaterial":
+        base = getattr(mat, "baseColorFactor", None)
+        out: dict[str, Any] = {
+            "kind": "pbr",
+            "base_color": _rgb(base, (1.0, 1.0, 1.0)),
+            "metallic": float(mat.metallicFactor) if mat.metallicFactor is not None else 1.0,
+            "roughness": float(mat.roughnessFactor) if mat.roughnessFactor is not None else 1.0,
+            "emission": _rgb(getattr(mat, "emissiveFactor", None), (0.0, 0.0, 0.0)),
+            "opacity": _alpha(base),
+        }
+        tex = _texture(getattr(mat, "baseColorTexture", None))
+    elif name == "SimpleMaterial":
+        diffuse = getattr(mat, "diffuse", None)
+        glossiness = getattr(mat, "glossiness", None)
+        out = {
+            "kind": "phong",
+            "ambient": _rgb(getattr(mat, "ambient", None), (0.2, 0.2, 0.2)),
+            "diffuse": _rgb(diffuse, (0.8, 0.8, 0.8)),
+            "specular": _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)),
+            "shininess": float(glossiness) if glossiness is not None else 1.0,
+            "opacity": _alpha(diffuse),
+        }
+        tex = _texture(getattr(mat, "image", None))
+    else:
+        return None
+    if tex is not None:
+        out["texture"] = tex
+    return out
