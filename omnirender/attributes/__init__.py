@@ -1,3 +1,46 @@
-"""om.attributes (filled by issue 3)."""
+"""Attribute declarations common to all engines (issue 3).
 
-__all__: list[str] = []
+Appearance (``Color``, ``Material``, ``PBRMaterial``, ``Texture``,
+``DrawStyle``), lights with OpenGL's parameters (``DirectionalLight``,
+``PointLight``, ``SpotLight``, ``AmbientLight``), transforms (``LookAt``,
+``Billboard``) and environment attributes (``ClipPlane``, ``Fog``,
+``Background``, ``Tessellation``, ``Highlight``, ``PickId``, ``Collidable``).
+Every class validates at construction and rebuilds from ``parameters()``.
+
+The core's ``Camera``, ``LightSwitch``, ``Light`` and transforms are importable
+from here too but stay in the core's ``__all__`` (they are ``om.X`` already).
+"""
+
+from ..core.camera import Camera
+from ..core.light import Light, LightSwitch
+from ..core.transform import Matrix, Rotation, Scaling, Transform, Translation
+from .appearance import Color, DrawStyle, Material, PBRMaterial, Texture
+from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
+from .lights import AmbientLight, DirectionalLight, LightSource, PointLight, SpotLight
+from .transforms import Billboard, BillboardSimplifier, LookAt
+
+__all__ = [
+    "Color",
+    "Material",
+    "PBRMaterial",
+    "Texture",
+    "DrawStyle",
+    "LightSource",
+    "DirectionalLight",
+    "PointLight",
+    "SpotLight",
+    "AmbientLight",
+    "LookAt",
+    "Billboard",
+    "BillboardSimplifier",
+    "ClipPlane",
+    "Fog",
+    "Background",
+    "Tessellation",
+    "Highlight",
+    "PickId",
+    "Collidable",
+]
+
+# Re-exported from the core (already om.X through omnirender.core).
+_CORE_REEXPORTS = (Camera, Light, LightSwitch, Matrix, Rotation, Scaling, Transform, Translation)

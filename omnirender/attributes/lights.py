@@ -1,0 +1,237 @@
+"""Lights with OpenGL's parameters (poly attributes of the shared category ``Light``).
+
+Every light has a ``color`` and an ``intensity`` (>= 0) and OpenGL's ambient,
+diffuse and specular colours; ``diffuse`` and ``specular`` default to
+``color * intensity`` (pass a colour to set them explicitly; ``parameters()``
+keeps None for the default so a rebuilt light still follows ``color``).
+Positions and directions are in the coordinates of the place the light sits in
+the graph; ``world_position(m)`` / ``world_direction(m)`` apply the world matrix
+that ``engine.lights()`` reports.
+
+Attenuation is OpenGL's: ``f(d) = 1 / (C + L d + Q d^2)``; a spot light
+multiplies it by ``spot_factor(cos_angle) = cos_angle ** exponent`` inside the
+cone (angle to the spot axis <= ``cutoff`` degrees) and 0 outside.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..core.light import Light
+from ._params import (
+    Param,
+    Parameterised,
+    check_direction,
+    check_number,
+    check_rgb,
+    check_vector,
+    optional,
+)
+
+__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight"]
+
+_nonneg = check_number(0.0)
+
+
+def _scaled(color: tuple[float, ...], intensity: float) -> tuple[float, float, float]:
+    return (color[0] * intensity, color[1] * intensity, color[2] * intensity)
+
+
+class _Defaulted(Param):
+    """A colour parameter that reads as ``color * intensity`` while unset (None)."""
+
+    __slots__ = ()
+
+    def __get__(self, obj: Any, owner: type | None = None) -> Any:
+        if obj is None:
+            return self
+        value = getattr(obj, self.slot)
+        return _scaled(obj._color, obj._intensity) if value is None else value
+
+
+class LightSource(Parameterised, Light):
+    """Base of the concrete lights: colour, intensity and OpenGL's colour terms."""
+
+    __slots__ = ("_color", "_intensity", "_ambient", "_diffuse", "_specular")
+    color = Param(check_rgb, "light colour (RGB in [0, 1])")
+    intensity = Param(_nonneg, "scale of the colour (>= 0)")
+    ambient = Param(check_rgb, "ambient contribution (RGB)")
+    diffuse = _Defaulted(optional(check_rgb), "diffuse colour; None: color * intensity")
+    specular = _Defaulted(optional(check_rgb), "specular colour; None: color * intensity")
+
+    def __init__(
+        self,
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+    ) -> None:
+        super().__init__()
+        self.color = color
+        self.intensity = intensity
+        self.ambient = ambient
+        self.diffuse = diffuse
+        self.specular = specular
+
+    @property
+    def radiance(self) -> tuple[float, float, float]:
+        """``color * intensity``: what physically based engines emit."""
+        return _scaled(self._color, self._intensity)
+
+    def attenuation(self, distance: float | np.ndarray) -> float | np.ndarray:
+        """Distance attenuation factor (1 for lights without attenuation)."""
+        d = np.asarray(distance, dtype=np.float64)
+        return 1.0 if d.ndim == 0 else np.ones_like(d)
+
+
+class _Attenuated(LightSource):
+    """A light at a position, attenuated with distance (OpenGL's C, L, Q)."""
+
+    __slots__ = ("_position", "_constant", "_linear", "_quadratic")
+    position = Param(check_vector(3), "position in the light's coordinates")
+    constant = Param(_nonneg, "constant attenuation C")
+    linear = Param(_nonneg, "linear attenuation L")
+    quadratic = Param(_nonneg, "quadratic attenuation Q")
+
+    def _init_attenuation(self, position: Sequence[float], constant: float, linear: float, quadratic: float) -> None:
+        self.position = position
+        self.constant = constant
+        self.linear = linear
+        self.quadratic = quadratic
+        if self._constant == 0.0 and self._linear == 0.0 and self._quadratic == 0.0:
+            raise ValueError(f"{type(self).__name__}: constant, linear and quadratic must not all be 0")
+
+    def attenuation(self, distance: float | np.ndarray) -> float | np.ndarray:
+        """``1 / (C + L d + Q d^2)`` for distance(s) ``d`` >= 0."""
+        d = np.asarray(distance, dtype=np.float64)
+        f = 1.0 / (self._constant + self._linear * d + self._quadratic * d * d)
+        return float(f) if d.ndim == 0 else f
+
+    def world_position(self, matrix: np.ndarray) -> np.ndarray:
+        """The position in world coordinates under ``matrix`` (the light's world matrix)."""
+        return (np.asarray(matrix, dtype=np.float64) @ np.array([*self._position, 1.0]))[:3]
+
+
+class DirectionalLight(LightSource):
+    """A light infinitely far away; ``direction`` is the way the light travels (into the scene)."""
+
+    __slots__ = ("_direction",)
+    direction = Param(check_direction, "direction of travel (normalised)")
+
+    def __init__(
+        self,
+        direction: Sequence[float] = (0.0, 0.0, -1.0),
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+    ) -> None:
+        super().__init__(color, intensity, ambient, diffuse, specular)
+        self.direction = direction
+
+    def world_direction(self, matrix: np.ndarray) -> np.ndarray:
+        """The unit direction of travel in world coordinates under ``matrix``."""
+        d = np.asarray(matrix, dtype=np.float64)[:3, :3] @ np.asarray(self._direction)
+        return d / np.linalg.norm(d)
+
+
+class PointLight(_Attenuated):
+    """A light at ``position`` shining in all directions."""
+
+    __slots__ = ()
+
+    def __init__(
+        self,
+        position: Sequence[float] = (0.0, 0.0, 0.0),
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        constant: float = 1.0,
+        linear: float = 0.0,
+        quadratic: float = 0.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+    ) -> None:
+        super().__init__(color, intensity, ambient, diffuse, specular)
+        self._init_attenuation(position, constant, linear, quadratic)
+
+
+class SpotLight(_Attenuated):
+    """A point light restricted to a cone around ``direction``.
+
+    ``cutoff`` is the cone's half angle in degrees (0 < cutoff <= 90),
+    ``exponent`` (>= 0) concentrates the light towards the axis.
+    """
+
+    __slots__ = ("_direction", "_cutoff", "_exponent")
+    direction = Param(check_direction, "spot axis (normalised)")
+    cutoff = Param(check_number(0.0, 90.0, min_open=True), "half angle of the cone in degrees")
+    exponent = Param(_nonneg, "spot exponent >= 0")
+
+    def __init__(
+        self,
+        position: Sequence[float] = (0.0, 0.0, 0.0),
+        direction: Sequence[float] = (0.0, 0.0, -1.0),
+        cutoff: float = 30.0,
+        exponent: float = 0.0,
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        constant: float = 1.0,
+        linear: float = 0.0,
+        quadratic: float = 0.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+    ) -> None:
+        super().__init__(color, intensity, ambient, diffuse, specular)
+        self._init_attenuation(position, constant, linear, quadratic)
+        self.direction = direction
+        self.cutoff = cutoff
+        self.exponent = exponent
+
+    @property
+    def cos_cutoff(self) -> float:
+        """cos(cutoff), the smallest cosine still inside the cone."""
+        return math.cos(math.radians(self._cutoff))
+
+    def spot_factor(self, cos_angle: float | np.ndarray) -> float | np.ndarray:
+        """``cos_angle ** exponent`` inside the cone, 0 outside.
+
+        ``cos_angle`` is the cosine between the spot axis and the direction from
+        the light to the lit point.
+        """
+        c = np.asarray(cos_angle, dtype=np.float64)
+        inside = c >= self.cos_cutoff - 1e-12
+        f = np.where(inside, np.power(np.clip(c, 0.0, 1.0), self._exponent), 0.0)
+        return float(f) if c.ndim == 0 else f
+
+    def world_direction(self, matrix: np.ndarray) -> np.ndarray:
+        """The unit spot axis in world coordinates under ``matrix``."""
+        d = np.asarray(matrix, dtype=np.float64)[:3, :3] @ np.asarray(self._direction)
+        return d / np.linalg.norm(d)
+
+
+class AmbientLight(LightSource):
+    """Light that reaches every surface equally from everywhere (``ambient = color * intensity``)."""
+
+    __slots__ = ()
+
+    def __init__(self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2) -> None:
+        super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+    @property
+    def ambient(self) -> tuple[float, float, float]:  # type: ignore[override]
+        return _scaled(self._color, self._intensity)
+
+    @ambient.setter
+    def ambient(self, value: Sequence[float]) -> None:
+        object.__setattr__(self, "_ambient", check_rgb("AmbientLight", "ambient", value))
+
+    def parameters(self) -> dict[str, Any]:
+        return {"color": self._color, "intensity": self._intensity}

@@ -1,0 +1,69 @@
+"""Appearance attributes: colours, materials, textures, draw style."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+
+def test_color_forms():
+    assert om.Color(1, 0.5, 0).rgba == (1.0, 0.5, 0.0, 1.0)
+    assert om.Color((0, 0, 1, 0.25)).rgba == (0.0, 0.0, 1.0, 0.25)
+    assert om.Color(np.array([0.2, 0.2, 0.2])).rgb == (0.2, 0.2, 0.2)
+
+
+def test_material_colours_are_rgb_and_transparency_hint():
+    m = om.Material(diffuse=(1, 0, 0, 0.3))
+    assert m.diffuse == (1.0, 0.0, 0.0)
+    assert "transparent" not in m.hints
+    assert "transparent" in om.Material(opacity=0.5).hints
+    assert "transparent" in om.PBRMaterial(opacity=0.2).hints
+
+
+def test_texture_from_array_gray_rgb_rgba_float():
+    gray = np.array([[0, 255], [128, 64]], np.uint8)
+    a = om.Texture(gray).image_array()
+    assert a.shape == (2, 2, 4) and a.dtype == np.uint8
+    assert a[0, 1].tolist() == [255, 255, 255, 255] and a[1, 0].tolist() == [128, 128, 128, 255]
+    rgb = om.Texture(np.ones((3, 2, 3))).image_array()
+    assert rgb.shape == (3, 2, 4) and np.all(rgb == 255)
+    rgba = np.zeros((1, 1, 4), np.uint8)
+    rgba[0, 0] = (1, 2, 3, 4)
+    t = om.Texture(rgba)
+    assert t.image_array()[0, 0].tolist() == [1, 2, 3, 4]
+    assert t.image_array() is t.image_array()  # cached
+    assert t.path is None
+    assert not t.image_array().flags.writeable
+
+
+def test_texture_path_is_lazy_and_loads_with_pillow(tmp_path):
+    from PIL import Image
+
+    path = tmp_path / "tex.png"
+    t = om.Texture(path)  # no file yet: loading is lazy
+    assert t.path == str(path)
+    arr = np.zeros((4, 5, 3), np.uint8)
+    arr[0, 0] = (255, 0, 0)
+    Image.fromarray(arr).save(path)
+    img = t.image_array()
+    assert img.shape == (4, 5, 4) and img[0, 0].tolist() == [255, 0, 0, 255]
+    t.image = np.zeros((2, 2, 4), np.uint8)  # replacing the image drops the cache
+    assert t.image_array().shape == (2, 2, 4)
+
+
+def test_texture_errors_name_the_path(tmp_path):
+    missing = tmp_path / "nope.png"
+    with pytest.raises(FileNotFoundError, match="nope.png"):
+        om.Texture(missing).image_array()
+    bad = tmp_path / "bad.png"
+    bad.write_text("not an image")
+    with pytest.raises(ValueError, match="bad.png"):
+        om.Texture(bad).image_array()
+
+
+def test_drawstyle_cull_booleans():
+    assert om.DrawStyle(cull=True).cull == "back"
+    assert om.DrawStyle(cull=False).cull == "none"
+    assert om.DrawStyle(cull="front").cull == "front"
