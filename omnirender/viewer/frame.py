@@ -1,0 +1,135 @@
+"""One viewer frame as something any engine can run.
+
+A frame is evaluated by ``engine.run(FrameRoot)``: the root's declarative
+pre-evaluation hands the engine the viewer's lights (camera-space ones placed
+by the eye-to-world matrix), the lights of every scene node in the render
+lists, and a camera carrying the viewer's exact view and projection matrices.
+Its program evaluates a single :class:`FrameShape`, whose simplifier (a
+default for every engine) draws the four passes by calling each renderable's
+``render(engine, flags)``.  Because the frame runs inside one traversal, nodes
+evaluated by renderables do not redo pre-evaluation, so lights and camera stay
+those of the frame.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..core.camera import Camera
+from ..core.component import Shape
+from ..core.engine import Engine
+from ..core.handler import ShapeSimplifier, default_for
+from ..core.program import EVAL
+from .render_list import PASSES
+from .renderable import HIGHLIGHT, TRANSPARENT, TWO_DIMENSIONAL, NodeRenderable
+
+__all__ = ["ViewCamera", "FrameShape", "FrameRoot", "FrameSimplifier", "PASS_FLAGS"]
+
+#: Flags given to ``render`` in each pass.
+PASS_FLAGS = {
+    "opaque": 0,
+    "transparent": TRANSPARENT,
+    "opaque_2d": TWO_DIMENSIONAL,
+    "transparent_2d": TRANSPARENT | TWO_DIMENSIONAL,
+}
+
+
+class ViewCamera(Camera):
+    """An ``om.Camera`` whose view and projection are given as matrices by the viewer."""
+
+    __slots__ = ("_view", "_projection")
+
+    def __init__(self, camera: Camera, view: np.ndarray, projection: np.ndarray) -> None:
+        if camera.is_orthographic:
+            super().__init__(camera.eye, camera.center, camera.up, fov=None, height=camera.height,
+                             near=camera.near, far=camera.far)  # fmt: skip
+        else:
+            super().__init__(camera.eye, camera.center, camera.up, fov=camera.fov, near=camera.near, far=camera.far)
+        object.__setattr__(self, "_view", np.array(view, dtype=np.float64))
+        object.__setattr__(self, "_projection", np.array(projection, dtype=np.float64))
+
+    def view_matrix(self) -> np.ndarray:
+        return self._view.copy()
+
+    def projection_matrix(self, aspect: float) -> np.ndarray:
+        return self._projection.copy()
+
+
+class FrameShape(Shape):
+    """Stands for "draw the viewer's render lists" inside an engine traversal."""
+
+    __slots__ = ("_lists", "_highlighted", "_begin_pass")
+
+    def __init__(
+        self,
+        lists: Sequence[Any],
+        highlighted: set[int],
+        begin_pass: Callable[[Engine, str], None] | None = None,
+    ) -> None:
+        super().__init__()
+        object.__setattr__(self, "_lists", tuple(lists))
+        object.__setattr__(self, "_highlighted", highlighted)
+        object.__setattr__(self, "_begin_pass", begin_pass)
+
+
+@default_for(Engine)
+class FrameSimplifier(ShapeSimplifier):
+    """Draws a frame: opaque, transparent, 2D opaque, 2D transparent, each list in turn."""
+
+    __slots__ = ()
+    target = FrameShape
+
+    def exec(self, shape: FrameShape, engine: Engine) -> None:
+        highlighted = shape._highlighted
+        for name in PASSES:
+            items = [r for rl in shape._lists for r in rl.sublist(name)]
+            if not items:
+                continue
+            if shape._begin_pass is not None:
+                shape._begin_pass(engine, name)
+            base = PASS_FLAGS[name]
+            for r in items:
+                r.render(engine, base | HIGHLIGHT if id(r) in highlighted else base)
+        if shape._begin_pass is not None:
+            shape._begin_pass(engine, "end")
+        return None
+
+
+class FrameRoot:
+    """A duck-typed graph root (``groups``, ``preevaluate``, ``program``) for ``engine.run``."""
+
+    __slots__ = ("_lights", "_camera", "_shape", "_lists", "name", "path")
+
+    groups: frozenset[str] = frozenset()
+
+    def __init__(
+        self,
+        lights: Sequence[tuple[Any, np.ndarray]],
+        camera: ViewCamera,
+        shape: FrameShape,
+        lists: Sequence[Any],
+    ) -> None:
+        self._lights = list(lights)
+        self._camera = camera
+        self._shape = shape
+        self._lists = lists
+        self.name = "viewer"
+        self.path = "/viewer"
+
+    def preevaluate(self, mask_fn: Any = None) -> tuple[list[tuple[Any, np.ndarray]], tuple[Camera, np.ndarray]]:
+        lights = list(self._lights)
+        seen = {id(light) for light, _ in lights}
+        for rl in self._lists:
+            for r in rl:
+                if isinstance(r, NodeRenderable):
+                    for light, matrix in r.node.preevaluate(mask_fn)[0]:
+                        if id(light) not in seen:
+                            seen.add(id(light))
+                            lights.append((light, matrix))
+        return lights, (self._camera, np.eye(4))
+
+    def program(self) -> list[tuple[int, Any]]:
+        return [(EVAL, self._shape)]
