@@ -1,0 +1,198 @@
+"""Conversions from generic attributes to Mitsuba plugin dicts (no Mitsuba import here).
+
+Colours of materials are taken as sRGB display values (what the GL engine
+writes to the screen) and converted to linear reflectances, so a fully lit
+surface has the same colour in both engines.  Light colours are linear
+radiance scales.  GL point and spot lights with constant attenuation do not
+fall off with distance, physical ones always fall off as 1/d^2: the intensity
+is chosen so both agree at a reference distance (the camera's centre of
+interest by default).  Matrices are numpy 4x4 here; the engine turns them into
+``mi.ScalarTransform4f``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..attributes import AmbientLight, Color, DirectionalLight, Material, PBRMaterial, PointLight, SpotLight
+from ..core import Camera
+
+__all__ = [
+    "srgb_to_linear",
+    "linear_to_srgb",
+    "rgb",
+    "material_bsdf",
+    "pbr_bsdf",
+    "color_bsdf",
+    "wrap_bsdf",
+    "light_emitter",
+    "sensor_matrix",
+    "sensor_dict",
+    "look_at",
+    "GL_TO_MITSUBA_EYE",
+]
+
+#: GL eye space (looking down -z, +x right) to Mitsuba camera space (looking down +z, +x left).
+GL_TO_MITSUBA_EYE = np.diag([-1.0, 1.0, -1.0, 1.0])
+
+
+def srgb_to_linear(c: Any) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] to linear values (the IEC 61966-2-1 curve)."""
+    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, None)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(c: Any) -> np.ndarray:
+    """Linear values to sRGB encoding (clamped to [0, 1] first)."""
+    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
+    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def rgb(value: Any, *, linearize: bool = True) -> dict[str, Any]:
+    """An ``rgb`` spectrum plugin dict of 3 values (sRGB in, linear out unless ``linearize`` is False)."""
+    v = np.asarray(value, dtype=np.float64).reshape(-1)[:3]
+    if linearize:
+        v = srgb_to_linear(v)
+    return {"type": "rgb", "value": [float(x) for x in v]}
+
+
+def _shininess_to_alpha(shininess: float) -> float:
+    """Phong exponent to Beckmann roughness (Walter et al.: alpha = sqrt(2 / (n + 2)))."""
+    return float(min(1.0, max(0.01, math.sqrt(2.0 / (shininess + 2.0)))))
+
+
+def material_bsdf(material: Material, reflectance: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Phong ``Material`` -> ``diffuse``, or ``roughplastic`` when it has a specular colour.
+
+    ``reflectance`` (a texture dict) replaces the diffuse colour when given.
+    """
+    diffuse = reflectance if reflectance is not None else rgb(material.diffuse)
+    spec = float(np.mean(material.specular))
+    if spec <= 0.0:
+        return {"type": "diffuse", "reflectance": diffuse}
+    return {
+        "type": "roughplastic",
+        "distribution": "beckmann",
+        "alpha": _shininess_to_alpha(material.shininess),
+        "diffuse_reflectance": diffuse,
+        "specular_reflectance": min(1.0, spec),
+        "nonlinear": True,
+    }
+
+
+def pbr_bsdf(material: PBRMaterial, base_color: dict[str, Any] | None = None) -> dict[str, Any]:
+    """``PBRMaterial`` -> ``principled`` (the same metallic-roughness model)."""
+    return {
+        "type": "principled",
+        "base_color": base_color if base_color is not None else rgb(material.base_color),
+        "metallic": float(material.metallic),
+        "roughness": float(max(material.roughness, 0.01)),
+    }
+
+
+def color_bsdf(color: Color | None, reflectance: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A plain ``Color`` (or the default grey 0.8) -> ``diffuse``."""
+    if reflectance is None:
+        reflectance = rgb(color.rgb if color is not None else (0.8, 0.8, 0.8))
+    return {"type": "diffuse", "reflectance": reflectance}
+
+
+def wrap_bsdf(bsdf: dict[str, Any], opacity: float, two_sided: bool = True) -> dict[str, Any]:
+    """Make a converted BSDF two-sided (GL lights both faces) and translucent via ``mask``."""
+    if two_sided:
+        bsdf = {"type": "twosided", "material": bsdf}
+    if opacity < 1.0:
+        bsdf = {"type": "mask", "opacity": float(opacity), "material": bsdf}
+    return bsdf
+
+
+def look_at(origin: np.ndarray, target: np.ndarray, up: np.ndarray) -> np.ndarray:
+    """Mitsuba's ``look_at`` (local +z towards the target, +x to the image's left) as numpy."""
+    d = np.asarray(target, np.float64) - np.asarray(origin, np.float64)
+    d /= np.linalg.norm(d)
+    left = np.cross(np.asarray(up, np.float64), d)
+    n = np.linalg.norm(left)
+    if n < 1e-9:  # up parallel to the direction: any perpendicular will do
+        left = np.cross(np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0]), d)
+        n = np.linalg.norm(left)
+    left /= n
+    new_up = np.cross(d, left)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, new_up, d, origin
+    return m
+
+
+def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[str, Any] | None:
+    """An emitter dict for a generic light with world matrix ``world`` (None: nothing to emit).
+
+    ``reference`` is the point where physical 1/d^2 falloff is made to match
+    GL's attenuation.
+    """
+    if isinstance(light, AmbientLight):
+        # Constant environment radiance L lights an unoccluded diffuse surface
+        # to albedo * L, GL's ambient term is material ambient * light ambient.
+        return {"type": "constant", "radiance": rgb(light.ambient, linearize=False)}
+    color = np.asarray(light.diffuse, dtype=np.float64)
+    if isinstance(light, DirectionalLight):
+        # irradiance E gives albedo * E / pi reflected radiance; GL: diffuse * color.
+        d = light.world_direction(world)
+        return {
+            "type": "directional",
+            "direction": [float(x) for x in d],
+            "irradiance": rgb(color * math.pi, linearize=False),
+        }
+    if isinstance(light, (PointLight, SpotLight)):
+        p = light.world_position(world)
+        dist = max(float(np.linalg.norm(np.asarray(reference) - p)), 1e-6)
+        scale = math.pi * dist * dist * float(light.attenuation(dist))
+        intensity = rgb(color * scale, linearize=False)
+        if isinstance(light, PointLight):
+            return {"type": "point", "position": [float(x) for x in p], "intensity": intensity}
+        axis = light.world_direction(world)
+        up = np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.99 else np.array([1.0, 0.0, 0.0])
+        cutoff = float(light.cutoff)
+        # GL's cos^exponent falloff: full beam where it is above one half.
+        beam = cutoff if light.exponent <= 0 else math.degrees(math.acos(0.5 ** (1.0 / light.exponent)))
+        return {
+            "type": "spot",
+            "to_world": look_at(p, p + axis, up),
+            "cutoff_angle": cutoff,
+            "beam_width": float(min(beam, cutoff * 0.999)),
+            "intensity": intensity,
+        }
+    return None
+
+
+def sensor_matrix(camera: Camera, camera_world: np.ndarray, aspect: float) -> np.ndarray:
+    """Mitsuba sensor ``to_world`` reproducing the camera's GL view exactly.
+
+    The GL eye looks down -z with +x to the right; Mitsuba's camera looks down
+    +z with +x to the left: a half turn about y.  Mitsuba's orthographic camera
+    sees x in [-1, 1] and y in [-1/aspect, 1/aspect]; scaling x and y by
+    ``height * aspect / 2`` makes the view ``height`` tall.
+    """
+    eye_to_world = np.asarray(camera_world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    m = eye_to_world @ GL_TO_MITSUBA_EYE
+    if camera.is_orthographic:
+        s = camera.height * aspect / 2.0
+        m = m @ np.diag([s, s, 1.0, 1.0])
+    return m
+
+
+def sensor_dict(camera: Camera, camera_world: np.ndarray, size: tuple[int, int], film: dict[str, Any]) -> dict:
+    """A ``perspective`` or ``orthographic`` sensor dict (with ``film``) for the camera."""
+    w, h = size
+    sensor: dict[str, Any] = {
+        "type": "orthographic" if camera.is_orthographic else "perspective",
+        "to_world": sensor_matrix(camera, camera_world, w / h),
+        "near_clip": float(camera.near),
+        "far_clip": float(camera.far),
+        "film": film,
+    }
+    if not camera.is_orthographic:
+        sensor["fov"] = float(camera.fov)
+        sensor["fov_axis"] = "y"
+    return sensor

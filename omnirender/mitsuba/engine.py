@@ -1,0 +1,262 @@
+"""The Mitsuba engine: evaluates a scene graph into a Mitsuba 3 scene.
+
+Painters (service ``"mitsuba.paint"``, see :mod:`.painters`) turn shapes into
+Mitsuba shape plugins with ``to_world`` matrices or into in-memory meshes;
+attribute painters collect lights, emitters, the integrator and the
+background.  The BSDF of a shape is converted from the active appearance
+attributes (:meth:`MitsubaEngine.current_bsdf`), cached per combination so
+shapes with the same look share one Mitsuba object.  After a traversal
+:meth:`MitsubaEngine.scene_dict` assembles sensor, film, integrator, emitters
+and shapes, and :meth:`MitsubaEngine.load` instantiates it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..attributes import Color, Material, PBRMaterial, Texture
+from ..core import SIMPLIFY, Camera, Engine, Technique
+from ..core.errors import EvaluationError
+from . import convert
+from ._mi import mitsuba, transform
+from .attributes import BSDF, Emitter
+
+__all__ = ["MitsubaEngine", "DEFAULT_INTEGRATOR"]
+
+#: The integrator used when the scene has no ``om.mitsuba.Integrator``.  Directly
+#: visible emitters (the ambient environment) are hidden so that the background
+#: stays black and colours are premultiplied by coverage, unless the scene has
+#: area emitters (emissive materials), which must stay visible.
+DEFAULT_INTEGRATOR: dict[str, Any] = {"type": "path", "max_depth": 8, "hide_emitters": True}
+
+#: A cheap pass for the pixel coverage (alpha) and depth: first hits only
+#: (Mitsuba's ``depth`` integrator writes the ray distance to R, G, B and the hit to A).
+COVERAGE_INTEGRATOR: dict[str, Any] = {"type": "depth"}
+
+_WRAP = {"repeat": "repeat", "clamp": "clamp", "mirror": "mirror"}
+_FILTER = {"linear": "bilinear", "nearest": "nearest"}
+
+
+class MitsubaEngine(Engine):
+    """Builds a Mitsuba scene dict from a scene graph (service ``"mitsuba.paint"``).
+
+    ``size`` is the film size (width, height).  Use :func:`omnirender.mitsuba.render`
+    for the whole job; the engine is for users who want the Mitsuba scene
+    itself (``engine.run(scene); mi_scene = engine.load()``).
+    """
+
+    service = "mitsuba.paint"
+
+    def __init__(
+        self,
+        size: tuple[int, int] = (640, 480),
+        *,
+        technique: Technique | None = None,
+        on_missing: str = "raise",
+        mask: str | Callable[[frozenset[str]], bool] | None = None,
+    ) -> None:
+        super().__init__(technique=technique, on_missing=on_missing, mask=mask)
+        w, h = (int(v) for v in size)
+        if w <= 0 or h <= 0:
+            raise ValueError(f"MitsubaEngine: size must be positive, got {size!r}")
+        self.size = (w, h)
+        self.clear()
+
+    # -- collected scene ----------------------------------------------------
+    def clear(self) -> None:
+        """Forget everything collected by earlier traversals."""
+        #: shape plugins (dicts or Mitsuba objects) by unique key, in evaluation order
+        self.shapes: dict[str, Any] = {}
+        #: emitter plugin dicts by unique key
+        self.emitters: dict[str, Any] = {}
+        #: (light, world matrix) pairs still to convert (converted in scene_dict)
+        self.pending_lights: list[tuple[Any, np.ndarray]] = []
+        #: the integrator plugin dict from an ``om.mitsuba.Integrator``, or None
+        self.integrator: dict[str, Any] | None = None
+        #: the RGBA colour of the active ``om.Background`` at the root, or None
+        self.background: tuple[float, ...] | None = None
+        self._bsdfs: dict[tuple, Any] = {}
+        self._emitter_ids: set[int] = set()
+        #: whether some shape got an area emitter (then emitters cannot be hidden)
+        self.has_area_emitters = False
+        self._count = 0
+
+    def unique_name(self, kind: str) -> str:
+        """A fresh key for the scene dict (``"003_sphere"``)."""
+        self._count += 1
+        return f"{self._count:05d}_{kind}"
+
+    def add_emitter(self, plugin: dict[str, Any], kind: str = "emitter") -> str:
+        """Add a scene-level emitter plugin dict; returns its key."""
+        key = self.unique_name(kind)
+        self.emitters[key] = plugin
+        return key
+
+    def add_light(self, light: Any) -> None:
+        """Queue a generic light (with its world matrix from ``lights()``) for conversion."""
+        matrix = np.eye(4)
+        for other, m in self.lights():
+            if other is light:
+                matrix = m
+                break
+        else:
+            matrix = self.model_matrix()
+        self.pending_lights.append((light, np.array(matrix)))
+
+    def add_shape(self, plugin: Any, kind: str, *, two_sided: bool = True) -> str:
+        """Add a shape plugin dict (its BSDF and area emitter filled from the state); returns its key."""
+        if isinstance(plugin, dict):
+            plugin.setdefault("bsdf", self.current_bsdf(two_sided=two_sided))
+            emitter = self.current_area_emitter()
+            if emitter is not None:
+                plugin.setdefault("emitter", emitter)
+        key = self.unique_name(kind)
+        self.shapes[key] = plugin
+        return key
+
+    def simplify(self, shape: Any) -> None:
+        """Evaluate ``shape`` through its simplifier (for painters that cannot draw a case natively)."""
+        for klass in type(shape).__mro__:
+            h = self.find_handler(SIMPLIFY, klass)
+            if h is not None:
+                result = h.exec(shape, self)
+                if result is not None:
+                    self.evaluate(result)
+                return
+        raise EvaluationError(
+            f"MitsubaEngine: {type(shape).__name__} in node {self.node_path or '/'} cannot be drawn natively "
+            f"here and has no simplifier; register an om.ShapeSimplifier for it"
+        )
+
+    # -- appearance ---------------------------------------------------------
+    def current_bsdf(self, *, two_sided: bool = True, vertex_colors: bool = False, texcoords: bool = True) -> Any:
+        """The Mitsuba BSDF object for the active appearance attributes (cached).
+
+        Priority: ``om.mitsuba.BSDF`` (passed through), ``PBRMaterial``,
+        ``Material``, ``Color``, default grey.  A ``Texture`` (when the shape
+        has texture coordinates) or per-vertex colours replace the diffuse
+        colour.  Converted BSDFs are two-sided and use ``mask`` for opacity < 1.
+        """
+        user = self.mono(BSDF)
+        tex = self.mono(Texture) if texcoords else None
+        pbr = self.mono(PBRMaterial)
+        mat = self.mono(Material)
+        col = self.mono(Color)
+        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, pbr, mat, col)) + (
+            two_sided,
+            vertex_colors,
+        )
+        found = self._bsdfs.get(key)
+        if found is None:
+            found = self._bsdfs[key] = mitsuba().load_dict(
+                self._bsdf_dict(user, tex, pbr, mat, col, two_sided, vertex_colors)
+            )
+        return found
+
+    def _bsdf_dict(self, user, tex, pbr, mat, col, two_sided, vertex_colors) -> dict[str, Any]:
+        if user is not None:
+            return user.plugin_dict()
+        reflectance = None
+        if tex is not None:
+            reflectance = self._texture_dict(tex)
+        elif vertex_colors:
+            reflectance = {"type": "mesh_attribute", "name": "vertex_color"}
+        if pbr is not None:
+            bsdf, opacity = convert.pbr_bsdf(pbr, reflectance), pbr.opacity
+        elif mat is not None:
+            bsdf, opacity = convert.material_bsdf(mat, reflectance), mat.opacity
+        else:
+            bsdf, opacity = convert.color_bsdf(col, reflectance), (col.a if col is not None else 1.0)
+        return convert.wrap_bsdf(bsdf, float(opacity), two_sided)
+
+    def _texture_dict(self, tex: Texture) -> dict[str, Any]:
+        mi = mitsuba()
+        rgba = tex.image_array()
+        # Mitsuba looks up v = 0 in the image's first row; omnirender follows
+        # OpenGL (v = 0 at the bottom row), so the rows are flipped.
+        image = np.ascontiguousarray(rgba[::-1, :, :3])
+        return {
+            "type": "bitmap",
+            "bitmap": mi.Bitmap(image),
+            "wrap_mode": _WRAP.get(tex.wrap, "repeat"),
+            "filter_type": _FILTER.get(tex.filter, "bilinear"),
+        }
+
+    def current_area_emitter(self) -> Any:
+        """An area emitter object for the next shape (emissive material or ``om.mitsuba.Emitter("area")``)."""
+        mi = mitsuba()
+        areas = [e for e in self.poly(Emitter) if e.is_area]
+        if areas:
+            self.has_area_emitters = True
+            return mi.load_dict(areas[-1].plugin_dict())
+        material = self.mono(PBRMaterial) or self.mono(Material)
+        if material is not None and max(material.emission) > 0.0:
+            self.has_area_emitters = True
+            return mi.load_dict({"type": "area", "radiance": convert.rgb(material.emission)})
+        return None
+
+    # -- evaluation ---------------------------------------------------------
+    def begin(self, root: Any) -> None:
+        self.clear()
+        super().begin(root)
+
+    def reference_point(self) -> np.ndarray:
+        """Where GL-style light attenuation is matched: the camera's centre of interest."""
+        camera, world = self.camera_or_default()
+        return (np.asarray(world, np.float64) @ np.array([*camera.center, 1.0]))[:3]
+
+    def camera_or_default(self) -> tuple[Camera, np.ndarray]:
+        """The pre-evaluated camera, or ``om.Camera()`` (eye at (0, 0, 5)) when the scene has none."""
+        if self.camera is not None:
+            return self.camera
+        return Camera(), np.eye(4)
+
+    # -- assembling ---------------------------------------------------------
+    def film_dict(self, rfilter: str = "box") -> dict[str, Any]:
+        w, h = self.size
+        return {
+            "type": "hdrfilm",
+            "width": w,
+            "height": h,
+            "pixel_format": "rgba",
+            "component_format": "float32",
+            "rfilter": {"type": rfilter},
+        }
+
+    def integrator_dict(self, integrator: dict[str, Any] | None = None) -> dict[str, Any]:
+        """The integrator to use: ``integrator``, else the scene's, else :data:`DEFAULT_INTEGRATOR`."""
+        if integrator is not None:
+            return dict(integrator)
+        if self.integrator is not None:
+            return dict(self.integrator)
+        return {**DEFAULT_INTEGRATOR, "hide_emitters": not self.has_area_emitters}
+
+    def scene_dict(self, *, integrator: dict[str, Any] | None = None, rfilter: str = "box") -> dict[str, Any]:
+        """The Mitsuba scene dict of the last traversal (``integrator`` overrides the scene's)."""
+        camera, world = self.camera_or_default()
+        sensor = convert.sensor_dict(camera, world, self.size, self.film_dict(rfilter))
+        sensor["to_world"] = transform(sensor["to_world"])
+        chosen = self.integrator_dict(integrator)
+        out: dict[str, Any] = {"type": "scene", "integrator": chosen, "sensor": sensor}
+        self.convert_lights()
+        out.update(self.emitters)
+        out.update(self.shapes)
+        return out
+
+    def convert_lights(self) -> None:
+        """Turn the queued generic lights into emitter plugins (matched at :meth:`reference_point`)."""
+        reference = self.reference_point()
+        for light, matrix in self.pending_lights:
+            plugin = convert.light_emitter(light, matrix, reference)
+            if plugin is not None:
+                if "to_world" in plugin:
+                    plugin["to_world"] = transform(plugin["to_world"])
+                self.add_emitter(plugin, type(light).__name__.lower())
+        self.pending_lights.clear()
+
+    def load(self, **options: Any) -> Any:
+        """Instantiate the scene of the last traversal as an ``mi.Scene`` (options: see :meth:`scene_dict`)."""
+        return mitsuba().load_dict(self.scene_dict(**options))

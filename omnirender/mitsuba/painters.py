@@ -1,0 +1,273 @@
+"""Default handlers of the Mitsuba engine (service ``"mitsuba.paint"``).
+
+Shapes Mitsuba has natively (sphere, cube, cylinder, disk, rectangle) become
+shape plugins with ``to_world`` = model matrix times the shape's own frame;
+Mitsuba's quadrics are in its own frames (z-up disk and rectangle, cylinder
+from p0 to p1, open), so the painters add the rotation and, for the cylinder,
+the two cap disks.  Sphere and cylinder refuse non-uniform scaling in Mitsuba:
+under such a matrix they fall back to their simplifier (a mesh).  Triangle
+sets become in-memory meshes.  Cones, tori and all other shapes reach Mitsuba
+through their simplifiers.  Lines and points have no surface and are skipped
+with one warning per class.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..attributes import Background, DrawStyle, LightSource
+from ..core import AttributePainter, ShapePainter, default_for
+from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
+from . import convert
+from ._mi import transform
+from .attributes import Emitter, Integrator
+from .engine import MitsubaEngine
+from .mesh import build_mesh
+
+__all__ = [
+    "SpherePainter",
+    "BoxPainter",
+    "CylinderPainter",
+    "DiskPainter",
+    "RectanglePainter",
+    "TriangleSetPainter",
+    "SkipPainter",
+    "LightPainter",
+    "EmitterPainter",
+    "IntegratorPainter",
+    "BackgroundPainter",
+    "is_similarity",
+]
+
+SERVICE = MitsubaEngine.service
+
+
+def _translate(x: float, y: float, z: float) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def _scale(x: float, y: float, z: float) -> np.ndarray:
+    return np.diag([x, y, z, 1.0])
+
+
+def _rot_x(degrees: float) -> np.ndarray:
+    c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    m = np.eye(4)
+    m[1, 1], m[1, 2], m[2, 1], m[2, 2] = c, -s, s, c
+    return m
+
+
+#: Mitsuba's z-up frame (disk, rectangle) to ours: z -> +y, y -> -z.
+Z_TO_Y = _rot_x(-90.0)
+#: z -> -y (the bottom cap of a cylinder faces down).
+Z_TO_MINUS_Y = _rot_x(90.0)
+
+
+def is_similarity(matrix: np.ndarray, tol: float = 1e-6) -> bool:
+    """Whether the linear part is a rotation (or mirror) times a uniform scale."""
+    m = np.asarray(matrix, np.float64)[:3, :3]
+    g = m.T @ m
+    s = np.trace(g) / 3.0
+    return s > 0.0 and bool(np.allclose(g, s * np.eye(3), atol=tol * s))
+
+
+@default_for(MitsubaEngine)
+class SpherePainter(ShapePainter):
+    """``Sphere`` -> Mitsuba ``sphere`` (mesh fallback under non-uniform scaling)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Sphere
+
+    def exec(self, shape: Sphere, engine: MitsubaEngine) -> None:
+        m = engine.model_matrix()
+        if not is_similarity(m):
+            engine.simplify(shape)
+            return
+        r = float(shape.radius)
+        to_world = m @ _translate(*shape.center) @ _scale(r, r, r)
+        engine.add_shape({"type": "sphere", "to_world": transform(to_world)}, "sphere")
+
+
+@default_for(MitsubaEngine)
+class BoxPainter(ShapePainter):
+    """``Box`` -> Mitsuba ``cube`` ([-1, 1]^3) scaled to the box."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Box
+
+    def exec(self, shape: Box, engine: MitsubaEngine) -> None:
+        sx, sy, sz = (float(v) / 2.0 for v in shape.size)
+        to_world = engine.model_matrix() @ _translate(*shape.center) @ _scale(sx, sy, sz)
+        engine.add_shape({"type": "cube", "to_world": transform(to_world)}, "box")
+
+
+@default_for(MitsubaEngine)
+class CylinderPainter(ShapePainter):
+    """``Cylinder`` (axis +y, centred, capped) -> open Mitsuba ``cylinder`` plus two ``disk`` caps."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Cylinder
+
+    def exec(self, shape: Cylinder, engine: MitsubaEngine) -> None:
+        m = engine.model_matrix()
+        if not is_similarity(m):
+            engine.simplify(shape)
+            return
+        r, h = float(shape.radius), float(shape.height)
+        bsdf = engine.current_bsdf()
+        body = m @ _translate(0.0, -h / 2.0, 0.0) @ Z_TO_Y @ _scale(r, r, h)
+        engine.add_shape({"type": "cylinder", "to_world": transform(body), "bsdf": bsdf}, "cylinder")
+        top = m @ _translate(0.0, h / 2.0, 0.0) @ Z_TO_Y @ _scale(r, r, 1.0)
+        bottom = m @ _translate(0.0, -h / 2.0, 0.0) @ Z_TO_MINUS_Y @ _scale(r, r, 1.0)
+        engine.add_shape({"type": "disk", "to_world": transform(top), "bsdf": bsdf}, "cap")
+        engine.add_shape({"type": "disk", "to_world": transform(bottom), "bsdf": bsdf}, "cap")
+
+
+@default_for(MitsubaEngine)
+class DiskPainter(ShapePainter):
+    """``Disk`` (xz plane, facing +y) -> Mitsuba ``disk`` (xy plane, facing +z)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Disk
+
+    def exec(self, shape: Disk, engine: MitsubaEngine) -> None:
+        r = float(shape.radius)
+        to_world = engine.model_matrix() @ Z_TO_Y @ _scale(r, r, 1.0)
+        engine.add_shape({"type": "disk", "to_world": transform(to_world)}, "disk")
+
+
+@default_for(MitsubaEngine)
+class RectanglePainter(ShapePainter):
+    """``Rectangle`` (xz plane, facing +y) -> Mitsuba ``rectangle`` ([-1, 1]^2 in xy, facing +z)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Rectangle
+
+    def exec(self, shape: Rectangle, engine: MitsubaEngine) -> None:
+        sx, sz = (float(v) / 2.0 for v in shape.size)
+        to_world = engine.model_matrix() @ Z_TO_Y @ _scale(sx, sz, 1.0)
+        engine.add_shape({"type": "rectangle", "to_world": transform(to_world)}, "rectangle")
+
+
+@default_for(MitsubaEngine)
+class TriangleSetPainter(ShapePainter):
+    """``TriangleSet`` -> an in-memory Mitsuba mesh in world coordinates.
+
+    Normals are passed unless ``DrawStyle(shading="flat")`` is active; colours
+    (sRGB) become the linear ``vertex_color`` attribute the BSDF reads.
+    """
+
+    __slots__ = ()
+    service = SERVICE
+    target = TriangleSet
+
+    def exec(self, shape: TriangleSet, engine: MitsubaEngine) -> None:
+        faces = shape.index_array()
+        if len(faces) == 0:
+            return
+        style = engine.mono(DrawStyle)
+        flat = style is not None and getattr(style, "shading", "smooth") == "flat"
+        colors = shape.color_array()
+        texcoords = shape.texcoord_array()
+        linear = None if colors is None else convert.srgb_to_linear(colors[:, :3]).astype(np.float32)
+        bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=texcoords is not None)
+        name = engine.unique_name("mesh")
+        mesh = build_mesh(
+            name,
+            shape.vertex_array(),
+            faces,
+            matrix=engine.model_matrix(),
+            normals=None if flat else shape.normal_array(),
+            texcoords=texcoords,
+            colors=linear,
+            bsdf=bsdf,
+            emitter=engine.current_area_emitter(),
+        )
+        engine.shapes[name] = mesh
+
+
+class SkipPainter(ShapePainter):
+    """Skips shapes without a surface (lines, points) with one warning per class and engine."""
+
+    __slots__ = ()
+    service = SERVICE
+
+    def exec(self, shape: Any, engine: MitsubaEngine) -> None:
+        cls = type(shape)
+        if cls not in engine._warned:
+            engine._warned.add(cls)
+            warnings.warn(
+                f"MitsubaEngine: {cls.__name__} (node {engine.node_path or '/'}) has no surface to render; skipped",
+                stacklevel=2,
+            )
+
+
+for _cls in (LineSet, Polyline, PointSet):
+    default_for(MitsubaEngine)(type(f"Skip{_cls.__name__}Painter", (SkipPainter,), {"__slots__": (), "target": _cls}))
+
+
+@default_for(MitsubaEngine)
+class LightPainter(AttributePainter):
+    """Generic lights -> queued for conversion to Mitsuba emitters (see :func:`convert.light_emitter`)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = LightSource
+
+    def exec(self, light: LightSource, engine: MitsubaEngine) -> None:
+        engine.add_light(light)
+
+
+@default_for(MitsubaEngine)
+class EmitterPainter(AttributePainter):
+    """``om.mitsuba.Emitter``: non-area emitters join the scene once (area ones are read by shapes)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Emitter
+
+    def exec(self, emitter: Emitter, engine: MitsubaEngine) -> None:
+        if emitter.is_area or id(emitter) in engine._emitter_ids:
+            return
+        engine._emitter_ids.add(id(emitter))
+        plugin = emitter.plugin_dict()
+        m = engine.model_matrix()
+        if "to_world" not in plugin and not np.array_equal(m, np.eye(4)):
+            plugin["to_world"] = transform(m)
+        engine.add_emitter(plugin, emitter.kind)
+
+
+@default_for(MitsubaEngine)
+class IntegratorPainter(AttributePainter):
+    """``om.mitsuba.Integrator``: the last one met is the render's integrator."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Integrator
+
+    def exec(self, integrator: Integrator, engine: MitsubaEngine) -> None:
+        engine.integrator = integrator.plugin_dict()
+
+
+@default_for(MitsubaEngine)
+class BackgroundPainter(AttributePainter):
+    """``Background``: the first one met (the root's) is composited behind the image."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = Background
+
+    def exec(self, background: Background, engine: MitsubaEngine) -> None:
+        if engine.background is None:
+            engine.background = tuple(float(c) for c in background.color)

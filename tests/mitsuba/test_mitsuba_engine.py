@@ -1,0 +1,231 @@
+"""The Mitsuba engine: camera agreement with the core matrices, shapes, meshes, plugins, images."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.mitsuba
+
+W, H = 80, 60
+
+
+def _project(camera: om.Camera, point, size=(W, H)) -> tuple[float, float]:
+    """Pixel (x, y) of a world point through the core's GL matrices (row 0 at the top)."""
+    w, h = size
+    clip = camera.projection_matrix(w / h) @ camera.view_matrix() @ np.array([*point, 1.0])
+    ndc = clip[:3] / clip[3]
+    return (ndc[0] + 1.0) / 2.0 * w, (1.0 - ndc[1]) / 2.0 * h
+
+
+def _centroid(mask: np.ndarray) -> tuple[float, float]:
+    ys, xs = np.nonzero(mask)
+    assert len(xs) > 0, "nothing was drawn"
+    return xs.mean() + 0.5, ys.mean() + 0.5
+
+
+def _flat(*items) -> om.Node:
+    scene = om.Node("scene")
+    scene.add(om.AmbientLight(intensity=1.0))
+    for item in items:
+        scene.add(item)
+    return scene
+
+
+@pytest.mark.parametrize(
+    "camera",
+    [
+        om.Camera.look_at(eye=(3, 2, 6), center=(0, 0.5, 0), fov=40),
+        om.Camera.look_at(eye=(-4, 1, -3), center=(0.5, 0, 0), up=(0, 1, 0), fov=25),
+        om.Camera.orthographic(eye=(2, 3, 5), center=(0, 0, 0), height=4),
+    ],
+    ids=["perspective", "perspective-behind", "orthographic"],
+)
+def test_small_sphere_lands_where_the_core_camera_projects_it(camera):
+    # Sphere centres at known world points, off-centre in both directions so a
+    # mirrored or flipped image would move them by many pixels.
+    points = [(1.0, 0.8, 0.3), (-0.9, -0.4, 0.5)]
+    for point in points:
+        scene = _flat(camera, om.Node("ball", [om.Translation(*point), om.Sphere(radius=0.08)]))
+        img = om.render(scene, engine="mitsuba", size=(W, H), spp=16)
+        cx, cy = _centroid(img.mask)
+        px, py = _project(camera, point)
+        assert abs(cx - px) < 1.0 and abs(cy - py) < 1.0, (point, (cx, cy), (px, py))
+
+
+def test_depth_is_eye_space_distance_and_inf_for_background():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=40)
+    # A wall facing the camera at z = -1 covering the lower half: eye-space depth 6 everywhere on it.
+    wall = om.Node("wall", [om.Translation(0, -2, -1), om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(20, 4))])
+    img = om.render(_flat(camera, wall), engine="mitsuba", size=(W, H), spp=4)
+    d = img.depth
+    assert np.all(np.isinf(d[: H // 2 - 2]))
+    covered = d[H // 2 + 2 :]
+    assert np.all(np.isfinite(covered))
+    np.testing.assert_allclose(covered, 6.0, rtol=5e-3)
+    assert img.mask[H - 1].all() and not img.mask[0].any()
+
+
+def test_array_alpha_hdr_and_colour_of_a_lit_diffuse_sphere():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=30)
+    scene = _flat(camera, om.Color(1.0, 0.0, 0.0), om.Sphere(radius=1.0))
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=16)
+    assert img.array.shape == (H, W, 4) and img.array.dtype == np.uint8
+    assert img.hdr.shape == (H, W, 4) and img.hdr.dtype == np.float32
+    r, g, b, a = img.pixel(W // 2, H // 2)
+    # constant white environment of radiance 1 on an unoccluded red albedo-1 surface: full red
+    assert r > 230 and g < 10 and b < 10 and a == 255
+    assert img.pixel(0, 0)[3] == 0
+    assert img.engine == "mitsuba" and img.info["spp"] == 16
+
+
+def test_background_is_composited():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=30)
+    scene = _flat(camera, om.Background((0.0, 0.0, 1.0)), om.Sphere(radius=0.5))
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=4)
+    assert img.pixel(0, 0) == (0, 0, 255, 255)
+    assert img.mask.sum() < W * H / 4  # the mask still comes from depth
+
+
+def _simplified(shape) -> list:
+    e = om.mitsuba.MitsubaEngine((W, H))
+    for klass in type(shape).__mro__:
+        h = e.find_handler("simplify", klass)
+        if h is not None:
+            return list(h.exec(shape, e))
+    pytest.skip(f"no simplifier for {type(shape).__name__} registered yet")
+
+
+@pytest.mark.parametrize(
+    "shape",
+    [
+        om.Box(size=(1.5, 0.6, 1.0), center=(0.2, 0, 0)),
+        om.Cylinder(radius=0.6, height=1.4),
+        om.Disk(radius=1.0),
+        om.Rectangle(size=(2.0, 1.0)),
+        om.Sphere(center=(0.2, 0.1, 0), radius=0.8),
+    ],
+    ids=lambda s: type(s).__name__,
+)
+def test_native_shapes_cover_what_their_tessellations_cover(shape):
+    # Each natively painted shape (Mitsuba's own frames, caps, rotations) must
+    # cover the same pixels as its simplification into triangles.
+    camera = om.Camera.look_at(eye=(2.5, 2.0, 3.5), center=(0, 0, 0), fov=45)
+    placement = [om.Rotation(25, (0, 1, 0)), om.Scaling(1.1)]
+    native_engine = om.mitsuba.MitsubaEngine((W, H))
+    native_engine.run(_flat(camera, *placement, shape))
+    assert not any(k.endswith("_mesh") for k in native_engine.shapes), "painted natively, not simplified"
+    native = om.render(_flat(camera, *placement, shape), engine="mitsuba", size=(W, H), spp=4)
+    parts = [om.Tessellation(6), *_simplified(shape)]
+    meshed = om.render(_flat(camera, *placement, *parts), engine="mitsuba", size=(W, H), spp=4)
+    a, b = native.mask, meshed.mask
+    assert a.sum() > 100
+    assert (a != b).mean() < 0.01, (a != b).sum()
+
+
+def test_non_uniform_scaling_falls_back_to_the_simplifier():
+    _simplified(om.Sphere())
+    e = om.mitsuba.MitsubaEngine((W, H))
+    e.run(om.Node("s", [om.Scaling(1, 2, 1), om.Sphere(), om.Cylinder()]))
+    kinds = [k.split("_", 1)[1] for k in e.shapes]
+    assert "sphere" not in kinds and "cylinder" not in kinds and "mesh" in kinds
+
+
+def test_triangle_set_with_transform_colours_and_texture():
+    camera = om.Camera.look_at(eye=(0, 0, 4), center=(0, 0, 0), fov=40)
+    quad = om.TriangleSet(
+        vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)],
+        indices=[(0, 1, 2), (0, 2, 3)],
+        texcoords=[(0, 0), (1, 0), (1, 1), (0, 1)],
+    )
+    image = np.zeros((4, 4, 3), np.uint8)
+    image[:2] = (255, 0, 0)  # top half red
+    image[2:] = (0, 0, 255)  # bottom half blue
+    tex = om.Texture(image, filter="nearest")
+    img = om.render(_flat(camera, om.Translation(0.5, 0, 0), tex, quad), engine="mitsuba", size=(W, H), spp=4)
+    cx, cy = _centroid(img.mask)
+    px, py = _project(camera, (0.5, 0, 0))
+    assert abs(cx - px) < 1 and abs(cy - py) < 1
+    top = img.pixel(int(px), int(py) - 6)
+    bottom = img.pixel(int(px), int(py) + 6)
+    assert top[0] > 200 and top[2] < 30, top  # v = 1 (top of the quad) shows the image's top row
+    assert bottom[2] > 200 and bottom[0] < 30, bottom
+
+    colored = om.TriangleSet(
+        vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)],
+        indices=[(0, 1, 2), (0, 2, 3)],
+        colors=[(0, 1, 0)] * 4,
+    )
+    img = om.render(_flat(camera, colored), engine="mitsuba", size=(W, H), spp=4)
+    r, g, b, _ = img.pixel(W // 2, H // 2)
+    assert g > 230 and r < 10 and b < 10
+
+
+def test_mitsuba_plugins_pass_through():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=30)
+    scene = om.Node("scene", [camera])
+    scene.add(om.mitsuba.Emitter({"type": "constant", "radiance": {"type": "rgb", "value": [0.5, 0.5, 0.5]}}))
+    scene.add(om.Material(diffuse=(1, 0, 0)))
+    scene.add(om.mitsuba.BSDF({"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0, 1.0, 0.0]}}))
+    scene.add(om.Sphere(radius=1))
+    body = scene.add(om.Node("deep"))
+    body.add(om.mitsuba.Integrator({"type": "direct"}))
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=8)
+    r, g, b, _ = img.pixel(W // 2, H // 2)
+    assert g > 150 and r < 10  # the BSDF wins over the Material
+    e = om.mitsuba.MitsubaEngine((W, H))
+    e.run(scene)
+    assert e.integrator == {"type": "direct"}
+    d = e.scene_dict()
+    assert d["integrator"]["type"] == "direct"
+    assert sum(1 for v in d.values() if isinstance(v, dict) and v.get("type") == "constant") == 1
+
+
+def test_area_emitter_attribute_and_emissive_material_light_the_scene():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=30)
+    scene = om.Node("scene", [camera, om.Material(emission=(1.0, 1.0, 1.0), diffuse=(0, 0, 0)), om.Sphere(radius=1)])
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=4)
+    assert img.pixel(W // 2, H // 2)[:3] == (255, 255, 255)
+    dark = om.Node("scene", [camera, om.Material(diffuse=(0, 0, 0)), om.Sphere(radius=1)])
+    assert om.render(dark, engine="mitsuba", size=(W, H), spp=4).pixel(W // 2, H // 2)[:3] == (0, 0, 0)
+
+
+def test_point_light_matches_gl_attenuation_at_the_reference_point():
+    # GL: a white diffuse surface facing a light of intensity 1 with constant
+    # attenuation is fully lit.  At the camera's centre of interest Mitsuba must agree.
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=20)
+    wall = om.Node("wall", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(10, 10))])
+    scene = om.Node("scene", [camera, om.PointLight(position=(0, 0, 3)), om.Material(diffuse=(0.5, 0.5, 0.5)), wall])
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=4)
+    r, g, b, _ = img.pixel(W // 2, H // 2)
+    assert abs(r - 128) <= 3 and r == g == b
+    sun = om.Node("scene", [camera, om.DirectionalLight(direction=(0, 0, -1)), om.Material(diffuse=(0.5,) * 3), wall])
+    assert abs(om.render(sun, engine="mitsuba", size=(W, H), spp=4).pixel(W // 2, H // 2)[0] - 128) <= 3
+
+
+def test_spot_light_lights_only_its_cone():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=60)
+    wall = om.Node("wall", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(10, 10))])
+    spot = om.SpotLight(position=(0, 0, 3), direction=(0, 0, -1), cutoff=15)
+    img = om.render(om.Node("s", [camera, spot, wall]), engine="mitsuba", size=(W, H), spp=4)
+    assert img.pixel(W // 2, H // 2)[0] > 150
+    assert img.pixel(2, 2)[0] == 0
+
+
+def test_errors_are_clear():
+    with pytest.raises(ValueError, match="spp"):
+        om.render(om.Node("s"), engine="mitsuba", size=(8, 8), spp=0)
+    with pytest.raises(TypeError, match="plugin dict"):
+        om.mitsuba.BSDF("diffuse")
+    with pytest.raises(ValueError, match="'type'"):
+        om.mitsuba.Integrator({"max_depth": 3})
+
+
+def test_available_and_other_engines_ignore_mitsuba_attributes():
+    ok, why = om.mitsuba.available()
+    assert ok and "scalar_rgb" in why
+    scene = om.Node("s", [om.mitsuba.BSDF({"type": "conductor"}), om.Sphere()])
+    trace = om.trace(scene)
+    assert any(op == "push" for op, _ in trace)
