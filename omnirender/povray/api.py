@@ -1,0 +1,166 @@
+"""``render``, ``export`` and ``available``: the functions ``om.render``/``om.export`` dispatch to."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..fileio import atomic_path, atomic_write
+from ..image import Image
+from . import painters as _painters  # noqa: F401  (registers the default handlers)
+from .engine import POVRayEngine
+from .runner import POVRayError, find_povray, read_png, run_povray
+
+__all__ = ["render", "export", "available", "scene_sdl"]
+
+
+def available() -> tuple[bool, str]:
+    """Whether the ``povray`` program can be run here, and why not."""
+    exe = find_povray()
+    if exe is None:
+        return False, "the povray program is not installed (apt-get install povray)"
+    try:
+        out = subprocess.run([exe, "--version"], capture_output=True, timeout=20, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return False, f"povray cannot be run: {exc}"
+    text = (out.stdout + out.stderr).decode("latin-1")
+    version = next((ln.strip() for ln in text.splitlines() if ln.startswith("POV-Ray")), "POV-Ray")
+    return True, version
+
+
+def scene_sdl(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: Any) -> tuple[str, POVRayEngine]:
+    """Evaluate ``scene`` with a POVRayEngine; returns (SDL text, engine) — the engine lists the resources."""
+    engine = POVRayEngine(size, **engine_options)
+    engine.run(scene)
+    return engine.sdl(), engine
+
+
+def _write_resources(engine: POVRayEngine, folder: Path) -> list[Path]:
+    written = []
+    for name, data in engine.resources:
+        target = folder / name
+        if isinstance(data, str):
+            if not os.path.exists(data):
+                raise FileNotFoundError(f"POV-Ray: texture image {data!r} does not exist")
+            with atomic_path(target) as tmp:
+                shutil.copyfile(data, tmp)
+        else:
+            from PIL import Image as PILImage
+
+            arr = np.asarray(data, dtype=np.uint8)
+            with atomic_path(target) as tmp:
+                PILImage.fromarray(arr, "RGBA" if arr.shape[2] == 4 else "RGB").save(tmp, format="PNG")
+        written.append(target)
+    return written
+
+
+def export(scene: Any, path: str | os.PathLike[str], size: tuple[int, int] = (640, 480), **options: Any) -> Path:
+    """Write ``scene`` as POV-Ray SDL to ``path`` (atomically); texture images go next to it."""
+    target = Path(path)
+    prefix = "".join(ch if ch.isalnum() or ch in "_-" else "_" for ch in target.stem) + "_"
+    text, engine = scene_sdl(scene, size, resource_prefix=prefix, **options)
+    _write_resources(engine, target.parent if str(target.parent) else Path("."))
+    with atomic_write(target) as fh:
+        fh.write(text)
+    return target
+
+
+def _background(engine: POVRayEngine) -> np.ndarray | None:
+    bg = engine.background
+    if bg is None:
+        return None
+    c = np.asarray(bg.color, dtype=np.float64)
+    return np.array([*c[:3], c[3] if len(c) > 3 else 1.0])
+
+
+def render(
+    scene: Any,
+    size: tuple[int, int] = (640, 480),
+    quality: int = 9,
+    antialias: bool | float = False,
+    timeout: float | None = 600.0,
+    progress: Any = None,
+    threads: int | None = None,
+    keep: str | os.PathLike[str] | None = None,
+    **engine_options: Any,
+) -> Image:
+    """Render ``scene`` with POV-Ray and return an :class:`om.Image`.
+
+    ``quality`` 0-11 is POV-Ray's ``+Q``; ``antialias`` True (threshold 0.3)
+    or a threshold turns on adaptive anti-aliasing; ``timeout`` seconds (None:
+    no limit); ``progress`` None (a bar on a terminal), True/False, or a
+    callable ``(done_pixels, total_pixels)``; ``threads`` limits POV-Ray's
+    render threads; ``keep`` a folder to copy the scene file into (for
+    debugging).  The background is transparent in the alpha channel (so
+    ``image.mask`` marks the objects) unless an ``om.Background`` with alpha
+    sets it; ``image.depth`` is None.
+    """
+    w, h = (int(v) for v in size)
+    if not 0 <= int(quality) <= 11:
+        raise ValueError(f"POV-Ray: quality must be 0..11, got {quality}")
+    if find_povray() is None:
+        raise POVRayError("POV-Ray: the povray program was not found on PATH; install it with `apt-get install povray`")
+    started = time.perf_counter()
+    text, engine = scene_sdl(scene, (w, h), **engine_options)
+    sdl_seconds = time.perf_counter() - started
+    with tempfile.TemporaryDirectory(prefix="omnirender-povray-") as tmp:
+        folder = Path(tmp)
+        _write_resources(engine, folder)
+        (folder / "scene.pov").write_text(text, encoding="utf-8")
+        if keep is not None:
+            shutil.copyfile(folder / "scene.pov", Path(keep) / "scene.pov")
+        args = [
+            "+Iscene.pov",
+            "+Oimage.png",
+            f"+W{w}",
+            f"+H{h}",
+            "-D",
+            "-P",
+            "+FN8",
+            "+UA",
+            f"+Q{int(quality)}",
+            "File_Gamma=sRGB",
+            "-GS",  # no statistics
+            "-GD",  # no debug stream
+            "+GR",  # render stream: progress lines
+            "+V",
+        ]
+        if antialias:
+            threshold = 0.3 if antialias is True else float(antialias)
+            args += [f"+A{threshold:g}", "+AM2", "+R3"]
+        else:
+            args.append("-A")
+        if threads is not None:
+            args.append(f"+WT{int(threads)}")
+        t0 = time.perf_counter()
+        run_povray(args, folder, timeout=timeout, progress=progress, total_pixels=w * h)
+        render_seconds = time.perf_counter() - t0
+        out = folder / "image.png"
+        if not out.exists():
+            raise POVRayError("POV-Ray finished without writing an image (see its output above)")
+        array = read_png(out)
+    if array.shape[:2] != (h, w):
+        raise POVRayError(f"POV-Ray wrote a {array.shape[1]}x{array.shape[0]} image, expected {w}x{h}")
+    bg = _background(engine)
+    if bg is not None and bg[3] > 0:
+        # straight-alpha "over": the objects over the background colour
+        alpha = array[:, :, 3:4].astype(np.float64) / 255.0
+        bg_rgb = np.clip(bg[:3], 0.0, 1.0) * 255.0
+        out_alpha = alpha + bg[3] * (1.0 - alpha)
+        rgb = (array[:, :, :3] * alpha + bg_rgb * bg[3] * (1.0 - alpha)) / np.maximum(out_alpha, 1e-9)
+        array = np.clip(np.round(np.concatenate([rgb, out_alpha * 255.0], axis=2)), 0, 255).astype(np.uint8)
+    info = {
+        "sdl_seconds": sdl_seconds,
+        "render_seconds": render_seconds,
+        "quality": int(quality),
+        "antialias": bool(antialias),
+        "objects": len(engine.objects),
+    }
+    return Image(array, depth=None, engine="povray", info=info)

@@ -1,0 +1,135 @@
+"""Rendering with the povray program: exact camera, transforms, colours, errors, clean-up."""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.povray import POVRayError
+
+sys.path.insert(0, os.path.dirname(__file__))
+from raycast import box_mask, pixel_rays, sphere_mask  # noqa: E402
+
+pytestmark = pytest.mark.povray
+SIZE = (160, 100)
+
+
+def _render(scene, size=SIZE, **kw):
+    kw.setdefault("threads", 1)
+    return om.render(scene, engine="povray", size=size, **kw)
+
+
+@pytest.mark.parametrize(
+    "camera",
+    [
+        om.Camera.look_at(eye=(3, 2, 7), center=(0.3, 0.2, 0), fov=40),
+        om.Camera.orthographic(eye=(3, 2, 7), center=(0.3, 0.2, 0), height=4),
+    ],
+    ids=["perspective", "orthographic"],
+)
+def test_mask_matches_the_gl_camera_exactly(camera):
+    s = om.Node("s")
+    s.add(camera)
+    s.add(om.Sphere(center=(1, 0.5, 0), radius=0.8))
+    moved = s.add(om.Node("moved"))
+    moved.add(om.Translation(-1, -0.5, 0.5))
+    moved.add(om.Scaling(0.5, 0.25, 1))
+    moved.add(om.Box(size=(2, 2, 2)))
+    img = _render(s)
+    o, d = pixel_rays(camera, SIZE)
+    ref = sphere_mask(o, d, (1, 0.5, 0), 0.8) | box_mask(o, d, (-1.5, -0.75, -0.5), (-0.5, -0.25, 1.5))
+    assert ref.sum() > 1000
+    assert (img.mask != ref).sum() <= 4  # only pixels whose centre is within rounding of an edge
+
+
+def test_colours_lights_and_background():
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 0, 5), fov=40))
+    s.add(om.PointLight(position=(0, 0, 10)))
+    s.add(om.Background((0.0, 0.0, 1.0, 1.0)))
+    s.add(om.Material(diffuse=(1, 0, 0), ambient=(0, 0, 0)))
+    s.add(om.Sphere(radius=1))
+    img = _render(s)
+    r, g, b, a = img.pixel(80, 50)
+    assert r > 240 and g < 10 and b < 10 and a == 255  # lit head-on: the material colour
+    assert img.pixel(2, 2) == (0, 0, 255, 255)  # opaque blue background
+
+
+def test_transparent_background_and_mask():
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 0, 5), fov=40))
+    s.add(om.Sphere(radius=1))
+    img = _render(s)
+    assert img.pixel(0, 0)[3] == 0 and img.mask[50, 80] and not img.mask[0, 0]
+    assert img.depth is None and img.engine == "povray"
+
+
+def test_vertex_colours_and_texture_orientation():
+    s = om.Node("s")
+    s.add(om.Camera.orthographic(eye=(0, 0, 5), height=2))
+    s.add(om.AmbientLight(intensity=1.0))
+    s.add(om.Material(ambient=(1, 1, 1), diffuse=(1, 1, 1)))
+    quad = s.add(om.Node("quad"))
+    quad.add(om.Translation(-1, 0, 0))
+    quad.add(
+        om.TriangleSet(
+            vertices=[[-1, -1, 0], [0, -1, 0], [0, 1, 0], [-1, 1, 0]],
+            indices=[[0, 1, 2], [0, 2, 3]],
+            colors=[[1, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0]],
+        )
+    )
+    tex = np.zeros((2, 2, 3), np.uint8)
+    tex[0, :] = (0, 0, 255)  # top row blue
+    tex[1, :] = (255, 255, 0)  # bottom row yellow
+    textured = s.add(om.Node("textured"))
+    textured.add(om.Texture(tex, filter="nearest"))
+    textured.add(
+        om.TriangleSet(
+            vertices=[[0, -1, 0], [1, -1, 0], [1, 1, 0], [0, 1, 0]],
+            indices=[[0, 1, 2], [0, 2, 3]],
+            texcoords=[[0, 0], [1, 0], [1, 1], [0, 1]],
+        )
+    )
+    img = _render(s, size=(100, 50))
+    bottom_left, top_left = img.pixel(12, 45), img.pixel(12, 4)
+    assert bottom_left[0] > 200 and bottom_left[1] < 100  # red at the bottom (colours interpolate)
+    assert top_left[1] > 200 and top_left[0] < 100  # green at the top
+    bottom_right, top_right = img.pixel(62, 45), img.pixel(62, 4)
+    assert bottom_right[0] > 200 and bottom_right[1] > 200 and bottom_right[2] < 50  # texcoord v=0: bottom row
+    assert top_right[2] > 200 and top_right[0] < 50
+
+
+def test_parse_errors_carry_povrays_lines():
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    s.add(om.povray.Raw("sphere { <0,0,0>, 1 texture { finsh { } } }"))
+    with pytest.raises(POVRayError, match=r"(?s)File 'scene.pov' line \d+: Parse Error.*finsh") as info:
+        _render(s, size=(8, 8))
+    assert "POV-Ray failed" in str(info.value)
+
+
+def test_temporary_files_are_removed_and_progress_is_reported():
+    before = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("omnirender-povray-")}
+    seen = []
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    s.add(om.Sphere())
+    _render(s, size=(64, 64), progress=lambda done, total: seen.append((done, total)))
+    after = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("omnirender-povray-")}
+    assert after == before
+    assert seen and seen[-1] == (64 * 64, 64 * 64)
+
+
+def test_timeout_stops_povray():
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    s.add(om.povray.GlobalSettings(radiosity={"count": 1600, "recursion_limit": 3}))
+    s.add(om.PointLight(position=(3, 3, 3)))
+    s.add(om.Sphere())
+    with pytest.raises(POVRayError, match="timeout"):
+        _render(s, size=(400, 400), timeout=0.3, antialias=True)

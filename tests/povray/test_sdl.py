@@ -1,0 +1,214 @@
+"""The POV-Ray engine's SDL writer (no povray program needed)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.povray import POVRayEngine, scene_sdl, sdl
+from omnirender.povray.mesh import mesh2_text
+from omnirender.povray.runner import POVRayError, error_lines
+
+
+def _scene(*items, name="scene"):
+    s = om.Node(name)
+    s.add(om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=40))
+    for item in items:
+        s.add(item)
+    return s
+
+
+def test_matrix_is_transposed_for_row_vectors():
+    m = om.Translation(1, 2, 3).matrix @ om.Scaling(2, 3, 4).matrix
+    text = sdl.matrix(m)
+    values = [float(v) for v in text[len("matrix <") : -1].split(",")]
+    assert values == [2, 0, 0, 0, 3, 0, 0, 0, 4, 1, 2, 3]
+    r = om.Rotation(90, (0, 0, 1)).matrix  # x axis -> y axis
+    values = [float(v) for v in sdl.matrix(r)[len("matrix <") : -1].split(",")]
+    assert np.allclose(values[:3], [0, 1, 0], atol=1e-12)  # image of the x axis is the first row
+
+
+def test_numbers_must_be_finite():
+    with pytest.raises(sdl.SDLError, match="non-finite"):
+        sdl.vector([1.0, math.nan, 0.0])
+
+
+def test_camera_vectors_reproduce_the_gl_projection():
+    cam = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=40)
+    text = om.povray.engine.camera_sdl(cam, cam.view_matrix(), (400, 200))
+    up = [float(v) for v in re.search(r"up <([^>]*)>", text).group(1).split(",")]
+    right = [float(v) for v in re.search(r"right <([^>]*)>", text).group(1).split(",")]
+    direction = [float(v) for v in re.search(r"direction <([^>]*)>", text).group(1).split(",")]
+    assert np.allclose(direction, [0, 0, -1])
+    assert np.allclose(up, [0, 2 * math.tan(math.radians(20)), 0])
+    assert np.allclose(right, [4 * math.tan(math.radians(20)), 0, 0])  # aspect 2, +x to the right
+    ortho = om.Camera.orthographic(eye=(0, 0, 5), height=3)
+    text = om.povray.engine.camera_sdl(ortho, ortho.view_matrix(), (300, 200))
+    assert "orthographic" in text and "up <0,3,0>" in text and "right <4.5,0,0>" in text
+
+
+def test_primitives_materials_and_povray_attributes():
+    body = om.Node("body")
+    body.add(om.Translation(0, 1, 0))
+    body.add(om.Material(diffuse=(1, 0, 0), specular=(1, 1, 1), shininess=40))
+    body.add(om.povray.Finish(phong=0.8, reflection={"metallic": True, "falloff": 2}))
+    body.add(om.povray.Interior(ior=1.5))
+    body.add(om.Torus(major_radius=1, minor_radius=0.3))
+    body.add(om.Cylinder(radius=0.5, height=2))
+    body.add(om.Cone(radius=0.5, height=2))
+    body.add(om.Disk(radius=2))
+    body.add(om.Rectangle(size=(2, 4)))
+    text, engine = scene_sdl(_scene(om.PointLight(position=(5, 5, 5)), body))
+    assert "torus { 1, 0.3 }" in text
+    assert "cylinder { <0,-1,0>, <0,1,0>, 0.5 }" in text
+    assert "cone { <0,-1,0>, 0.5, <0,1,0>, 0 }" in text
+    assert "disc { <0,0,0>, <0,1,0>, 2 }" in text
+    assert "polygon { 4, <-1,0,-2>, <1,0,-2>, <1,0,2>, <-1,0,2> }" in text
+    assert text.count("matrix <1,0,0,0,1,0,0,0,1,0,1,0>") == 5
+    assert "phong 0.8 reflection { metallic falloff 2 }" in text
+    assert "interior { ior 1.5 }" in text
+    assert "pigment { rgb <1,0,0> }" in text  # red stays red after sRGB -> linear
+    assert "light_source { <5,5,5> rgb <1,1,1> }" in text
+    assert text.count("#declare OM_T") == 1  # one texture shared by all five objects
+
+
+def test_other_engines_ignore_povray_attributes():
+    from omnirender.core import Engine
+
+    class Counting(Engine):
+        service = "count"
+
+    seen = []
+
+    class Count(om.ShapePainter):
+        service = "count"
+        target = om.Sphere
+
+        def exec(self, shape, engine):
+            seen.append(shape)
+
+    e = Counting()
+    e.install(Count())
+    e.evaluate([om.povray.Finish(phong=1), om.povray.Pigment(color=(1, 0, 0)), om.povray.Raw("x"), om.Sphere()])
+    assert len(seen) == 1
+
+
+def test_light_conversions():
+    lights = [
+        om.PointLight(position=(0, 4, 0), constant=1, quadratic=0.25),
+        om.SpotLight(position=(0, 4, 0), direction=(0, -1, 0), cutoff=30, exponent=2),
+        om.DirectionalLight(direction=(0, -1, 0), color=(1, 0.5, 0.25)),
+        om.AmbientLight(color=(1, 1, 1), intensity=0.2),
+    ]
+    text, _ = scene_sdl(_scene(*lights, om.Sphere()))
+    # 1/(1 + 0.25 d^2) == 0.5 * 2 / (1 + (d/2)^2)
+    assert "light_source { <0,4,0> rgb <0.5,0.5,0.5> fade_distance 2 fade_power 2 }" in text
+    assert "spotlight point_at <0,3,0>" in text and "falloff 30 tightness 2" in text
+    assert "light_source { <0,100000,0> rgb <1,0.5,0.25> parallel point_at <0,0,0> }" in text
+    assert "ambient_light rgb <0.2,0.2,0.2>" in text
+
+
+def test_mesh2_is_complete_and_vectorised():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=np.float32)
+    i = np.array([[0, 1, 2], [1, 3, 2]])
+    c = np.array([[1, 0, 0, 1], [0, 1, 0, 1], [1, 0, 0, 0.5], [1, 0, 0, 1]])
+    text = mesh2_text(v, i, normals=np.tile([0, 0, 1], (4, 1)), texcoords=v[:, :2], colors=c, finish="F")
+    assert "vertex_vectors { 4,\n<0,0,0>,\n<1,0,0>,\n<0,1,0>,\n<1,1,0>\n}" in text
+    assert "normal_vectors { 4," in text and "uv_vectors { 4," in text
+    assert "texture_list { 3," in text  # distinct colours only
+    assert re.search(r"face_indices \{ 2,\n<0,1,2>,\d,\d,\d,\n<1,3,2>,\d,\d,\d\n\}", text)
+    with pytest.raises(sdl.SDLError, match="out of range"):
+        mesh2_text(v, np.array([[0, 1, 7]]))
+
+
+def test_triangle_set_with_vertex_colours_and_flat_shading():
+    mesh = om.TriangleSet(
+        vertices=[[0, 0, 0], [1, 0, 0], [0, 1, 0]], indices=[[0, 1, 2]], colors=[[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    )
+    text, _ = scene_sdl(_scene(om.DrawStyle(shading="flat"), mesh))
+    assert "mesh2 {" in text and "texture_list { 3," in text and "normal_vectors" not in text
+    assert "#declare OM_F0 = finish" in text
+
+
+def test_names_and_paths_cannot_inject_directives(tmp_path):
+    evil = 'x"\n#include "passwd"\n#declare A = 1;'
+    s = om.Node(evil)
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    child = s.add(om.Node('b"#\nc'))
+    img = tmp_path / 'bad"name\n#x.png'
+    from PIL import Image as PILImage
+
+    PILImage.fromarray(np.zeros((2, 2, 3), np.uint8)).save(img, format="PNG")
+    child.add(om.Texture(str(img)))
+    child.add(om.Sphere())
+    text, engine = scene_sdl(s)
+    directives = [ln for ln in text.splitlines() if ln.lstrip().startswith("#")]
+    assert all(ln.startswith(("#version", "#declare OM_")) for ln in directives), directives
+    assert 'passwd"' not in text and "#include" not in text
+    assert '"om_tex0.png"' in text and engine.resources == [("om_tex0.png", str(img))]
+    for bad in ("phong 1 } #declare", "a b"):
+        with pytest.raises(sdl.SDLError):
+            om.povray.Finish(**{bad: 1})
+    with pytest.raises(sdl.SDLError):
+        om.povray.Pigment(pattern='checker }\n#include "x"')
+    with pytest.raises(sdl.SDLError):
+        om.povray.Finish(phong="0.5 } #include")
+    with pytest.raises(sdl.SDLError):
+        sdl.file_name('a"b')
+
+
+def test_export_writes_sdl_and_texture_images(tmp_path):
+    tex = np.zeros((4, 4, 3), np.uint8)
+    tex[:, :2] = 255
+    s = _scene(om.Texture(tex), om.Rectangle(size=(2, 2)))
+    path = om.export(s, tmp_path / "scene.pov")
+    text = path.read_text()
+    assert text.startswith("// omnirender scene for POV-Ray 3.7\n#version 3.7;")
+    assert '"scene_tex0.png"' in text and (tmp_path / "scene_tex0.png").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.pov", "scene_tex0.png"]  # no temp files left
+
+
+def test_clip_planes_and_raw_text():
+    s = _scene(
+        om.ClipPlane(normal=(0, 1, 0), offset=0.5),
+        om.povray.Raw("no_shadow", placement="object"),
+        om.povray.Raw("#declare Trusted = 1;"),
+        om.povray.GlobalSettings(radiosity={"count": 50}, max_trace_level=7),
+        om.Background((0.2, 0.3, 0.4)),
+        om.Fog(color=(1, 1, 1), mode="exp", density=0.1),
+        om.Sphere(),
+    )
+    text, _ = scene_sdl(s)
+    assert "clipped_by { plane { <0,-1,0>, -0.5 } }" in text
+    assert "  no_shadow\n" in text and "#declare Trusted = 1;" in text
+    assert "radiosity { count 50 } max_trace_level 7" in text
+    assert "fog { fog_type 1 distance 10 " in text
+
+
+def test_missing_program_says_how_to_install(monkeypatch):
+    monkeypatch.setenv("PATH", "/nonexistent")
+    ok, why = om.povray.available()
+    assert not ok and "apt-get install povray" in why
+    with pytest.raises(POVRayError, match="apt-get install povray"):
+        om.render(_scene(om.Sphere()), engine="povray", size=(8, 8))
+
+
+def test_error_lines_are_extracted_and_unwrapped():
+    output = (
+        "==== [Parsing...] ====\nFile 'scene.pov' line 12: Parse Error: No matching } in 'texture', undeclared\n"
+        " identifier 'finsh' found instead\nFatal error in parser: Cannot parse input.\nRender failed\n"
+    )
+    lines = error_lines(output)
+    assert lines[0] == (
+        "File 'scene.pov' line 12: Parse Error: No matching } in 'texture', undeclared identifier 'finsh' found instead"
+    )
+    assert "Fatal error in parser: Cannot parse input." in lines
+
+
+def test_engine_rejects_bad_size():
+    with pytest.raises(ValueError, match="size"):
+        POVRayEngine((0, 10))
