@@ -5,6 +5,7 @@ Every shape has a default simplifier (registered for every engine in
 PointSets, so any engine can show any shape; painters are optional speed-ups.
 """
 
+from . import simplifiers  # noqa: E402,F401  (registers the default simplifiers)
 from .base import DeclaredShape
 from .grids import Heightfield, TransferFunction, Volume
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
