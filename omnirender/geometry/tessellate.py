@@ -182,7 +182,9 @@ def cone(radius: float = 1.0, height: float = 2.0, segments: int = 32, capped: b
     apex_v = np.tile([0.0, h, 0.0], (m, 1))
     apex_n = np.stack([nr * np.sin(mid), np.full(m, ny), nr * np.cos(mid)], -1)
     u = np.linspace(0.0, 1.0, m)
-    uv = np.concatenate([np.stack([u, np.zeros(m)], -1), np.stack([u + 0.5 / segments, np.ones(m)], -1)])
+    uv = np.concatenate(
+        [np.stack([u, np.zeros(m)], -1), np.stack([np.minimum(u + 0.5 / segments, 1.0), np.ones(m)], -1)]
+    )
     k = np.arange(segments)
     side_i = np.stack([k, k + 1, m + k], -1)  # base, next base, apex: outward
     parts = [(np.concatenate([base_v, apex_v]), np.concatenate([base_n, apex_n]), uv, side_i)]
