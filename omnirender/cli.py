@@ -1,51 +1,312 @@
-"""The ``omnirender`` command (see ``omnirender --help``)."""
+"""The ``omnirender`` command (see ``omnirender --help``).
+
+Sub-commands: ``render`` a scene file with an engine, ``view`` it in an
+interactive window, ``export`` it to another format, print ``info`` about it,
+list the ``engines`` available here, and render the ``demo`` scene with every
+engine.  Exit codes: 0 success, 1 a rendering (or loading) error reported in
+one line (``--debug`` shows the traceback), 2 a usage error.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser"]
+
+_EXAMPLES = """\
+examples:
+  omnirender demo -o demo-output                 render the demo scene with every engine
+  omnirender render scene.yaml -e gl -o out.png --size 800x600
+  omnirender render scene.json -e mitsuba --spp 64 -o final.png
+  omnirender render scene.yaml --mask '!debug'   skip nodes in the group 'debug'
+  omnirender view scene.yaml                     interactive window (mouse: orbit/pan/zoom, h: help)
+  omnirender export scene.yaml scene.glb         also .pov and .rib
+  omnirender info scene.yaml                     tree, statistics, bounds, engines
+"""
 
 
+class UsageError(Exception):
+    """A mistake in the command line (exit code 2)."""
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"size must be WIDTHxHEIGHT like 800x600, got {text!r}") from None
+    if w <= 0 or h <= 0 or w > 16384 or h > 16384:
+        raise argparse.ArgumentTypeError(f"size must be between 1x1 and 16384x16384, got {text!r}")
+    return w, h
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def _load(path: str) -> Any:
+    p = Path(path)
+    if not p.is_file():
+        raise UsageError(f"scene file not found: {path}")
+    from .scene.files import load
+
+    return load(p)
+
+
+# -- sub-commands -----------------------------------------------------------
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    run_demo(Path(args.output), size=tuple(int(v) for v in args.size.lower().split("x")))
+    run_demo(Path(args.output), size=args.size)
     return 0
 
 
 def _engines(args: argparse.Namespace) -> int:
-    from .render import engines
+    from .render import engines, exporters
 
     for name, (ok, why) in engines().items():
         print(f"{name:10s} {'available' if ok else 'unavailable'}: {why}")
+    for ext, desc in exporters().items():
+        print(f"export {ext:5s} {desc}")
     return 0
 
 
+def _render(args: argparse.Namespace) -> int:
+    from .render import _engines, engines, render
+
+    if args.engine not in _engines:
+        raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
+    if not Path(args.scene).is_file():
+        raise UsageError(f"scene file not found: {args.scene}")
+    options: dict[str, Any] = {}
+    if args.spp is not None:
+        options.update(_spp_option(args.engine, args.spp))
+    if args.mask is not None:
+        from .core.mask import compile_mask
+
+        try:
+            compile_mask(args.mask)
+        except Exception as exc:
+            raise UsageError(f"bad --mask expression {args.mask!r}: {exc}") from None
+        options["mask"] = args.mask
+    ok, why = engines()[args.engine]
+    if not ok:
+        raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
+    scene = _load(args.scene)
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
+    image = render(scene, engine=args.engine, size=args.size, **options)
+    image.save(output)
+    print(output)
+    return 0
+
+
+def _spp_option(engine: str, spp: int) -> dict[str, Any]:
+    """``--spp`` in each engine's terms: Mitsuba's samples per pixel, GL's MSAA samples, POV-Ray's antialiasing."""
+    if engine == "povray":
+        return {"antialias": spp > 1}
+    if engine == "gl":
+        return {"samples": spp}
+    return {"spp": spp}
+
+
+def _view(args: argparse.Namespace) -> int:
+    scene = _load(args.scene)
+    from .viewer import view
+
+    view(scene, size=args.size, title=f"omnirender - {args.scene}")
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from .render import export, exporters
+
+    ext = Path(args.output).suffix.lower()
+    if ext not in exporters():
+        raise UsageError(f"cannot export to {args.output!r}: use one of {', '.join(exporters())}")
+    scene = _load(args.scene)
+    export(scene, args.output)
+    print(args.output)
+    return 0
+
+
+def _info(args: argparse.Namespace) -> int:
+    scene = _load(args.scene)
+    print(scene_report(scene, engines=not args.no_engines))
+    return 0
+
+
+def scene_report(scene: Any, engines: bool = True) -> str:
+    """The text of ``omnirender info``: tree with paths, statistics, bounds, capable engines."""
+    lines = ["tree:"]
+    _tree(scene, lines, "  ", set())
+    from .scene import statistics
+
+    lines.append("statistics:")
+    for key, value in dict(statistics(scene)).items():
+        lines.append(f"  {key}: {value}")
+    lines.append(f"bounds: {_bounds_text(scene)}")
+    if engines:
+        lines.append("engines:")
+        for name, verdict in engine_support(scene).items():
+            lines.append(f"  {name:10s} {verdict}")
+    return "\n".join(lines)
+
+
+def _tree(node: Any, lines: list[str], indent: str, seen: set[int]) -> None:
+    groups = f"  groups={sorted(node.groups)}" if node.groups else ""
+    shared = "  (shared, listed above)" if id(node) in seen else ""
+    lines.append(f"{indent}{node.path}{groups}{shared}")
+    if shared:
+        return
+    seen.add(id(node))
+    for item in node:
+        if hasattr(item, "_compile_node"):
+            _tree(item, lines, indent + "  ", seen)
+        else:
+            text = repr(item)
+            lines.append(f"{indent}  - {text if len(text) <= 100 else text[:97] + '...'}")
+
+
+def _bounds_text(scene: Any) -> str:
+    try:
+        from .techniques import bounds
+
+        box = bounds(scene)
+    except Exception as exc:
+        return f"unavailable ({type(exc).__name__}: {exc})"
+    if box is None:
+        return "empty"
+    lo, hi = box
+    return f"min {_vec(lo)}  max {_vec(hi)}"
+
+
+def _vec(v: Any) -> str:
+    return "(" + ", ".join(f"{float(x):.4g}" for x in v) + ")"
+
+
+def engine_support(scene: Any) -> dict[str, str]:
+    """Engine name -> whether it can render every shape class in ``scene`` (by handler look-up)."""
+    import importlib
+
+    from .core.engine import Engine
+    from .core.handler import SIMPLIFY, registry
+    from .render import _engines, engines
+
+    shape_classes = {type(c) for n in scene.walk() for c in n.components if _is_shape(c)}
+    out = {}
+    for name, (ok, why) in engines().items():
+        if not ok:
+            out[name] = f"unavailable here: {why}"
+            continue
+        entry = _engines[name]
+        module_name = entry.render.partition(":")[0] if isinstance(entry.render, str) else entry.render.__module__
+        try:
+            module = importlib.import_module(module_name)
+        except Exception as exc:
+            out[name] = f"cannot import {module_name}: {exc}"
+            continue
+        engine_cls = next(
+            (
+                v
+                for v in vars(module).values()
+                if isinstance(v, type) and issubclass(v, Engine) and v is not Engine and v.service != Engine.service
+            ),
+            None,
+        )
+        if engine_cls is None:
+            out[name] = "available (no engine class to check handlers against)"
+            continue
+        missing = []
+        for cls in sorted(shape_classes, key=lambda c: c.__name__):
+            if not any(
+                registry.lookup(engine_cls, engine_cls.service, k) or registry.lookup(engine_cls, SIMPLIFY, k)
+                for k in cls.__mro__
+            ):
+                missing.append(cls.__name__)
+        out[name] = "can render it" if not missing else f"cannot render: no handler for {', '.join(missing)}"
+    return out
+
+
+def _is_shape(component: Any) -> bool:
+    from .core.component import Shape
+
+    return isinstance(component, Shape)
+
+
+# -- parser -------------------------------------------------------------------
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="omnirender", description="One scene graph, many engines.")
+    parser = argparse.ArgumentParser(
+        prog="omnirender",
+        description="One scene graph, many engines: render, view, export and inspect scene files.",
+        epilog=_EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("render", help="render a scene file to an image")
+    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
+    p.add_argument("-o", "--output", help="image file (.png, .jpg...; default SCENE-ENGINE.png)")
+    p.add_argument("--size", type=_size, default=(800, 600), help="image size WxH (default 800x600)")
+    p.add_argument("--spp", type=_positive, help="samples per pixel (path tracers, antialiasing)")
+    p.add_argument("--mask", help="group mask expression, e.g. '!debug & (left|shared)'")
+    p.set_defaults(func=_render)
+
+    p = sub.add_parser("view", help="open a scene file in an interactive window")
+    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
+    p.set_defaults(func=_view)
+
+    p = sub.add_parser("export", help="write a scene file in another format (.glb, .pov, .rib)")
+    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("output", help="output file; the extension chooses the format")
+    p.set_defaults(func=_export)
+
+    p = sub.add_parser("info", help="print the node tree with paths, statistics, bounds and capable engines")
+    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("--no-engines", action="store_true", help="skip checking which engines can render it")
+    p.set_defaults(func=_info)
+
+    p = sub.add_parser("engines", help="list engines and exporters and whether they work here")
+    p.set_defaults(func=_engines)
+
     p = sub.add_parser("demo", help="render the demo scene with every available engine")
     p.add_argument("-o", "--output", default="demo-output", help="folder for the images (default: demo-output)")
-    p.add_argument("--size", default="640x480", help="image size WxH (default 640x480)")
+    p.add_argument("--size", type=_size, default=(640, 480), help="image size WxH (default 640x480)")
     p.set_defaults(func=_demo)
-    p = sub.add_parser("engines", help="list engines and whether they work here")
-    p.set_defaults(func=_engines)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: 0 for --help, 2 for usage errors
+        return int(exc.code or 0)
     try:
         return int(args.func(args) or 0)
+    except UsageError as exc:
+        if args.debug:
+            raise
+        parser.print_usage(sys.stderr)
+        print(f"omnirender {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
     except Exception as exc:
         if args.debug:
             raise
-        print(f"omnirender: error: {exc}", file=sys.stderr)
+        message = " ".join(str(exc).split()) or type(exc).__name__
+        print(f"omnirender {args.command}: error: {message}", file=sys.stderr)
         return 1
 
 

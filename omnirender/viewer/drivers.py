@@ -40,6 +40,10 @@ class EngineDriver:
         if hook is not None:
             hook(name)
 
+    def pass_attributes(self, name: str) -> list[Any]:
+        """Attributes pushed around the pass ``name`` (none for a generic engine)."""
+        return []
+
     def release(self) -> None:
         pass
 

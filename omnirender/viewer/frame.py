@@ -13,7 +13,7 @@ those of the frame.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -59,20 +59,28 @@ class ViewCamera(Camera):
 
 
 class FrameShape(Shape):
-    """Stands for "draw the viewer's render lists" inside an engine traversal."""
+    """Stands for "draw the viewer's render lists" inside an engine traversal.
 
-    __slots__ = ("_lists", "_highlighted", "_begin_pass")
+    ``driver`` supplies ``begin_pass(engine, name)`` (a hook, also called with
+    ``"end"``) and ``pass_attributes(name)`` (attributes pushed around a pass,
+    e.g. depth test off for 2D); ``overrides`` are pushed around the whole frame
+    (e.g. a wireframe draw style).
+    """
+
+    __slots__ = ("_lists", "_highlighted", "_driver", "_overrides")
 
     def __init__(
         self,
         lists: Sequence[Any],
         highlighted: set[int],
-        begin_pass: Callable[[Engine, str], None] | None = None,
+        driver: Any = None,
+        overrides: Sequence[Any] = (),
     ) -> None:
         super().__init__()
         object.__setattr__(self, "_lists", tuple(lists))
         object.__setattr__(self, "_highlighted", highlighted)
-        object.__setattr__(self, "_begin_pass", begin_pass)
+        object.__setattr__(self, "_driver", driver)
+        object.__setattr__(self, "_overrides", tuple(overrides))
 
 
 @default_for(Engine)
@@ -84,17 +92,29 @@ class FrameSimplifier(ShapeSimplifier):
 
     def exec(self, shape: FrameShape, engine: Engine) -> None:
         highlighted = shape._highlighted
-        for name in PASSES:
-            items = [r for rl in shape._lists for r in rl.sublist(name)]
-            if not items:
-                continue
-            if shape._begin_pass is not None:
-                shape._begin_pass(engine, name)
-            base = PASS_FLAGS[name]
-            for r in items:
-                r.render(engine, base | HIGHLIGHT if id(r) in highlighted else base)
-        if shape._begin_pass is not None:
-            shape._begin_pass(engine, "end")
+        driver = shape._driver
+        for attribute in shape._overrides:
+            engine.push(attribute)
+        try:
+            for name in PASSES:
+                items = [r for rl in shape._lists for r in rl.sublist(name)]
+                if not items:
+                    continue
+                if driver is not None:
+                    driver.begin_pass(engine, name)
+                attributes = driver.pass_attributes(name) if driver is not None else ()
+                for attribute in attributes:
+                    engine.push(attribute)
+                base = PASS_FLAGS[name]
+                for r in items:
+                    r.render(engine, base | HIGHLIGHT if id(r) in highlighted else base)
+                for attribute in reversed(attributes):
+                    engine.pop(attribute.category)
+            if driver is not None:
+                driver.begin_pass(engine, "end")
+        finally:
+            for attribute in reversed(shape._overrides):
+                engine.pop(attribute.category)
         return None
 
 

@@ -65,6 +65,7 @@ class Viewer:
         self._external: RenderList | None = None
         self._lights: list[tuple[Any, str]] = [(light, "camera") for light in default_lights()]
         self._highlighted: set[int] = set()
+        self._picked: Any = None
         self._lock = threading.RLock()
         self._image: Any = None
         self._driver: Any = None
@@ -169,6 +170,24 @@ class Viewer:
         else:
             self._highlighted.discard(id(r))
 
+    def set_picked(self, hit: Any) -> None:
+        """Show ``hit`` (an ``om.Hit`` from picking, with ``root`` set) highlighted; None clears it."""
+        from .picking import PickHighlight
+
+        with self._lock:
+            if self._picked is not None:
+                self._renderables = [r for r in self._renderables if r is not self._picked]
+                self._picked = None
+            root = getattr(hit, "root", None) if hit is not None else None
+            if root is not None:
+                self._picked = PickHighlight(root, hit.path, hit.shape)
+                self._renderables.append(self._picked)
+
+    @property
+    def picked(self) -> Any:
+        """The highlight overlay of the last pick, or None."""
+        return self._picked
+
     @property
     def render_list(self) -> RenderList:
         """The viewer's own render list."""
@@ -203,7 +222,7 @@ class Viewer:
             for rl in lists:
                 rl.lock.acquire()
             try:
-                shape = FrameShape(lists, highlighted, driver.begin_pass)
+                shape = FrameShape(lists, highlighted, driver, self._overrides())
                 root = FrameRoot(lights, camera, shape, lists)
                 self._image = driver.draw(root)
             finally:
@@ -369,6 +388,14 @@ class Viewer:
     def clear_lights(self) -> None:
         with self._lock:
             self._lights.clear()
+
+    def _overrides(self) -> list[Any]:
+        """Attributes pushed around the whole frame (the wireframe toggle)."""
+        if not self.wireframe:
+            return []
+        from ..attributes import DrawStyle
+
+        return [DrawStyle(mode="wireframe")]
 
     def _light_placements(self) -> list[tuple[Any, np.ndarray]]:
         eye_to_world = self._camera.get_eye_to_world()

@@ -1,0 +1,95 @@
+"""Picking in a viewer: the shape under a pixel, seen through the viewer's camera, and its highlight."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..core.transform import Matrix, Transform
+from .frame import ViewCamera
+from .renderable import TRANSPARENT, TWO_DIMENSIONAL, NodeRenderable
+
+__all__ = ["pick_in_viewer", "viewer_camera", "PickHighlight", "shape_world_matrix"]
+
+
+def viewer_camera(viewer: Any) -> ViewCamera:
+    """An ``om.Camera`` with exactly the viewer's view and projection matrices."""
+    cam = viewer.camera
+    return ViewCamera(cam.to_camera(), cam.get_view_matrix(), cam.get_projection_matrix())
+
+
+def pick_in_viewer(viewer: Any, scene: Any, x: int, y: int) -> Any:
+    """The nearest ``om.Hit`` at pixel (x, y) (top-left origin) of ``viewer``, or None.
+
+    ``scene`` None picks among every Node the viewer draws.
+    """
+    from ..techniques import pick
+
+    roots = [scene] if scene is not None else [r.node for r in viewer.renderables() if isinstance(r, NodeRenderable)]
+    camera = viewer_camera(viewer)
+    best = None
+    for root in roots:
+        hits = pick(root, pixel=(x, y), size=viewer.size, camera=camera, nearest=True)
+        if hits and (best is None or hits[0].distance < best[1].distance):
+            best = (root, hits[0])
+    if best is None:
+        return None
+    root, hit = best
+    return _with_root(hit, root)
+
+
+def _with_root(hit: Any, root: Any) -> Any:
+    try:
+        hit.root = root
+    except AttributeError:
+        pass
+    return hit
+
+
+def shape_world_matrix(root: Any, path: str, shape: Any) -> np.ndarray:
+    """Model matrix of ``shape`` held by the node at ``path`` under ``root`` (transforms before it)."""
+    from ..techniques.base import world_matrix_of
+
+    node = root[path]
+    m = world_matrix_of(node)
+    for item in node:
+        if item is shape:
+            break
+        if isinstance(item, Transform):
+            m = m @ item.matrix
+    return m
+
+
+class PickHighlight:
+    """Overlay renderable drawing a picked shape translucent in the highlight colour, on top of everything."""
+
+    def __init__(self, root: Any, path: str, shape: Any, color: tuple[float, float, float] = (1.0, 0.85, 0.1)) -> None:
+        self.root = root
+        self.path = path
+        self.shape = shape
+        self.color = color
+        self.visible = True
+        self.z_order = 1000
+        self._matrix = np.eye(4)
+
+    def prerender(self, render_list: Any) -> None:
+        self._matrix = shape_world_matrix(self.root, self.path, self.shape)
+
+    def render(self, renderer: Any, flags: int) -> None:
+        from ..attributes import Color, Highlight
+
+        attributes = [Matrix(self._matrix), Color(*self.color, a=0.5), Highlight(self.color)]
+        for a in attributes:
+            renderer.push(a)
+        try:
+            renderer.eval(self.shape)
+        finally:
+            for a in reversed(attributes):
+                renderer.pop(a.category)
+
+    def update_bounds(self, pmin: np.ndarray, pmax: np.ndarray) -> None:
+        pass
+
+    def render_hints(self) -> int:
+        return TRANSPARENT | TWO_DIMENSIONAL

@@ -1,0 +1,140 @@
+"""The omnirender command end to end on a scene file."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.cli import main
+
+
+@pytest.fixture
+def scene_file(tmp_path: Path) -> Path:
+    scene = om.Node("scene")
+    scene.add(om.Camera.look_at(eye=(0, 1.5, 6), center=(0, 0.5, 0), fov=40))
+    scene.add(om.PointLight(position=(4, 6, 6)))
+    floor = scene.add(om.Node("floor"))
+    floor.add(om.Material(diffuse=(0.7, 0.7, 0.7)))
+    floor.add(om.Box(size=(6, 0.1, 6), center=(0, -0.05, 0)))
+    body = scene.add(om.Node("body"))
+    body.add(om.Translation(0, 1, 0))
+    body.add(om.Material(diffuse=(0.9, 0.2, 0.2)))
+    body.add(om.Sphere(radius=0.8))
+    debug = scene.add(om.Node("marker", groups=["debug"]))
+    debug.add(om.Material(diffuse=(0.1, 0.9, 0.1)))
+    debug.add(om.Box(size=(0.6, 0.6, 0.6), center=(-1.8, 0.3, 1)))
+    path = tmp_path / "scene.json"
+    om.save(scene, path)
+    return path
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_help_lists_every_command(capsys):
+    code, out, _ = run(capsys, "--help")
+    assert code == 0
+    for command in ("render", "view", "export", "info", "engines", "demo"):
+        assert command in out
+    code, out, _ = run(capsys, "render", "--help")
+    assert code == 0 and "--spp" in out and "--mask" in out and "WxH" in out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        ([], "required"),
+        (["paint", "x"], "invalid choice"),
+        (["render", "SCENE", "--size", "big"], "WIDTHxHEIGHT"),
+        (["render", "SCENE", "--spp", "0"], "positive"),
+        (["render", "missing.json"], "not found"),
+        (["render", "SCENE", "-e", "blender"], "unknown engine"),
+        (["render", "SCENE", "--mask", "a &"], "bad --mask"),
+        (["export", "SCENE", "out.xyz"], "cannot export"),
+        (["info", "missing.yaml"], "not found"),
+    ],
+)
+def test_usage_errors_exit_2(capsys, scene_file, argv, message):
+    argv = [str(scene_file) if a == "SCENE" else a for a in argv]
+    code, _, err = run(capsys, *argv)
+    assert code == 2
+    assert message in err
+
+
+def test_engines_lists_engines_and_exporters(capsys):
+    code, out, _ = run(capsys, "engines")
+    assert code == 0
+    for name in ("gl", "povray", "mitsuba", ".glb", ".pov", ".rib"):
+        assert name in out
+
+
+def test_info_prints_tree_statistics_bounds_and_engines(capsys, scene_file):
+    code, out, _ = run(capsys, "info", str(scene_file))
+    assert code == 0, out
+    assert "/scene/body" in out and "/scene/marker  groups=['debug']" in out
+    assert "Sphere(" in out and "statistics:" in out
+    line = next(ln for ln in out.splitlines() if ln.startswith("bounds:"))
+    assert "min (-3, -0.1, -3)" in line and "max (3, 1.8, 3)" in line
+    assert "engines:" in out and "povray" in out
+    assert "can render it" in out
+
+
+def test_loading_errors_exit_1_with_one_line(capsys, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "omnirender-scene", "version": 1, "root": {"node": "s", "contents": '
+                   '[{"type": "Sphere", "radius": -1}]}}')  # fmt: skip
+    code, _, err = run(capsys, "info", str(bad))
+    assert code == 1
+    assert len(err.strip().splitlines()) == 1 and "radius" in err and "Traceback" not in err
+    with pytest.raises(ValueError, match="radius"):
+        main(["--debug", "info", str(bad)])
+
+
+@pytest.mark.povray
+def test_render_with_povray_and_mask(capsys, scene_file, tmp_path):
+    out_all = tmp_path / "all.png"
+    out_masked = tmp_path / "masked.png"
+    code, out, err = run(capsys, "render", str(scene_file), "-e", "povray", "-o", str(out_all), "--size", "80x60")
+    assert code == 0, err
+    assert out.strip() == str(out_all)
+    code, _, err = run(capsys, "render", str(scene_file), "-e", "povray", "-o", str(out_masked), "--size", "80x60",
+                       "--mask", "!debug")  # fmt: skip
+    assert code == 0, err
+    from PIL import Image
+
+    full = np.asarray(Image.open(out_all).convert("RGB")).astype(int)
+    masked = np.asarray(Image.open(out_masked).convert("RGB")).astype(int)
+    assert full.shape == (60, 80, 3) and full.std() > 5  # not blank
+    green = (full[:, :, 1] > full[:, :, 0] + 60).sum()
+    assert green > 10 and (masked[:, :, 1] > masked[:, :, 0] + 60).sum() == 0  # the debug box is gone
+
+
+@pytest.mark.povray
+def test_export_pov_end_to_end(capsys, scene_file, tmp_path):
+    target = tmp_path / "scene.pov"
+    code, out, err = run(capsys, "export", str(scene_file), str(target))
+    assert code == 0, err
+    text = target.read_text()
+    assert "camera" in text and "sphere" in text
+
+
+@pytest.mark.slow
+def test_console_entry_point_runs_as_a_process(scene_file):
+    result = subprocess.run(
+        [sys.executable, "-m", "omnirender.cli", "info", str(scene_file), "--no-engines"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "/scene/floor" in result.stdout
+    result = subprocess.run([sys.executable, "-m", "omnirender.cli", "render"], capture_output=True, text=True)
+    assert result.returncode == 2 and "usage" in result.stderr
