@@ -159,7 +159,11 @@ def _check_image(owner: str, name: str, value: Any) -> str | np.ndarray:
         raise ValueError(f"{owner}: {name} must be an (H, W), (H, W, 3) or (H, W, 4) array, got shape {arr.shape}")
     if arr.dtype == np.uint8:
         pass
-    elif arr.dtype.kind in "fiu" and arr.dtype != np.bool_:
+    elif arr.dtype.kind in "iu":
+        if arr.min() < 0 or arr.max() > 255:
+            raise ValueError(f"{owner}: {name} integer values must be in [0, 255]")
+        arr = arr.astype(np.uint8)
+    elif arr.dtype.kind == "f":
         arr = arr.astype(np.float64)
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{owner}: {name} must be finite")
@@ -187,7 +191,7 @@ class Texture(Parameterised, MonoAttribute):
 
     ``image`` is a file path (kept as given and loaded lazily with Pillow on the
     first :meth:`image_array` call) or an (H, W), (H, W, 3) or (H, W, 4) array
-    of uint8 or floats in [0, 1].  Row 0 is the top of the image.  ``wrap`` is
+    of uint8 (integers in [0, 255]) or floats in [0, 1].  Row 0 is the top of the image.  ``wrap`` is
     ``"repeat"``, ``"clamp"`` or ``"mirror"``; ``filter`` ``"linear"`` or
     ``"nearest"``; ``mipmap`` asks engines for mipmapped minification.
     """

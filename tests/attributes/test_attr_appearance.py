@@ -67,3 +67,11 @@ def test_drawstyle_cull_booleans():
     assert om.DrawStyle(cull=True).cull == "back"
     assert om.DrawStyle(cull=False).cull == "none"
     assert om.DrawStyle(cull="front").cull == "front"
+
+
+def test_texture_integer_lists_become_uint8():
+    t = om.Texture([[[255, 0, 0], [0, 255, 0]]])
+    assert t.image.dtype == np.uint8
+    assert t.image_array()[0, 1].tolist() == [0, 255, 0, 255]
+    with pytest.raises(ValueError, match=r"Texture: image integer values must be in \[0, 255\]"):
+        om.Texture([[[256, 0, 0]]])
