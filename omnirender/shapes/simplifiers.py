@@ -312,6 +312,12 @@ class MeshFileSimplifier(_Fixed):
     __slots__ = ()
     target = MeshFile
 
+    def exec(self, shape: MeshFile, engine: Engine) -> list[Any]:
+        try:
+            return super().exec(shape, engine)
+        except (ValueError, FileNotFoundError) as exc:
+            raise type(exc)(f"{exc} (MeshFile in node {engine.node_path!r}; fix or replace the file)") from None
+
     def build(self, shape: MeshFile) -> list[Any]:
         out: list[Any] = []
         for material, triangles in shape.parts():

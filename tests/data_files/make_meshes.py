@@ -6,6 +6,8 @@
 * ``cube.off``: unit cube.
 * ``two_parts.glb``: two meshes (a cube at x = -1 and an icosphere at x = +1, radius 0.5),
   PBR materials (green metallic, blue rough).
+* ``textured.obj`` + ``textured.mtl`` + its PNG: a 2 x 2 quad facing +z with texture coordinates
+  and a 2 x 2 checker texture (red top-left, blue bottom-right).
 * ``malformed.obj`` / ``malformed.ply``: broken files for error tests.
 """
 
@@ -59,6 +61,22 @@ def write_all(directory: str | Path) -> Path:
     scene.add_geometry(a, geom_name="cube")
     scene.add_geometry(b, geom_name="ball")
     (out / "two_parts.glb").write_bytes(scene.export(file_type="glb"))
+
+    # A textured quad (2 x 2 checker texture, red top-left) facing +z.
+    from PIL import Image
+
+    checker = np.array([[[255, 0, 0], [255, 255, 255]], [[255, 255, 255], [0, 0, 255]]], dtype=np.uint8)
+    quad = trimesh.Trimesh([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], [[0, 1, 2], [0, 2, 3]], process=False)
+    quad.visual = TextureVisuals(
+        uv=[[0, 0], [1, 0], [1, 1], [0, 1]],
+        material=SimpleMaterial(name="checker", image=Image.fromarray(checker), diffuse=(255, 255, 255, 255)),
+    )
+    text, files = trimesh.exchange.obj.export_obj(
+        quad, include_texture=True, mtl_name="textured.mtl", return_texture=True
+    )
+    (out / "textured.obj").write_text(text)
+    for name, data in files.items():
+        (out / name).write_bytes(data)
 
     (out / "malformed.obj").write_text("v 0 0 0\nv 1 0\nf 1 2 3 4 banana\n")
     (out / "malformed.ply").write_bytes(b"ply\nformat ascii 1.0\nelement vertex 3\nend_header\n1 2\n")

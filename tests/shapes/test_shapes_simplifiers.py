@@ -304,3 +304,29 @@ def test_unsupported_extension_and_empty_file(tmp_path):
     (tmp_path / "empty.obj").write_text("# nothing\n")
     with pytest.raises(ValueError, match="empty.obj"):
         om.MeshFile(tmp_path / "empty.obj").parts()
+
+
+def test_textured_obj_yields_material_texture_and_texcoords():
+    engine = om.Engine(on_missing="skip")
+    (part,) = simplifiers.MeshFileSimplifier().exec(om.MeshFile(DATA / "textured.obj"), engine)
+    material, texture, triangles = part.items
+    assert isinstance(material, om.Material) and isinstance(texture, om.Texture)
+    image = texture.image_array() if hasattr(texture, "image_array") else np.asarray(texture.image)
+    assert image.shape[:2] == (2, 2)
+    assert tuple(image[0, 0, :3]) == (255, 0, 0)  # row 0 is the top of the image
+    assert triangles.texcoord_array().tolist() == [[0, 0], [1, 0], [1, 1], [0, 1]]
+
+
+def test_mesh_file_errors_during_evaluation_name_the_node(tmp_path):
+    node = om.Node("scene")
+    model = node.add(om.Node("model"))
+    model.add(om.MeshFile(DATA / "malformed.obj"))
+    with pytest.raises(ValueError, match="malformed.obj") as info:
+        node.evaluate(om.Engine(on_missing="skip"))
+    assert "model" in str(info.value)
+
+
+def test_mesh_file_parameters_round_trip():
+    mf = om.MeshFile(DATA / "cube.off")
+    copy = type(mf)(**mf.parameters())
+    assert copy.path == mf.path and copy.triangle_count == 12
