@@ -1,0 +1,116 @@
+"""Offline engines: writing a 1,000,000-triangle mesh, and render times of the agreement test scene.
+
+POV-Ray half: the mesh (a 1001 x 501 vertex grid bent into a wave, with
+normals) is written as POV-Ray ``mesh2`` through ``om.export(scene,
+"mesh.pov")`` (the whole pipeline: engine traversal, SDL formatting, atomic
+file write) and compared with trimesh's own OBJ export of the same mesh
+(vertices, normals, faces) in the same run.  Target: SDL writing at most as
+slow as trimesh's OBJ export.  Then the test scene of
+``tests/test_engines_agree.py`` is rendered with POV-Ray at 640x480.
+
+Mitsuba half: ``mitsuba_half`` below (filled in by the Mitsuba adapter's
+author) builds the same mesh as a Mitsuba mesh and renders the test scene.
+
+Run: .venv/bin/python bench/offline_export.py [--repeat N] [--no-render]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import omnirender as om
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def wave_mesh(nx: int = 1001, nz: int = 501) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(vertices, normals, faces) of a grid with 2 (nx-1)(nz-1) triangles (1,000,000 by default)."""
+    x, z = np.meshgrid(np.linspace(-2, 2, nx), np.linspace(-1, 1, nz))
+    y = 0.1 * np.sin(4 * x) * np.cos(5 * z)
+    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()]).astype(np.float32)
+    dydx = 0.4 * np.cos(4 * x) * np.cos(5 * z)
+    dydz = -0.5 * np.sin(4 * x) * np.sin(5 * z)
+    normals = np.column_stack([-dydx.ravel(), np.ones(x.size), -dydz.ravel()])
+    normals = (normals / np.linalg.norm(normals, axis=1, keepdims=True)).astype(np.float32)
+    i = np.arange(nx * nz, dtype=np.uint32).reshape(nz, nx)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(), i[1:, :-1].ravel()
+    faces = np.concatenate([np.column_stack([a, c, b]), np.column_stack([a, d, c])])
+    return vertices, normals, faces
+
+
+def best_of(fn, repeat: int) -> float:
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def povray_half(vertices, normals, faces, repeat: int, render: bool) -> dict[str, float]:
+    import trimesh
+
+    scene = om.Node("bench")
+    scene.add(om.Camera.look_at(eye=(0, 3, 4)))
+    scene.add(om.TriangleSet(vertices=vertices, indices=faces, normals=normals))
+    tm = trimesh.Trimesh(vertices=vertices, faces=faces, vertex_normals=normals, process=False)
+    out: dict[str, float] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        pov, obj = Path(tmp) / "mesh.pov", Path(tmp) / "mesh.obj"
+        out["povray_mesh2_s"] = best_of(lambda: om.export(scene, pov), repeat)
+        out["trimesh_obj_s"] = best_of(lambda: tm.export(obj), repeat)
+        out["povray_mb"] = pov.stat().st_size / 1e6
+        out["obj_mb"] = obj.stat().st_size / 1e6
+        obj_text = obj.read_text()
+        assert obj_text.count("\nf ") + obj_text.startswith("f ") == len(faces)
+        assert f"face_indices {{ {len(faces)}," in pov.read_text()
+    out["ratio_pov_over_obj"] = out["povray_mesh2_s"] / out["trimesh_obj_s"]
+    if render:
+        sys.path.insert(0, str(ROOT / "tests"))
+        from test_engines_agree import make_scene
+
+        times = []
+        for _ in range(repeat):
+            img = om.render(make_scene(), engine="povray", size=(640, 480), progress=False)
+            times.append(img.info["render_seconds"])
+        out["povray_render_640x480_s"] = min(times)
+        out["povray_render_640x480_median_s"] = statistics.median(times)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# MITSUBA HALF — owned by the Mitsuba adapter's author; fill in below.
+# Should time building the same (vertices, normals, faces) mesh as a Mitsuba
+# mesh and, when ``render`` is True, the Mitsuba render of
+# test_engines_agree.make_scene() at 640x480.  Return {name: seconds}.
+# ---------------------------------------------------------------------------
+def mitsuba_half(vertices, normals, faces, repeat: int, render: bool) -> dict[str, float]:
+    return {}
+
+
+def main(argv: list[str] | None = None) -> dict[str, float]:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--no-render", action="store_true")
+    args = parser.parse_args(argv)
+    vertices, normals, faces = wave_mesh()
+    print(f"mesh: {len(vertices)} vertices, {len(faces)} triangles")
+    results = povray_half(vertices, normals, faces, args.repeat, not args.no_render)
+    results.update(mitsuba_half(vertices, normals, faces, args.repeat, not args.no_render))
+    for key, value in results.items():
+        print(f"{key:34s} {value:10.3f}")
+    if "ratio_pov_over_obj" in results:
+        verdict = "met" if results["ratio_pov_over_obj"] <= 1.0 else "NOT met"
+        print(f"target (POV-Ray SDL at most as slow as trimesh OBJ): {verdict}")
+    return results
+
+
+if __name__ == "__main__":
+    main()
