@@ -16,6 +16,8 @@ from ..core import Shape
 
 __all__ = ["DeclaredShape", "parameter"]
 
+_MISSING = object()
+
 
 def parameter(name: str, doc: str = "") -> property:
     """A public parameter stored in the private slot ``_<name>``; assigning it re-validates the shape."""
@@ -80,6 +82,16 @@ class DeclaredShape(Shape):
         return params, {}
 
     # -- caches ---------------------------------------------------------
+    def _reuse(self, name: str, value: Any, key: str, convert: Callable[[Any], Any]) -> Any:
+        """``convert(value)``, or the current derived ``key`` when parameter ``name`` is unchanged.
+
+        Saves re-validating big arrays when another parameter changes (a volume's
+        ``iso``, a mesh's ``colors``).
+        """
+        if value is getattr(self, "_" + name, _MISSING) and self._cache_version == self._version and key in self._cache:
+            return self._cache[key]
+        return convert(value)
+
     def _cached(self, key: str, compute: Callable[[], Any] | None = None) -> Any:
         """A cached value of the current version: ``compute()`` or, without it, a derived value."""
         cache = self._cache

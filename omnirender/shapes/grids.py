@@ -199,15 +199,7 @@ class Volume(DeclaredShape):
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         name = "Volume"
-        d = as_array(p["data"], None, name=f"{name}: data")
-        if d.dtype.kind not in "biuf":
-            raise ValueError(f"{name}: data must be numbers, got dtype {d.dtype}")
-        if d.ndim != 3 or min(d.shape) < 2:
-            raise ValueError(f"{name}: data must be a 3D grid (D, H, W) with every size >= 2, got shape {d.shape}")
-        d = np.array(d, dtype=np.float32)
-        if not np.all(np.isfinite(d)):
-            raise ValueError(f"{name}: data must be finite")
-        d.setflags(write=False)
+        d = self._reuse("data", p["data"], "data", _volume_data)
         p["spacing"] = _check.vector(name, "spacing", p["spacing"], 3, positive=True)
         tf = p["transfer_function"]
         if tf is None:
@@ -237,3 +229,17 @@ class Volume(DeclaredShape):
         d, h, w = self.data_array().shape
         half = np.array([(w - 1), (h - 1), (d - 1)], dtype=np.float64) * np.array(self._spacing) / 2.0
         return -half, half
+
+
+def _volume_data(value: Any) -> np.ndarray:
+    name = "Volume"
+    d = as_array(value, None, name=f"{name}: data")
+    if d.dtype.kind not in "biuf":
+        raise ValueError(f"{name}: data must be numbers, got dtype {d.dtype}")
+    if d.ndim != 3 or min(d.shape) < 2:
+        raise ValueError(f"{name}: data must be a 3D grid (D, H, W) with every size >= 2, got shape {d.shape}")
+    d = np.array(d, dtype=np.float32)
+    if not np.all(np.isfinite(d)):
+        raise ValueError(f"{name}: data must be finite")
+    d.setflags(write=False)
+    return d

@@ -78,7 +78,9 @@ class TriangleSet(_VertexShape):
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         name = "TriangleSet"
-        v = _check.float_array(name, "vertices", p["vertices"], (3,), minimum=3)
+        v = self._reuse(
+            "vertices", p["vertices"], "vertices", lambda x: _check.float_array(name, "vertices", x, (3,), minimum=3)
+        )
         n = len(v)
         if p["indices"] is None:
             if n % 3:

@@ -201,3 +201,17 @@ def test_transfer_function_lookup_table_and_iso():
     lo, hi = vol.bounds()
     assert np.allclose(hi, [1.5, 2.0, 1.5]) and np.allclose(lo, -hi)
     assert vol.iso_level() == pytest.approx(0.5)
+
+
+def test_changing_one_parameter_keeps_the_other_validated_arrays():
+    data = np.random.default_rng(0).random((4, 4, 4))
+    vol = om.Volume(data)
+    before = vol.data_array()
+    vol.iso = 0.25
+    assert vol.data_array() is before and vol.iso_level() == 0.25
+    vol.touch()  # after an in-place change the data is converted again
+    assert vol.data_array() is not before
+    ts = om.TriangleSet(TRI)
+    v = ts.vertex_array()
+    ts.colors = (1, 0, 0)
+    assert ts.vertex_array() is v and ts.color_array().shape == (3, 4)
