@@ -1,0 +1,385 @@
+"""glTF 2.0 binary export (``om.export(scene, "scene.glb")``).
+
+:class:`GLTFEngine` (service ``"gltf.export"``) evaluates the scene graph like
+any engine: every scene-graph node becomes a glTF node with its name and the
+transform accumulated since its parent (a ``matrix``); every shape is
+simplified down to triangle sets (line and point sets), which become meshes
+under a child node carrying the transforms met inside the node.  Materials are
+converted to metallic-roughness (``Material``'s Phong parameters approximated,
+colours made linear), textures are embedded as PNG, the camera becomes a glTF
+camera and lights use ``KHR_lights_punctual``.  Texture coordinates follow
+OpenGL in omnirender (v = 0 at the image's bottom row) and glTF's v points
+down: v is flipped.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+from typing import Any
+
+import numpy as np
+
+from ..attributes import (
+    AmbientLight,
+    Color,
+    DirectionalLight,
+    LightSource,
+    Material,
+    PBRMaterial,
+    PointLight,
+    SpotLight,
+    Texture,
+)
+from ..core import AttributePainter, ShapePainter, default_for
+from ..fileio import atomic_write
+from ..scene import Node
+from ..shapes import LineSet, PointSet, TriangleSet
+from .colors import srgb_to_linear
+from .glb import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GLBBuilder
+from .walk import NodeTrackingEngine
+
+__all__ = ["export", "to_bytes", "GLTFEngine", "LIGHTS_EXTENSION"]
+
+LIGHTS_EXTENSION = "KHR_lights_punctual"
+_WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
+_FILTER = {"linear": 9729, "nearest": 9728}
+_POINTS, _LINES, _TRIANGLES = 0, 1, 4
+
+
+def _column_major(m: np.ndarray) -> list[float]:
+    return [float(v) for v in np.asarray(m, np.float64).T.reshape(-1)]
+
+
+def _is_identity(m: np.ndarray) -> bool:
+    return bool(np.allclose(m, np.eye(4), atol=1e-12))
+
+
+def _frame_looking(direction: np.ndarray, position: np.ndarray) -> np.ndarray:
+    """A node matrix whose -z axis points along ``direction`` (glTF lights and cameras look down -z)."""
+    z = -np.asarray(direction, np.float64)
+    z /= np.linalg.norm(z)
+    up = np.array([0.0, 1.0, 0.0]) if abs(z[1]) < 0.99 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(up, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, y, z, position
+    return m
+
+
+class GLTFEngine(NodeTrackingEngine):
+    """Evaluates a scene into a glTF document (see the module docstring)."""
+
+    service = "gltf.export"
+
+    def __init__(self, size: tuple[int, int] = (640, 480), **options: Any) -> None:
+        super().__init__(**options)
+        self.size = (int(size[0]), int(size[1]))
+        if min(self.size) <= 0:
+            raise ValueError(f"glTF export: size (camera aspect) must be positive (width, height), got {size!r}")
+        self.gltf = GLBBuilder()
+        self.roots: list[int] = []
+        self._stack: list[tuple[int, np.ndarray]] = []
+        self._materials: dict[tuple, int] = {}
+        self._textures: dict[tuple, int] = {}
+        self._lights: list[tuple[Any, np.ndarray]] = []
+        self.triangle_count = 0
+
+    # -- structure ------------------------------------------------------------
+    def _attach(self, index: int) -> None:
+        if self._stack:
+            parent = self.gltf.doc["nodes"][self._stack[-1][0]]
+            parent.setdefault("children", []).append(index)
+        else:
+            self.roots.append(index)
+
+    def enter_node(self, node: Any, world: np.ndarray) -> None:
+        entry: dict[str, Any] = {"name": node.name}
+        parent_world = self._stack[-1][1] if self._stack else np.eye(4)
+        local = np.linalg.solve(parent_world, world)
+        if not _is_identity(local):
+            entry["matrix"] = _column_major(local)
+        index = self.gltf.append("nodes", entry)
+        self._attach(index)
+        self._stack.append((index, np.array(world)))
+
+    def leave_node(self, node: Any) -> None:
+        self._stack.pop()
+
+    def add_primitive(self, kind: str, primitive: dict[str, Any]) -> int:
+        """Add a one-primitive mesh under a node placed by the current model matrix."""
+        mesh = self.gltf.append("meshes", {"name": kind, "primitives": [primitive]})
+        entry: dict[str, Any] = {"name": kind, "mesh": mesh}
+        parent_world = self._stack[-1][1] if self._stack else np.eye(4)
+        local = np.linalg.solve(parent_world, self.model_matrix())
+        if not _is_identity(local):
+            entry["matrix"] = _column_major(local)
+        index = self.gltf.append("nodes", entry)
+        self._attach(index)
+        return index
+
+    def vertex_attributes(self, shape: Any) -> dict[str, int]:
+        """POSITION (with bounds) and COLOR_0 (linear) accessors of a shape with vertices."""
+        attrs = {"POSITION": self.gltf.accessor(shape.vertex_array().astype(np.float32), ARRAY_BUFFER, bounds=True)}
+        colors = shape.color_array()
+        if colors is not None:
+            linear = np.asarray(colors, np.float64).copy()
+            linear[:, :3] = srgb_to_linear(linear[:, :3])
+            attrs["COLOR_0"] = self.gltf.accessor(linear.astype(np.float32), ARRAY_BUFFER)
+        return attrs
+
+    # -- materials ------------------------------------------------------------
+    def material_index(self, textured: bool = True) -> int:
+        """The glTF material for the active appearance attributes (shared when identical)."""
+        pbr, mat, col = self.mono(PBRMaterial), self.mono(Material), self.mono(Color)
+        tex = self.mono(Texture) if textured else None
+        key = tuple((id(a), a.version) if a is not None else None for a in (pbr, mat, col, tex))
+        found = self._materials.get(key)
+        if found is not None:
+            return found
+        if pbr is not None:
+            base, alpha = pbr.base_color, pbr.opacity
+            metallic, roughness, emission = pbr.metallic, pbr.roughness, pbr.emission
+            name = "PBRMaterial"
+        elif mat is not None:
+            base, alpha, metallic, emission = mat.diffuse, mat.opacity, 0.0, mat.emission
+            shiny = float(np.mean(mat.specular)) > 0.0
+            roughness = min(1.0, math.sqrt(2.0 / (mat.shininess + 2.0))) if shiny else 1.0
+            name = "Material"
+        else:
+            base = col.rgb if col is not None else (0.8, 0.8, 0.8)
+            alpha = col.a if col is not None else 1.0
+            metallic, roughness, emission, name = 0.0, 1.0, (0.0, 0.0, 0.0), "Color"
+        factor = [*(float(v) for v in srgb_to_linear(base)), float(alpha)]
+        pbr_block: dict[str, Any] = {"metallicFactor": float(metallic), "roughnessFactor": float(roughness)}
+        if tex is not None:
+            factor[:3] = [1.0, 1.0, 1.0]  # the texture replaces the colour (as in the other engines)
+            pbr_block["baseColorTexture"] = {"index": self.texture_index(tex)}
+        pbr_block["baseColorFactor"] = factor
+        material: dict[str, Any] = {"name": name, "pbrMetallicRoughness": pbr_block, "doubleSided": True}
+        if max(emission) > 0.0:
+            material["emissiveFactor"] = [float(v) for v in srgb_to_linear(emission)]
+        if alpha < 1.0:
+            material["alphaMode"] = "BLEND"
+        index = self._materials[key] = self.gltf.append("materials", material)
+        return index
+
+    def texture_index(self, tex: Texture) -> int:
+        key = (id(tex), tex.version)
+        found = self._textures.get(key)
+        if found is not None:
+            return found
+        try:
+            from PIL import Image as PILImage
+        except ImportError:  # pragma: no cover - Pillow comes with the gl extra
+            raise RuntimeError("glTF export of textures needs Pillow: pip install pillow") from None
+        buf = io.BytesIO()
+        PILImage.fromarray(np.asarray(tex.image_array()), "RGBA").save(buf, format="PNG")
+        view = self.gltf.buffer_view(buf.getvalue())
+        image = self.gltf.append("images", {"bufferView": view, "mimeType": "image/png"})
+        wrap = _WRAP[tex.wrap]
+        linear = tex.filter == "linear"
+        sampler = self.gltf.append(
+            "samplers",
+            {
+                "magFilter": _FILTER[tex.filter],
+                "minFilter": (9987 if tex.mipmap else 9729) if linear else (9984 if tex.mipmap else 9728),
+                "wrapS": wrap,
+                "wrapT": wrap,
+            },
+        )
+        index = self._textures[key] = self.gltf.append("textures", {"source": image, "sampler": sampler})
+        return index
+
+    # -- lights and camera ------------------------------------------------------
+    def add_light(self, light: Any) -> None:
+        """Queue a light with its world matrix (written as a KHR_lights_punctual node at the end)."""
+        for other, m in self.lights():
+            if other is light:
+                self._lights.append((light, np.array(m)))
+                return
+        self._lights.append((light, self.model_matrix()))
+
+    def _write_lights(self) -> None:
+        ambient = [0.0, 0.0, 0.0]
+        lights: list[dict[str, Any]] = []
+        for light, world in self._lights:
+            color = [float(c) for c in light.color]
+            if isinstance(light, AmbientLight):
+                ambient = [a + float(b) for a, b in zip(ambient, light.ambient, strict=True)]
+                continue
+            entry: dict[str, Any] = {"name": type(light).__name__, "color": color, "intensity": float(light.intensity)}
+            if isinstance(light, DirectionalLight):
+                entry["type"] = "directional"
+                matrix = _frame_looking(light.world_direction(world), np.zeros(3))
+            elif isinstance(light, (PointLight, SpotLight)):
+                position = light.world_position(world)
+                if isinstance(light, SpotLight):
+                    outer = math.radians(light.cutoff)
+                    inner = outer if light.exponent <= 0 else min(outer, math.acos(0.5 ** (1.0 / light.exponent)))
+                    entry["type"] = "spot"
+                    entry["spot"] = {"innerConeAngle": float(min(inner, outer * 0.999)), "outerConeAngle": outer}
+                    matrix = _frame_looking(light.world_direction(world), position)
+                else:
+                    entry["type"] = "point"
+                    matrix = np.eye(4)
+                    matrix[:3, 3] = position
+            else:
+                continue
+            index = len(lights)
+            lights.append(entry)
+            node = {
+                "name": entry["name"],
+                "matrix": _column_major(matrix),
+                "extensions": {LIGHTS_EXTENSION: {"light": index}},
+            }
+            self.roots.append(self.gltf.append("nodes", node))
+        if lights:
+            self.gltf.use_extension(LIGHTS_EXTENSION)
+            self.gltf.doc.setdefault("extensions", {})[LIGHTS_EXTENSION] = {"lights": lights}
+        if any(ambient):
+            # glTF has no ambient light; keep it for importers that want it.
+            self.gltf.doc.setdefault("extras", {})["ambient_light"] = ambient
+
+    def _write_camera(self) -> None:
+        if self.camera is None:
+            return
+        camera, world = self.camera
+        w, h = self.size
+        if camera.is_orthographic:
+            cam: dict[str, Any] = {
+                "type": "orthographic",
+                "orthographic": {
+                    "xmag": camera.height * w / h / 2.0,
+                    "ymag": camera.height / 2.0,
+                    "znear": camera.near,
+                    "zfar": camera.far,
+                },
+            }
+        else:
+            cam = {
+                "type": "perspective",
+                "perspective": {
+                    "yfov": math.radians(camera.fov),
+                    "aspectRatio": w / h,
+                    "znear": camera.near,
+                    "zfar": camera.far,
+                },
+            }
+        index = self.gltf.append("cameras", cam)
+        eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+        self.roots.append(
+            self.gltf.append("nodes", {"name": "camera", "camera": index, "matrix": _column_major(eye_to_world)})
+        )
+
+    def finish(self, name: str = "scene") -> bytes:
+        """Write camera, lights and the scene list; return the GLB bytes."""
+        self._write_camera()
+        self._write_lights()
+        self.gltf.doc["scenes"] = [{"name": name, "nodes": list(self.roots)}]
+        self.gltf.doc["scene"] = 0
+        return self.gltf.to_bytes()
+
+
+@default_for(GLTFEngine)
+class TriangleSetExporter(ShapePainter):
+    """``TriangleSet`` -> a TRIANGLES primitive with normals, texture coordinates and colours."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = TriangleSet
+
+    def exec(self, shape: TriangleSet, engine: GLTFEngine) -> None:
+        faces = shape.index_array()
+        if len(faces) == 0:
+            return
+        g = engine.gltf
+        attrs = engine.vertex_attributes(shape)
+        attrs["NORMAL"] = g.accessor(shape.normal_array().astype(np.float32), ARRAY_BUFFER)
+        uv = shape.texcoord_array()
+        if uv is not None:
+            flipped = np.array(uv, np.float32)
+            flipped[:, 1] = 1.0 - flipped[:, 1]
+            attrs["TEXCOORD_0"] = g.accessor(flipped, ARRAY_BUFFER)
+        indices = g.accessor(faces.astype(np.uint32).reshape(-1), ELEMENT_ARRAY_BUFFER)
+        primitive = {
+            "attributes": attrs,
+            "indices": indices,
+            "mode": _TRIANGLES,
+            "material": engine.material_index(uv is not None),
+        }
+        engine.add_primitive("TriangleSet", primitive)
+        engine.triangle_count += len(faces)
+
+
+@default_for(GLTFEngine)
+class LineSetExporter(ShapePainter):
+    """``LineSet`` -> a LINES primitive."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = LineSet
+
+    def exec(self, shape: LineSet, engine: GLTFEngine) -> None:
+        segments = shape.index_array()
+        if len(segments) == 0:
+            return
+        indices = engine.gltf.accessor(segments.astype(np.uint32).reshape(-1), ELEMENT_ARRAY_BUFFER)
+        primitive = {
+            "attributes": engine.vertex_attributes(shape),
+            "indices": indices,
+            "mode": _LINES,
+            "material": engine.material_index(False),
+        }
+        engine.add_primitive("LineSet", primitive)
+
+
+@default_for(GLTFEngine)
+class PointSetExporter(ShapePainter):
+    """``PointSet`` -> a POINTS primitive."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = PointSet
+
+    def exec(self, shape: PointSet, engine: GLTFEngine) -> None:
+        if len(shape.vertex_array()) == 0:
+            return
+        primitive = {
+            "attributes": engine.vertex_attributes(shape),
+            "mode": _POINTS,
+            "material": engine.material_index(False),
+        }
+        engine.add_primitive("PointSet", primitive)
+
+
+@default_for(GLTFEngine)
+class LightExporter(AttributePainter):
+    """Lights -> queued for ``KHR_lights_punctual`` (ambient goes to ``extras``)."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = LightSource
+
+    def exec(self, light: LightSource, engine: GLTFEngine) -> None:
+        engine.add_light(light)
+
+
+def to_bytes(
+    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "warn", mask: str | None = None
+) -> bytes:
+    """The GLB file of ``scene`` as bytes (``size`` gives the camera's aspect ratio)."""
+    if not isinstance(scene, Node):
+        scene = Node("scene", scene)
+    engine = GLTFEngine(size, on_missing=on_missing, mask=mask)
+    engine.run(scene)
+    return engine.finish(scene.name)
+
+
+def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:
+    """Write ``scene`` as glTF 2.0 binary to ``path`` atomically (options: see :func:`to_bytes`)."""
+    data = to_bytes(scene, **options)
+    with atomic_write(path, "wb") as fh:
+        fh.write(data)
