@@ -13,6 +13,7 @@ The ``check_*`` functions raise ValueError naming the class and the parameter
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -67,7 +68,10 @@ _NAMES_CACHE: dict[type, tuple[Param, ...]] = {}
 
 
 def declared_params(cls: type) -> tuple[Param, ...]:
-    """The :class:`Param` descriptors of ``cls``, base classes first, in declaration order."""
+    """The :class:`Param` descriptors of ``cls`` in the order of its constructor's arguments.
+
+    Params the constructor does not name follow in declaration order (base classes first).
+    """
     found = _NAMES_CACHE.get(cls)
     if found is None:
         seen: dict[str, Param] = {}
@@ -75,7 +79,13 @@ def declared_params(cls: type) -> tuple[Param, ...]:
             for key, value in vars(klass).items():
                 if isinstance(value, Param):
                     seen[key] = value
-        found = _NAMES_CACHE[cls] = tuple(seen.values())
+        try:
+            order = list(inspect.signature(cls.__init__).parameters)
+        except (TypeError, ValueError):  # pragma: no cover - every attribute has a Python __init__
+            order = []
+        rank = {name: i for i, name in enumerate(order)}
+        names = sorted(seen, key=lambda n: rank.get(n, len(order)))
+        found = _NAMES_CACHE[cls] = tuple(seen[n] for n in names)
     return found
 
 

@@ -129,8 +129,11 @@ def test_builtin_types_are_discovered():
 def test_every_registered_type_round_trips(tmp_path, fmt):
     samples = _samples(tmp_path)
     builtin = {n: c for n, c in files.registered_types().items() if "." not in n}
-    missing = sorted(set(builtin) - set(samples))
-    assert not missing, f"add samples for the new types {missing}"
+    for name in sorted(set(builtin) - set(samples)):  # a type added later: its defaults must round-trip
+        try:
+            samples[name] = [builtin[name]()]
+        except (TypeError, ValueError) as exc:
+            pytest.fail(f"add a sample for the new scene-file type {name} to _samples() ({exc})")
     scene = om.Node("scene")
     expected = []
     for name in sorted(builtin):
@@ -182,9 +185,7 @@ def test_shared_nodes_and_components_round_trip(fmt):
     assert wheel.components[0] is debug.components[0]  # shared material
     switch = right.components[-1]
     assert switch.lights[0] is loaded.components[1]  # LightSwitch refers to the scene's light
-    assert [type(c).__name__ for c in right] == ["Translation", "Node", "LightSwitch"] or [
-        type(x).__name__ for x in right
-    ] == ["Translation", "Node", "LightSwitch"]
+    assert [type(x).__name__ for x in right] == ["Translation", "Node", "LightSwitch"]
     assert files.dumps(loaded, fmt) == text
     assert text.count('"$ref"' if fmt == "json" else "$ref:") == 3
 
