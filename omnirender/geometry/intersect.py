@@ -76,8 +76,9 @@ def ray_triangles(
         t = np.einsum("...i,...i->...", e2, q) * inv_det
     scale = np.einsum("...i,...i->...", e1, e1) * np.einsum("...i,...i->...", e2, e2)
     eps = 1e-12
-    hit = (np.abs(det) > 1e-14 * np.sqrt(scale + _TINY)) & (u >= -eps) & (v >= -eps) & (u + v <= 1.0 + eps)
-    hit &= t > tmin
+    with np.errstate(invalid="ignore"):
+        hit = (np.abs(det) > 1e-14 * np.sqrt(scale + _TINY)) & (u >= -eps) & (v >= -eps) & (u + v <= 1.0 + eps)
+        hit &= t > tmin
     return hit, t, u, v
 
 

@@ -1,0 +1,185 @@
+"""Image information: where the shapes at a node path land in the image.
+
+The :class:`ImageInfoEngine` (service ``"image.info"``) evaluates only the
+shapes at or below the path and projects them with the scene's camera: spheres
+under a similarity transform analytically (tangent planes through the eye, so
+the rectangle is the exact silhouette's), everything else through the vertices
+of its triangle, line or point sets (simplifiers supply them).  Depths are
+eye-space distances along the viewing axis (-z in eye coordinates).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..core.camera import Camera
+from ..core.handler import SIMPLIFY, ShapePainter, default_for
+from ..shapes import LineSet, PointSet, Polygon, Polyline, Sphere, TriangleSet
+from .base import AnalysisEngine
+from .picking import _size, scene_camera
+
+__all__ = ["ImageInfo", "ImageInfoEngine", "image_info"]
+
+INFO = "image.info"
+
+
+@dataclass
+class ImageInfo:
+    """Where shapes land in an image.
+
+    ``rect`` = (x0, y0, x1, y1) in whole pixels, top-left origin, end exclusive,
+    clipped to the image (None when nothing is in view); ``extent`` the same
+    unclipped and unrounded; ``depth`` = (near, far) eye-space depth range.
+    """
+
+    rect: tuple[int, int, int, int] | None
+    extent: tuple[float, float, float, float] | None
+    depth: tuple[float, float] | None
+    size: tuple[int, int]
+
+    @property
+    def visible(self) -> bool:
+        return self.rect is not None
+
+
+class ImageInfoEngine(AnalysisEngine):
+    """Accumulates NDC x/y ranges and depth ranges of the shapes at or below ``path``."""
+
+    service = INFO
+
+    def __init__(self, path: str, view: np.ndarray, camera: Camera, aspect: float, *, mask: Any = None) -> None:
+        super().__init__(mask=mask)
+        self.path = path
+        self.view = np.asarray(view, dtype=np.float64)
+        self.camera_attr = camera
+        self.projection = camera.projection_matrix(aspect)
+        self.ranges: np.ndarray | None = None  # [xmin, xmax, ymin, ymax, zmin, zmax]
+
+    def accepts(self, shape: Any) -> bool:
+        p = self.node_path
+        return p == self.path or p.startswith(self.path.rstrip("/") + "/")
+
+    def include(self, xmin: float, xmax: float, ymin: float, ymax: float, dmin: float, dmax: float) -> None:
+        r = np.array([xmin, xmax, ymin, ymax, dmin, dmax])
+        if self.ranges is None:
+            self.ranges = r
+        else:
+            self.ranges[0::2] = np.minimum(self.ranges[0::2], r[0::2])
+            self.ranges[1::2] = np.maximum(self.ranges[1::2], r[1::2])
+
+    def include_points(self, local_points: np.ndarray) -> None:
+        """Project points given in the current model frame (points behind the eye are ignored)."""
+        m = self.view @ self.model_matrix()
+        p = np.asarray(local_points, dtype=np.float64).reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+        depth = -p[:, 2]
+        if not self.camera_attr.is_orthographic:
+            p = p[depth > 1e-12]
+            depth = depth[depth > 1e-12]
+        if not len(p):
+            return
+        clip = np.c_[p, np.ones(len(p))] @ self.projection.T
+        ndc = clip[:, :2] / clip[:, 3:4]
+        self.include(ndc[:, 0].min(), ndc[:, 0].max(), ndc[:, 1].min(), ndc[:, 1].max(), depth.min(), depth.max())
+
+
+class _VertexInfo(ShapePainter):
+    __slots__ = ()
+    service = INFO
+
+    def exec(self, shape: Any, engine: ImageInfoEngine) -> None:
+        engine.include_points(shape.vertex_array())
+
+
+@default_for(ImageInfoEngine)
+class TriangleSetInfo(_VertexInfo):
+    __slots__ = ()
+    target = TriangleSet
+
+
+@default_for(ImageInfoEngine)
+class LineSetInfo(_VertexInfo):
+    __slots__ = ()
+    target = LineSet
+
+
+@default_for(ImageInfoEngine)
+class PolylineInfo(_VertexInfo):
+    __slots__ = ()
+    target = Polyline
+
+
+@default_for(ImageInfoEngine)
+class PointSetInfo(_VertexInfo):
+    __slots__ = ()
+    target = PointSet
+
+
+@default_for(ImageInfoEngine)
+class PolygonInfo(_VertexInfo):
+    __slots__ = ()
+    target = Polygon
+
+
+@default_for(ImageInfoEngine)
+class SphereInfo(ShapePainter):
+    """Exact projected extent of a sphere under a similarity transform (else its simplification)."""
+
+    __slots__ = ()
+    service = INFO
+    target = Sphere
+
+    def exec(self, shape: Sphere, engine: ImageInfoEngine) -> None:
+        m = engine.view @ engine.model_matrix()
+        a = m[:3, :3]
+        scale = abs(np.linalg.det(a)) ** (1.0 / 3.0)
+        similar = scale > 0 and np.allclose(a.T @ a, scale * scale * np.eye(3), rtol=1e-9, atol=1e-12 * scale * scale)
+        c = a @ np.asarray(shape.center, dtype=np.float64) + m[:3, 3]
+        r = shape.radius * scale
+        depth = -c[2]
+        p = engine.projection
+        if similar and engine.camera_attr.is_orthographic:
+            x = (p[0, 0] * (c[0] - r) + p[0, 3], p[0, 0] * (c[0] + r) + p[0, 3])
+            y = (p[1, 1] * (c[1] - r) + p[1, 3], p[1, 1] * (c[1] + r) + p[1, 3])
+            engine.include(*x, *y, depth - r, depth + r)
+            return
+        if similar and depth - r > 1e-12:
+            xs = _tangents(c[0], c[2], r)
+            ys = _tangents(c[1], c[2], r)
+            x = sorted(-p[0, 0] * k for k in xs)
+            y = sorted(-p[1, 1] * k for k in ys)
+            engine.include(x[0], x[1], y[0], y[1], depth - r, depth + r)
+            return
+        simplifier = engine.find_handler(SIMPLIFY, Sphere)
+        if simplifier is not None:
+            engine.evaluate(simplifier.exec(shape, engine))
+
+
+def _tangents(u: float, z: float, r: float) -> tuple[float, float]:
+    """Slopes k of the planes u = k z through the eye that touch a sphere at (u, z) of radius r."""
+    a = z * z - r * r
+    b = -2.0 * u * z
+    c = u * u - r * r
+    disc = math.sqrt(max(b * b - 4 * a * c, 0.0))
+    return (-b - disc) / (2 * a), (-b + disc) / (2 * a)
+
+
+def image_info(scene: Any, path: str, size: Any, camera: Camera | None = None, mask: str | None = None) -> ImageInfo:
+    """Pixel rectangle and depth range of the shapes at (or below) ``path`` for the scene's camera."""
+    w, h = _size(size)
+    node = scene[path]
+    cam, world = scene_camera(scene, camera, mask)
+    view = cam.view_matrix() if world is None else cam.view_matrix() @ np.linalg.inv(world)
+    engine = ImageInfoEngine(node.path, view, cam, w / h, mask=mask)
+    scene.evaluate(engine)
+    if engine.ranges is None:
+        return ImageInfo(None, None, None, (w, h))
+    xmin, xmax, ymin, ymax, dmin, dmax = engine.ranges
+    extent = ((xmin + 1) / 2 * w, (1 - ymax) / 2 * h, (xmax + 1) / 2 * w, (1 - ymin) / 2 * h)
+    x0, y0 = max(0, math.floor(extent[0])), max(0, math.floor(extent[1]))
+    x1, y1 = min(w, math.ceil(extent[2])), min(h, math.ceil(extent[3]))
+    rect = (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
+    return ImageInfo(rect, tuple(float(e) for e in extent), (float(dmin), float(dmax)), (w, h))
