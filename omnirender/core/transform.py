@@ -70,9 +70,19 @@ class Translation(Transform):
 
     __slots__ = ("_offset",)
 
-    def __init__(self, x: float | Sequence[float] = 0.0, y: float = 0.0, z: float = 0.0) -> None:
+    def __init__(
+        self,
+        x: float | Sequence[float] = 0.0,
+        y: float = 0.0,
+        z: float = 0.0,
+        *,
+        offset: Sequence[float] | None = None,
+    ) -> None:
         super().__init__()
-        self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
+        if offset is not None:
+            self.offset = offset
+        else:
+            self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
 
     @property
     def offset(self) -> tuple[float, float, float]:
@@ -123,7 +133,8 @@ class Rotation(Transform):
             raise ValueError(f"Rotation: angle must be a number of degrees, got {angle!r}") from None
         if not math.isfinite(angle):
             raise ValueError(f"Rotation: angle must be finite, got {angle!r}")
-        a = a / n
+        if n != 1.0:
+            a = a / n
         object.__setattr__(self, "_angle", angle)
         object.__setattr__(self, "_axis", tuple(float(c) for c in a))
         self._set_matrix(_axis_angle_matrix(a, math.radians(angle)))
@@ -175,9 +186,18 @@ class Scaling(Transform):
 
     __slots__ = ("_factors",)
 
-    def __init__(self, sx: float | Sequence[float] = 1.0, sy: float | None = None, sz: float | None = None) -> None:
+    def __init__(
+        self,
+        sx: float | Sequence[float] = 1.0,
+        sy: float | None = None,
+        sz: float | None = None,
+        *,
+        factors: Sequence[float] | None = None,
+    ) -> None:
         super().__init__()
-        if isinstance(sx, (Sequence, np.ndarray)):
+        if factors is not None:
+            self.factors = factors
+        elif isinstance(sx, (Sequence, np.ndarray)):
             self.factors = sx
         elif sy is None and sz is None:
             self.factors = (sx, sx, sx)

@@ -504,3 +504,15 @@ def test_categories_default_to_class_and_can_be_shared():
         __slots__ = ()
 
     assert MyLight.category is om.Light
+
+
+def test_transforms_rebuild_from_their_parameters():
+    for t in (
+        om.Translation(1, 2, 3),
+        om.Scaling(1, 2, 3),
+        om.Rotation(33, (1, 2, 3)),
+        om.Matrix(np.diag([1, 2, 3, 1.0])),
+    ):
+        again = type(t)(**t.parameters())
+        assert again.parameters() == t.parameters()
+        np.testing.assert_array_equal(again.matrix, t.matrix)
