@@ -141,11 +141,20 @@ def render(
             args.append(f"+WT{int(threads)}")
         t0 = time.perf_counter()
         run_povray(args, folder, timeout=timeout, progress=progress, total_pixels=w * h)
-        render_seconds = time.perf_counter() - t0
         out = folder / "image.png"
         if not out.exists():
             raise POVRayError("POV-Ray finished without writing an image (see its output above)")
         array = read_png(out)
+        if engine.fog is not None:
+            # POV-Ray fogs the background too (making it opaque): the coverage comes from a quick
+            # pass without fog at quality 0, so image.mask still marks the objects.
+            (folder / "coverage.pov").write_text(engine.sdl(fog=False), encoding="utf-8")
+            cover = [a.replace("scene.pov", "coverage.pov").replace("image.png", "coverage.png") for a in args]
+            cover = [a for a in cover if not a.startswith("+Q")] + ["+Q0"]
+            run_povray(cover, folder, timeout=timeout, progress=False, total_pixels=w * h)
+            array = array.copy()
+            array[:, :, 3] = read_png(folder / "coverage.png")[:, :, 3]
+        render_seconds = time.perf_counter() - t0
     if array.shape[:2] != (h, w):
         raise POVRayError(f"POV-Ray wrote a {array.shape[1]}x{array.shape[0]} image, expected {w}x{h}")
     bg = _background(engine)

@@ -162,8 +162,8 @@ class POVRayEngine(Engine):
         return out
 
     # -- the file -------------------------------------------------------
-    def sdl(self) -> str:
-        """The complete scene file for what was evaluated."""
+    def sdl(self, fog: bool = True) -> str:
+        """The complete scene file for what was evaluated (``fog=False`` leaves the fog out)."""
         head = ["// omnirender scene for POV-Ray 3.7\n#version 3.7;\n"]
         settings = "assumed_gamma 1.0 ambient_light " + sdl.color(self.ambient)
         if self.global_settings is not None:
@@ -176,7 +176,7 @@ class POVRayEngine(Engine):
         bg = (0.0, 0.0, 0.0) if self.background is None else _rgb(self.background)
         # transmit 1: the background stays transparent in the alpha channel (om.Image.mask)
         head.append(f"background {{ {sdl.color(bg, transmit=1.0)} }}\n")
-        if self.fog is not None:
+        if fog and self.fog is not None:
             head.append(self.fog)
         return "".join(head + self.lights_sdl + self.declarations + self.objects)
 

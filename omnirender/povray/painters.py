@@ -1,7 +1,9 @@
 """Default handlers of the POV-Ray engine (service ``"pov.paint"``).
 
 Shape painters write native POV-Ray primitives (sphere, box, cylinder, cone,
-torus, disc, polygon) and ``mesh2`` for triangle sets; every other shape
+torus, disc, polygon; textured ones are tessellated by their simplifier so the
+texture coordinates are those of every other engine) and ``mesh2`` for
+triangle sets; every other shape
 reaches these through the shapes' default simplifiers.  Line and point sets
 become thin cylinders and small spheres whose radius corresponds to the
 style's line width / point size in pixels at the shape's distance from the
@@ -27,7 +29,7 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
-from ..core import AttributePainter, ShapePainter, default_for
+from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from . import sdl
 from .appearance import finish_name, srgb_to_linear, texture_name
@@ -56,11 +58,29 @@ def _n(value: float) -> str:
     return sdl.number(value)
 
 
+def _simplify(shape: Any, engine: POVRayEngine) -> bool:
+    """Evaluate the shape's default simplification instead (True when there is one).
+
+    Textured primitives are tessellated so that they carry the same texture
+    coordinates as in every other engine; POV-Ray's own uv mappings differ.
+    """
+    for cls in type(shape).__mro__:
+        simplifier = engine.find_handler(SIMPLIFY, cls)
+        if simplifier is not None:
+            result = simplifier.exec(shape, engine)
+            if result is not None:
+                engine.evaluate(result)
+            return True
+    return False
+
+
 class _Primitive(ShapePainter):
     __slots__ = ()
     service = PAINT
 
     def exec(self, shape: Any, engine: POVRayEngine) -> None:
+        if engine.mono(Texture) is not None and _simplify(shape, engine):
+            return
         engine.emit(self.geometry(shape), texture_name(engine))
 
     def geometry(self, shape: Any) -> str:  # pragma: no cover - abstract

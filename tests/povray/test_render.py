@@ -133,3 +133,43 @@ def test_timeout_stops_povray():
     s.add(om.Sphere())
     with pytest.raises(POVRayError, match="timeout"):
         _render(s, size=(400, 400), timeout=0.3, antialias=True)
+
+
+def test_every_conversion_parses_and_renders():
+    """All lights, fog, background, clip plane, PBR/Phong/transparent materials and POV-Ray attributes at once."""
+    s = om.Node("s")
+    s.add(om.Camera.look_at(eye=(0, 3, 8), center=(0, 0.5, 0)))
+    s.add(om.PointLight(position=(0, 4, 0), constant=1, linear=0.1, quadratic=0.05))
+    s.add(om.SpotLight(position=(0, 4, 2), direction=(0, -1, -0.3), cutoff=25, exponent=3))
+    s.add(om.DirectionalLight(direction=(-1, -1, -1), intensity=0.5))
+    s.add(om.AmbientLight(intensity=0.2))
+    s.add(om.Fog(color=(0.8, 0.8, 0.9), mode="linear", start=2, end=30))
+    s.add(om.povray.GlobalSettings(max_trace_level=5))
+    a = s.add(om.Node("a"))
+    a.add(om.ClipPlane(normal=(0, 1, 0), offset=0.5))
+    a.add(om.Translation(0, 0.5, 0))
+    a.add(om.PBRMaterial(base_color=(0.9, 0.8, 0.2), metallic=1, roughness=0.3))
+    a.add(om.Sphere())
+    b = s.add(om.Node("b"))
+    b.add(om.Translation(-2, 0, 0))
+    b.add(om.Material(diffuse=(0.2, 0.8, 0.2), opacity=0.5, emission=(0.1, 0, 0)))
+    b.add(om.povray.Normal(pattern="bumps", amount=0.5, scale=0.1))
+    b.add(om.Cylinder(radius=0.5, height=1))
+    c = s.add(om.Node("c"))
+    c.add(om.Translation(2, 0, 0))
+    c.add(om.povray.Pigment(pattern="checker", scale=0.2))
+    c.add(om.povray.Interior(ior=1.3))
+    c.add(om.Cone(radius=0.5, height=1.5))
+    f = s.add(om.Node("f"))
+    f.add(om.Texture(np.full((4, 4, 3), 200, np.uint8)))
+    f.add(om.Box(size=(8, 0.1, 8), center=(0, -0.8, 0)))
+    f.add(om.Disk(radius=0.3))
+    f.add(om.Rectangle(size=(0.5, 0.5)))
+    lines = s.add(om.Node("lines"))
+    lines.add(om.LineSet(vertices=[[0, 2, 0], [1, 2, 0]]))
+    lines.add(om.PointSet(vertices=[[0, 2.5, 0]]))
+    img = _render(s, size=(64, 48), antialias=True)
+    # clipped sphere: nothing of it above y = 0.5 + 1 - its cap; the top of the image is fog-coloured background
+    assert img.mask.mean() > 0.3
+    top = img.pixel(32, 1)
+    assert top[3] == 0  # the background stays transparent (no om.Background)

@@ -212,3 +212,10 @@ def test_error_lines_are_extracted_and_unwrapped():
 def test_engine_rejects_bad_size():
     with pytest.raises(ValueError, match="size"):
         POVRayEngine((0, 10))
+
+
+def test_textured_primitives_are_tessellated_with_uvs():
+    text, engine = scene_sdl(_scene(om.Texture(np.zeros((2, 2, 3), np.uint8)), om.Sphere(), om.Box()))
+    assert text.count("mesh2 {") == 2 and text.count("uv_vectors") == 2
+    assert 'uv_mapping image_map { png "om_tex0.png" interpolate 2 }' in text
+    assert "sphere {" not in text and len(engine.resources) == 1  # one image shared by both
