@@ -1,0 +1,95 @@
+"""om.gl: the OpenGL adapter (moderngl, headless EGL by default).
+
+``om.gl.render(scene, size)`` renders once; ``om.gl.GLEngine(size)`` renders
+frame after frame with ``engine.render(scene)``.  GL-specific attributes
+(``DepthTest``, ``DepthMask``, ``Blend``, ``CullFace``, ``PolygonOffset``,
+``ColorMask``, ``StencilTest``, ``StencilOp``) live here; other engines
+ignore them.  moderngl is imported only when an engine is created.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, StencilOp, StencilTest
+
+__all__ = [
+    "render",
+    "available",
+    "GLEngine",
+    "GLTechnique",
+    "DepthTest",
+    "DepthMask",
+    "Blend",
+    "CullFace",
+    "PolygonOffset",
+    "ColorMask",
+    "StencilTest",
+    "StencilOp",
+]
+
+_LAZY = {"GLEngine": "engine", "GLTechnique": "engine", "FramebufferStack": "framebuffer", "DepthSprite": "framebuffer"}
+_loaded = False
+
+
+def _load() -> None:
+    """Import the engine and register its painters (on first use)."""
+    global _loaded
+    if not _loaded:
+        from . import attribute_painters, painters  # noqa: F401
+
+        for name in ("text", "volume"):
+            try:
+                importlib.import_module(f".{name}", __name__)
+            except ModuleNotFoundError as exc:  # optional painters not written yet
+                if exc.name != f"{__name__}.{name}":
+                    raise
+        _loaded = True
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        _load()
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'omnirender.gl' has no attribute {name!r}")
+
+
+def available() -> tuple[bool, str]:
+    """Whether a headless OpenGL 3.3 context can be created here, and why not."""
+    try:
+        import moderngl  # noqa: F401
+    except ImportError as exc:
+        return False, f"moderngl is not installed ({exc}); pip install 'omnirender[gl]'"
+    try:
+        from .context import create_context
+
+        ctx = create_context()
+        ctx.release()
+    except Exception as exc:
+        return False, str(exc)
+    return True, "OpenGL through moderngl (headless EGL)"
+
+
+def render(
+    scene: Any,
+    size: tuple[int, int] = (640, 480),
+    mask: str | None = None,
+    samples: int = 4,
+    background: Any = None,
+    **options: Any,
+) -> Any:
+    """Render ``scene`` once with a temporary :class:`GLEngine`; returns an ``om.Image``."""
+    _load()
+    from .engine import GLEngine
+
+    read_depth = options.pop("read_depth", True)
+    if options:
+        raise TypeError(f"om.gl.render: unknown options {sorted(options)}")
+    engine = GLEngine(size=size, samples=samples, background=background)
+    try:
+        return engine.render(scene, mask=mask, read_depth=read_depth)
+    finally:
+        engine.release()

@@ -1,0 +1,120 @@
+"""OpenGL contexts: a headless EGL context by default, limits, and raw GL entry points.
+
+moderngl does not expose stencil functions; those few calls go through the
+process's libOpenGL (GLVND dispatches them to the current context).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+from typing import Any
+
+__all__ = ["create_context", "check_size", "RawGL", "GLError"]
+
+
+class GLError(RuntimeError):
+    """An OpenGL failure reported with a readable explanation (out of memory, no context)."""
+
+
+def create_context(require: int = 330) -> Any:
+    """A headless OpenGL context (EGL), at least version ``require`` (330 = OpenGL 3.3 core)."""
+    try:
+        import moderngl
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise GLError(f"GLEngine: moderngl is not installed ({exc}); pip install 'omnirender[gl]'") from None
+    try:
+        return moderngl.create_standalone_context(backend="egl", require=require)
+    except Exception as exc:
+        raise GLError(
+            f"GLEngine: cannot create a headless OpenGL {require // 100}.{require % 100 // 10} context through EGL "
+            f"({exc}); install Mesa's EGL (libegl1, libgl1-mesa-dri) or pass context= a moderngl context"
+        ) from None
+
+
+def limits(ctx: Any) -> tuple[int, int]:
+    """(max renderbuffer size, max viewport dimension) of the context."""
+    info = ctx.info
+    rb = int(info.get("GL_MAX_RENDERBUFFER_SIZE", 4096))
+    vp = info.get("GL_MAX_VIEWPORT_DIMS", (rb, rb))
+    return rb, int(min(vp))
+
+
+def check_size(size: Any, ctx: Any) -> tuple[int, int]:
+    """``size`` as (w, h) ints, or ValueError when zero, negative or above the driver's maximum."""
+    try:
+        w, h = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise ValueError(f"GLEngine: size must be (width, height), got {size!r}") from None
+    if w <= 0 or h <= 0:
+        raise ValueError(f"GLEngine: size must be positive, got {w}x{h}")
+    rb, vp = limits(ctx)
+    top = min(rb, vp)
+    if w > top or h > top:
+        raise ValueError(
+            f"GLEngine: size {w}x{h} exceeds this driver's maximum framebuffer size {top}x{top} "
+            f"(GL_MAX_RENDERBUFFER_SIZE / GL_MAX_VIEWPORT_DIMS); render tiles or a smaller image"
+        )
+    return w, h
+
+
+_STENCIL_FUNCS = {
+    "never": 0x0200,
+    "less": 0x0201,
+    "equal": 0x0202,
+    "lequal": 0x0203,
+    "greater": 0x0204,
+    "notequal": 0x0205,
+    "gequal": 0x0206,
+    "always": 0x0207,
+}
+_STENCIL_OPS = {
+    "keep": 0x1E00,
+    "zero": 0,
+    "replace": 0x1E01,
+    "incr": 0x1E02,
+    "decr": 0x1E03,
+    "invert": 0x150A,
+    "incr_wrap": 0x8507,
+    "decr_wrap": 0x8508,
+}
+GL_STENCIL_TEST = 0x0B90
+
+
+class RawGL:
+    """The handful of GL calls moderngl lacks (stencil state), loaded from libOpenGL/libGL."""
+
+    _lib: Any = None
+
+    def __init__(self) -> None:
+        if RawGL._lib is None:
+            for name in ("OpenGL", "GL"):
+                path = ctypes.util.find_library(name)
+                if path:
+                    try:
+                        RawGL._lib = ctypes.CDLL(path)
+                        break
+                    except OSError:
+                        continue
+        lib = RawGL._lib
+        self.available = lib is not None
+        if lib is not None:
+            self._func = lib.glStencilFunc
+            self._func.argtypes = [ctypes.c_uint, ctypes.c_int, ctypes.c_uint]
+            self._op = lib.glStencilOp
+            self._op.argtypes = [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]
+            self._mask = lib.glStencilMask
+            self._mask.argtypes = [ctypes.c_uint]
+
+    def stencil(self, ctx: Any, state: tuple | None) -> None:
+        """Apply ``(func, ref, mask, fail, zfail, zpass, write_mask)`` or disable the stencil test (None)."""
+        if state is None:
+            ctx.disable_direct(GL_STENCIL_TEST)
+            return
+        if not self.available:
+            raise GLError("GLEngine: StencilTest needs libOpenGL/libGL to set stencil state, which was not found")
+        func, ref, mask, fail, zfail, zpass, write = state
+        ctx.enable_direct(GL_STENCIL_TEST)
+        self._func(_STENCIL_FUNCS[func], int(ref), int(mask) & 0xFFFFFFFF)
+        self._op(_STENCIL_OPS[fail], _STENCIL_OPS[zfail], _STENCIL_OPS[zpass])
+        self._mask(int(write) & 0xFFFFFFFF)

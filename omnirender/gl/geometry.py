@@ -1,0 +1,258 @@
+"""GPU geometry: vertex and index buffers uploaded once per (shape, version).
+
+A :class:`Geometry` keeps the validated CPU arrays and uploads them lazily on
+first draw; :class:`GeometryCache` finds the geometry of a shape by its id and
+version (checking a weak reference so a recycled id never aliases), and
+releases the GPU buffers of geometries the last compiled draw list no longer
+uses.  Unit meshes (sphere, box, cylinder) are shared by every instance of the
+native painters.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Geometry", "GeometryCache", "unit_sphere", "unit_box", "unit_cylinder", "validate_mesh"]
+
+
+class Geometry:
+    """Vertex arrays (positions, normals, optional colours, texcoords, sizes) and optional indices."""
+
+    __slots__ = (
+        "mode",
+        "positions",
+        "normals",
+        "colors",
+        "texcoords",
+        "sizes",
+        "indices",
+        "bounds",
+        "buffers",
+        "count",
+        "persistent",
+        "label",
+        "translucent",
+        "__weakref__",
+    )
+
+    def __init__(
+        self,
+        mode: str,
+        positions: np.ndarray,
+        normals: np.ndarray | None = None,
+        colors: np.ndarray | None = None,
+        texcoords: np.ndarray | None = None,
+        sizes: np.ndarray | None = None,
+        indices: np.ndarray | None = None,
+        persistent: bool = False,
+        label: str = "",
+    ) -> None:
+        self.mode = mode  # "triangles", "lines" or "points"
+        self.positions = np.ascontiguousarray(positions, dtype=np.float32)
+        self.normals = None if normals is None else np.ascontiguousarray(normals, dtype=np.float32)
+        self.colors = None if colors is None else np.ascontiguousarray(colors, dtype=np.float32)
+        self.texcoords = None if texcoords is None else np.ascontiguousarray(texcoords, dtype=np.float32)
+        self.sizes = None if sizes is None else np.ascontiguousarray(sizes, dtype=np.float32)
+        self.indices = None if indices is None else np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
+        p = self.positions
+        self.bounds = (p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64))
+        self.buffers: dict[str, Any] | None = None
+        self.count = len(self.indices) if self.indices is not None else len(p)
+        self.persistent = persistent
+        self.label = label
+        self.translucent = bool(self.colors is not None and len(self.colors) and self.colors[:, 3].min() < 1.0)
+
+    @property
+    def uploaded(self) -> bool:
+        return self.buffers is not None
+
+    def upload(self, ctx: Any) -> dict[str, Any]:
+        """Create the GPU buffers (once); returns name -> moderngl Buffer."""
+        if self.buffers is None:
+            from .resources import gpu_call
+
+            bufs: dict[str, Any] = {}
+            try:
+                bufs["in_position"] = gpu_call(ctx.buffer, self.positions, what=f"vertices of {self.label}")
+                for name, arr in (
+                    ("in_normal", self.normals),
+                    ("in_color", self.colors),
+                    ("in_texcoord", self.texcoords),
+                    ("in_size", self.sizes),
+                ):
+                    if arr is not None:
+                        bufs[name] = gpu_call(ctx.buffer, arr, what=f"{name[3:]}s of {self.label}")
+                if self.indices is not None:
+                    bufs["index"] = gpu_call(ctx.buffer, self.indices, what=f"indices of {self.label}")
+            except Exception:
+                for b in bufs.values():
+                    b.release()
+                raise
+            self.buffers = bufs
+        return self.buffers
+
+    def release(self) -> None:
+        """Free the GPU buffers (the CPU arrays stay, so the geometry can upload again)."""
+        if self.buffers is not None:
+            for b in self.buffers.values():
+                b.release()
+            self.buffers = None
+
+    def content(self, program: Any) -> list[tuple]:
+        """moderngl vertex-array content for the per-vertex attributes ``program`` uses."""
+        bufs = self.buffers
+        assert bufs is not None
+        formats = {"in_position": "3f", "in_normal": "3f", "in_color": "4f", "in_texcoord": "2f", "in_size": "1f"}
+        out = []
+        for name, fmt in formats.items():
+            if name in bufs:
+                try:
+                    program[name]
+                except KeyError:
+                    continue
+                out.append((bufs[name], fmt, name))
+        return out
+
+
+def validate_mesh(positions: np.ndarray, indices: np.ndarray | None, owner: str, path: str, arity: int = 3) -> None:
+    """Raise ValueError (naming the shape and node path) for non-finite vertices or out-of-range indices."""
+    where = f" in node {path}" if path else ""
+    n = len(positions)
+    if n == 0:
+        raise ValueError(f"{owner}{where}: no vertices; give at least one primitive")
+    if not np.all(np.isfinite(positions)):
+        bad = int(np.argmax(~np.all(np.isfinite(positions), axis=1)))
+        raise ValueError(f"{owner}{where}: vertex {bad} is not finite ({positions[bad].tolist()}); fix the vertex data")
+    if indices is not None and indices.size:
+        top = int(indices.max())
+        if top >= n:
+            raise ValueError(
+                f"{owner}{where}: index {top} is out of range for {n} vertices (valid 0..{n - 1}); "
+                f"fix the indices before rendering"
+            )
+        if indices.size % arity:
+            raise ValueError(f"{owner}{where}: {indices.size} indices is not a multiple of {arity}")
+
+
+class GeometryCache:
+    """Geometry per (shape id, version, variant), verified through a weak reference to the shape."""
+
+    def __init__(self) -> None:
+        self._entries: dict[tuple, tuple[Any, Geometry]] = {}
+
+    def get(self, shape: Any, variant: Any = None) -> Geometry | None:
+        entry = self._entries.get((id(shape), shape._version, variant))
+        if entry is not None and entry[0]() is shape:
+            return entry[1]
+        return None
+
+    def put(self, shape: Any, geometry: Geometry, variant: Any = None) -> Geometry:
+        self._entries[(id(shape), shape._version, variant)] = (weakref.ref(shape), geometry)
+        return geometry
+
+    def sweep(self, used: set[int]) -> int:
+        """Release geometries whose id is not in ``used`` (ids of geometries in the draw list); returns the count."""
+        released = 0
+        for key, (ref, geom) in list(self._entries.items()):
+            if id(geom) not in used or ref() is None:
+                if id(geom) not in used:
+                    geom.release()
+                    released += 1
+                del self._entries[key]
+        return released
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+    def geometries(self) -> list[Geometry]:
+        return [g for _, g in self._entries.values()]
+
+
+# -- unit meshes ---------------------------------------------------------------
+def unit_sphere(segments: int = 48, rings: int = 24) -> Geometry:
+    """A UV sphere of radius 1 at the origin."""
+    theta = np.linspace(0.0, math.pi, rings + 1)
+    phi = np.linspace(0.0, 2.0 * math.pi, segments + 1)
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    pos = np.stack([np.sin(t) * np.cos(p), np.cos(t), -np.sin(t) * np.sin(p)], axis=-1).reshape(-1, 3)
+    uv = np.stack([p / (2 * math.pi), 1.0 - t / math.pi], axis=-1).reshape(-1, 2)
+    idx = []
+    cols = segments + 1
+    for i in range(rings):
+        for j in range(segments):
+            a, b = i * cols + j, (i + 1) * cols + j
+            if i != 0:
+                idx.append((a, b, a + 1))
+            if i != rings - 1:
+                idx.append((a + 1, b, b + 1))
+    return Geometry("triangles", pos, pos, texcoords=uv, indices=np.array(idx), persistent=True, label="unit sphere")
+
+
+def unit_box() -> Geometry:
+    """A cube from -0.5 to 0.5 with flat face normals."""
+    faces = [
+        ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
+        ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
+        ((0, 1, 0), (1, 0, 0), (0, 0, -1)),
+        ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
+        ((0, 0, 1), (1, 0, 0), (0, 1, 0)),
+        ((0, 0, -1), (-1, 0, 0), (0, 1, 0)),
+    ]
+    pos, nrm, uv, idx = [], [], [], []
+    for n, u, v in faces:
+        n, u, v = np.array(n, float), np.array(u, float), np.array(v, float)
+        base = len(pos)
+        for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+            pos.append(0.5 * n + 0.5 * su * u + 0.5 * sv * v)
+            nrm.append(n)
+            uv.append(((su + 1) / 2, (sv + 1) / 2))
+        idx += [(base, base + 1, base + 2), (base, base + 2, base + 3)]
+    return Geometry(
+        "triangles",
+        np.array(pos),
+        np.array(nrm),
+        texcoords=np.array(uv),
+        indices=np.array(idx),
+        persistent=True,
+        label="unit box",
+    )
+
+
+def unit_cylinder(segments: int = 48) -> Geometry:
+    """A capped cylinder of radius 1 from y = -1 to y = 1."""
+    a = np.linspace(0.0, 2.0 * math.pi, segments + 1)
+    x, z = np.cos(a), -np.sin(a)
+    pos, nrm, uv, idx = [], [], [], []
+    for k in range(segments + 1):
+        for y in (-1.0, 1.0):
+            pos.append((x[k], y, z[k]))
+            nrm.append((x[k], 0.0, z[k]))
+            uv.append((k / segments, (y + 1) / 2))
+    for k in range(segments):
+        i = 2 * k
+        idx += [(i, i + 2, i + 1), (i + 1, i + 2, i + 3)]
+    for y, sign in ((1.0, 1.0), (-1.0, -1.0)):
+        center = len(pos)
+        pos.append((0.0, y, 0.0))
+        nrm.append((0.0, sign, 0.0))
+        uv.append((0.5, 0.5))
+        for k in range(segments + 1):
+            pos.append((x[k], y, z[k]))
+            nrm.append((0.0, sign, 0.0))
+            uv.append((0.5 + 0.5 * x[k], 0.5 + 0.5 * z[k]))
+        for k in range(segments):
+            a0, a1 = center + 1 + k, center + 2 + k
+            idx.append((center, a0, a1) if sign > 0 else (center, a1, a0))
+    return Geometry(
+        "triangles",
+        np.array(pos),
+        np.array(nrm),
+        texcoords=np.array(uv),
+        indices=np.array(idx),
+        persistent=True,
+        label="unit cylinder",
+    )

@@ -1,0 +1,97 @@
+"""Light uniforms: the pre-evaluated lights as view-space arrays for the shaders.
+
+OpenGL's model: directional lights (``w = 0``), point and spot lights with
+attenuation ``1 / (C + L d + Q d^2)`` and a spot factor ``cos^exponent`` inside
+the cut-off cone.  Ambient terms of all lights add up with OpenGL's global
+ambient (0.2).  A scene without any light gets a headlight.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .shaders import MAX_LIGHTS
+
+__all__ = ["LightUniforms", "GLOBAL_AMBIENT", "HEADLIGHT"]
+
+GLOBAL_AMBIENT = 0.2
+#: Headlight direction towards the light in eye space (a little above and left of the eye).
+HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
+
+
+class LightUniforms:
+    """Packed light arrays for one light switch state."""
+
+    __slots__ = ("count", "pos", "diffuse", "specular", "attenuation", "spot", "exponent", "ambient", "_bytes")
+
+    def __init__(self, lights: list[tuple[Any, np.ndarray]], view: np.ndarray, headlight: bool) -> None:
+        from ..attributes import AmbientLight, DirectionalLight, SpotLight
+
+        pos = np.zeros((MAX_LIGHTS, 4), np.float32)
+        diffuse = np.zeros((MAX_LIGHTS, 3), np.float32)
+        specular = np.zeros((MAX_LIGHTS, 3), np.float32)
+        att = np.zeros((MAX_LIGHTS, 3), np.float32)
+        att[:, 0] = 1.0
+        spot = np.zeros((MAX_LIGHTS, 4), np.float32)
+        spot[:, 3] = -2.0
+        exponent = np.zeros(MAX_LIGHTS, np.float32)
+        ambient = np.full(3, GLOBAL_AMBIENT)
+        rot = view[:3, :3]
+        n = 0
+        for light, matrix in lights:
+            amb = getattr(light, "ambient", None)
+            if amb is not None:
+                ambient += np.asarray(amb, dtype=np.float64)
+            if isinstance(light, AmbientLight):
+                continue
+            if n == MAX_LIGHTS:
+                warnings.warn(f"GLEngine: more than {MAX_LIGHTS} lights; the rest are ignored", stacklevel=3)
+                break
+            diffuse[n] = getattr(light, "diffuse", (1.0, 1.0, 1.0))
+            specular[n] = getattr(light, "specular", (1.0, 1.0, 1.0))
+            if isinstance(light, DirectionalLight):
+                d = rot @ -light.world_direction(matrix)
+                pos[n, :3] = d / np.linalg.norm(d)
+            elif hasattr(light, "world_position"):
+                p = view @ np.append(light.world_position(matrix), 1.0)
+                pos[n] = (p[0], p[1], p[2], 1.0)
+                att[n] = (light.constant, light.linear, light.quadratic)
+                if isinstance(light, SpotLight):
+                    axis = rot @ light.world_direction(matrix)
+                    spot[n, :3] = axis / np.linalg.norm(axis)
+                    spot[n, 3] = light.cos_cutoff
+                    exponent[n] = light.exponent
+            else:
+                continue
+            n += 1
+        if n == 0 and headlight:
+            pos[0, :3] = HEADLIGHT
+            diffuse[0] = (1.0, 1.0, 1.0)
+            specular[0] = (1.0, 1.0, 1.0)
+            n = 1
+        self.count = n
+        self.pos, self.diffuse, self.specular, self.attenuation = pos, diffuse, specular, att
+        self.spot, self.exponent = spot, exponent
+        self.ambient = ambient.astype(np.float32)
+        self._bytes = {
+            "u_lpos": pos.tobytes(),
+            "u_ldiff": diffuse.tobytes(),
+            "u_lspec": specular.tobytes(),
+            "u_latt": att.tobytes(),
+            "u_lspot": spot.tobytes(),
+            "u_lexp": exponent.tobytes(),
+            "u_ambient": self.ambient.tobytes(),
+        }
+
+    def apply(self, program: Any) -> None:
+        """Write the arrays into ``program``'s uniforms (those it has)."""
+        for name, data in self._bytes.items():
+            u = program.get(name, None)
+            if u is not None:
+                u.write(data)
+        u = program.get("u_nlights", None)
+        if u is not None:
+            u.value = self.count

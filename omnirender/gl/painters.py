@@ -1,0 +1,167 @@
+"""Shape painters of the GL engine (service ``"gl.paint"``).
+
+Painters turn a shape into draw items through ``engine.submit``; they never
+call OpenGL.  TriangleSet, LineSet, Polyline and PointSet upload their arrays
+once per (shape, version).  Sphere, Box and Cylinder are native: they reuse a
+unit mesh scaled by a local matrix, so they need no tessellation and any
+number of them instance automatically.  Every other shape (Torus, Cone,
+Arrow, Disk, MeshFile, ...) reaches the engine through its simplifier.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..core.handler import ShapePainter, default_for
+from ..shapes import Box, Cylinder, LineSet, PointSet, Polyline, Sphere, TriangleSet
+from .engine import GLEngine
+from .geometry import Geometry, validate_mesh
+
+__all__ = [
+    "TriangleSetPainter",
+    "SpherePainter",
+    "BoxPainter",
+    "CylinderPainter",
+    "LineSetPainter",
+    "PolylinePainter",
+    "PointSetPainter",
+]
+
+
+def _where(engine: Any) -> str:
+    return engine.node_path
+
+
+def _check_optional(arr: np.ndarray | None, owner: str, name: str, path: str) -> None:
+    if arr is not None and not np.all(np.isfinite(arr)):
+        where = f" in node {path}" if path else ""
+        raise ValueError(f"{owner}{where}: {name} contain non-finite values; fix the {name}")
+
+
+@default_for(GLEngine)
+class TriangleSetPainter(ShapePainter):
+    """Triangles with per-vertex normals, colours and texture coordinates (uploaded once per version)."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = TriangleSet
+
+    def exec(self, shape: TriangleSet, engine: GLEngine) -> None:
+        geom = engine.geometry_cache.get(shape)
+        if geom is None:
+            path = _where(engine)
+            v = shape.vertex_array()
+            idx = shape.index_array()
+            validate_mesh(v, idx, "TriangleSet", path)
+            normals = shape.normal_array()
+            _check_optional(normals, "TriangleSet", "normals", path)
+            colors = shape.color_array()
+            _check_optional(colors, "TriangleSet", "colors", path)
+            uv = shape.texcoord_array()
+            _check_optional(uv, "TriangleSet", "texcoords", path)
+            geom = Geometry("triangles", v, normals, colors, uv, indices=idx, label=f"TriangleSet in {path or '/'}")
+            engine.geometry_cache.put(shape, geom)
+        engine.submit(geom)
+
+
+def _scale_translate(sx: float, sy: float, sz: float, center: Any = (0.0, 0.0, 0.0)) -> np.ndarray:
+    m = np.diag([sx, sy, sz, 1.0])
+    m[:3, 3] = center
+    return m
+
+
+@default_for(GLEngine)
+class SpherePainter(ShapePainter):
+    """Native sphere: the shared unit sphere, scaled and moved per instance."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Sphere
+
+    def exec(self, shape: Sphere, engine: GLEngine) -> None:
+        r = shape.radius
+        engine.submit(engine.unit["sphere"], _scale_translate(r, r, r, shape.center))
+
+
+@default_for(GLEngine)
+class BoxPainter(ShapePainter):
+    """Native box: the shared unit cube, scaled and moved per instance."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Box
+
+    def exec(self, shape: Box, engine: GLEngine) -> None:
+        sx, sy, sz = shape.size
+        engine.submit(engine.unit["box"], _scale_translate(sx, sy, sz, shape.center))
+
+
+@default_for(GLEngine)
+class CylinderPainter(ShapePainter):
+    """Native capped cylinder: the shared unit cylinder (radius 1, y in [-1, 1]) scaled per instance."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Cylinder
+
+    def exec(self, shape: Cylinder, engine: GLEngine) -> None:
+        r = shape.radius
+        engine.submit(engine.unit["cylinder"], _scale_translate(r, shape.height / 2.0, r))
+
+
+class _LinePainter(ShapePainter):
+    __slots__ = ()
+    service = "gl.paint"
+
+    def exec(self, shape: Any, engine: GLEngine) -> None:
+        geom = engine.geometry_cache.get(shape)
+        if geom is None:
+            path = _where(engine)
+            name = type(shape).__name__
+            v = shape.vertex_array()
+            idx = shape.index_array()
+            validate_mesh(v, idx, name, path, arity=2)
+            colors = shape.color_array()
+            _check_optional(colors, name, "colors", path)
+            geom = Geometry("lines", v, colors=colors, indices=idx, label=f"{name} in {path or '/'}")
+            engine.geometry_cache.put(shape, geom)
+        engine.submit(geom, kind="lines")
+
+
+@default_for(GLEngine)
+class LineSetPainter(_LinePainter):
+    """Line segments, drawn as screen-space quads (a geometry shader), so any DrawStyle.line_width works."""
+
+    __slots__ = ()
+    target = LineSet
+
+
+@default_for(GLEngine)
+class PolylinePainter(_LinePainter):
+    """A polyline (open or closed) as wide line segments."""
+
+    __slots__ = ()
+    target = Polyline
+
+
+@default_for(GLEngine)
+class PointSetPainter(ShapePainter):
+    """Round point sprites, shaded like small spheres; size per point or DrawStyle.point_size (pixels)."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = PointSet
+
+    def exec(self, shape: PointSet, engine: GLEngine) -> None:
+        geom = engine.geometry_cache.get(shape)
+        if geom is None:
+            path = _where(engine)
+            v = shape.vertex_array()
+            validate_mesh(v, None, "PointSet", path)
+            colors = shape.color_array()
+            _check_optional(colors, "PointSet", "colors", path)
+            geom = Geometry("points", v, colors=colors, sizes=shape.size_array(), label=f"PointSet in {path or '/'}")
+            engine.geometry_cache.put(shape, geom)
+        engine.submit(geom, kind="points")

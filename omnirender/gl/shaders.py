@@ -1,0 +1,367 @@
+"""GLSL sources of the GL technique and the cache of compiled program variants.
+
+One uber-shader per primitive kind (``mesh``, ``points``, ``lines``) is
+specialised with ``#define``s (vertex colours, texture, flat shading, number
+of clip planes, fog), so a variant pays only for the features it uses.
+Lighting is linear; the fragment shader writes sRGB.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["MAX_LIGHTS", "ProgramCache", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "ROW"]
+
+MAX_LIGHTS = 32
+
+#: Per-instance attributes: model matrix + six vec4 (colour, specular, emission, ambient, highlight, extra).
+INSTANCE_FORMAT = "16f 4f 4f 4f 4f 4f 4f/i"
+INSTANCE_ATTRIBUTES = ("i_model", "i_color", "i_spec", "i_emis", "i_amb", "i_hl", "i_extra")
+ROW = 40
+
+_COMMON = """
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+vec3 to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+#ifdef FOG
+uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
+uniform vec3 u_fog_color;
+vec3 apply_fog(vec3 c, float d) {
+    float f;
+    if (u_fog.w < 0.5) f = (u_fog.y - d) / (u_fog.y - u_fog.x);
+    else if (u_fog.w < 1.5) f = exp(-u_fog.z * d);
+    else f = exp(-(u_fog.z * d) * (u_fog.z * d));
+    return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
+}
+#endif
+"""
+
+VERTEX = """
+in vec3 in_position;
+#ifndef POINTS
+in vec3 in_normal;
+#endif
+#ifdef VCOLOR
+in vec4 in_color;
+#endif
+#ifdef TEXTURE
+in vec2 in_texcoord;
+#endif
+#ifdef VSIZE
+in float in_size;
+#endif
+in mat4 i_model;
+in vec4 i_color;
+in vec4 i_spec;
+in vec4 i_emis;
+in vec4 i_amb;
+in vec4 i_hl;
+in vec4 i_extra;
+uniform mat4 u_view;
+uniform mat4 u_proj;
+#if NCLIP > 0
+uniform vec4 u_clip[NCLIP];
+out float gl_ClipDistance[NCLIP];
+#endif
+out vec3 v_pos;
+out vec3 v_normal;
+out vec4 v_color;
+out vec2 v_uv;
+flat out vec4 v_spec;
+flat out vec4 v_emis;
+flat out vec4 v_amb;
+flat out vec4 v_hl;
+flat out vec4 v_extra;
+void main() {
+    vec4 world = i_model * vec4(in_position, 1.0);
+    vec4 eye = u_view * world;
+#ifdef POINTS
+    v_normal = vec3(0.0, 0.0, 1.0);
+#ifdef VSIZE
+    gl_PointSize = in_size;
+#else
+    gl_PointSize = i_extra.y;
+#endif
+#else
+    mat3 m = mat3(i_model);
+    mat3 cof = mat3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
+    vec3 n = cof * in_normal;
+    if (dot(m[0], cof[0]) < 0.0) n = -n;
+    v_normal = mat3(u_view) * n;
+#endif
+    v_pos = eye.xyz;
+#ifdef VCOLOR
+    v_color = vec4(in_color.rgb, in_color.a * i_color.a);
+#else
+    v_color = i_color;
+#endif
+#ifdef TEXTURE
+    v_uv = in_texcoord;
+#else
+    v_uv = vec2(0.0);
+#endif
+    v_spec = i_spec; v_emis = i_emis; v_amb = i_amb; v_hl = i_hl; v_extra = i_extra;
+#if NCLIP > 0
+    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
+#endif
+    gl_Position = u_proj * eye;
+}
+"""
+
+FRAGMENT = """
+in vec3 v_pos;
+in vec3 v_normal;
+in vec4 v_color;
+in vec2 v_uv;
+flat in vec4 v_spec;
+flat in vec4 v_emis;
+flat in vec4 v_amb;
+flat in vec4 v_hl;
+flat in vec4 v_extra;
+uniform int u_nlights;
+uniform vec4 u_lpos[MAX_LIGHTS];    // view space; w = 0: direction towards the light, 1: position
+uniform vec3 u_ldiff[MAX_LIGHTS];
+uniform vec3 u_lspec[MAX_LIGHTS];
+uniform vec3 u_latt[MAX_LIGHTS];    // constant, linear, quadratic
+uniform vec4 u_lspot[MAX_LIGHTS];   // spot axis (view space), cos(cutoff); w < -1.5: no spot
+uniform float u_lexp[MAX_LIGHTS];
+uniform vec3 u_ambient;
+uniform int u_ortho;
+#ifdef TEXTURE
+uniform sampler2D u_texture;
+#endif
+out vec4 f_color;
+const float PI = 3.14159265;
+
+float light_at(int i, vec3 P, out vec3 L) {
+    vec4 lp = u_lpos[i];
+    if (lp.w == 0.0) { L = normalize(lp.xyz); return 1.0; }
+    vec3 d = lp.xyz - P;
+    float dist = length(d);
+    L = d / max(dist, 1e-20);
+    float att = 1.0 / (u_latt[i].x + u_latt[i].y * dist + u_latt[i].z * dist * dist);
+    vec4 spot = u_lspot[i];
+    if (spot.w > -1.5) {
+        float c = dot(-L, spot.xyz);
+        att *= c >= spot.w ? pow(max(c, 0.0), u_lexp[i]) : 0.0;
+    }
+    return att;
+}
+
+void main() {
+    vec3 P = v_pos;
+    vec4 base = v_color;
+#ifdef TEXTURE
+    vec4 tex = texture(u_texture, v_uv);
+    base *= vec4(to_linear(tex.rgb), tex.a);
+#endif
+    vec3 N;
+#ifdef POINTS
+    vec2 c = gl_PointCoord * 2.0 - 1.0;
+    float r2 = dot(c, c);
+    if (r2 > 1.0) discard;
+    N = vec3(c.x, -c.y, sqrt(1.0 - r2));
+#elif defined(FLAT)
+    N = normalize(cross(dFdx(P), dFdy(P)));
+#else
+    N = normalize(v_normal);
+    if (!gl_FrontFacing) N = -N;
+#endif
+    vec3 V = u_ortho == 1 ? vec3(0.0, 0.0, 1.0) : normalize(-P);
+    float model = v_emis.w;
+    vec3 color;
+    if (model > 1.5) {
+        color = base.rgb;
+    } else if (model > 0.5) {
+        float metallic = v_extra.x;
+        float rough = max(v_amb.w, 0.04);
+        float a2 = rough * rough * rough * rough;
+        vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
+        float NdV = max(dot(N, V), 1e-4);
+        float k = (rough + 1.0) * (rough + 1.0) / 8.0;
+        color = v_emis.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
+        for (int i = 0; i < u_nlights; ++i) {
+            vec3 L;
+            float att = light_at(i, P, L);
+            float NdL = dot(N, L);
+            if (NdL <= 0.0 || att <= 0.0) continue;
+            vec3 H = normalize(L + V);
+            float NdH = max(dot(N, H), 0.0);
+            float dd = NdH * NdH * (a2 - 1.0) + 1.0;
+            float D = a2 / (PI * dd * dd);
+            float G = (NdV / (NdV * (1.0 - k) + k)) * (NdL / (NdL * (1.0 - k) + k));
+            vec3 F = F0 + (1.0 - F0) * pow(1.0 - max(dot(H, V), 0.0), 5.0);
+            vec3 spec = D * G * F / (4.0 * NdV * NdL);
+            vec3 kd = (1.0 - F) * (1.0 - metallic);
+            color += (kd * base.rgb + PI * spec) * u_ldiff[i] * NdL * att;
+        }
+    } else {
+        color = v_emis.rgb + v_amb.rgb * u_ambient;
+        for (int i = 0; i < u_nlights; ++i) {
+            vec3 L;
+            float att = light_at(i, P, L);
+            float NdL = dot(N, L);
+            if (NdL <= 0.0 || att <= 0.0) continue;
+            vec3 H = normalize(L + V);
+            float s = pow(max(dot(N, H), 0.0), v_spec.w);
+            color += att * (base.rgb * NdL * u_ldiff[i] + v_spec.rgb * s * u_lspec[i]);
+        }
+    }
+    if (v_hl.w > 0.0) {
+        float rim = 1.0 - abs(dot(N, V));
+        color = mix(color, v_hl.rgb, 0.35) + v_hl.rgb * rim * rim;
+    }
+#ifdef FOG
+    color = apply_fog(color, length(P));
+#endif
+    f_color = vec4(to_srgb(color), base.a);
+}
+"""
+
+LINE_VERTEX = """
+in vec3 in_position;
+#ifdef VCOLOR
+in vec4 in_color;
+#endif
+in mat4 i_model;
+in vec4 i_color;
+in vec4 i_spec;
+in vec4 i_emis;
+in vec4 i_amb;
+in vec4 i_hl;
+in vec4 i_extra;
+uniform mat4 u_view;
+uniform mat4 u_proj;
+#if NCLIP > 0
+uniform vec4 u_clip[NCLIP];
+out float gl_ClipDistance[NCLIP];
+#endif
+out vec3 g_pos;
+out vec4 g_color;
+void main() {
+    vec4 world = i_model * vec4(in_position, 1.0);
+    vec4 eye = u_view * world;
+    g_pos = eye.xyz;
+#ifdef VCOLOR
+    g_color = vec4(in_color.rgb, in_color.a * i_color.a);
+#else
+    g_color = i_color;
+#endif
+    if (i_hl.w > 0.0) g_color.rgb = mix(g_color.rgb, i_hl.rgb, 0.6);
+#if NCLIP > 0
+    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
+#endif
+    gl_Position = u_proj * eye;
+}
+"""
+
+LINE_GEOMETRY = """
+layout(lines) in;
+layout(triangle_strip, max_vertices = 4) out;
+in vec3 g_pos[];
+in vec4 g_color[];
+#if NCLIP > 0
+in gl_PerVertex { vec4 gl_Position; float gl_ClipDistance[NCLIP]; } gl_in[];
+out float gl_ClipDistance[NCLIP];
+#endif
+uniform vec2 u_viewport;
+uniform float u_line_width;
+out vec3 v_pos;
+out vec4 v_color;
+void emit(int i, vec2 offset) {
+    vec4 p = gl_in[i].gl_Position;
+    gl_Position = vec4(p.xy + offset * p.w, p.zw);
+    v_pos = g_pos[i];
+    v_color = g_color[i];
+#if NCLIP > 0
+    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = gl_in[i].gl_ClipDistance[k];
+#endif
+    EmitVertex();
+}
+void main() {
+    vec4 a = gl_in[0].gl_Position;
+    vec4 b = gl_in[1].gl_Position;
+    if (a.w <= 0.0 || b.w <= 0.0) return;
+    vec2 sa = a.xy / a.w * u_viewport;
+    vec2 sb = b.xy / b.w * u_viewport;
+    vec2 d = sb - sa;
+    float len = length(d);
+    vec2 dir = len > 1e-6 ? d / len : vec2(1.0, 0.0);
+    vec2 n = vec2(-dir.y, dir.x) * (0.5 * u_line_width) / u_viewport;
+    emit(0, n);
+    emit(0, -n);
+    emit(1, n);
+    emit(1, -n);
+    EndPrimitive();
+}
+"""
+
+LINE_FRAGMENT = """
+in vec3 v_pos;
+in vec4 v_color;
+out vec4 f_color;
+void main() {
+    vec3 color = v_color.rgb;
+#ifdef FOG
+    color = apply_fog(color, length(v_pos));
+#endif
+    f_color = vec4(to_srgb(color), v_color.a);
+}
+"""
+
+
+def _header(defines: dict[str, Any]) -> str:
+    lines = ["#version 330"]
+    for name, value in sorted(defines.items()):
+        lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
+    lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
+    if "NCLIP" not in defines:
+        lines.append("#define NCLIP 0")
+    return "\n".join(lines) + "\n"
+
+
+class ProgramCache:
+    """Compiled programs by (kind, features); compiled on first use, kept for the engine's life."""
+
+    def __init__(self, ctx: Any) -> None:
+        self.ctx = ctx
+        self._programs: dict[tuple, Any] = {}
+        self._custom: dict[str, tuple[str, str | None, str]] = {}
+
+    def register(self, kind: str, vertex: str, fragment: str, geometry: str | None = None) -> None:
+        """Add a program kind (used by the text and volume painters)."""
+        self._custom[kind] = (vertex, geometry, fragment)
+
+    def get(self, kind: str, features: tuple[tuple[str, Any], ...] = ()) -> Any:
+        key = (kind, features)
+        prog = self._programs.get(key)
+        if prog is not None:
+            return prog
+        defines = dict(features)
+        head = _header(defines)
+        if kind == "mesh":
+            vs, gs, fs = VERTEX, None, FRAGMENT
+        elif kind == "points":
+            defines["POINTS"] = True
+            head = _header(defines)
+            vs, gs, fs = VERTEX, None, FRAGMENT
+        elif kind == "lines":
+            vs, gs, fs = LINE_VERTEX, LINE_GEOMETRY, LINE_FRAGMENT
+        else:
+            vs, gs, fs = self._custom[kind]
+        prog = self.ctx.program(
+            vertex_shader=head + vs,
+            geometry_shader=None if gs is None else head + gs,
+            fragment_shader=head + _COMMON + fs,
+        )
+        self._programs[key] = prog
+        return prog
+
+    def release(self) -> None:
+        for prog in self._programs.values():
+            prog.release()
+        self._programs.clear()
