@@ -1,0 +1,194 @@
+"""RenderMan RIB export: parse the output back with a small tokenizer and check its structure."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.export import rib
+
+_TOKEN = re.compile(
+    r'"([^"]*)"|(\[)|(\])|([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(#[^\n]*)|(\S)'
+)
+
+
+def tokenize(text: str) -> list[tuple[str, object]]:
+    """RIB tokens: ("str", s), ("[", None), ("]", None), ("num", float), ("req", name); comments dropped."""
+    out: list[tuple[str, object]] = []
+    for m in _TOKEN.finditer(text):
+        s, lb, rb, num, name, comment, other = m.groups()
+        if comment is not None:
+            continue
+        if other is not None:
+            raise AssertionError(f"unexpected character {other!r} in RIB")
+        if s is not None:
+            out.append(("str", s))
+        elif lb:
+            out.append(("[", None))
+        elif rb:
+            out.append(("]", None))
+        elif num is not None:
+            out.append(("num", float(num)))
+        else:
+            out.append(("req", name))
+    return out
+
+
+def parse(text: str) -> list[tuple[str, list]]:
+    """Requests with their arguments; arrays become Python lists."""
+    requests: list[tuple[str, list]] = []
+    array: list | None = None
+    for kind, value in tokenize(text):
+        if kind == "req":
+            assert array is None, f"request {value} inside an array"
+            requests.append((value, []))
+        elif kind == "[":
+            assert array is None, "nested array"
+            array = []
+        elif kind == "]":
+            assert array is not None, "unbalanced ]"
+            requests[-1][1].append(array)
+            array = None
+        elif array is not None:
+            array.append(value)
+        else:
+            requests[-1][1].append(value)
+    assert array is None, "unterminated array"
+    return requests
+
+
+def _balanced(requests) -> None:
+    stack = []
+    for name, _ in requests:
+        if name.endswith("Begin"):
+            stack.append(name[:-5])
+        elif name.endswith("End"):
+            assert stack and stack.pop() == name[:-3], f"unbalanced {name}"
+    assert not stack
+
+
+def _scene() -> om.Node:
+    scene = om.Node("scene")
+    scene.add(om.Camera.look_at(eye=(4, 3, 6), center=(0, 0, 0), fov=35))
+    scene.add(om.PointLight(position=(5, 5, 5)))
+    scene.add(om.DirectionalLight(direction=(0, -1, 0)))
+    scene.add(om.SpotLight(position=(0, 4, 0), direction=(0, -1, 0), cutoff=20))
+    scene.add(om.AmbientLight(intensity=0.2))
+    floor = scene.add(om.Node("floor", [om.Material(diffuse=(0.8, 0.8, 0.8)), om.Box(size=(10, 0.1, 10))]))
+    assert floor
+    body = scene.add(om.Node("body"))
+    body.add(om.Translation(0, 1, 0))
+    body.add(om.Material(diffuse=(1, 0.4, 0.6), specular=(1, 1, 1), shininess=40, opacity=0.5))
+    body.add(om.Torus(major_radius=1, minor_radius=0.3))
+    body.add(om.Sphere(center=(0, 1, 0), radius=0.5))
+    parts = body.add(om.Node("parts"))
+    parts.add(om.Translation(2, 0, 0))
+    parts.add(om.rib.Surface("wood", Kd=0.7, ringscale=[10], **{"uniform string mapname": "grain.tex"}))
+    parts.add(om.Cylinder(radius=0.3, height=1))
+    parts.add(om.Cone(radius=0.4, height=0.8))
+    parts.add(om.Disk(radius=0.5))
+    parts.add(om.Rectangle(size=(1, 2)))
+    parts.add(om.TriangleSet(vertices=[(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], indices=[(0, 1, 2), (0, 2, 3)]))
+    parts.add(om.LineSet(vertices=[(0, 0, 0), (1, 1, 1)]))
+    parts.add(om.PointSet(vertices=[(0, 0, 0), (1, 1, 1), (2, 2, 2)]))
+    return scene
+
+
+def test_rib_structure(tmp_path):
+    path = om.export(_scene(), tmp_path / "scene.rib", size=(400, 300))
+    requests = parse(path.read_text())
+    names = [n for n, _ in requests]
+    _balanced(requests)
+    assert names.index("Projection") < names.index("WorldBegin") < names.index("WorldEnd") == len(names) - 1
+    args = dict(requests)
+    assert args["Format"] == [400.0, 300.0, 1.0]
+    assert args["Projection"] == ["perspective", "fov", [35.0]]
+    assert args["Display"][0] == "scene.tif"
+    assert names.count("AttributeBegin") == names.count("AttributeEnd")
+    # one block per node (scene, floor, body, parts) and one per shape
+    identifiers = [a[2][0] for n, a in requests if n == "Attribute" and a[0] == "identifier"]
+    assert identifiers == ["scene", "floor", "body", "parts"]
+    for quadric in ("Sphere", "Torus", "Cylinder", "Cone", "Polygon", "Curves", "Points"):
+        assert names.count(quadric) == 1, quadric
+    assert names.count("Disk") == 2 + 1 + 1  # cylinder caps, cone base, the disk
+    assert names.count("LightSource") == 4
+    lights = sorted(a[0] for n, a in requests if n == "LightSource")
+    assert lights == ["ambientlight", "distantlight", "pointlight", "spotlight"]
+    spot = next(a for n, a in requests if n == "LightSource" and a[0] == "spotlight")
+    assert spot[spot.index("coneangle") + 1] == [pytest.approx(math.radians(20), rel=1e-6)]
+    for name, a in requests:
+        if name in ("ConcatTransform", "Transform"):
+            assert len(a) == 1 and len(a[0]) == 16 and a[0][15] == 1.0
+        if name == "PointsPolygons":
+            nverts, verts = a[0], a[1]
+            assert set(nverts) == {3.0} and len(verts) == 3 * len(nverts)
+            p = a[a.index("P") + 1]
+            assert len(p) % 3 == 0 and max(verts) < len(p) // 3
+            n = a[a.index("N") + 1]
+            assert len(n) == len(p)
+    surfaces = [a for n, a in requests if n == "Surface"]
+    assert ["matte", "Ka", [0.25], "Kd", [1.0]] in surfaces
+    assert any(s[0] == "plastic" and s[s.index("roughness") + 1] == [pytest.approx(1 / 40)] for s in surfaces)
+    wood = [s for s in surfaces if s[0] == "wood"]
+    assert len(wood) == 7 and wood[0] == [
+        "wood",
+        "Kd",
+        [0.7],
+        "ringscale",
+        [10.0],
+        "uniform string mapname",
+        ["grain.tex"],
+    ]
+    assert ["Opacity", [[0.5, 0.5, 0.5]]] == [n_a for n_a in ([n, a] for n, a in requests) if n_a[0] == "Opacity"][0]
+
+
+def test_camera_transform_maps_the_eye_to_the_origin_and_the_centre_onto_plus_z():
+    requests = parse(rib.to_text(_scene()))
+    m = np.array(dict(requests)["Transform"][0]).reshape(4, 4).T  # row-vector order back to ours
+    eye = m @ np.array([4, 3, 6, 1.0])
+    centre = m @ np.array([0, 0, 0, 1.0])
+    np.testing.assert_allclose(eye[:3], 0, atol=1e-6)
+    np.testing.assert_allclose(centre[:3], (0, 0, np.sqrt(61)), atol=1e-5)  # RenderMan looks down +z
+    up = m @ np.array([0, 10, 0, 1.0])
+    assert up[1] > centre[1]  # world up is camera up
+
+
+def test_quadrics_are_turned_from_z_up_to_y_up():
+    requests = parse(rib.to_text(om.Node("s", [om.Translation(1, 2, 3), om.Cylinder(radius=0.5, height=2)])))
+    names = [n for n, _ in requests]
+    m = np.array(requests[names.index("Cylinder") - 3][1][0]).reshape(4, 4).T
+    # the cylinder's axis (RenderMan z) ends up along world +y, at the translation
+    np.testing.assert_allclose(m[:3, :3] @ (0, 0, 1), (0, 1, 0), atol=1e-12)
+    np.testing.assert_allclose(m[:3, 3], (1, 2, 3))
+    assert dict(requests)["Cylinder"] == [0.5, -1.0, 1.0, 360.0]
+
+
+def test_orthographic_camera_and_tall_images():
+    ortho = om.Node("s", [om.Camera.orthographic(eye=(0, 0, 5), height=4), om.Sphere()])
+    args = dict(parse(rib.to_text(ortho, size=(200, 100))))
+    assert args["Projection"] == ["orthographic"] and args["ScreenWindow"] == [-4.0, 4.0, -2.0, 2.0]
+    tall = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5), fov=40), om.Sphere()])
+    fov = dict(parse(rib.to_text(tall, size=(100, 200))))["Projection"][2][0]
+    assert fov == pytest.approx(math.degrees(2 * math.atan(math.tan(math.radians(20)) * 0.5)), rel=1e-6)
+
+
+def test_strings_cannot_inject_requests():
+    with pytest.raises(ValueError, match="quote"):
+        om.rib.Surface('wood" WorldEnd "')
+    with pytest.raises(ValueError, match="parameter name"):
+        om.rib.Surface("wood", **{"Kd]": 1})
+    with pytest.raises(ValueError, match="quote"):
+        om.rib.Surface("wood", mapname='a"b')
+    with pytest.raises(ValueError, match="quote"):
+        rib.to_text(om.Node("s", [om.Sphere()]), display='x" "y')
+
+
+def test_om_rib_is_the_surface_attribute():
+    assert om.rib.Surface is rib.Surface
+    s = om.rib.Surface("metal", Ks=0.9)
+    assert s.parameters() == {"name": "metal", "Ks": 0.9}
+    assert s.rib() == 'Surface "metal" "Ks" [0.9]'
