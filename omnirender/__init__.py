@@ -22,6 +22,7 @@ from .render import engines, exporters, register_engine, register_exporter, rend
 from .scene import Node, Statistics, TraceEngine, Visitor, register_statistic, statistics, trace
 from .shapes import *  # noqa: F403
 from .shapes import __all__ as _shapes_all
+from .techniques import Hit, attribute_search, bounds, collisions, image_info, pick
 
 __version__ = "0.1.0"
 
@@ -40,12 +41,6 @@ _LAZY_MODULES = {
 
 # Public functions and classes that live in lazily imported modules.
 _LAZY_NAMES = {
-    "pick": "techniques",
-    "bounds": "techniques",
-    "collisions": "techniques",
-    "attribute_search": "techniques",
-    "image_info": "techniques",
-    "Hit": "techniques",
     "Viewer": "viewer",
     "view": "viewer",
     "RenderList": "viewer",
@@ -75,6 +70,12 @@ __all__ = [
     "exporters",
     "register_engine",
     "register_exporter",
+    "pick",
+    "bounds",
+    "collisions",
+    "attribute_search",
+    "image_info",
+    "Hit",
 ]
 
 

@@ -2,20 +2,45 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import omnirender as om
 
-__all__ = ["demo_scene", "run_demo"]
+__all__ = ["demo_scene", "run_demo", "KNOT_PATH"]
+
+#: The demo's "mesh loaded from a file": a trefoil-knot tube (see assets/make_assets.py).
+KNOT_PATH = Path(__file__).parent / "assets" / "knot.obj"
 
 
 def demo_scene() -> om.Node:
-    """A small scene exercising the core: camera, lights, transforms, nested nodes."""
+    """Floor, a mesh from a file, a torus, a sphere and two point lights."""
     scene = om.Node("scene")
-    scene.add(om.Camera.look_at(eye=(4, 3, 6), center=(0, 0.6, 0), up=(0, 1, 0), fov=35))
-    body = scene.add(om.Node("body"))
-    body.add(om.Translation(0, 1, 0))
-    body.add(om.Rotation(30, (0, 1, 0)))
+    scene.add(om.Camera.look_at(eye=(4.2, 3.2, 6.0), center=(0, 0.75, 0), up=(0, 1, 0), fov=35))
+    scene.add(om.Background((0.12, 0.13, 0.16)))
+    lights = scene.add(om.Node("lights"))
+    lights.add(om.PointLight(position=(4, 6, 5), color=(1.0, 0.95, 0.9), intensity=0.9))
+    lights.add(om.PointLight(position=(-5, 4, 1), color=(0.55, 0.65, 1.0), intensity=0.5))
+
+    floor = scene.add(om.Node("floor"))
+    floor.add(om.Translation(0, -0.05, 0))
+    floor.add(om.Material(diffuse=(0.75, 0.75, 0.72), specular=(0.1, 0.1, 0.1), shininess=8))
+    floor.add(om.Box(size=(8, 0.1, 8)))
+
+    knot = scene.add(om.Node("knot"))
+    knot.add(om.Translation(0, 1.05, 0))
+    knot.add(om.Material(diffuse=(0.85, 0.35, 0.15), specular=(0.9, 0.9, 0.9), shininess=60))
+    knot.add(om.MeshFile(KNOT_PATH))
+
+    torus = scene.add(om.Node("torus"))
+    torus.add(om.Translation(1.9, 0.3, 0.9))
+    torus.add(om.Rotation(20, (0, 0, 1)))
+    torus.add(om.Material(diffuse=(0.2, 0.45, 0.9), specular=(1, 1, 1), shininess=40))
+    torus.add(om.Torus(major_radius=0.55, minor_radius=0.2))
+
+    ball = scene.add(om.Node("ball"))
+    ball.add(om.Material(diffuse=(0.3, 0.75, 0.35), specular=(0.6, 0.6, 0.6), shininess=30))
+    ball.add(om.Sphere(center=(-1.8, 0.45, 0.8), radius=0.45))
     return scene
 
 
@@ -23,18 +48,18 @@ def run_demo(output: Path, size: tuple[int, int] = (640, 480)) -> list[Path]:
     """Render the demo scene with each available engine into ``output``; returns the files."""
     output.mkdir(parents=True, exist_ok=True)
     scene = demo_scene()
-    program = om.trace(scene)
-    print(f"demo scene: micro program of {len(program)} ops")
-    for op, obj in program:
-        print(f"  {op:9s} {obj!r}")
-    print("statistics:", dict(om.statistics(scene)))
+    stats = om.statistics(scene)
+    print(f"demo scene: {stats['nodes']} nodes, {stats['shapes']} shapes, {stats['attributes']} attributes", end="")
+    print(f", {stats['triangles']} triangles" if "triangles" in stats else "")
     written: list[Path] = []
     for name, (ok, why) in om.engines().items():
         if not ok:
-            print(f"{name}: skipped ({why})")
+            print(f"{name:8s} skipped: {why}")
             continue
         path = output / f"demo-{name}.png"
+        start = time.perf_counter()
         om.render(scene, engine=name, size=size).save(path)
         written.append(path)
-        print(f"{name}: wrote {path}")
+        print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s)")
+    print(f"{len(written)} image(s) in {output.resolve()}")
     return written
