@@ -55,11 +55,3 @@ def driver_for(engine: Engine, viewer: Any) -> Any:
 
         return GLDriver(viewer, engine=engine)
     return EngineDriver(engine, viewer)
-
-
-def __getattr__(name: str) -> Any:
-    if name == "GLDriver":
-        from .gl_driver import GLDriver
-
-        return GLDriver
-    raise AttributeError(name)

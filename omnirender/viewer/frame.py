@@ -23,8 +23,9 @@ from ..core.component import Shape
 from ..core.engine import Engine
 from ..core.handler import ShapeSimplifier, default_for
 from ..core.program import EVAL
+from ..core.transform import Matrix
 from .render_list import PASSES
-from .renderable import HIGHLIGHT, TRANSPARENT, TWO_DIMENSIONAL, NodeRenderable
+from .renderable import HIGHLIGHT, TRANSPARENT, TWO_DIMENSIONAL
 
 __all__ = ["ViewCamera", "FrameShape", "FrameRoot", "FrameSimplifier", "PASS_FLAGS"]
 
@@ -119,36 +120,50 @@ class FrameSimplifier(ShapeSimplifier):
 
 
 class FrameRoot:
-    """A duck-typed graph root (``groups``, ``preevaluate``, ``program``) for ``engine.run``."""
+    """A duck-typed graph root for ``engine.run``: ``groups``, ``preevaluate`` and ``program``.
 
-    __slots__ = ("_lights", "_camera", "_shape", "_lists", "name", "path")
+    It also exposes the node-like ``_items``/``_groups``/``_version`` that
+    engines walking graphs themselves (the GL engine's cached pre-evaluation)
+    read: the camera, the world-space lights, every scene node drawn (for their
+    lights), then the eye-to-world matrix followed by the camera-space lights.
+    """
 
-    groups: frozenset[str] = frozenset()
+    __slots__ = ("_items", "_camera", "_shape", "_lights", "_version", "name", "path", "__weakref__")
 
     def __init__(
         self,
-        lights: Sequence[tuple[Any, np.ndarray]],
         camera: ViewCamera,
         shape: FrameShape,
-        lists: Sequence[Any],
+        world_lights: Sequence[Any],
+        camera_lights: Sequence[Any],
+        eye_to_world: np.ndarray,
+        nodes: Sequence[Any],
+        version: int = 0,
     ) -> None:
-        self._lights = list(lights)
         self._camera = camera
         self._shape = shape
-        self._lists = lists
+        self._items: list[Any] = [camera, *world_lights, *nodes]
+        self._lights: list[tuple[Any, np.ndarray]] = [(light, np.eye(4)) for light in world_lights]
+        if camera_lights:
+            self._items.append(Matrix(eye_to_world))
+            self._items.extend(camera_lights)
+            self._lights.extend((light, eye_to_world) for light in camera_lights)
+        self._version = version
         self.name = "viewer"
         self.path = "/viewer"
+
+    groups: frozenset[str] = frozenset()
+    _groups: frozenset[str] = frozenset()
 
     def preevaluate(self, mask_fn: Any = None) -> tuple[list[tuple[Any, np.ndarray]], tuple[Camera, np.ndarray]]:
         lights = list(self._lights)
         seen = {id(light) for light, _ in lights}
-        for rl in self._lists:
-            for r in rl:
-                if isinstance(r, NodeRenderable):
-                    for light, matrix in r.node.preevaluate(mask_fn)[0]:
-                        if id(light) not in seen:
-                            seen.add(id(light))
-                            lights.append((light, matrix))
+        for item in self._items:
+            if hasattr(item, "preevaluate") and hasattr(item, "_items"):
+                for light, matrix in item.preevaluate(mask_fn)[0]:
+                    if id(light) not in seen:
+                        seen.add(id(light))
+                        lights.append((light, matrix))
         return lights, (self._camera, np.eye(4))
 
     def program(self) -> list[tuple[int, Any]]:

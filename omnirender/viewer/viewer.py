@@ -21,7 +21,7 @@ from .axial import AxisAlignedRotation
 from .camera import ViewerCamera
 from .frame import FrameRoot, FrameShape, ViewCamera
 from .render_list import RenderList
-from .renderable import as_renderable
+from .renderable import NodeRenderable, as_renderable
 
 __all__ = ["Viewer", "default_lights"]
 
@@ -66,6 +66,7 @@ class Viewer:
         self._lights: list[tuple[Any, str]] = [(light, "camera") for light in default_lights()]
         self._highlighted: set[int] = set()
         self._picked: Any = None
+        self._frame_count = 0
         self._lock = threading.RLock()
         self._image: Any = None
         self._driver: Any = None
@@ -93,7 +94,7 @@ class Viewer:
 
     def _get_driver(self) -> Any:
         if self._driver is None:
-            from .drivers import GLDriver
+            from .gl_driver import GLDriver
 
             self._driver = GLDriver(self, samples=self._samples)
         return self._driver
@@ -213,17 +214,22 @@ class Viewer:
         """Redraw from the cached render lists (no prerender); returns the image (an om.Image)."""
         with self._lock:
             lists = [self._render_list] + ([self._external] if self._external is not None else [])
-            lights = self._light_placements()
-            view = self._camera.get_view_matrix()
-            projection = self._camera.get_projection_matrix()
-            camera = ViewCamera(self._camera.to_camera(), view, projection)
-            highlighted = set(self._highlighted)
             driver = self._get_driver()
             for rl in lists:
                 rl.lock.acquire()
             try:
-                shape = FrameShape(lists, highlighted, driver, self._overrides())
-                root = FrameRoot(lights, camera, shape, lists)
+                self._frame_count += 1
+                root = FrameRoot(
+                    ViewCamera(
+                        self._camera.to_camera(), self._camera.get_view_matrix(), self._camera.get_projection_matrix()
+                    ),
+                    FrameShape(lists, set(self._highlighted), driver, self._overrides()),
+                    [light for light, space in self._lights if space == "world"],
+                    [light for light, space in self._lights if space == "camera"],
+                    self._camera.get_eye_to_world(),
+                    [r.node for rl in lists for r in rl if isinstance(r, NodeRenderable)],
+                    self._frame_count,
+                )
                 self._image = driver.draw(root)
             finally:
                 for rl in reversed(lists):
@@ -396,10 +402,6 @@ class Viewer:
         from ..attributes import DrawStyle
 
         return [DrawStyle(mode="wireframe")]
-
-    def _light_placements(self) -> list[tuple[Any, np.ndarray]]:
-        eye_to_world = self._camera.get_eye_to_world()
-        return [(light, eye_to_world if space == "camera" else np.eye(4)) for light, space in self._lights]
 
     # -- window --------------------------------------------------------------
     def close(self) -> None:

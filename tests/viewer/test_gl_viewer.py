@@ -1,0 +1,199 @@
+"""The viewer driving the GL engine: images, passes, caching, lights, highlight, picking."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.viewer import TRANSPARENT, TWO_DIMENSIONAL, Viewer
+
+pytestmark = pytest.mark.gl
+
+SIZE = (160, 120)
+
+
+def scene_with_sphere(color=(0.9, 0.2, 0.2)) -> om.Node:
+    scene = om.Node("scene")
+    body = scene.add(om.Node("body"))
+    body.add(om.Material(diffuse=color))
+    body.add(om.Sphere(radius=1.0))
+    return scene
+
+
+class Ball:
+    """A renderable sphere at a position cached by prerender."""
+
+    def __init__(self, position, color, hints=0, radius=0.5, opacity=1.0):
+        self.position = np.array(position, dtype=float)
+        self.color = color
+        self.hints = hints
+        self.radius = radius
+        self.opacity = opacity
+        self.renders = 0
+        self._cached = self.position.copy()
+
+    def prerender(self, render_list):
+        self._cached = self.position.copy()
+
+    def render(self, renderer, flags):
+        self.renders += 1
+        renderer.push(om.Translation(*self._cached))
+        renderer.push(om.Material(diffuse=self.color, opacity=self.opacity))
+        renderer.eval(om.Sphere(radius=self.radius))
+        renderer.pop(om.Material)
+        renderer.pop(om.Transform)
+
+    def update_bounds(self, pmin, pmax):
+        np.minimum(pmin, self.position - self.radius, out=pmin)
+        np.maximum(pmax, self.position + self.radius, out=pmax)
+
+    def render_hints(self):
+        return self.hints
+
+
+@pytest.fixture
+def viewer():
+    v = Viewer(size=SIZE, samples=0)
+    yield v
+    v.close()
+
+
+def red(img):
+    a = img.array.astype(int)
+    return (a[:, :, 0] > a[:, :, 1] + 60) & (a[:, :, 0] > a[:, :, 2] + 60)
+
+
+def test_node_fits_in_view_and_background_colour(viewer):
+    viewer.add_renderable(scene_with_sphere())
+    viewer.background = (0.0, 0.0, 1.0)
+    viewer.auto_fit()
+    img = viewer.rerender()
+    assert img.size == SIZE and img.engine == "gl"
+    mask = red(img)
+    assert 0.1 * mask.size < mask.sum() < 0.6 * mask.size
+    assert not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
+    assert img.pixel(0, 0)[:3] == (0, 0, 255)
+    assert viewer.image() is img
+    png = viewer._repr_png_()
+    assert png.startswith(b"\x89PNG")
+    from PIL import Image
+
+    assert Image.open(io.BytesIO(png)).size == SIZE
+
+
+def test_viewer_matches_om_render_with_the_same_camera_and_lights(viewer):
+    scene = scene_with_sphere()
+    scene.add(om.PointLight(position=(3, 4, 5)))
+    cam = om.Camera.look_at(eye=(1, 2, 5), center=(0, 0, 0), fov=35, near=1, far=20)
+    viewer.clear_lights()
+    viewer.add_renderable(scene)
+    viewer.set_camera(cam)
+    viewer.background = (0.1, 0.1, 0.1)
+    mine = viewer.rerender().array.astype(int)
+    with_cam = om.Node("root", [cam, om.Background((0.1, 0.1, 0.1)), scene])
+    ref = om.render(with_cam, engine="gl", size=SIZE, samples=0).array.astype(int)
+    assert np.abs(mine - ref).max() <= 2
+
+
+def test_repaint_reuses_the_draw_list_until_something_changes(viewer):
+    ball = Ball((0, 0, 0), (0.9, 0.1, 0.1))
+    viewer.add_renderable(ball)
+    viewer.auto_fit()
+    first = viewer.rerender()
+    assert ball.renders == 1
+    viewer.camera.orbit(40, 10)
+    moved = viewer.repaint()
+    assert ball.renders == 1  # camera moves redraw the installed list
+    assert red(moved).sum() > 100
+    ball.position = np.array([0.6, 0.0, 0.0])
+    same = viewer.repaint()  # no prerender: the cached position is still drawn
+    assert np.array_equal(same.array, moved.array)
+    after = viewer.rerender()
+    assert ball.renders == 2 and not np.array_equal(after.array, moved.array)
+    assert first.size == after.size
+
+
+def test_two_dimensional_pass_draws_over_nearer_geometry(viewer):
+    viewer.set_eye_to_world((0, 0, 10), (0, 0, 0), (0, 1, 0))
+    viewer.set_perspective(35, 1, 50)
+    front = Ball((0, 0, 2), (0.1, 0.1, 0.9), radius=1.5)
+    behind = Ball((0, 0, -2), (0.9, 0.1, 0.1), radius=0.5)
+    viewer.add_renderable(front)
+    viewer.add_renderable(behind)
+    assert red(viewer.rerender()).sum() == 0  # hidden behind the blue ball
+    behind.hints = TWO_DIMENSIONAL
+    assert red(viewer.rerender()).sum() > 50  # drawn after everything with the depth test off
+
+
+def test_transparent_renderable_blends_over_opaque(viewer):
+    viewer.set_eye_to_world((0, 0, 10), (0, 0, 0), (0, 1, 0))
+    viewer.add_renderable(Ball((0, 0, -1), (0.9, 0.1, 0.1), radius=1.0))
+    glass = viewer.add_renderable(Ball((0, 0, 1), (0.1, 0.1, 0.9), hints=TRANSPARENT, radius=1.5, opacity=0.5))
+    r, g, b, _ = viewer.rerender().pixel(SIZE[0] // 2, SIZE[1] // 2)
+    assert r > 40 and b > 40  # both colours contribute
+    glass.opacity = 1.0
+    r2, _, b2, _ = viewer.rerender().pixel(SIZE[0] // 2, SIZE[1] // 2)
+    assert r2 < r - 20 and b2 > b  # the red ball no longer shows through
+
+
+def test_lights_change_at_next_repaint_and_highlight(viewer):
+    scene = scene_with_sphere((0.6, 0.6, 0.6))
+    viewer.add_renderable(scene)
+    viewer.auto_fit()
+    lit = viewer.rerender().array[SIZE[1] // 2, SIZE[0] // 2, :3].astype(int)
+    assert abs(lit[0] - lit[2]) < 10  # grey under the white default lights
+    viewer.clear_lights()
+    lamp = om.PointLight(position=(0, 0, 10), color=(1, 0, 0))
+    viewer.add_light(lamp, space="camera")
+    reddish = viewer.repaint().array[SIZE[1] // 2, SIZE[0] // 2, :3].astype(int)
+    assert reddish[0] > reddish[1] + 40
+    viewer.remove_light(lamp)
+    viewer.add_light(om.DirectionalLight(direction=(0, 0, -1), color=(0, 0, 1)), space="camera")
+    bluish = viewer.repaint().array[SIZE[1] // 2, SIZE[0] // 2, :3].astype(int)
+    assert bluish[2] > bluish[0] + 40
+    viewer.remove_light(0)
+    viewer.add_light(lamp, space="camera")
+    reddish = viewer.repaint().array[SIZE[1] // 2, SIZE[0] // 2, :3].astype(int)
+    viewer.set_highlight(scene)
+    highlighted = viewer.repaint().array[SIZE[1] // 2, SIZE[0] // 2, :3].astype(int)
+    assert not np.array_equal(highlighted, reddish)
+
+
+def test_wireframe_override_draws_fewer_pixels(viewer):
+    viewer.add_renderable(scene_with_sphere())
+    viewer.auto_fit()
+    filled = red(viewer.rerender()).sum()
+    viewer.wireframe = True
+    wire = red(viewer.repaint()).sum()
+    assert 0 < wire < 0.8 * filled
+
+
+def test_pick_highlight_overlay(viewer):
+    from omnirender.viewer.picking import pick_in_viewer
+
+    scene = om.Node("scene")
+    left = scene.add(om.Node("left"))
+    left.add(om.Translation(-1.5, 0, 0))
+    left.add(om.Material(diffuse=(0.2, 0.2, 0.9)))
+    left.add(om.Box(size=(1, 1, 1)))
+    right = scene.add(om.Node("right"))
+    right.add(om.Translation(1.5, 0, 0))
+    right.add(om.Material(diffuse=(0.2, 0.2, 0.9)))
+    right.add(om.Sphere(radius=0.6))
+    viewer.add_renderable(scene)
+    viewer.set_eye_to_world((0, 0, 8), (0, 0, 0), (0, 1, 0))
+    before = viewer.rerender()
+    x, y = 120, 60  # the sphere on the right
+    hit = pick_in_viewer(viewer, scene, x, y)
+    assert hit is not None and hit.path == "/scene/right" and isinstance(hit.shape, om.Sphere)
+    assert pick_in_viewer(viewer, None, 80, 5) is None
+    viewer.set_picked(hit)
+    after = viewer.rerender()
+    p0, p1 = before.pixel(x, y), after.pixel(x, y)
+    assert p1[0] > p0[0] + 60  # yellow-ish overlay on the picked sphere
+    assert after.pixel(40, 60) == before.pixel(40, 60)  # the box is untouched
+    viewer.set_picked(None)
+    assert np.array_equal(viewer.rerender().array, before.array)
