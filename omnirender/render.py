@@ -21,6 +21,7 @@ __all__ = [
     "export",
     "engines",
     "register_engine",
+    "unregister_engine",
     "register_exporter",
     "EngineEntry",
     "exporters",
@@ -64,6 +65,11 @@ def register_engine(
         )
     origin = render_fn if isinstance(render_fn, str) else getattr(render_fn, "__module__", "?")
     _engines[name] = EngineEntry(name, render_fn, available, description, str(origin))
+
+
+def unregister_engine(name: str) -> None:
+    """Remove the engine called ``name`` (no error when it is not registered)."""
+    _engines.pop(name, None)
 
 
 def register_exporter(

@@ -312,6 +312,17 @@ class Node:
     def __repr__(self) -> str:
         return f"Node({self._name!r}, {len(self._items)} items)"
 
+    #: Size of the picture a node shows of itself in a notebook.
+    repr_size: tuple[int, int] = (480, 360)
+
+    def _repr_png_(self) -> bytes | None:
+        """Jupyter display: the node rendered by the GL engine (None when GL is unavailable)."""
+        from ..render import engines, render
+
+        if not engines().get("gl", (False, ""))[0]:
+            return None
+        return render(self, engine="gl", size=self.repr_size)._repr_png_()
+
 
 def _collect(node: Node, matrix: np.ndarray, mask_fn: Any, lights: list, camera: list, stack: set) -> None:
     if node._groups and mask_fn is not None and not mask_fn(node._groups):
