@@ -117,6 +117,10 @@ class BVH:
         #: per level (root first): node bounds; empty nodes have NaN bounds and are never hit
         self.lo = levels_lo[::-1]
         self.hi = levels_hi[::-1]
+        #: per level: (n, 6) = [lo | hi], one gather per level during single-ray traversal
+        self.boxes = [
+            np.ascontiguousarray(np.concatenate([lo, hi], axis=1)) for lo, hi in zip(self.lo, self.hi, strict=True)
+        ]
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
@@ -136,12 +140,20 @@ class BVH:
         if self.count == 0:
             return np.zeros(0, dtype=np.int64)
         inv = safe_inverse(direction)
+        # slab test with the near/far planes chosen by the direction's signs (no min/max per node)
+        neg = (inv < 0).astype(np.int64) * 3
+        near = np.arange(3) + neg
+        far = np.arange(3) + 3 - neg
+        o_inv = origin * inv
         b = self.branching
         offsets = np.arange(b)
         nodes = np.zeros(1, dtype=np.int64)
+        boxes = self.boxes
         for level in range(self.depth + 1):
-            hit, _ = ray_aabb_level(origin, inv, self.lo[level][nodes], self.hi[level][nodes], tmax)
-            nodes = nodes[hit]
+            box = boxes[level][nodes]
+            tn = (box[:, near] * inv - o_inv).max(axis=1)
+            tf = (box[:, far] * inv - o_inv).min(axis=1)
+            nodes = nodes[(tn <= tf) & (tf >= 0.0) & (tn <= tmax)]
             if not nodes.size:
                 return nodes
             if level < self.depth:
