@@ -20,6 +20,8 @@ from .runner import POVRayError, find_povray, read_png, run_povray
 
 __all__ = ["render", "export", "available", "scene_sdl"]
 
+_ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix"}
+
 
 def available() -> tuple[bool, str]:
     """Whether the ``povray`` program can be run here, and why not."""
@@ -37,6 +39,16 @@ def available() -> tuple[bool, str]:
 
 def scene_sdl(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: Any) -> tuple[str, POVRayEngine]:
     """Evaluate ``scene`` with a POVRayEngine; returns (SDL text, engine) — the engine lists the resources."""
+    unknown = set(engine_options) - _ENGINE_OPTIONS
+    if unknown:
+        raise TypeError(
+            f"POV-Ray: unknown option(s) {sorted(unknown)}; render() takes size, quality, antialias, timeout, "
+            f"progress, threads, keep and the engine options {sorted(_ENGINE_OPTIONS)}"
+        )
+    if not hasattr(scene, "preevaluate"):  # a list of components
+        from ..scene import Node
+
+        scene = Node("scene", list(scene))
     engine = POVRayEngine(size, **engine_options)
     engine.run(scene)
     return engine.sdl(), engine

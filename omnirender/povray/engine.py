@@ -3,7 +3,9 @@
 The engine is the generic state machine with service ``"pov.paint"``; shape
 painters (``painters.py``) call :meth:`POVRayEngine.emit` with the geometry
 text of one object and the engine adds the texture, interior, model matrix,
-clip planes and object-level ``Raw`` text from the rendering context.  Lights,
+clip planes and object-level ``Raw`` text from the rendering context.  Like
+the GL engine, a global ambient of 0.2 is added to the lights' ambient terms
+and a scene without lights gets a headlight.  Lights,
 background, fog and global settings are recorded by attribute painters;
 :meth:`POVRayEngine.sdl` assembles the file.  The engine writes the scene in
 omnirender's right-handed world coordinates unchanged and gives the camera
@@ -28,6 +30,10 @@ from .attributes import GlobalSettings, Interior, Raw
 __all__ = ["POVRayEngine", "camera_sdl"]
 
 _IDENTITY = np.eye(4)
+#: OpenGL's global ambient light, added to the lights' ambient terms (as in the GL engine).
+GLOBAL_AMBIENT = 0.2
+#: Direction towards the headlight in eye space, used when a scene has no light (as in the GL engine).
+HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
 
 
 def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
@@ -92,7 +98,8 @@ class POVRayEngine(Engine):
         self.resources: list[tuple[str, Any]] = []
         self.background: Any = None
         self.fog: Any = None
-        self.ambient = np.zeros(3)
+        self.ambient = np.full(3, GLOBAL_AMBIENT)
+        self.light_count = 0
         self.global_settings: GlobalSettings | None = None
         self.camera_text: str | None = None
         self._declared: dict[Any, str] = {}
@@ -178,7 +185,16 @@ class POVRayEngine(Engine):
         head.append(f"background {{ {sdl.color(bg, transmit=1.0)} }}\n")
         if fog and self.fog is not None:
             head.append(self.fog)
-        return "".join(head + self.lights_sdl + self.declarations + self.objects)
+        lights = list(self.lights_sdl)
+        if self.light_count == 0:
+            lights.append(self._headlight())
+        return "".join(head + lights + self.declarations + self.objects)
+
+    def _headlight(self) -> str:
+        view = self.view_matrix() if self.camera is not None else Camera().view_matrix()
+        towards = np.linalg.inv(view)[:3, :3] @ HEADLIGHT
+        towards /= np.linalg.norm(towards)
+        return f"light_source {{ {sdl.vector(towards * 1e5)} rgb <1,1,1> parallel point_at <0,0,0> }} // headlight\n"
 
 
 def _rgb(attr: Any) -> tuple[float, float, float]:

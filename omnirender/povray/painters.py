@@ -317,6 +317,7 @@ class LightPainter(AttributePainter):
 
     def exec(self, light: Any, engine: POVRayEngine) -> None:
         engine.ambient = engine.ambient + np.asarray(light.ambient, dtype=np.float64)
+        engine.light_count += 1  # any light (even ambient) turns the headlight off, as in GL
         if isinstance(light, AmbientLight):
             return
         world = _light_matrix(light, engine)

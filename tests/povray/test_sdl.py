@@ -109,6 +109,17 @@ def test_light_conversions():
     assert "light_source { <0,4,0> rgb <0.5,0.5,0.5> fade_distance 2 fade_power 2 }" in text
     assert "spotlight point_at <0,3,0>" in text and "falloff 30 tightness 2" in text
     assert "light_source { <0,100000,0> rgb <1,0.5,0.25> parallel point_at <0,0,0> }" in text
+    assert "ambient_light rgb <0.4,0.4,0.4>" in text  # GL's global ambient 0.2 + the ambient light
+    assert "headlight" not in text
+
+
+def test_a_scene_without_lights_gets_the_gl_headlight():
+    text, _ = scene_sdl(_scene(om.Sphere()))
+    m = re.search(r"light_source \{ <([^>]*)> rgb <1,1,1> parallel point_at <0,0,0> \} // headlight", text)
+    towards = np.array([float(v) for v in m.group(1).split(",")])
+    assert np.allclose(
+        towards / np.linalg.norm(towards), np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1])
+    )
     assert "ambient_light rgb <0.2,0.2,0.2>" in text
 
 
@@ -219,3 +230,13 @@ def test_textured_primitives_are_tessellated_with_uvs():
     assert text.count("mesh2 {") == 2 and text.count("uv_vectors") == 2
     assert 'uv_mapping image_map { png "om_tex0.png" interpolate 2 }' in text
     assert "sphere {" not in text and len(engine.resources) == 1  # one image shared by both
+
+
+def test_component_lists_and_unknown_options():
+    text, _ = scene_sdl([om.Camera.look_at(eye=(0, 0, 5)), om.Sphere(radius=2)])
+    assert "sphere { <0,0,0>, 2 }" in text
+    with pytest.raises(TypeError, match="unknown option"):
+        scene_sdl([om.Sphere()], spp=3)
+    s = _scene(om.Node("a", [om.Sphere()], groups=["debug"]), om.Node("b", [om.Box()]))
+    text, _ = scene_sdl(s, mask="!debug")
+    assert "sphere" not in text and "box" in text
