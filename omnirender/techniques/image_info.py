@@ -179,7 +179,9 @@ def image_info(scene: Any, path: str, size: Any, camera: Camera | None = None, m
         return ImageInfo(None, None, None, (w, h))
     xmin, xmax, ymin, ymax, dmin, dmax = engine.ranges
     extent = ((xmin + 1) / 2 * w, (1 - ymax) / 2 * h, (xmax + 1) / 2 * w, (1 - ymin) / 2 * h)
-    x0, y0 = max(0, math.floor(extent[0])), max(0, math.floor(extent[1]))
-    x1, y1 = min(w, math.ceil(extent[2])), min(h, math.ceil(extent[3]))
+    # whole pixels touched; a degenerate extent (a point, an edge-on disk) still covers one pixel
+    x0, y0 = math.floor(extent[0]), math.floor(extent[1])
+    x1, y1 = max(math.ceil(extent[2]), x0 + 1), max(math.ceil(extent[3]), y0 + 1)
+    x0, y0, x1, y1 = max(0, x0), max(0, y0), min(w, x1), min(h, y1)
     rect = (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
     return ImageInfo(rect, tuple(float(e) for e in extent), (float(dmin), float(dmax)), (w, h))

@@ -38,7 +38,7 @@ __all__ = ["Hit", "PickEngine", "pick", "pixel_ray", "ClipPlaneTracker"]
 RAY = "ray.intersect"
 
 
-@dataclass
+@dataclass(eq=False)
 class Hit:
     """One crossing of the pick ray with a shape.
 
@@ -47,7 +47,8 @@ class Hit:
     origin side); ``shape`` the shape the scene holds and ``path`` its node
     path; ``primitive`` the triangle index in the (possibly simplified)
     triangle set, -1 for analytic shapes; ``part`` the shape actually
-    intersected (a simplifier's triangle set, or ``shape`` itself).
+    intersected (a simplifier's triangle set, or ``shape`` itself).  Hits
+    compare by identity (their arrays make value equality ambiguous).
     """
 
     distance: float
@@ -261,9 +262,8 @@ class TriangleSetIntersector(RayIntersector):
         hits = bvh_for(shape, engine.backend).intersect(o, d, tmax=engine.tmax)
         if not len(hits):
             return
-        v = shape.vertex_array().astype(np.float64)
-        tri = v[shape.index_array()[hits.triangle]]
-        normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        tri = shape.vertex_array()[shape.index_array()[hits.triangle]].astype(np.float64)
+        normals = gi.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         engine.report(hits.t, normals, hits.triangle, shape)
 
 

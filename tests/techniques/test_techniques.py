@@ -366,3 +366,35 @@ def test_statistics_count_triangles_after_simplification():
     s.add(om.Node("mesh", [om.TriangleSet([[0, 0, 0], [1, 0, 0], [0, 1, 0]])]))
     s.add(om.LineSet([[0, 0, 0], [1, 1, 1]]))
     assert om.statistics(s)["triangles"] == 12 + 1
+
+
+def test_every_shape_goes_through_every_technique():
+    rng = np.random.default_rng(0)
+    tf = om.TransferFunction([(0, (0, 0, 0, 0)), (1, (1, 1, 1, 1))])
+    shapes = [
+        om.Sphere(),
+        om.Box(),
+        om.Cylinder(),
+        om.Cone(),
+        om.Torus(),
+        om.Disk(),
+        om.Rectangle(),
+        om.Arrow((0, 0, 0), (0, 1, 0)),
+        om.TriangleSet([[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+        om.Polygon([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]),
+        om.LineSet([[0, 0, 0], [1, 1, 1]]),
+        om.Polyline([[0, 0, 0], [1, 0, 0], [1, 1, 0]]),
+        om.PointSet([[0, 0, 0]]),
+        om.Heightfield(rng.random((5, 5)), 0.5),
+        om.Volume(rng.random((8, 8, 8)), (0.2, 0.2, 0.2), tf),
+    ]
+    for shape in shapes:
+        s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10)), om.Collidable()])
+        s.add(om.Node("n", [shape]))
+        s.add(om.Node("m", [om.Translation(0.2, 0.1, 0.1), om.Box((0.5, 0.5, 0.5))]))
+        name = type(shape).__name__
+        assert len(om.pick(s, ray=((0.1, 0.1, 10), (0, 0, -1)))) >= 2, name
+        assert om.bounds(s["/scene/n"]) is not None, name
+        assert om.image_info(s, "/scene/n", (100, 100)).visible, name
+        assert isinstance(om.collisions(s), list)
+        assert om.statistics(s)["triangles"] >= 12, name
