@@ -168,10 +168,15 @@ def _tangents(u: float, z: float, r: float) -> tuple[float, float]:
 
 
 def image_info(scene: Any, path: str, size: Any, camera: Camera | None = None, mask: str | None = None) -> ImageInfo:
-    """Pixel rectangle and depth range of the shapes at (or below) ``path`` for the scene's camera."""
+    """Pixel rectangle and depth range of the shapes at (or below) ``path`` for the scene's camera.
+
+    ``camera`` overrides the scene's camera; the camera's group mask applies unless ``mask`` is given.
+    """
     w, h = _size(size)
     node = scene[path]
     cam, world = scene_camera(scene, camera, mask)
+    if mask is None and cam.mask:
+        mask = cam.mask
     view = cam.view_matrix() if world is None else cam.view_matrix() @ np.linalg.inv(world)
     engine = ImageInfoEngine(node.path, view, cam, w / h, mask=mask)
     scene.evaluate(engine)

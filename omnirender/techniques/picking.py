@@ -371,7 +371,8 @@ def pick(
     Give either ``ray=(origin, direction)`` in world coordinates, or
     ``pixel=(x, y)`` with ``size=(width, height)``: the ray through that
     pixel's centre (pixel (0, 0) top-left) for ``camera`` or, by default, the
-    camera found in the scene.  ``nearest=True`` returns at most the nearest hit.
+    camera found in the scene; then the camera's group mask applies unless
+    ``mask`` is given.  ``nearest=True`` returns at most the nearest hit.
     """
     if (ray is None) == (pixel is None):
         raise ValueError("pick: give exactly one of ray=(origin, direction) or pixel=(x, y) with size=(w, h)")
@@ -380,6 +381,8 @@ def pick(
             raise ValueError("pick: pixel=(x, y) needs size=(width, height) of the image")
         cam, world = scene_camera(scene, camera, mask)
         origin, direction = pixel_ray(cam, world, pixel, size)
+        if mask is None and cam.mask:
+            mask = cam.mask  # what the camera shows is what its pixels pick (as the GL engine renders)
     else:
         try:
             origin, direction = ray

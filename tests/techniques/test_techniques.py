@@ -398,3 +398,23 @@ def test_every_shape_goes_through_every_technique():
         assert om.image_info(s, "/scene/n", (100, 100)).visible, name
         assert isinstance(om.collisions(s), list)
         assert om.statistics(s)["triangles"] >= 12, name
+
+
+def test_pixel_picks_follow_the_cameras_group_mask():
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10), mask="!hidden")])
+    s.add(om.Node("veil", [om.Translation(0, 0, 2), om.Box()], groups=["hidden"]))
+    s.add(om.Node("ball", [om.Sphere()]))
+    assert om.pick(s, pixel=(50, 50), size=(100, 100))[0].path == "/scene/ball"
+    assert om.pick(s, pixel=(50, 50), size=(100, 100), mask="hidden | !hidden")[0].path == "/scene/veil"
+    assert not om.image_info(s, "/scene/veil", (100, 100)).visible
+
+
+def test_technique_bad_input_and_empty_results():
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10)), om.Node("n", [om.Sphere()])])
+    with pytest.raises(ValueError, match="size"):
+        om.image_info(s, "/scene/n", (0, 10))
+    with pytest.raises(KeyError, match="closest existing prefix"):
+        om.image_info(s, "/scene/missing", (10, 10))
+    with pytest.raises(TypeError, match="Camera"):
+        om.pick(s, pixel=(1, 1), size=(10, 10), camera="front")
+    assert om.collisions(s) == []  # nothing is tagged Collidable
