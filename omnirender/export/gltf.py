@@ -23,7 +23,6 @@ import numpy as np
 
 from ..attributes import (
     AmbientLight,
-    Color,
     DirectionalLight,
     LightSource,
     Material,
@@ -38,7 +37,7 @@ from ..scene import Node
 from ..shapes import LineSet, PointSet, TriangleSet
 from .colors import srgb_to_linear
 from .glb import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GLBBuilder
-from .walk import NodeTrackingEngine
+from .walk import NodeTrackingEngine, track_surfaces
 
 __all__ = ["export", "to_bytes", "GLTFEngine", "LIGHTS_EXTENSION"]
 
@@ -133,25 +132,26 @@ class GLTFEngine(NodeTrackingEngine):
     # -- materials ------------------------------------------------------------
     def material_index(self, textured: bool = True) -> int:
         """The glTF material for the active appearance attributes (shared when identical)."""
-        pbr, mat, col = self.mono(PBRMaterial), self.mono(Material), self.mono(Color)
+        material, col = self.surface()
         tex = self.mono(Texture) if textured else None
-        key = tuple((id(a), a.version) if a is not None else None for a in (pbr, mat, col, tex))
+        key = tuple((id(a), a.version) if a is not None else None for a in (material, col, tex))
         found = self._materials.get(key)
         if found is not None:
             return found
-        if pbr is not None:
-            base, alpha = pbr.base_color, pbr.opacity
-            metallic, roughness, emission = pbr.metallic, pbr.roughness, pbr.emission
+        if isinstance(material, PBRMaterial):
+            base, alpha = material.base_color, material.opacity
+            metallic, roughness, emission = material.metallic, material.roughness, material.emission
             name = "PBRMaterial"
-        elif mat is not None:
-            base, alpha, metallic, emission = mat.diffuse, mat.opacity, 0.0, mat.emission
-            shiny = float(np.mean(mat.specular)) > 0.0
-            roughness = min(1.0, math.sqrt(2.0 / (mat.shininess + 2.0))) if shiny else 1.0
+        elif isinstance(material, Material):
+            base, alpha, metallic, emission = material.diffuse, material.opacity, 0.0, material.emission
+            shiny = float(np.mean(material.specular)) > 0.0
+            roughness = min(1.0, math.sqrt(2.0 / (material.shininess + 2.0))) if shiny else 1.0
             name = "Material"
         else:
-            base = col.rgb if col is not None else (0.8, 0.8, 0.8)
-            alpha = col.a if col is not None else 1.0
+            base, alpha = (0.8, 0.8, 0.8), 1.0
             metallic, roughness, emission, name = 0.0, 1.0, (0.0, 0.0, 0.0), "Color"
+        if col is not None:  # a Color after the material replaces its colour (as in the GL engine)
+            base, alpha = col.rgb, alpha * col.a
         factor = [*(float(v) for v in srgb_to_linear(base)), float(alpha)]
         pbr_block: dict[str, Any] = {"metallicFactor": float(metallic), "roughnessFactor": float(roughness)}
         if tex is not None:
@@ -281,6 +281,9 @@ class GLTFEngine(NodeTrackingEngine):
         self.gltf.doc["scenes"] = [{"name": name, "nodes": list(self.roots)}]
         self.gltf.doc["scene"] = 0
         return self.gltf.to_bytes()
+
+
+track_surfaces(GLTFEngine)
 
 
 @default_for(GLTFEngine)

@@ -29,7 +29,6 @@ import numpy as np
 
 from ..attributes import (
     AmbientLight,
-    Color,
     DirectionalLight,
     DrawStyle,
     LightSource,
@@ -42,7 +41,7 @@ from ..core import AttributePainter, Camera, MonoAttribute, ShapePainter, defaul
 from ..fileio import atomic_write
 from ..scene import Node
 from ..shapes import Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
-from .walk import NodeTrackingEngine
+from .walk import NodeTrackingEngine, track_surfaces
 
 __all__ = ["Surface", "RIBEngine", "export", "to_text", "rib_string", "rib_numbers"]
 
@@ -206,7 +205,9 @@ class RIBEngine(NodeTrackingEngine):
     def appearance(self) -> None:
         """``Color``, ``Opacity`` and ``Surface`` from the active attributes."""
         surface = self.mono(Surface)
-        pbr, mat, col = self.mono(PBRMaterial), self.mono(Material), self.mono(Color)
+        material, col = self.surface()
+        pbr = material if isinstance(material, PBRMaterial) else None
+        mat = material if isinstance(material, Material) else None
         if pbr is not None:
             self.emit(f"Color {rib_numbers(pbr.base_color)}")
             opacity = pbr.opacity
@@ -229,10 +230,12 @@ class RIBEngine(NodeTrackingEngine):
             else:
                 converted = f'Surface "matte" "Ka" {rib_numbers(min(ka, 1.0))} "Kd" [1]'
         else:
-            rgb = col.rgb if col is not None else (0.8, 0.8, 0.8)
-            self.emit(f"Color {rib_numbers(rgb)}")
-            opacity = col.a if col is not None else 1.0
+            self.emit(f"Color {rib_numbers((0.8, 0.8, 0.8))}")
+            opacity = 1.0
             converted = 'Surface "matte"'
+        if col is not None:  # a Color after the material replaces its colour (as in the GL engine)
+            self.lines[-1] = self.lines[-1].rsplit("Color ", 1)[0] + f"Color {rib_numbers(col.rgb)}"
+            opacity *= col.a
         if opacity < 1.0:
             self.emit(f"Opacity {rib_numbers((opacity,) * 3)}")
         self.emit(surface.rib() if surface is not None else converted)
@@ -321,6 +324,7 @@ class RIBEngine(NodeTrackingEngine):
 
 # -- shape handlers ---------------------------------------------------------------
 SERVICE = RIBEngine.service
+track_surfaces(RIBEngine)
 
 
 def _painter(target: type):

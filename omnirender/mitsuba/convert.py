@@ -29,6 +29,11 @@ __all__ = [
     "color_bsdf",
     "wrap_bsdf",
     "light_emitter",
+    "ambient_emitter",
+    "headlight_emitter",
+    "GLOBAL_AMBIENT",
+    "ENVIRONMENTS",
+    "HEADLIGHT",
     "sensor_matrix",
     "sensor_dict",
     "look_at",
@@ -132,9 +137,7 @@ def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[
     GL's attenuation.
     """
     if isinstance(light, AmbientLight):
-        # Constant environment radiance L lights an unoccluded diffuse surface
-        # to albedo * L, GL's ambient term is material ambient * light ambient.
-        return {"type": "constant", "radiance": rgb(light.ambient, linearize=False)}
+        return None  # summed into the constant environment by the engine (see ambient_emitter)
     color = np.asarray(light.diffuse, dtype=np.float64)
     if isinstance(light, DirectionalLight):
         # irradiance E gives albedo * E / pi reflected radiance; GL: diffuse * color.
@@ -164,6 +167,44 @@ def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[
             "intensity": intensity,
         }
     return None
+
+
+#: Emitter plugins that are environments (Mitsuba allows one per scene).
+ENVIRONMENTS = ("constant", "envmap", "sunsky")
+#: OpenGL's global ambient light, added to the lights' ambient terms (as the GL engine does).
+GLOBAL_AMBIENT = 0.2
+#: The GL engine's headlight for scenes without lights: direction towards the light in eye space.
+HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
+
+
+def ambient_emitter(lights: list[tuple[Any, np.ndarray]], global_ambient: float = GLOBAL_AMBIENT) -> dict | None:
+    """A ``constant`` environment for GL's ambient light: the global ambient plus every light's ambient term.
+
+    A constant environment of radiance L lights an unoccluded diffuse surface
+    to albedo * L; GL's ambient term is material ambient * total ambient, so
+    both agree where the material's ambient colour equals its diffuse one (and
+    for plain ``Color``s); Mitsuba adds the occlusion GL does not have.
+    """
+    total = np.full(3, float(global_ambient))
+    for light, _ in lights:
+        amb = getattr(light, "ambient", None)
+        if amb is not None:
+            total += np.asarray(amb, dtype=np.float64)
+    if not np.any(total > 0.0):
+        return None
+    return {"type": "constant", "radiance": rgb(total, linearize=False)}
+
+
+def headlight_emitter(camera: Camera, camera_world: np.ndarray) -> dict[str, Any]:
+    """The GL engine's headlight (white, from a little above-left of the eye) as a ``directional`` emitter."""
+    eye_to_world = np.asarray(camera_world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    towards = eye_to_world[:3, :3] @ HEADLIGHT
+    d = -towards / np.linalg.norm(towards)
+    return {
+        "type": "directional",
+        "direction": [float(x) for x in d],
+        "irradiance": rgb((math.pi,) * 3, linearize=False),
+    }
 
 
 def sensor_matrix(camera: Camera, camera_world: np.ndarray, aspect: float) -> np.ndarray:

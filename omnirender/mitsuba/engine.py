@@ -63,6 +63,10 @@ class MitsubaEngine(Engine):
         if w <= 0 or h <= 0:
             raise ValueError(f"MitsubaEngine: size must be positive, got {size!r}")
         self.size = (w, h)
+        #: GL's global ambient light added to the lights' ambient terms (0 turns it off)
+        self.global_ambient = convert.GLOBAL_AMBIENT
+        #: give scenes without lights the GL engine's headlight
+        self.headlight = True
         self.clear()
 
     # -- collected scene ----------------------------------------------------
@@ -80,9 +84,12 @@ class MitsubaEngine(Engine):
         self.background: tuple[float, ...] | None = None
         self._bsdfs: dict[tuple, Any] = {}
         self._emitter_ids: set[int] = set()
+        #: Color / Material / PBRMaterial in the order they became active (see :meth:`surface`)
+        self.surface_stack: list[Any] = []
         #: whether some shape got an area emitter (then emitters cannot be hidden)
         self.has_area_emitters = False
         self._count = 0
+        self._lights_converted = False
 
     def unique_name(self, kind: str) -> str:
         """A fresh key for the scene dict (``"003_sphere"``)."""
@@ -132,6 +139,20 @@ class MitsubaEngine(Engine):
         )
 
     # -- appearance ---------------------------------------------------------
+    def surface(self) -> tuple[Any, Any]:
+        """(material, colour) as the GL engine resolves them: the innermost Material or
+        PBRMaterial, and a Color only if it became active after that material (it then
+        replaces the material's diffuse/base colour and scales its opacity)."""
+        material = color = None
+        for attr in reversed(self.surface_stack):
+            if isinstance(attr, Color):
+                if color is None:
+                    color = attr
+            else:
+                material = attr
+                break
+        return material, color
+
     def current_bsdf(self, *, two_sided: bool = True, vertex_colors: bool = False, texcoords: bool = True) -> Any:
         """The Mitsuba BSDF object for the active appearance attributes (cached).
 
@@ -142,21 +163,19 @@ class MitsubaEngine(Engine):
         """
         user = self.mono(BSDF)
         tex = self.mono(Texture) if texcoords else None
-        pbr = self.mono(PBRMaterial)
-        mat = self.mono(Material)
-        col = self.mono(Color)
-        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, pbr, mat, col)) + (
+        material, color = self.surface()
+        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, material, color)) + (
             two_sided,
             vertex_colors,
         )
         found = self._bsdfs.get(key)
         if found is None:
             found = self._bsdfs[key] = mitsuba().load_dict(
-                self._bsdf_dict(user, tex, pbr, mat, col, two_sided, vertex_colors)
+                self._bsdf_dict(user, tex, material, color, two_sided, vertex_colors)
             )
         return found
 
-    def _bsdf_dict(self, user, tex, pbr, mat, col, two_sided, vertex_colors) -> dict[str, Any]:
+    def _bsdf_dict(self, user, tex, material, color, two_sided, vertex_colors) -> dict[str, Any]:
         if user is not None:
             return user.plugin_dict()
         reflectance = None
@@ -164,12 +183,16 @@ class MitsubaEngine(Engine):
             reflectance = self._texture_dict(tex)
         elif vertex_colors:
             reflectance = {"type": "mesh_attribute", "name": "vertex_color"}
-        if pbr is not None:
-            bsdf, opacity = convert.pbr_bsdf(pbr, reflectance), pbr.opacity
-        elif mat is not None:
-            bsdf, opacity = convert.material_bsdf(mat, reflectance), mat.opacity
+        elif color is not None and material is not None:
+            reflectance = convert.rgb(color.rgb)
+        if isinstance(material, PBRMaterial):
+            bsdf, opacity = convert.pbr_bsdf(material, reflectance), material.opacity
+        elif isinstance(material, Material):
+            bsdf, opacity = convert.material_bsdf(material, reflectance), material.opacity
         else:
-            bsdf, opacity = convert.color_bsdf(col, reflectance), (col.a if col is not None else 1.0)
+            bsdf, opacity = convert.color_bsdf(color, reflectance), 1.0
+        if color is not None:
+            opacity *= color.a
         return convert.wrap_bsdf(bsdf, float(opacity), two_sided)
 
     def _texture_dict(self, tex: Texture) -> dict[str, Any]:
@@ -192,7 +215,7 @@ class MitsubaEngine(Engine):
         if areas:
             self.has_area_emitters = True
             return mi.load_dict(areas[-1].plugin_dict())
-        material = self.mono(PBRMaterial) or self.mono(Material)
+        material, _ = self.surface()
         if material is not None and max(material.emission) > 0.0:
             self.has_area_emitters = True
             return mi.load_dict({"type": "area", "radiance": convert.rgb(material.emission)})
@@ -246,9 +269,26 @@ class MitsubaEngine(Engine):
         out.update(self.shapes)
         return out
 
+    def has_environment(self) -> bool:
+        """Whether an environment emitter (seen behind the shapes) is in the scene."""
+        return any(isinstance(p, dict) and p.get("type") in convert.ENVIRONMENTS for p in self.emitters.values())
+
     def convert_lights(self) -> None:
-        """Turn the queued generic lights into emitter plugins (matched at :meth:`reference_point`)."""
+        """Turn the queued generic lights into emitter plugins, as the GL engine lights the scene.
+
+        Point and spot lights are matched at :meth:`reference_point`; ambient terms
+        (plus the global ambient) become one constant environment; a scene without
+        any light or emitter gets the GL engine's headlight.
+        """
+        if self._lights_converted:
+            return
+        self._lights_converted = True
+        if not self.pending_lights and not self.emitters and self.headlight:
+            self.add_emitter(convert.headlight_emitter(*self.camera_or_default()), "headlight")
         reference = self.reference_point()
+        ambient = convert.ambient_emitter(self.pending_lights, self.global_ambient)
+        if ambient is not None and not self.has_environment():  # Mitsuba allows one environment
+            self.add_emitter(ambient, "ambient")
         for light, matrix in self.pending_lights:
             plugin = convert.light_emitter(light, matrix, reference)
             if plugin is not None:

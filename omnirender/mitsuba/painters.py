@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Background, DrawStyle, LightSource
+from ..attributes import Background, Color, DrawStyle, LightSource, Material, PBRMaterial
 from ..core import AttributePainter, ShapePainter, default_for
 from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from . import convert
@@ -36,6 +36,7 @@ __all__ = [
     "RectanglePainter",
     "TriangleSetPainter",
     "SkipPainter",
+    "SurfacePainter",
     "LightPainter",
     "EmitterPainter",
     "IntegratorPainter",
@@ -215,6 +216,29 @@ class SkipPainter(ShapePainter):
 
 for _cls in (LineSet, Polyline, PointSet):
     default_for(MitsubaEngine)(type(f"Skip{_cls.__name__}Painter", (SkipPainter,), {"__slots__": (), "target": _cls}))
+
+
+class SurfacePainter(AttributePainter):
+    """Keeps ``Color``/``Material``/``PBRMaterial`` in activation order (``engine.surface_stack``)."""
+
+    __slots__ = ()
+    service = SERVICE
+
+    def exec(self, attribute: Any, engine: MitsubaEngine) -> None:
+        engine.surface_stack.append(attribute)
+
+    def unexec(self, attribute: Any, engine: MitsubaEngine) -> None:
+        stack = engine.surface_stack
+        for i in range(len(stack) - 1, -1, -1):
+            if stack[i] is attribute:
+                del stack[i]
+                return
+
+
+for _cls in (Color, Material, PBRMaterial):
+    default_for(MitsubaEngine)(
+        type(f"{_cls.__name__}SurfacePainter", (SurfacePainter,), {"__slots__": (), "target": _cls})
+    )
 
 
 @default_for(MitsubaEngine)

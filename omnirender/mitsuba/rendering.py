@@ -18,9 +18,6 @@ from .engine import COVERAGE_INTEGRATOR, MitsubaEngine
 
 __all__ = ["render", "develop", "eye_depth"]
 
-#: Emitter plugins seen behind the shapes when not hidden.
-_ENVIRONMENTS = ("constant", "envmap", "sunsky")
-
 
 def render(
     scene: Any,
@@ -34,6 +31,8 @@ def render(
     progress: bool | None = None,
     on_missing: str = "raise",
     mask: str | None = None,
+    global_ambient: float = 0.2,
+    headlight: bool = True,
 ) -> Image:
     """Render ``scene`` (a Node or a list of components) with Mitsuba 3 (``scalar_rgb``).
 
@@ -43,7 +42,9 @@ def render(
     Mitsuba's ``depth`` integrator that also gives the coverage alpha); ``rfilter``
     the film's reconstruction filter (``"box"`` keeps edges where the GL
     engine has them); ``progress`` shows a tqdm bar (default: when stderr is
-    a terminal and the render is long).  The image has tone-mapped (clamped)
+    a terminal and the render is long); ``global_ambient`` (GL's 0.2, added to
+    the lights' ambient terms as a constant environment) and ``headlight`` (for
+    scenes without lights) light the scene like the GL engine.  The image has tone-mapped (clamped)
     sRGB with straight alpha in ``.array``, linear radiance RGBA in ``.hdr``.
     """
     spp = int(spp)
@@ -53,6 +54,8 @@ def render(
         scene = Node("scene", scene)
     t0 = time.perf_counter()
     engine = MitsubaEngine(size, on_missing=on_missing, mask=mask)
+    engine.global_ambient = float(global_ambient)
+    engine.headlight = bool(headlight)
     engine.run(scene)
     chosen = engine.integrator_dict(integrator)
     mi_scene = engine.load(integrator=chosen, rfilter=rfilter)
@@ -67,8 +70,7 @@ def render(
         dtype=np.float32,
     )
     alpha = np.clip(hits[:, :, 3], 0.0, 1.0)
-    environment = any(isinstance(p, dict) and p.get("type") in _ENVIRONMENTS for p in engine.emitters.values())
-    premultiplied = bool(chosen.get("hide_emitters", False)) or not environment
+    premultiplied = bool(chosen.get("hide_emitters", False)) or not engine.has_environment()
     hdr = np.concatenate([data[:, :, :3], alpha[..., None]], axis=2)
     camera, _ = engine.camera_or_default()
     image = develop(hdr, background=engine.background, premultiplied=premultiplied)

@@ -192,24 +192,51 @@ def test_area_emitter_attribute_and_emissive_material_light_the_scene():
     assert om.render(dark, engine="mitsuba", size=(W, H), spp=4).pixel(W // 2, H // 2)[:3] == (0, 0, 0)
 
 
+def _gl_value(diffuse: float, light: float, ambient: float) -> float:
+    """GL's result for a Material whose ambient colour equals its diffuse one, in 0..255 (via linear light)."""
+    from omnirender.mitsuba.convert import linear_to_srgb, srgb_to_linear
+
+    return float(linear_to_srgb(srgb_to_linear(diffuse) * (light + ambient))) * 255
+
+
 def test_point_light_matches_gl_attenuation_at_the_reference_point():
-    # GL: a white diffuse surface facing a light of intensity 1 with constant
-    # attenuation is fully lit.  At the camera's centre of interest Mitsuba must agree.
+    # GL: a surface facing a light of intensity 1 with constant attenuation
+    # gets diffuse * 1, plus GL's global ambient 0.2.  At the camera's centre of
+    # interest Mitsuba must agree.
     camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=20)
     wall = om.Node("wall", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(10, 10))])
-    scene = om.Node("scene", [camera, om.PointLight(position=(0, 0, 3)), om.Material(diffuse=(0.5, 0.5, 0.5)), wall])
-    img = om.render(scene, engine="mitsuba", size=(W, H), spp=4)
-    r, g, b, _ = img.pixel(W // 2, H // 2)
-    assert abs(r - 128) <= 3 and r == g == b
-    sun = om.Node("scene", [camera, om.DirectionalLight(direction=(0, 0, -1)), om.Material(diffuse=(0.5,) * 3), wall])
-    assert abs(om.render(sun, engine="mitsuba", size=(W, H), spp=4).pixel(W // 2, H // 2)[0] - 128) <= 3
+    grey = om.Material(diffuse=(0.5, 0.5, 0.5), ambient=(0.5, 0.5, 0.5))
+    scene = om.Node("scene", [camera, om.PointLight(position=(0, 0, 3)), grey, wall])
+    r, g, b, _ = om.render(scene, engine="mitsuba", size=(W, H), spp=4).pixel(W // 2, H // 2)
+    assert abs(r - _gl_value(0.5, 1.0, 0.2)) <= 3 and r == g == b
+    sun = om.Node("scene", [camera, om.DirectionalLight(direction=(0, 0, -1)), grey, wall])
+    img = om.render(sun, engine="mitsuba", size=(W, H), spp=4, global_ambient=0.0)
+    assert abs(img.pixel(W // 2, H // 2)[0] - _gl_value(0.5, 1.0, 0.0)) <= 3
+
+
+def test_scene_without_lights_gets_the_gl_headlight_and_ambient_lights_add_up():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=20)
+    wall = om.Node("wall", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(10, 10))])
+    grey = om.Material(diffuse=(0.5, 0.5, 0.5))
+    e = om.mitsuba.MitsubaEngine((W, H))
+    e.run(om.Node("s", [camera, grey, wall]))
+    d = e.scene_dict()
+    kinds = sorted(v["type"] for k, v in d.items() if k.endswith(("_headlight", "_ambient")))
+    assert kinds == ["constant", "directional"]
+    sun = next(v for k, v in d.items() if k.endswith("_headlight"))
+    np.testing.assert_allclose(sun["direction"], -np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0]))
+    e.run(om.Node("s", [camera, om.AmbientLight(intensity=0.3), om.AmbientLight(color=(1, 0, 0), intensity=0.1), wall]))
+    d = e.scene_dict()
+    assert not any(k.endswith("_headlight") for k in d)
+    env = [v for v in d.values() if isinstance(v, dict) and v.get("type") == "constant"]
+    assert len(env) == 1 and env[0]["radiance"]["value"] == pytest.approx([0.6, 0.5, 0.5])
 
 
 def test_spot_light_lights_only_its_cone():
     camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=60)
     wall = om.Node("wall", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(10, 10))])
     spot = om.SpotLight(position=(0, 0, 3), direction=(0, 0, -1), cutoff=15)
-    img = om.render(om.Node("s", [camera, spot, wall]), engine="mitsuba", size=(W, H), spp=4)
+    img = om.render(om.Node("s", [camera, spot, wall]), engine="mitsuba", size=(W, H), spp=4, global_ambient=0)
     assert img.pixel(W // 2, H // 2)[0] > 150
     assert img.pixel(2, 2)[0] == 0
 
@@ -229,3 +256,19 @@ def test_available_and_other_engines_ignore_mitsuba_attributes():
     scene = om.Node("s", [om.mitsuba.BSDF({"type": "conductor"}), om.Sphere()])
     trace = om.trace(scene)
     assert any(op == "push" for op, _ in trace)
+
+
+def test_color_after_a_material_replaces_its_diffuse_colour_like_gl():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=30)
+    after = _flat(camera, om.Material(diffuse=(1, 0, 0)), om.Color(0, 0, 1), om.Sphere(radius=1))
+    r, g, b, _ = om.render(after, engine="mitsuba", size=(W, H), spp=8).pixel(W // 2, H // 2)
+    assert b > 150 and r < 10
+    before = _flat(camera, om.Color(0, 0, 1), om.Material(diffuse=(1, 0, 0)), om.Sphere(radius=1))
+    r, g, b, _ = om.render(before, engine="mitsuba", size=(W, H), spp=8).pixel(W // 2, H // 2)
+    assert r > 150 and b < 10
+    half = _flat(camera, om.Material(diffuse=(1, 1, 1), opacity=0.5), om.Color(1, 1, 1, 0.5), om.Sphere(radius=1))
+    e = om.mitsuba.MitsubaEngine((W, H))
+    e.run(half)
+    bsdf = next(iter(e._bsdfs.values()))
+    assert "Mask" in type(bsdf).__name__ or "mask" in str(bsdf).lower()
+    assert "0.25" in str(bsdf)
