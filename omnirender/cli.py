@@ -121,7 +121,7 @@ def _view(args: argparse.Namespace) -> int:
     scene = _load(args.scene)
     from .viewer import view
 
-    view(scene, size=args.size, title=f"omnirender - {args.scene}")
+    view(scene, size=args.size, title=f"omnirender - {Path(args.scene).name}", duration=args.duration)
     return 0
 
 
@@ -264,6 +264,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("view", help="open a scene file in an interactive window")
     p.add_argument("scene", help="scene file (.json, .yaml)")
     p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
+    p.add_argument("--duration", type=float, help="close the window after this many seconds (demos, tests)")
     p.set_defaults(func=_view)
 
     p = sub.add_parser("export", help="write a scene file in another format (.glb, .pov, .rib)")

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -59,12 +60,47 @@ void main() { color = texture(image, uv); }
 """
 
 
+class _GLFWLoader:
+    """moderngl loader for the window's context: GL functions from glfw, entering makes the window current."""
+
+    def __init__(self, glfw: Any, handle: Any) -> None:
+        self._glfw = glfw
+        self._handle = handle
+        self.load_opengl_function = lambda name: glfw.get_proc_address(name) or 0
+
+    def __enter__(self) -> None:
+        if self._handle is not None:
+            self._glfw.make_context_current(self._handle)
+
+    def __exit__(self, *args: Any) -> None:
+        pass
+
+    def release(self) -> None:
+        self._handle = None
+
+
+def _attach_context(glfw: Any, handle: Any) -> Any:
+    """A moderngl context wrapping the window's (like ``moderngl.init_context``, without making it global)."""
+    import moderngl
+
+    ctx = moderngl.Context.__new__(moderngl.Context)
+    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(context=_GLFWLoader(glfw, handle))
+    ctx._info = None
+    ctx._extensions = None
+    ctx.extra = None
+    ctx._gc_mode = None
+    ctx._objects = deque()
+    ctx._screen = ctx.detect_framebuffer(0)
+    ctx.fbo = ctx.detect_framebuffer()
+    ctx.mglo.fbo = ctx.fbo.mglo
+    return ctx
+
+
 class Window:
     """A glfw window bound to ``viewer``; ``run()`` loops until closed, ``step()`` runs one iteration."""
 
     def __init__(self, viewer: Any, title: str = "omnirender", visible: bool = True) -> None:
         import glfw
-        import moderngl
 
         self._glfw = glfw
         if not glfw.init():
@@ -77,13 +113,16 @@ class Window:
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
         glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
         glfw.window_hint(glfw.VISIBLE, bool(visible))
+        # EGL, like the headless contexts: mixing GLX and EGL contexts in one process makes
+        # glXMakeCurrent fail with BadAccess once an EGL context existed.
+        glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API)
         w, h = viewer.size
         self.handle = glfw.create_window(w, h, title, None, None)
         if not self.handle:
             raise RuntimeError("omnirender window: glfw could not create an OpenGL 3.3 window on this display")
         glfw.make_context_current(self.handle)
         glfw.swap_interval(0)
-        self.ctx = moderngl.create_context()
+        self.ctx = _attach_context(glfw, self.handle)
         self.viewer = viewer
         self.base_title = title
         self.title = title
@@ -204,6 +243,9 @@ class Window:
             self._texture.use(0)
             self._vao.render(self.ctx.TRIANGLES, vertices=3)
         data = self.ctx.screen.read(viewport=(0, 0, w, h), components=4)
+        # moderngl selects GL_COLOR_ATTACHMENT0 as read buffer, which the default framebuffer
+        # rejects (GL_INVALID_OPERATION) while keeping GL_BACK, the buffer just drawn: clear the flag.
+        _ = self.ctx.error
         array = np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1].copy()
         return Image(array, engine="window", info={"frames": self.frames})
 

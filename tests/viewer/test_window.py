@@ -1,0 +1,211 @@
+"""The interactive window for real under Xvfb: open, drive with input events, screenshot, check pixels."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+from viewer_helpers import start_xvfb
+
+import omnirender as om
+
+pytestmark = [pytest.mark.window, pytest.mark.gl]
+
+SIZE = (240, 180)
+
+
+@pytest.fixture(scope="module")
+def display():
+    proc, name = start_xvfb()
+    previous = os.environ.get("DISPLAY")
+    os.environ["DISPLAY"] = name
+    yield name
+    if previous is None:
+        os.environ.pop("DISPLAY", None)
+    else:
+        os.environ["DISPLAY"] = previous
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+def two_shapes() -> om.Node:
+    scene = om.Node("scene")
+    scene.add(om.Camera.look_at(eye=(0, 0, 9), center=(0, 0, 0), fov=35, near=1, far=50))
+    left = scene.add(om.Node("left"))
+    left.add(om.Translation(-1.3, 0, 0))
+    left.add(om.Material(diffuse=(0.9, 0.15, 0.15)))
+    left.add(om.Sphere(radius=0.8))
+    right = scene.add(om.Node("right"))
+    right.add(om.Translation(1.3, 0, 0))
+    right.add(om.Material(diffuse=(0.15, 0.2, 0.9)))
+    right.add(om.Box(size=(1.2, 1.2, 1.2)))
+    return scene
+
+
+@pytest.fixture
+def window(display):
+    from omnirender.viewer.window import open_scene
+
+    viewer = om.Viewer(size=SIZE, window=True, title="test")
+    open_scene(viewer, two_shapes())
+    viewer.window.step()
+    yield viewer.window
+    viewer.close()
+
+
+def red_mask(img):
+    a = img.array.astype(int)
+    return (a[:, :, 0] > a[:, :, 1] + 60) & (a[:, :, 0] > a[:, :, 2] + 60)
+
+
+def blue_mask(img):
+    a = img.array.astype(int)
+    return (a[:, :, 2] > a[:, :, 0] + 60) & (a[:, :, 2] > a[:, :, 1] + 60)
+
+
+def centroid_x(mask):
+    return float(np.nonzero(mask)[1].mean())
+
+
+def test_window_shows_the_scene(window):
+    shot = window.screenshot()
+    assert shot.size == SIZE and window.frames == 1
+    red, blue = red_mask(shot), blue_mask(shot)
+    assert red.sum() > 200 and blue.sum() > 200
+    assert centroid_x(red) < SIZE[0] / 2 < centroid_x(blue)  # red sphere left, blue box right
+    assert np.array_equal(shot.array, window.last_frame.array)  # the screen shows the rendered frame
+
+
+def test_drag_orbits_and_wheel_zooms(window):
+    import glfw
+
+    before = window.screenshot()
+    cam = window.viewer.camera
+    distance = cam.distance
+    window.on_cursor_pos(window.handle, 100, 90)
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
+    for x in range(110, 330, 20):  # drag right: 225 pixels = 90 degrees of yaw
+        window.on_cursor_pos(window.handle, x, 90)
+        assert window.step()  # the real glfw loop iteration redraws
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
+    assert window.picked is None  # a drag is not a click
+    assert np.isclose(cam.distance, distance)  # orbit keeps the centre distance
+    after = window.screenshot()
+    assert not np.array_equal(before.array, after.array)
+    # after a quarter turn the shapes are one behind the other, no longer side by side
+    assert (
+        abs(centroid_x(red_mask(after)) - centroid_x(blue_mask(after)))
+        < 0.5 * abs(centroid_x(red_mask(before)) - centroid_x(blue_mask(before)))
+        or min(red_mask(after).sum(), blue_mask(after).sum()) < 50
+    )
+    window.on_key(window.handle, glfw.KEY_R, 0, glfw.PRESS, 0)  # reset
+    window.step()
+    assert np.abs(window.screenshot().array.astype(int) - before.array.astype(int)).max() <= 2
+    covered = (red_mask(before) | blue_mask(before)).sum()
+    window.on_scroll(window.handle, 0, 3)
+    window.step()
+    zoomed = window.screenshot()
+    assert (red_mask(zoomed) | blue_mask(zoomed)).sum() > 1.5 * covered
+
+
+def test_click_picks_highlights_and_titles(window):
+    import glfw
+
+    before = window.screenshot()
+    red = red_mask(before)
+    ys, xs = np.nonzero(red)
+    x, y = int(xs.mean()), int(ys.mean())
+    window.on_cursor_pos(window.handle, x, y)
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
+    window.step()
+    assert window.picked is not None and window.picked.path == "/scene/left"
+    assert window.title == "test - /scene/left"
+    after = window.screenshot()
+    r, g, b, _ = after.pixel(x, y)
+    assert g > before.pixel(x, y)[1] + 60 and r > 150  # yellow overlay on the red sphere
+    assert blue_mask(after).sum() == blue_mask(before).sum()
+    # clicking the background clears the selection
+    window.on_cursor_pos(window.handle, 5, 5)
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
+    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
+    window.step()
+    assert window.picked is None and window.title == "test"
+
+
+def test_keys_axial_views_wireframe_screenshot_and_quit(window, tmp_path):
+    import glfw
+
+    before = window.screenshot()
+    filled = (red_mask(before) | blue_mask(before)).sum()
+    window.on_key(window.handle, glfw.KEY_W, 0, glfw.PRESS, 0)
+    window.step()
+    wire = window.screenshot()
+    assert 0 < (red_mask(wire) | blue_mask(wire)).sum() < 0.8 * filled
+    window.on_key(window.handle, glfw.KEY_W, 0, glfw.PRESS, 0)
+    window.on_key(window.handle, glfw.KEY_3, 0, glfw.PRESS, 0)  # top view: x right, -z up
+    window.step()
+    assert np.allclose(window.viewer.get_view_matrix()[:3, :3] @ (0, 0, -1), (0, 1, 0))
+    top = window.screenshot()
+    assert centroid_x(red_mask(top)) < centroid_x(blue_mask(top))
+    window.on_key(window.handle, glfw.KEY_1, 0, glfw.PRESS, glfw.MOD_SHIFT)  # back view: mirrored
+    window.step()
+    back = window.screenshot()
+    assert centroid_x(red_mask(back)) > centroid_x(blue_mask(back))
+    window.screenshot_dir = tmp_path
+    window.on_key(window.handle, glfw.KEY_S, 0, glfw.PRESS, 0)
+    assert window.screenshots == [tmp_path / "omnirender-screenshot-1.png"]
+    from PIL import Image
+
+    saved = np.asarray(Image.open(window.screenshots[0]))
+    assert saved.shape == (SIZE[1], SIZE[0], 4) and np.array_equal(saved, back.array)
+    window.on_key(window.handle, glfw.KEY_Q, 0, glfw.PRESS, 0)
+    assert window.should_close
+
+
+def test_frame_rate_is_independent_of_a_slow_application_update(window):
+    body = window.scene["/scene/left"]
+    move = body.items[0]
+    calls = []
+
+    def update(t):
+        time.sleep(0.3)  # a slow simulation step, computed without any lock
+        calls.append(t)
+        x = -1.3 + 0.5 * len(calls)
+        return lambda: setattr(move, "offset", (x, 0, 0))
+
+    start = centroid_x(red_mask(window.screenshot()))
+    window.start_updates(update)
+    slowest = 0.0
+    frames = window.frames
+    deadline = time.monotonic() + 1.0
+    while time.monotonic() < deadline:
+        window.viewer.camera.orbit(0.0, 0.0)
+        window.request_repaint()
+        t0 = time.monotonic()
+        window.step()
+        slowest = max(slowest, time.monotonic() - t0)
+    drawn = window.frames - frames
+    assert 1 <= len(calls) <= 4
+    assert drawn >= 10, drawn  # many frames while the update ran 3 slow steps
+    assert slowest < 0.25
+    window.close()
+    window.viewer.window = None
+    moved = centroid_x(red_mask(window.last_frame))
+    assert moved > start + 5  # the updates were applied and shown
+
+
+def test_om_view_runs_and_closes(display):
+    viewer = om.view(two_shapes(), size=SIZE, duration=0.3)
+    assert viewer.window is None  # closed on return
+    assert viewer.image().size == SIZE
+
+
+def test_cli_view_opens_a_window(display, tmp_path, capsys):
+    from omnirender.cli import main
+
+    path = tmp_path / "scene.json"
+    om.save(two_shapes(), path)
+    assert main(["view", str(path), "--size", "200x150", "--duration", "0.3"]) == 0
