@@ -91,8 +91,48 @@ def povray_half(vertices, normals, faces, repeat: int, render: bool) -> dict[str
 # mesh and, when ``render`` is True, the Mitsuba render of
 # test_engines_agree.make_scene() at 640x480.  Return {name: seconds}.
 # ---------------------------------------------------------------------------
+MITSUBA_SPP = 64
+
+
 def mitsuba_half(vertices, normals, faces, repeat: int, render: bool) -> dict[str, float]:
-    return {}
+    """Mitsuba mesh building (raw arrays, and through the engine) and the test scene's render time.
+
+    ``mitsuba_build_mesh_s``: ``omnirender.mitsuba.mesh.build_mesh`` (an ``mi.Mesh`` filled via
+    ``mi.traverse``, no files); ``mitsuba_engine_mesh_s``: the whole pipeline from a scene with the
+    TriangleSet to the loaded ``mi.Scene`` (traversal, BSDF, mesh, sensor).  The render is the
+    agreement test scene at 640x480, ``MITSUBA_SPP`` samples per pixel, ``scalar_rgb``, once.
+    """
+    ok, why = om.mitsuba.available()
+    if not ok:
+        print(f"mitsuba half skipped: {why}")
+        return {}
+    from omnirender.mitsuba.mesh import build_mesh
+
+    out: dict[str, float] = {}
+    built = []
+    out["mitsuba_build_mesh_s"] = best_of(
+        lambda: built.append(build_mesh("bench", vertices, faces, normals=normals)), repeat
+    )
+    assert built[-1].face_count() == len(faces) and built[-1].vertex_count() == len(vertices)
+    built.clear()
+    scene = om.Node("bench")
+    scene.add(om.Camera.look_at(eye=(0, 3, 4)))
+    scene.add(om.TriangleSet(vertices=vertices, indices=faces, normals=normals))
+
+    def through_engine() -> None:
+        engine = om.mitsuba.MitsubaEngine((640, 480))
+        engine.run(scene)
+        engine.load()
+
+    out["mitsuba_engine_mesh_s"] = best_of(through_engine, repeat)
+    if render:
+        sys.path.insert(0, str(ROOT / "tests"))
+        from test_engines_agree import make_scene
+
+        img = om.render(make_scene(), engine="mitsuba", size=(640, 480), spp=MITSUBA_SPP, progress=False)
+        out[f"mitsuba_render_640x480_spp{MITSUBA_SPP}_s"] = img.info["render_seconds"]
+        out["mitsuba_coverage_pass_s"] = img.info["coverage_seconds"]
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
