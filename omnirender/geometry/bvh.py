@@ -235,7 +235,8 @@ class BVH:
             nodes = np.zeros(len(qs), dtype=np.int64)
             for level in range(self.depth + 1):
                 nlo, nhi = self.lo[level][nodes], self.hi[level][nodes]
-                hit = np.all((nlo <= qhi[qs]) & (qlo[qs] <= nhi), axis=1)
+                ok = (nlo <= qhi[qs]) & (qlo[qs] <= nhi)
+                hit = ok[:, 0] & ok[:, 1] & ok[:, 2]
                 qs, nodes = qs[hit], nodes[hit]
                 if level < self.depth:
                     qs = np.repeat(qs, b)
@@ -244,7 +245,8 @@ class BVH:
             tris = (nodes[:, None] * ls + np.arange(ls)).ravel()
             ok = tris < self.count
             qs, tris = qs[ok], tris[ok]
-            hit = np.all((self.tri_lo[tris] <= qhi[qs]) & (qlo[qs] <= self.tri_hi[tris]), axis=1)
+            ok = (self.tri_lo[tris] <= qhi[qs]) & (qlo[qs] <= self.tri_hi[tris])
+            hit = ok[:, 0] & ok[:, 1] & ok[:, 2]
             out_q.append(qs[hit])
             out_t.append(self.order[tris[hit]])
         return np.concatenate(out_q), np.concatenate(out_t)

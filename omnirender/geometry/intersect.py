@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "cross",
     "safe_inverse",
     "ray_aabb",
     "ray_triangles",
@@ -33,6 +34,15 @@ __all__ = [
 ]
 
 _TINY = 1e-300
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (length 3), broadcasting; cheaper than ``np.cross`` for small arrays."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def safe_inverse(direction: np.ndarray) -> np.ndarray:
@@ -65,13 +75,13 @@ def ray_triangles(
     ``v0`` is the first vertex, ``e1 = v1 - v0``, ``e2 = v2 - v0``.
     Returns ``(hit, t, u, v)``; ``t`` is meaningful only where ``hit``.
     """
-    p = np.cross(direction, e2)
+    p = cross(direction, e2)
     det = np.einsum("...i,...i->...", e1, p)
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_det = 1.0 / det
         s = origin - v0
         u = np.einsum("...i,...i->...", s, p) * inv_det
-        q = np.cross(s, e1)
+        q = cross(s, e1)
         v = np.einsum("...i,...i->...", direction, q) * inv_det
         t = np.einsum("...i,...i->...", e2, q) * inv_det
     scale = np.einsum("...i,...i->...", e1, e1) * np.einsum("...i,...i->...", e2, e2)
@@ -220,13 +230,15 @@ def ray_rectangle(o: np.ndarray, d: np.ndarray, size=(1.0, 1.0), tmin: float = 0
 
 
 def triangle_bounds(tris: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per-triangle AABBs of (K, 3, 3) triangles."""
-    return tris.min(axis=1), tris.max(axis=1)
+    """Per-triangle AABBs of (K, 3, 3) triangles (elementwise: much faster than a reduce over 3)."""
+    a, b, c = tris[:, 0], tris[:, 1], tris[:, 2]
+    return np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
 
 
 def boxes_overlap(lo_a: np.ndarray, hi_a: np.ndarray, lo_b: np.ndarray, hi_b: np.ndarray, eps: float = 0.0):
     """Whether AABBs overlap (touching counts), broadcast over leading axes."""
-    return np.all((lo_a <= hi_b + eps) & (lo_b <= hi_a + eps), axis=-1)
+    ok = (lo_a <= hi_b + eps) & (lo_b <= hi_a + eps)
+    return ok[..., 0] & ok[..., 1] & ok[..., 2]
 
 
 def triangles_intersect(a: np.ndarray, b: np.ndarray, eps: float | None = None) -> np.ndarray:
@@ -247,10 +259,10 @@ def triangles_intersect(a: np.ndarray, b: np.ndarray, eps: float | None = None) 
     eb = np.roll(b, -1, axis=1) - b
     na = np.cross(ea[:, 0], ea[:, 1])
     nb = np.cross(eb[:, 0], eb[:, 1])
-    cross = np.cross(ea[:, :, None, :], eb[:, None, :, :]).reshape(len(a), 9, 3)
+    edge_cross = np.cross(ea[:, :, None, :], eb[:, None, :, :]).reshape(len(a), 9, 3)
     in_a = np.cross(na[:, None, :], ea)
     in_b = np.cross(nb[:, None, :], eb)
-    axes = np.concatenate([na[:, None], nb[:, None], cross, in_a, in_b], axis=1)  # (K, 17, 3)
+    axes = np.concatenate([na[:, None], nb[:, None], edge_cross, in_a, in_b], axis=1)  # (K, 17, 3)
     length = np.linalg.norm(axes, axis=2, keepdims=True)
     extent = np.maximum(np.ptp(np.concatenate([a, b], axis=1), axis=1).max(axis=1), 1e-300)
     # axes shorter than this are degenerate (parallel edges): they separate nothing

@@ -114,12 +114,15 @@ def bodies_collide(a: np.ndarray, b: np.ndarray, chunk: int = 65536) -> bool:
     if len(keep_a) > len(keep_b):
         a, b, keep_a, keep_b, lo_a, hi_a = b, a, keep_b, keep_a, lo_b, hi_b
     tree = BVH(b[keep_b].reshape(-1, 3), np.arange(3 * len(keep_b)).reshape(-1, 3))
-    qa, qb = tree.query_boxes(lo_a[keep_a] - eps, hi_a[keep_a] + eps)
-    for start in range(0, len(qa), chunk):
-        ta = a[keep_a[qa[start : start + chunk]]]
-        tb = b[keep_b[qb[start : start + chunk]]]
-        if np.any(gi.triangles_intersect(ta, tb, eps)):
-            return True
+    # query in chunks so that the first intersecting pair ends the search
+    for start in range(0, len(keep_a), 8192):
+        part = keep_a[start : start + 8192]
+        qa, qb = tree.query_boxes(lo_a[part] - eps, hi_a[part] + eps)
+        for s in range(0, len(qa), chunk):
+            ta = a[part[qa[s : s + chunk]]]
+            tb = b[keep_b[qb[s : s + chunk]]]
+            if np.any(gi.triangles_intersect(ta, tb, eps)):
+                return True
     return False
 
 
@@ -132,7 +135,7 @@ def collisions(scene: Any, mask: str | None = None) -> list[tuple[str, str]]:
         engine.evaluate(scene)
     paths = sorted(engine.bodies)
     soups = {p: np.concatenate(engine.bodies[p]) for p in paths}
-    boxes = {p: (s.min(axis=(0, 1)), s.max(axis=(0, 1))) for p, s in soups.items()}
+    boxes = {p: (s.reshape(-1, 3).min(axis=0), s.reshape(-1, 3).max(axis=0)) for p, s in soups.items()}
     out = []
     for i, pa in enumerate(paths):
         for pb in paths[i + 1 :]:
