@@ -7,26 +7,25 @@ from p0 to p1, open), so the painters add the rotation and, for the cylinder,
 the two cap disks.  Sphere and cylinder refuse non-uniform scaling in Mitsuba:
 under such a matrix they fall back to their simplifier (a mesh).  Triangle
 sets become in-memory meshes.  Cones, tori and all other shapes reach Mitsuba
-through their simplifiers.  Lines and points have no surface and are skipped
-with one warning per class.
+through their simplifiers.  Lines and points become thin tubes and small
+spheres sized in pixels like the GL engine draws them (see :mod:`.strokes`).
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any
 
 import numpy as np
 
 from ..attributes import Background, Color, DrawStyle, LightSource, Material, PBRMaterial
 from ..core import AttributePainter, ShapePainter, default_for
-from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
-from . import convert
+from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, TriangleSet
+from . import convert, strokes
 from ._mi import transform
 from .attributes import Emitter, Integrator
 from .engine import MitsubaEngine
-from .mesh import build_mesh
+from .mesh import build_mesh, transform_points
 
 __all__ = [
     "SpherePainter",
@@ -35,7 +34,8 @@ __all__ = [
     "DiskPainter",
     "RectanglePainter",
     "TriangleSetPainter",
-    "SkipPainter",
+    "LineSetPainter",
+    "PointSetPainter",
     "SurfacePainter",
     "LightPainter",
     "EmitterPainter",
@@ -178,6 +178,9 @@ class TriangleSetPainter(ShapePainter):
         if len(faces) == 0:
             return
         style = engine.mono(DrawStyle)
+        if style is not None and style.mode in ("wireframe", "points"):
+            _edges_or_points(shape, engine, style)
+            return
         flat = style is not None and getattr(style, "shading", "smooth") == "flat"
         colors = shape.color_array()
         texcoords = shape.texcoord_array()
@@ -198,24 +201,86 @@ class TriangleSetPainter(ShapePainter):
         engine.shapes[name] = mesh
 
 
-class SkipPainter(ShapePainter):
-    """Skips shapes without a surface (lines, points) with one warning per class and engine."""
+#: Above this many points a PointSet becomes one mesh of octahedra instead of Mitsuba spheres.
+MAX_SPHERES = 2000
+
+
+def _world_pixel(engine: MitsubaEngine, world_points: np.ndarray) -> float:
+    camera, _ = engine.camera_or_default()
+    view = engine.view_matrix()
+    if view is None:
+        view = camera.view_matrix()
+    return strokes.pixel_size(camera, view, engine.size[1], world_points.mean(axis=0))
+
+
+def _edges_or_points(shape: TriangleSet, engine: MitsubaEngine, style: DrawStyle) -> None:
+    """A triangle set drawn as ``DrawStyle(mode="wireframe")`` tubes or ``mode="points"`` spheres."""
+    points = transform_points(engine.model_matrix(), np.asarray(shape.vertex_array(), np.float64)).astype(np.float64)
+    unit = _world_pixel(engine, points)
+    bsdf = engine.current_bsdf(texcoords=False)
+    if style.mode == "points":
+        vertices, faces = strokes.octahedra(points, np.full(len(points), 0.5 * style.point_size * unit))
+    else:
+        tri = shape.index_array()
+        edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        vertices, faces = strokes.tubes(points[edges[:, 0]], points[edges[:, 1]], 0.5 * style.line_width * unit)
+    if len(faces):
+        name = engine.unique_name(style.mode)
+        engine.shapes[name] = build_mesh(name, vertices, faces, bsdf=bsdf)
+
+
+@default_for(MitsubaEngine)
+class LineSetPainter(ShapePainter):
+    """``LineSet`` -> one mesh of thin tubes ``DrawStyle.line_width`` pixels wide (1 by default)."""
 
     __slots__ = ()
     service = SERVICE
+    target = LineSet
 
-    def exec(self, shape: Any, engine: MitsubaEngine) -> None:
-        cls = type(shape)
-        if cls not in engine._warned:
-            engine._warned.add(cls)
-            warnings.warn(
-                f"MitsubaEngine: {cls.__name__} (node {engine.node_path or '/'}) has no surface to render; skipped",
-                stacklevel=2,
+    def exec(self, shape: LineSet, engine: MitsubaEngine) -> None:
+        segments = np.asarray(shape.index_array()).reshape(-1, 2)
+        if len(segments) == 0:
+            return
+        m = engine.model_matrix()
+        points = transform_points(m, np.asarray(shape.vertex_array(), np.float64)).astype(np.float64)
+        style = engine.mono(DrawStyle)
+        width = style.line_width if style is not None else 1.0
+        radius = 0.5 * width * _world_pixel(engine, points)
+        vertices, faces = strokes.tubes(points[segments[:, 0]], points[segments[:, 1]], radius)
+        if len(faces) == 0:
+            return
+        name = engine.unique_name("lines")
+        engine.shapes[name] = build_mesh(name, vertices, faces, bsdf=engine.current_bsdf(texcoords=False))
+
+
+@default_for(MitsubaEngine)
+class PointSetPainter(ShapePainter):
+    """``PointSet`` -> spheres of ``sizes`` or ``DrawStyle.point_size`` pixels (1 by default)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = PointSet
+
+    def exec(self, shape: PointSet, engine: MitsubaEngine) -> None:
+        vertices = np.asarray(shape.vertex_array(), np.float64)
+        if len(vertices) == 0:
+            return
+        points = transform_points(engine.model_matrix(), vertices).astype(np.float64)
+        style = engine.mono(DrawStyle)
+        size = style.point_size if style is not None else 1.0
+        sizes = shape.size_array()
+        pixels = np.asarray(sizes, np.float64).reshape(-1) if sizes is not None else np.full(len(points), size)
+        radii = 0.5 * pixels * _world_pixel(engine, points)
+        bsdf = engine.current_bsdf(texcoords=False)
+        if len(points) > MAX_SPHERES:
+            vertices, faces = strokes.octahedra(points, radii)
+            name = engine.unique_name("points")
+            engine.shapes[name] = build_mesh(name, vertices, faces, bsdf=bsdf)
+            return
+        for p, r in zip(points, radii, strict=True):
+            engine.add_shape(
+                {"type": "sphere", "center": [float(c) for c in p], "radius": float(r), "bsdf": bsdf}, "point"
             )
-
-
-for _cls in (LineSet, Polyline, PointSet):
-    default_for(MitsubaEngine)(type(f"Skip{_cls.__name__}Painter", (SkipPainter,), {"__slots__": (), "target": _cls}))
 
 
 class SurfacePainter(AttributePainter):

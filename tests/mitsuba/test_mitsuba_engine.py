@@ -272,3 +272,22 @@ def test_color_after_a_material_replaces_its_diffuse_colour_like_gl():
     bsdf = next(iter(e._bsdfs.values()))
     assert "Mask" in type(bsdf).__name__ or "mask" in str(bsdf).lower()
     assert "0.25" in str(bsdf)
+
+
+def test_lines_and_points_are_drawn_pixels_wide_like_gl():
+    camera = om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=40)
+    line = om.LineSet(vertices=[(-1, 0, 0), (1, 0, 0)])
+    img = om.render(_flat(camera, om.DrawStyle(line_width=4), line), engine="mitsuba", size=(W, H), spp=16)
+    column = img.mask[:, W // 2]
+    assert 3 <= column.sum() <= 5
+    x0, _ = _project(camera, (-1, 0, 0))
+    x1, _ = _project(camera, (1, 0, 0))
+    row = img.mask[H // 2 - 1] | img.mask[H // 2]
+    assert abs(row.sum() - (x1 - x0)) <= 2
+    points = om.PointSet(vertices=[(-1, 0.5, 0), (1, -0.5, 0)], sizes=[6, 6])
+    img = om.render(_flat(camera, points), engine="mitsuba", size=(W, H), spp=16)
+    assert abs(img.mask.sum() - 2 * np.pi * 9) <= 12
+    wire = om.DrawStyle(mode="wireframe", line_width=2)
+    quad = om.TriangleSet(vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], indices=[(0, 1, 2), (0, 2, 3)])
+    img = om.render(_flat(camera, wire, quad), engine="mitsuba", size=(W, H), spp=16)
+    assert not img.mask[H // 2 - 3, W // 2 - 8] and img.mask.sum() > 50  # hollow: edges only
