@@ -16,7 +16,7 @@ import numpy as np
 
 from .shaders import ROW
 
-__all__ = ["DrawItem", "DrawState", "Batch", "plan_batches"]
+__all__ = ["DrawItem", "DrawState", "Batch", "plan_batches", "uniform_material"]
 
 
 class DrawState:
@@ -79,7 +79,19 @@ class DrawItem:
 class Batch:
     """Items sharing geometry and state, drawn with one instanced call."""
 
-    __slots__ = ("geometry", "state", "items", "rows", "buffer", "vao", "program", "capacity", "dirty")
+    __slots__ = (
+        "geometry",
+        "state",
+        "items",
+        "rows",
+        "buffer",
+        "vao",
+        "program",
+        "capacity",
+        "dirty",
+        "uniform",
+        "stride",
+    )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
         self.geometry = geometry
@@ -91,6 +103,10 @@ class Batch:
         self.program: Any = None
         self.capacity = 0
         self.dirty: tuple[int, int] | None = None
+        #: True when every instance has the same material apart from its colour (uniforms instead of attributes).
+        self.uniform = False
+        #: floats per instance in the GPU buffer (20 = matrix + colour when the material is uniform).
+        self.stride = 0
 
     def mark(self, index: int) -> None:
         d = self.dirty
@@ -104,6 +120,12 @@ class Batch:
             self.buffer.release()
             self.buffer = None
         self.capacity = 0
+
+
+def uniform_material(rows: np.ndarray) -> bool:
+    """Whether all rows share the material columns (specular, emission, ambient, highlight, extra)."""
+    tail = rows[:, 20:40]
+    return bool(len(rows) == 1 or (tail == tail[0]).all())
 
 
 def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], list[tuple | None], list[DrawItem]]:

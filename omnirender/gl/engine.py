@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMaterial, Texture
 from ..core.camera import Camera
 from ..core.component import MonoAttribute, PolyAttribute, Shape
 from ..core.engine import Engine
@@ -31,7 +32,7 @@ from ..core.transform import Transform
 from ..image import Image
 from . import attributes as glattr
 from .context import GLError, RawGL, check_size, create_context
-from .drawlist import Batch, DrawItem, DrawState, plan_batches
+from .drawlist import Batch, DrawItem, DrawState, plan_batches, uniform_material
 from .geometry import Geometry, GeometryCache, unit_box, unit_cylinder, unit_sphere
 from .lighting import LightUniforms
 from .resources import gpu_call
@@ -153,6 +154,7 @@ class GLEngine(Engine):
         self._state_base: tuple = ()
         self._states: dict[tuple, DrawState] = {}
         self._surface_row = np.zeros(ROW - 16, np.float32)
+        self._surface_memo: dict[tuple, tuple[Any, np.ndarray]] = {}
         self._point_size = 1.0
         self._blend_on = False
         self._fill = "filled"
@@ -339,8 +341,6 @@ class GLEngine(Engine):
 
     def _preevaluate(self, root: Any) -> tuple[list, Any, Any]:
         """Lights (with world matrices), the first camera and the first Background, cached per node version."""
-        from ..attributes import Background
-
         lights, camera, background = self._pre_node(root, Background)
         return lights, camera, background
 
@@ -424,8 +424,6 @@ class GLEngine(Engine):
         return mode
 
     def _resolve_state(self) -> None:
-        from ..attributes import DrawStyle, Fog, Texture
-
         mono = self.context._mono
 
         def top(cat: type) -> Any:
@@ -518,23 +516,45 @@ class GLEngine(Engine):
         return state
 
     def _resolve_surface(self) -> None:
-        from ..attributes import Color, Highlight, PBRMaterial
-
         surface = self._surface
         material = None
         color = None
         for attr in reversed(surface):
-            if isinstance(attr, Color):
-                if color is None and material is None:
+            if attr.__class__ is Color or isinstance(attr, Color):
+                if color is None:
                     color = attr
             else:
                 material = attr
                 break
+        stack = self.context._mono.get(Highlight)
+        highlight = stack[-1] if stack else None
+        key = (
+            id(material),
+            material._version if material is not None else 0,
+            id(highlight),
+            highlight._version if highlight is not None else 0,
+        )
+        memo = self._surface_memo
+        base = memo.get(key)
+        if base is None or base[0] is not material:
+            base = (material, self._material_row(material, highlight))
+            if len(memo) > 256:
+                memo.clear()
+            memo[key] = base
+        row = base[1]
+        if color is not None:
+            row = row.copy()
+            row[0:4] = (color._r, color._g, color._b, color._a * row[3])
+            if not isinstance(material, PBRMaterial):
+                row[15] = 1.0  # colour material: ambient follows the colour
+        self._surface_row = row
+        self._surface_dirty = False
+
+    def _material_row(self, material: Any, highlight: Any) -> np.ndarray:
+        """The 24 material floats of an instance row (colour, specular, emission, ambient, highlight, extra)."""
         row = np.zeros(ROW - 16, np.float32)
         if isinstance(material, PBRMaterial):
-            base = material.base_color
-            opacity = material.opacity
-            row[0:4] = (*base, opacity)
+            row[0:4] = (*material.base_color, material.opacity)
             row[8:12] = (*material.emission, 1.0)
             row[12:16] = (0.0, 0.0, 0.0, material.roughness)
             row[20] = material.metallic
@@ -546,17 +566,10 @@ class GLEngine(Engine):
         else:
             row[0:4] = (0.8, 0.8, 0.8, 1.0)
             row[4:8] = (0.0, 0.0, 0.0, 32.0)
-            row[12:16] = (0.8, 0.8, 0.8, 0.0)
-        if color is not None:
-            opacity = row[3]
-            row[0:4] = (color.r, color.g, color.b, color.a * opacity)
-            if not isinstance(material, PBRMaterial):
-                row[12:15] = (color.r, color.g, color.b)
-        stack = self.context._mono.get(Highlight)
-        if stack:
-            row[16:20] = (*stack[-1].color, 1.0)
-        self._surface_row = row
-        self._surface_dirty = False
+            row[12:16] = (0.0, 0.0, 0.0, 1.0)  # ambient follows the colour
+        if highlight is not None:
+            row[16:20] = (*highlight.color, 1.0)
+        return row
 
     # -- draw ------------------------------------------------------------------
     def render(
@@ -605,8 +618,11 @@ class GLEngine(Engine):
                         continue
                     batch, index = slot
                     batch.items[index] = items[i]
-                    batch.rows[index] = items[i].row
+                    row = items[i].row
+                    batch.rows[index] = row
                     batch.mark(index)
+                    if batch.uniform and not (row[20:40] == batch.rows[0, 20:40]).all():
+                        batch.uniform = False
                 if need_others:
                     self._others = [it for it in items if it.transparent or it.state.overlay]
                 else:
@@ -624,6 +640,7 @@ class GLEngine(Engine):
             batch.items = group
             batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].row[None, :].copy()
             batch.dirty = (0, len(group))
+            batch.uniform = uniform_material(batch.rows)
             batches[key] = batch
         for batch in self._batches.values():
             batch.release()
@@ -893,10 +910,13 @@ class GLEngine(Engine):
             ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
         self._gl_state.clear()
 
-    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str) -> Any:
+    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, compact: bool = False) -> Any:
         self._ensure_uploaded(geometry)
         content = geometry.content(program)
-        content.append((buffer, INSTANCE_FORMAT, *INSTANCE_ATTRIBUTES))
+        if compact:
+            content.append((buffer, "16f 4f/i", "i_model", "i_color"))
+        else:
+            content.append((buffer, INSTANCE_FORMAT, *INSTANCE_ATTRIBUTES))
         index = geometry.buffers.get("index") if kind != "points" else None
         return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
 
@@ -908,30 +928,58 @@ class GLEngine(Engine):
             return ctx.LINES
         return ctx.TRIANGLES
 
+    def _features(self, state: DrawState, rows: np.ndarray, uniform: bool) -> tuple:
+        """Program features of a draw: the state's plus light count and, when shared, the material model."""
+        features = state.features
+        if state.kind in ("mesh", "points"):
+            features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+            if self._camera_used is not None and self._camera_used.is_orthographic:
+                features = features + (("ORTHO", True),)
+            if uniform:
+                features = features + (("MODEL", int(round(float(rows[0, 27])))), ("UNIFORM_MATERIAL", True))
+                if rows[0, 35] > 0.0:
+                    features = features + (("HIGHLIGHT", True),)
+        return features
+
+    def _set_material(self, prog: Any, row: np.ndarray) -> None:
+        for name, lo in (("u_spec", 20), ("u_emis", 24), ("u_amb", 28), ("u_hl", 32), ("u_extra", 36)):
+            u = prog.get(name, None)
+            if u is not None:
+                u.write(row[lo : lo + 4].tobytes())
+
     def _draw_batch(self, batch: Batch) -> int:
         state = batch.state
         drawer = self._drawers.get(state.kind)
         if drawer is not None:
             return drawer(self, batch.items, state)
         n = len(batch.items)
-        if batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None:
+        prog = self.programs.get(state.kind, self._features(state, batch.rows, batch.uniform))
+        stride = 20 if batch.uniform else ROW
+        if batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None or batch.stride != stride:
             if batch.vao is not None:
                 batch.vao.release()
+                batch.vao = None
             if batch.buffer is not None:
                 batch.buffer.release()
             capacity = max(n, 1)
-            batch.buffer = gpu_call(self.ctx.buffer, reserve=capacity * ROW * 4, dynamic=True, what="instance data")
+            batch.buffer = gpu_call(self.ctx.buffer, reserve=capacity * stride * 4, dynamic=True, what="instance data")
             batch.capacity = capacity
-            batch.program = self._program(state)
-            batch.vao = self._vao(batch.geometry, batch.program, batch.buffer, state.kind)
+            batch.stride = stride
             batch.dirty = (0, n)
+        if batch.vao is None or batch.program is not prog:
+            if batch.vao is not None:
+                batch.vao.release()
+            batch.program = prog
+            batch.vao = self._vao(batch.geometry, prog, batch.buffer, state.kind, compact=stride == 20)
         if batch.dirty is not None:
             lo, hi = batch.dirty
-            batch.buffer.write(batch.rows[lo:hi].tobytes(), offset=lo * ROW * 4)
+            data = batch.rows[lo:hi] if stride == ROW else np.ascontiguousarray(batch.rows[lo:hi, :20])
+            batch.buffer.write(data.tobytes(), offset=lo * stride * 4)
             batch.dirty = None
-        prog = batch.program
         self._apply_state(state)
         self._set_uniforms(prog, state)
+        if batch.uniform:
+            self._set_material(prog, batch.rows[0])
         batch.vao.render(self._mode(batch.geometry, state.kind), instances=n)
         return 1
 
@@ -961,8 +1009,13 @@ class GLEngine(Engine):
                     calls += drawer(self, [transparent[i] for i in indices], state)
                     continue
                 data = rows[indices]
-                buf, vao, prog = self._transient_vao(geometry, state, len(indices))
+                uniform = uniform_material(data)
+                buf, vao, prog = self._transient_vao(
+                    geometry, state, len(indices), self._features(state, data, uniform)
+                )
                 buf.write(data.tobytes())
+                if uniform:
+                    self._set_material(prog, data[0])
                 self._apply_state(state, blend_override=state.blend or default_blend, depth_mask=False)
                 self._set_uniforms(prog, state)
                 mode = self._mode(geometry, state.kind)
@@ -983,9 +1036,9 @@ class GLEngine(Engine):
                 calls += drawer(self, [it], it.state)
         return calls
 
-    def _transient_vao(self, geometry: Geometry, state: DrawState, n: int) -> tuple[Any, Any, Any]:
-        key = (id(geometry), id(state))
-        prog = self._program(state)
+    def _transient_vao(self, geometry: Geometry, state: DrawState, n: int, features: tuple) -> tuple[Any, Any, Any]:
+        prog = self.programs.get(state.kind, features)
+        key = (id(geometry), id(state), id(prog))
         entry = self._transient.get(key)
         if entry is not None and entry[2] >= n and geometry.buffers is not None:
             return entry[0], entry[1], prog

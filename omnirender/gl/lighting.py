@@ -25,7 +25,7 @@ HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
 class LightUniforms:
     """Packed light arrays for one light switch state."""
 
-    __slots__ = ("count", "pos", "diffuse", "specular", "attenuation", "spot", "exponent", "ambient", "_bytes")
+    __slots__ = ("count", "types", "pos", "diffuse", "specular", "attenuation", "spot", "exponent", "ambient", "_bytes")
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], view: np.ndarray, headlight: bool) -> None:
         from ..attributes import AmbientLight, DirectionalLight, SpotLight
@@ -41,6 +41,7 @@ class LightUniforms:
         ambient = np.full(3, GLOBAL_AMBIENT)
         rot = view[:3, :3]
         n = 0
+        types = []
         for light, matrix in lights:
             amb = getattr(light, "ambient", None)
             if amb is not None:
@@ -55,15 +56,18 @@ class LightUniforms:
             if isinstance(light, DirectionalLight):
                 d = rot @ -light.world_direction(matrix)
                 pos[n, :3] = d / np.linalg.norm(d)
+                types.append("d")
             elif hasattr(light, "world_position"):
                 p = view @ np.append(light.world_position(matrix), 1.0)
                 pos[n] = (p[0], p[1], p[2], 1.0)
                 att[n] = (light.constant, light.linear, light.quadratic)
+                types.append("p")
                 if isinstance(light, SpotLight):
                     axis = rot @ light.world_direction(matrix)
                     spot[n, :3] = axis / np.linalg.norm(axis)
                     spot[n, 3] = light.cos_cutoff
                     exponent[n] = light.exponent
+                    types[-1] = "s"
             else:
                 continue
             n += 1
@@ -71,19 +75,20 @@ class LightUniforms:
             pos[0, :3] = HEADLIGHT
             diffuse[0] = (1.0, 1.0, 1.0)
             specular[0] = (1.0, 1.0, 1.0)
+            types.append("d")
             n = 1
         self.count = n
+        self.types = "".join(types)
         self.pos, self.diffuse, self.specular, self.attenuation = pos, diffuse, specular, att
         self.spot, self.exponent = spot, exponent
         self.ambient = ambient.astype(np.float32)
         self._bytes = {
-            "u_lpos": pos.tobytes(),
-            "u_ldiff": diffuse.tobytes(),
-            "u_lspec": specular.tobytes(),
-            "u_latt": att.tobytes(),
-            "u_lspot": spot.tobytes(),
-            "u_lexp": exponent.tobytes(),
-            "u_ambient": self.ambient.tobytes(),
+            "u_lpos": pos,
+            "u_ldiff": diffuse,
+            "u_lspec": specular,
+            "u_latt": att,
+            "u_lspot": spot,
+            "u_lexp": exponent,
         }
 
     def apply(self, program: Any) -> None:
@@ -91,7 +96,11 @@ class LightUniforms:
         for name, data in self._bytes.items():
             u = program.get(name, None)
             if u is not None:
-                u.write(data)
+                # the compiler trims arrays to the elements a variant uses
+                u.write(data[: u.array_length].tobytes())
+        u = program.get("u_ambient", None)
+        if u is not None:
+            u.write(self.ambient.tobytes())
         u = program.get("u_nlights", None)
         if u is not None:
             u.value = self.count

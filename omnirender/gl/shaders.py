@@ -63,6 +63,9 @@ in vec4 i_hl;
 in vec4 i_extra;
 uniform mat4 u_view;
 uniform mat4 u_proj;
+#if defined(UNIFORM_MATERIAL) && defined(POINTS)
+uniform vec4 u_extra;
+#endif
 #if NCLIP > 0
 uniform vec4 u_clip[NCLIP];
 out float gl_ClipDistance[NCLIP];
@@ -70,12 +73,16 @@ out float gl_ClipDistance[NCLIP];
 out vec3 v_pos;
 out vec3 v_normal;
 out vec4 v_color;
+#ifdef TEXTURE
 out vec2 v_uv;
+#endif
+#ifndef UNIFORM_MATERIAL
 flat out vec4 v_spec;
 flat out vec4 v_emis;
 flat out vec4 v_amb;
 flat out vec4 v_hl;
 flat out vec4 v_extra;
+#endif
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
     vec4 eye = u_view * world;
@@ -83,6 +90,8 @@ void main() {
     v_normal = vec3(0.0, 0.0, 1.0);
 #ifdef VSIZE
     gl_PointSize = in_size;
+#elif defined(UNIFORM_MATERIAL)
+    gl_PointSize = u_extra.y;
 #else
     gl_PointSize = i_extra.y;
 #endif
@@ -101,10 +110,10 @@ void main() {
 #endif
 #ifdef TEXTURE
     v_uv = in_texcoord;
-#else
-    v_uv = vec2(0.0);
 #endif
+#ifndef UNIFORM_MATERIAL
     v_spec = i_spec; v_emis = i_emis; v_amb = i_amb; v_hl = i_hl; v_extra = i_extra;
+#endif
 #if NCLIP > 0
     for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
 #endif
@@ -116,12 +125,35 @@ FRAGMENT = """
 in vec3 v_pos;
 in vec3 v_normal;
 in vec4 v_color;
+#ifdef TEXTURE
 in vec2 v_uv;
+#endif
+#ifdef UNIFORM_MATERIAL
+uniform vec4 u_spec;
+uniform vec4 u_emis;
+uniform vec4 u_amb;
+uniform vec4 u_hl;
+uniform vec4 u_extra;
+#define M_SPEC u_spec
+#define M_EMIS u_emis
+#define M_AMB u_amb
+#define M_HL u_hl
+#define M_EXTRA u_extra
+#else
 flat in vec4 v_spec;
 flat in vec4 v_emis;
 flat in vec4 v_amb;
 flat in vec4 v_hl;
 flat in vec4 v_extra;
+#define M_SPEC v_spec
+#define M_EMIS v_emis
+#define M_AMB v_amb
+#define M_HL v_hl
+#define M_EXTRA v_extra
+#endif
+#ifndef NLIGHTS
+#define NLIGHTS u_nlights
+#endif
 uniform int u_nlights;
 uniform vec4 u_lpos[MAX_LIGHTS];    // view space; w = 0: direction towards the light, 1: position
 uniform vec3 u_ldiff[MAX_LIGHTS];
@@ -137,19 +169,46 @@ uniform sampler2D u_texture;
 out vec4 f_color;
 const float PI = 3.14159265;
 
-float light_at(int i, vec3 P, out vec3 L) {
-    vec4 lp = u_lpos[i];
-    if (lp.w == 0.0) { L = normalize(lp.xyz); return 1.0; }
-    vec3 d = lp.xyz - P;
+float dir_light(int i, out vec3 L) {
+    L = u_lpos[i].xyz;
+    return 1.0;
+}
+float point_light(int i, vec3 P, out vec3 L) {
+    vec3 d = u_lpos[i].xyz - P;
     float dist = length(d);
     L = d / max(dist, 1e-20);
-    float att = 1.0 / (u_latt[i].x + u_latt[i].y * dist + u_latt[i].z * dist * dist);
-    vec4 spot = u_lspot[i];
-    if (spot.w > -1.5) {
-        float c = dot(-L, spot.xyz);
-        att *= c >= spot.w ? pow(max(c, 0.0), u_lexp[i]) : 0.0;
-    }
-    return att;
+    return 1.0 / (u_latt[i].x + u_latt[i].y * dist + u_latt[i].z * dist * dist);
+}
+float spot_light(int i, vec3 P, out vec3 L) {
+    float att = point_light(i, P, L);
+    float c = dot(-L, u_lspot[i].xyz);
+    return c >= u_lspot[i].w ? att * pow(max(c, 0.0), u_lexp[i]) : 0.0;
+}
+float any_light(int i, vec3 P, out vec3 L) {
+    if (u_lpos[i].w == 0.0) return dir_light(i, L);
+    if (u_lspot[i].w > -1.5) return spot_light(i, P, L);
+    return point_light(i, P, L);
+}
+vec3 phong_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 kd) {
+    float NdL = dot(N, L);
+    if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
+    vec3 H = normalize(L + V);
+    float s = pow(max(dot(N, H), 0.0), M_SPEC.w);
+    return att * (kd * NdL * u_ldiff[i] + M_SPEC.rgb * s * u_lspec[i]);
+}
+vec3 pbr_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 albedo, vec3 F0, float metallic, float a2, float k) {
+    float NdL = dot(N, L);
+    if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
+    float NdV = max(dot(N, V), 1e-4);
+    vec3 H = normalize(L + V);
+    float NdH = max(dot(N, H), 0.0);
+    float dd = NdH * NdH * (a2 - 1.0) + 1.0;
+    float D = a2 / (PI * dd * dd);
+    float G = (NdV / (NdV * (1.0 - k) + k)) * (NdL / (NdL * (1.0 - k) + k));
+    vec3 F = F0 + (1.0 - F0) * pow(1.0 - max(dot(H, V), 0.0), 5.0);
+    vec3 spec = D * G * F / (4.0 * NdV * NdL);
+    vec3 kd = (1.0 - F) * (1.0 - metallic);
+    return (kd * albedo + PI * spec) * u_ldiff[i] * NdL * att;
 }
 
 void main() {
@@ -171,50 +230,55 @@ void main() {
     N = normalize(v_normal);
     if (!gl_FrontFacing) N = -N;
 #endif
-    vec3 V = u_ortho == 1 ? vec3(0.0, 0.0, 1.0) : normalize(-P);
-    float model = v_emis.w;
+#ifdef ORTHO
+    vec3 V = vec3(0.0, 0.0, 1.0);
+#else
+    vec3 V = normalize(-P);
+#endif
+#ifdef MODEL
+    const float model = float(MODEL);
+#else
+    float model = M_EMIS.w;
+#endif
     vec3 color;
     if (model > 1.5) {
         color = base.rgb;
     } else if (model > 0.5) {
-        float metallic = v_extra.x;
-        float rough = max(v_amb.w, 0.04);
+        float metallic = M_EXTRA.x;
+        float rough = max(M_AMB.w, 0.04);
         float a2 = rough * rough * rough * rough;
         vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
-        float NdV = max(dot(N, V), 1e-4);
         float k = (rough + 1.0) * (rough + 1.0) / 8.0;
-        color = v_emis.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
-        for (int i = 0; i < u_nlights; ++i) {
+        vec3 albedo = base.rgb;
+        color = M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
+#ifdef PBR_LIGHTS
+        PBR_LIGHTS
+#else
+        for (int i = 0; i < NLIGHTS; ++i) {
             vec3 L;
-            float att = light_at(i, P, L);
-            float NdL = dot(N, L);
-            if (NdL <= 0.0 || att <= 0.0) continue;
-            vec3 H = normalize(L + V);
-            float NdH = max(dot(N, H), 0.0);
-            float dd = NdH * NdH * (a2 - 1.0) + 1.0;
-            float D = a2 / (PI * dd * dd);
-            float G = (NdV / (NdV * (1.0 - k) + k)) * (NdL / (NdL * (1.0 - k) + k));
-            vec3 F = F0 + (1.0 - F0) * pow(1.0 - max(dot(H, V), 0.0), 5.0);
-            vec3 spec = D * G * F / (4.0 * NdV * NdL);
-            vec3 kd = (1.0 - F) * (1.0 - metallic);
-            color += (kd * base.rgb + PI * spec) * u_ldiff[i] * NdL * att;
+            float att = any_light(i, P, L);
+            color += pbr_light(i, att, L, N, V, albedo, F0, metallic, a2, k);
         }
+#endif
     } else {
-        color = v_emis.rgb + v_amb.rgb * u_ambient;
-        for (int i = 0; i < u_nlights; ++i) {
+        vec3 kd = base.rgb;
+        color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb) * u_ambient;
+#ifdef PHONG_LIGHTS
+        PHONG_LIGHTS
+#else
+        for (int i = 0; i < NLIGHTS; ++i) {
             vec3 L;
-            float att = light_at(i, P, L);
-            float NdL = dot(N, L);
-            if (NdL <= 0.0 || att <= 0.0) continue;
-            vec3 H = normalize(L + V);
-            float s = pow(max(dot(N, H), 0.0), v_spec.w);
-            color += att * (base.rgb * NdL * u_ldiff[i] + v_spec.rgb * s * u_lspec[i]);
+            float att = any_light(i, P, L);
+            color += phong_light(i, att, L, N, V, kd);
         }
+#endif
     }
-    if (v_hl.w > 0.0) {
+#if defined(HIGHLIGHT) || !defined(UNIFORM_MATERIAL)
+    if (M_HL.w > 0.0) {
         float rim = 1.0 - abs(dot(N, V));
-        color = mix(color, v_hl.rgb, 0.35) + v_hl.rgb * rim * rim;
+        color = mix(color, M_HL.rgb, 0.35) + M_HL.rgb * rim * rim;
     }
+#endif
 #ifdef FOG
     color = apply_fog(color, length(P));
 #endif
@@ -314,8 +378,28 @@ void main() {
 """
 
 
+def _light_code(types: str) -> list[str]:
+    """Unrolled light loops for a known list of light types (d: directional, p: point, s: spot)."""
+    calls = {"d": "dir_light({i}, L)", "p": "point_light({i}, P, L)", "s": "spot_light({i}, P, L)"}
+    phong, pbr = ["{ vec3 L; float att;"], ["{ vec3 L; float att;"]
+    for i, t in enumerate(types):
+        att = "att = " + calls[t].format(i=i) + ";"
+        phong.append(f"{att} color += phong_light({i}, att, L, N, V, kd);")
+        pbr.append(f"{att} color += pbr_light({i}, att, L, N, V, albedo, F0, metallic, a2, k);")
+    phong.append("}")
+    pbr.append("}")
+    return [
+        f"#define NLIGHTS {max(len(types), 1)}",
+        "#define PHONG_LIGHTS " + " ".join(phong),
+        "#define PBR_LIGHTS " + " ".join(pbr),
+    ]
+
+
 def _header(defines: dict[str, Any]) -> str:
     lines = ["#version 330"]
+    types = defines.pop("LIGHTS", None)
+    if types is not None:
+        lines += _light_code(types)
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
@@ -342,12 +426,10 @@ class ProgramCache:
         if prog is not None:
             return prog
         defines = dict(features)
-        head = _header(defines)
-        if kind == "mesh":
-            vs, gs, fs = VERTEX, None, FRAGMENT
-        elif kind == "points":
+        if kind == "points":
             defines["POINTS"] = True
-            head = _header(defines)
+        head = _header(dict(defines))
+        if kind in ("mesh", "points"):
             vs, gs, fs = VERTEX, None, FRAGMENT
         elif kind == "lines":
             vs, gs, fs = LINE_VERTEX, LINE_GEOMETRY, LINE_FRAGMENT

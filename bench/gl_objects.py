@@ -1,0 +1,307 @@
+"""GL engine speed against hand-written moderngl (issue 4).
+
+N unit cubes (N = 100, 1,000, 10,000), each with its own transform and colour,
+one directional light, 256x256, multisampling off everywhere.  Three ways:
+
+* omnirender: ``GLEngine.render(scene)`` (compiled draw list, automatic instancing);
+* naive moderngl: one draw call per cube (uniforms per cube);
+* hand-instanced moderngl: one instanced draw call.
+
+A frame is render + read-back of the colour image.  Also: the frame after
+changing one cube's transform (incremental recompile), and a 1.3-million-
+triangle single mesh at 512x512 against hand-written moderngl.
+
+Run: ``.venv/bin/python bench/gl_objects.py`` (``--quick`` for fewer frames).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import moderngl
+import numpy as np
+
+import omnirender as om
+from omnirender.gl import GLEngine
+
+VS = """
+#version 330
+in vec3 in_position;
+in vec3 in_normal;
+#ifdef INSTANCED
+in mat4 i_model;
+in vec4 i_color;
+#else
+uniform mat4 i_model;
+uniform vec4 i_color;
+#endif
+uniform mat4 u_view;
+uniform mat4 u_proj;
+out vec3 v_normal;
+out vec3 v_pos;
+out vec4 v_color;
+void main() {
+    vec4 eye = u_view * i_model * vec4(in_position, 1.0);
+    v_pos = eye.xyz;
+    v_normal = mat3(u_view) * transpose(inverse(mat3(i_model))) * in_normal;
+    v_color = i_color;
+    gl_Position = u_proj * eye;
+}
+"""
+
+FS = """
+#version 330
+in vec3 v_normal;
+in vec3 v_pos;
+in vec4 v_color;
+uniform vec3 u_light;   // direction towards the light, eye space
+out vec4 f_color;
+void main() {
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;
+    vec3 v = normalize(-v_pos);
+    vec3 h = normalize(u_light + v);
+    float d = max(dot(n, u_light), 0.0);
+    vec3 c = v_color.rgb * (0.04 + d) + vec3(0.2) * pow(max(dot(n, h), 0.0), 32.0) * step(0.0, d);
+    c = clamp(c, 0.0, 1.0);
+    f_color = vec4(mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c)), v_color.a);
+}
+"""
+
+
+def cube_data(n: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 4, 4) model matrices on a grid with random rotations, (n, 4) colours."""
+    rng = np.random.default_rng(seed)
+    side = int(np.ceil(n ** (1 / 3)))
+    idx = np.arange(n)
+    pos = np.stack([idx % side, (idx // side) % side, idx // (side * side)], axis=1).astype(np.float64)
+    pos = (pos - (side - 1) / 2.0) * 1.6
+    mats = np.zeros((n, 4, 4))
+    for i in range(n):
+        a = rng.normal(size=3)
+        a /= np.linalg.norm(a)
+        m = om.Rotation(float(rng.uniform(0, 360)), tuple(a)).matrix.copy()
+        m[:3, 3] = pos[i]
+        mats[i] = m
+    colors = np.concatenate([rng.uniform(0.2, 1.0, size=(n, 3)), np.ones((n, 1))], axis=1)
+    return mats, colors
+
+
+def camera_for(n: int) -> om.Camera:
+    side = int(np.ceil(n ** (1 / 3)))
+    d = side * 1.6 * 2.2 + 3
+    return om.Camera.look_at((d * 0.6, d * 0.5, d), (0, 0, 0), fov=40, near=0.5, far=d * 3)
+
+
+def omni_scene(mats: np.ndarray, colors: np.ndarray, camera: om.Camera) -> tuple[om.Node, list[om.Matrix]]:
+    scene = om.Node("scene")
+    scene.add(camera)
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    transforms = []
+    for i in range(len(mats)):
+        node = scene.add(om.Node(f"cube{i}"))
+        transforms.append(node.add(om.Matrix(mats[i])))
+        node.add(om.Color(*colors[i, :3]))
+        node.add(om.Box())
+    return scene, transforms
+
+
+def median_time(fn, frames: int) -> float:
+    times = []
+    for _ in range(frames):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+class HandWritten:
+    """The same cubes drawn by plain moderngl in the engine's context (naive and instanced)."""
+
+    def __init__(self, ctx: moderngl.Context, size: tuple[int, int], mats, colors, camera: om.Camera) -> None:
+        self.ctx = ctx
+        self.size = size
+        self.fbo = ctx.simple_framebuffer(size, components=4)
+        from omnirender.gl.geometry import unit_box
+
+        g = unit_box()
+        self.vbo = ctx.buffer(g.positions)
+        self.nbo = ctx.buffer(g.normals)
+        self.ibo = ctx.buffer(g.indices)
+        self.naive_prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        inst_vs = VS.replace("#version 330", "#version 330\n#define INSTANCED")
+        self.inst_prog = ctx.program(vertex_shader=inst_vs, fragment_shader=FS)
+        view = camera.view_matrix()
+        proj = camera.projection_matrix(size[0] / size[1])
+        light = view[:3, :3] @ -np.array([-0.4, -0.6, -1.0])
+        light /= np.linalg.norm(light)
+        for prog in (self.naive_prog, self.inst_prog):
+            prog["u_view"].write(view.T.astype("f4").tobytes())
+            prog["u_proj"].write(proj.T.astype("f4").tobytes())
+            prog["u_light"].value = tuple(light)
+        self.naive_vao = ctx.vertex_array(
+            self.naive_prog, [(self.vbo, "3f", "in_position"), (self.nbo, "3f", "in_normal")], self.ibo, 4
+        )
+        inst = np.concatenate([mats.transpose(0, 2, 1).reshape(-1, 16), colors], axis=1).astype("f4")
+        self.ibuf = ctx.buffer(inst)
+        self.inst_vao = ctx.vertex_array(
+            self.inst_prog,
+            [
+                (self.vbo, "3f", "in_position"),
+                (self.nbo, "3f", "in_normal"),
+                (self.ibuf, "16f 4f/i", "i_model", "i_color"),
+            ],
+            self.ibo,
+            4,
+        )
+        self.models = [m.T.astype("f4").tobytes() for m in mats]
+        self.colors = [tuple(float(x) for x in c) for c in colors]
+        self.n = len(mats)
+
+    def _begin(self) -> None:
+        self.fbo.use()
+        self.ctx.enable(moderngl.DEPTH_TEST)
+        self.fbo.clear(0.16, 0.16, 0.17, 1.0)
+
+    def _read(self) -> np.ndarray:
+        return np.frombuffer(self.fbo.read(components=4), np.uint8)
+
+    def naive(self) -> np.ndarray:
+        self._begin()
+        model = self.naive_prog["i_model"]
+        color = self.naive_prog["i_color"]
+        vao = self.naive_vao
+        for m, c in zip(self.models, self.colors, strict=True):
+            model.write(m)
+            color.value = c
+            vao.render()
+        return self._read()
+
+    def instanced(self) -> np.ndarray:
+        self._begin()
+        self.inst_vao.render(instances=self.n)
+        return self._read()
+
+
+def bench_cubes(n: int, frames: int) -> dict[str, float]:
+    mats, colors = cube_data(n)
+    camera = camera_for(n)
+    scene, transforms = omni_scene(mats, colors, camera)
+    engine = GLEngine(size=(256, 256), samples=0)
+    t = time.perf_counter()
+    engine.render(scene, read_depth=False)
+    first = time.perf_counter() - t
+    steady = median_time(lambda: engine.render(scene, read_depth=False), frames)
+    rng = np.random.default_rng(5)
+    changed = []
+    for _ in range(max(5, frames // 2)):
+        k = int(rng.integers(n))
+        m = mats[k].copy()
+        m[:3, 3] += rng.normal(size=3) * 0.1
+        t = time.perf_counter()
+        node = scene.child(f"cube{k}")
+        node.remove(transforms[k])
+        transforms[k] = node.insert(0, om.Matrix(m))
+        engine.render(scene, read_depth=False)
+        changed.append(time.perf_counter() - t)
+        assert engine.stats["incremental"] == 1, engine.stats
+    one_changed = statistics.median(changed)
+    with engine.ctx:
+        hand = HandWritten(engine.ctx, (256, 256), mats, colors, camera)
+        naive_frames = max(3, frames // (10 if n >= 10000 else 1))
+        naive = median_time(hand.naive, naive_frames)
+        instanced = median_time(hand.instanced, frames)
+    engine.release()
+    return {
+        "n": n,
+        "first": first,
+        "omni": steady,
+        "one_changed": one_changed,
+        "naive": naive,
+        "instanced": instanced,
+    }
+
+
+def bench_mesh(frames: int) -> dict[str, float]:
+    k = 806  # 2 * 805^2 = 1,296,050 triangles
+    x, z = np.meshgrid(np.linspace(-2, 2, k), np.linspace(-2, 2, k))
+    y = 0.3 * np.sin(3 * x) * np.cos(3 * z)
+    verts = np.stack([x, y, z], axis=-1).reshape(-1, 3).astype(np.float32)
+    i, j = np.meshgrid(np.arange(k - 1), np.arange(k - 1), indexing="ij")
+    a = (i * k + j).ravel()
+    tris = np.concatenate(
+        [np.stack([a, a + k, a + 1], axis=1), np.stack([a + 1, a + k, a + k + 1], axis=1)], axis=0
+    ).astype(np.uint32)
+    mesh = om.TriangleSet(verts, tris)
+    normals = mesh.normal_array()
+    camera = om.Camera.look_at((0, 4, 5), (0, 0, 0), fov=40)
+    scene = om.Node("scene")
+    scene.add(camera)
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    scene.add(om.Color(0.8, 0.6, 0.3))
+    scene.add(mesh)
+    engine = GLEngine(size=(512, 512), samples=0)
+    engine.render(scene, read_depth=False)
+    omni = median_time(lambda: engine.render(scene, read_depth=False), frames)
+    with engine.ctx:
+        ctx = engine.ctx
+        fbo = ctx.simple_framebuffer((512, 512), components=4)
+        prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
+        view = camera.view_matrix()
+        proj = camera.projection_matrix(1.0)
+        light = view[:3, :3] @ -np.array([-0.4, -0.6, -1.0])
+        prog["u_view"].write(view.T.astype("f4").tobytes())
+        prog["u_proj"].write(proj.T.astype("f4").tobytes())
+        prog["u_light"].value = tuple(light / np.linalg.norm(light))
+        prog["i_model"].write(np.eye(4, dtype="f4").tobytes())
+        prog["i_color"].value = (0.8, 0.6, 0.3, 1.0)
+        vao = ctx.vertex_array(
+            prog,
+            [(ctx.buffer(verts), "3f", "in_position"), (ctx.buffer(normals), "3f", "in_normal")],
+            ctx.buffer(tris),
+            4,
+        )
+
+        def hand() -> np.ndarray:
+            fbo.use()
+            ctx.enable(moderngl.DEPTH_TEST)
+            fbo.clear(0.16, 0.16, 0.17, 1.0)
+            vao.render()
+            return np.frombuffer(fbo.read(components=4), np.uint8)
+
+        hand()
+        handwritten = median_time(hand, frames)
+    engine.release()
+    return {"triangles": len(tris), "omni": omni, "hand": handwritten}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="fewer frames")
+    parser.add_argument("--sizes", type=int, nargs="*", default=[100, 1000, 10000])
+    args = parser.parse_args()
+    frames = 9 if args.quick else 25
+    print("GL engine vs hand-written moderngl (256x256, MSAA off, median frame = render + colour read-back)")
+    print(
+        f"{'N':>6} {'omni ms':>9} {'1 changed':>10} {'naive ms':>9} {'instanced':>10} "
+        f"{'omni/inst':>10} {'naive/omni':>11} {'changed/steady':>15} {'first frame':>12}"
+    )
+    for n in args.sizes:
+        r = bench_cubes(n, frames)
+        print(
+            f"{n:>6} {r['omni'] * 1e3:>9.2f} {r['one_changed'] * 1e3:>10.2f} {r['naive'] * 1e3:>9.2f} "
+            f"{r['instanced'] * 1e3:>10.2f} {r['omni'] / r['instanced']:>10.2f} {r['naive'] / r['omni']:>11.1f} "
+            f"{r['one_changed'] / r['omni']:>15.2f} {r['first'] * 1e3:>10.0f}ms"
+        )
+    m = bench_mesh(max(5, frames // 2))
+    print(
+        f"single mesh of {m['triangles']:,} triangles at 512x512: omni {m['omni'] * 1e3:.1f} ms, "
+        f"hand-written {m['hand'] * 1e3:.1f} ms, ratio {m['omni'] / m['hand']:.2f}"
+    )
+    print("targets at N=10,000: omni/inst <= 1.25, naive/omni >= 5, changed/steady <= 2; mesh ratio <= 1.1")
+
+
+if __name__ == "__main__":
+    main()
