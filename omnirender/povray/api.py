@@ -15,8 +15,8 @@ import numpy as np
 from ..fileio import atomic_path, atomic_write
 from ..image import Image
 from . import painters as _painters  # noqa: F401  (registers the default handlers)
-from .engine import POVRayEngine
-from .runner import POVRayError, find_povray, read_png, run_povray
+from .engine import POVRayEngine, coverage, decode_depth
+from .runner import POVRayError, find_povray, read_png, read_ppm, run_povray
 
 __all__ = ["render", "export", "available", "scene_sdl"]
 
@@ -101,6 +101,7 @@ def render(
     progress: Any = None,
     threads: int | None = None,
     keep: str | os.PathLike[str] | None = None,
+    depth: bool = False,
     **engine_options: Any,
 ) -> Image:
     """Render ``scene`` with POV-Ray and return an :class:`om.Image`.
@@ -110,15 +111,18 @@ def render(
     no limit); ``progress`` None (a bar on a terminal), True/False, or a
     callable ``(done_pixels, total_pixels)``; ``threads`` limits POV-Ray's
     render threads; ``keep`` a folder to copy the scene file into (for
-    debugging).  The background is transparent in the alpha channel (so
+    debugging); ``depth`` True adds ``image.depth`` (eye-space depth along the
+    viewing axis, inf on the background) from a second quick pass, else it is
+    None.  The background is transparent in the alpha channel (so
     ``image.mask`` marks the objects) unless an ``om.Background`` with alpha
-    sets it; ``image.depth`` is None.
+    sets it.
     """
     w, h = (int(v) for v in size)
     if not 0 <= int(quality) <= 11:
         raise ValueError(f"POV-Ray: quality must be 0..11, got {quality}")
     if find_povray() is None:
         raise POVRayError("POV-Ray: the povray program was not found on PATH; install it with `apt-get install povray`")
+    depth_map = None
     started = time.perf_counter()
     text, engine = scene_sdl(scene, (w, h), **engine_options)
     sdl_seconds = time.perf_counter() - started
@@ -157,15 +161,24 @@ def render(
         if not out.exists():
             raise POVRayError("POV-Ray finished without writing an image (see its output above)")
         array = read_png(out)
-        if engine.fog is not None:
-            # POV-Ray fogs the background too (making it opaque): the coverage comes from a quick
-            # pass without fog at quality 0, so image.mask still marks the objects.
-            (folder / "coverage.pov").write_text(engine.sdl(fog=False), encoding="utf-8")
-            cover = [a.replace("scene.pov", "coverage.pov").replace("image.png", "coverage.png") for a in args]
-            cover = [a for a in cover if not a.startswith("+Q")] + ["+Q0"]
-            run_povray(cover, folder, timeout=timeout, progress=False, total_pixels=w * h)
-            array = array.copy()
-            array[:, :, 3] = read_png(folder / "coverage.png")[:, :, 3]
+        if depth or engine.fog is not None:
+            # A second, quick pass (quality 0, no anti-aliasing, 16 bits, linear) with every object
+            # self-lit by a pigment that encodes its eye-space depth.  Its alpha is also the
+            # coverage: POV-Ray fogs the background too, making it opaque in the colour pass.
+            (folder / "depth.pov").write_text(engine.sdl(depth=True), encoding="utf-8")
+            pass_args = [
+                "+Idepth.pov", "+Odepth.ppm", f"+W{w}", f"+H{h}", "-D", "-P", "+FP16", "+Q0", "-A",
+                "File_Gamma=1.0", "-GS", "-GD", "-GR", "-V",
+            ]  # fmt: skip
+            if threads is not None:
+                pass_args.append(f"+WT{int(threads)}")
+            run_povray(pass_args, folder, timeout=timeout, progress=False, total_pixels=w * h)
+            rgb16 = read_ppm(folder / "depth.ppm")
+            if depth:
+                depth_map = decode_depth(rgb16, engine.depth_range())
+            if engine.fog is not None:
+                array = array.copy()
+                array[:, :, 3] = np.where(coverage(rgb16) > 0, np.maximum(array[:, :, 3], 1), 0)
         render_seconds = time.perf_counter() - t0
     if array.shape[:2] != (h, w):
         raise POVRayError(f"POV-Ray wrote a {array.shape[1]}x{array.shape[0]} image, expected {w}x{h}")
@@ -184,4 +197,4 @@ def render(
         "antialias": bool(antialias),
         "objects": len(engine.objects),
     }
-    return Image(array, depth=None, engine="povray", info=info)
+    return Image(array, depth=depth_map, engine="povray", info=info)

@@ -27,7 +27,7 @@ from ..core import Camera, Engine, Technique
 from . import sdl
 from .attributes import GlobalSettings, Interior, Raw
 
-__all__ = ["POVRayEngine", "camera_sdl"]
+__all__ = ["POVRayEngine", "camera_sdl", "depth_texture", "decode_depth", "coverage"]
 
 _IDENTITY = np.eye(4)
 #: OpenGL's global ambient light, added to the lights' ambient terms (as in the GL engine).
@@ -92,7 +92,7 @@ class POVRayEngine(Engine):
     # -- output buffers -------------------------------------------------
     def clear(self) -> None:
         """Forget everything written so far."""
-        self.objects: list[str] = []
+        self.objects: list[str | _Object] = []
         self.declarations: list[str] = []
         self.lights_sdl: list[str] = []
         self.resources: list[tuple[str, Any]] = []
@@ -132,27 +132,42 @@ class POVRayEngine(Engine):
         return name
 
     # -- objects --------------------------------------------------------
-    def emit(self, geometry: str, texture: str | None = None, *, matrix: np.ndarray | None = None) -> None:
-        """Write one object: ``geometry`` plus texture, interior, model matrix, clip planes, raw modifiers."""
-        parts = [f"object {{\n  {geometry}\n"]
-        if texture:
-            parts.append(f"  texture {{ {texture} }}\n")
-        interior = self.mono(Interior)
-        if interior is not None:
-            parts.append(f"  {interior.sdl()}\n")
+    def emit(
+        self,
+        geometry: str,
+        texture: str | None = None,
+        *,
+        matrix: np.ndarray | None = None,
+        plain: Callable[[], str] | None = None,
+    ) -> None:
+        """Write one object: ``geometry`` plus texture, interior, model matrix, clip planes, raw modifiers.
+
+        ``plain`` returns the geometry without embedded textures (per-vertex
+        colours), for the depth pass; by default ``geometry`` is used.
+        """
         m = self.model_matrix() if matrix is None else matrix
+        placement = []
         if not np.array_equal(m, _IDENTITY):
             if abs(np.linalg.det(m[:3, :3])) < 1e-300:
                 return  # a degenerate (flattened) transform draws nothing; POV-Ray would reject it
-            parts.append(f"  {sdl.matrix(m, self._owner())}\n")
+            placement.append(f"  {sdl.matrix(m, self._owner())}\n")
         for plane in self._clip_planes():
-            parts.append(f"  {plane}\n")
+            placement.append(f"  {plane}\n")
         for raw in self.poly(Raw):
             if raw.placement == "object":
-                parts.append(f"  {raw.text}\n")
+                placement.append(f"  {raw.text}\n")
+        interior = self.mono(Interior)
         path = self.node_path
-        head = sdl.comment(path) + "\n" if path else ""
-        self.objects.append(head + "".join(parts) + "}\n")
+        self.objects.append(
+            _Object(
+                sdl.comment(path) + "\n" if path else "",
+                geometry,
+                f"  texture {{ {texture} }}\n" if texture else "",
+                f"  {interior.sdl()}\n" if interior is not None else "",
+                "".join(placement),
+                plain,
+            )
+        )
 
     def _owner(self) -> str:
         path = self.node_path
@@ -169,29 +184,49 @@ class POVRayEngine(Engine):
         return out
 
     # -- the file -------------------------------------------------------
-    def sdl(self, fog: bool = True) -> str:
-        """The complete scene file for what was evaluated (``fog=False`` leaves the fog out)."""
+    def sdl(self, fog: bool = True, depth: bool = False) -> str:
+        """The complete scene file for what was evaluated.
+
+        ``fog=False`` leaves the fog out; ``depth=True`` writes the depth pass:
+        no lights, every object self-lit by a world-space pigment that encodes
+        the eye-space depth (see :func:`depth_texture`).
+        """
         head = ["// omnirender scene for POV-Ray 3.7\n#version 3.7;\n"]
         settings = "assumed_gamma 1.0 ambient_light " + sdl.color(self.ambient)
-        if self.global_settings is not None:
+        if self.global_settings is not None and not depth:
             settings += " " + self.global_settings.body()
         head.append(f"global_settings {{ {settings} }}\n")
-        if self.camera_text is not None:
-            head.append(self.camera_text)
-        else:
-            head.append(camera_sdl(Camera(), Camera().view_matrix(), self.size))
+        head.append(self.camera_text if self.camera_text is not None else self._default_camera())
         bg = (0.0, 0.0, 0.0) if self.background is None else _rgb(self.background)
-        # transmit 1: the background stays transparent in the alpha channel (om.Image.mask)
-        head.append(f"background {{ {sdl.color(bg, transmit=1.0)} }}\n")
+        if depth:  # blue marks the background; objects have none
+            head.append("background { rgb <0,0,1> }\n")
+        else:  # transmit 1: the background stays transparent in the alpha channel (om.Image.mask)
+            head.append(f"background {{ {sdl.color(bg, transmit=1.0)} }}\n")
+        if depth:
+            head.append(f"#declare OM_DEPTH = {depth_texture(self.depth_view(), self.depth_range())};\n")
+            body = [o.depth_sdl() if isinstance(o, _Object) else o for o in self.objects]
+            return "".join(head + body)
         if fog and self.fog is not None:
             head.append(self.fog)
         lights = list(self.lights_sdl)
         if self.light_count == 0:
             lights.append(self._headlight())
-        return "".join(head + lights + self.declarations + self.objects)
+        body = [o.sdl() if isinstance(o, _Object) else o for o in self.objects]
+        return "".join(head + lights + self.declarations + body)
+
+    def _default_camera(self) -> str:
+        return camera_sdl(Camera(), Camera().view_matrix(), self.size)
+
+    def depth_view(self) -> np.ndarray:
+        """The world-to-eye matrix the depth pass measures with."""
+        return self.view_matrix() if self.camera is not None else Camera().view_matrix()
+
+    def depth_range(self) -> float:
+        """The depth that maps to the largest encoded value: the camera's far distance."""
+        return float(self.camera[0].far) if self.camera is not None else Camera().far
 
     def _headlight(self) -> str:
-        view = self.view_matrix() if self.camera is not None else Camera().view_matrix()
+        view = self.depth_view()
         towards = np.linalg.inv(view)[:3, :3] @ HEADLIGHT
         towards /= np.linalg.norm(towards)
         return f"light_source {{ {sdl.vector(towards * 1e5)} rgb <1,1,1> parallel point_at <0,0,0> }} // headlight\n"
@@ -203,3 +238,62 @@ def _rgb(attr: Any) -> tuple[float, float, float]:
         value = value.rgb
     values = [float(v) for v in value][:3]
     return (values[0], values[1], values[2])
+
+
+class _Object:
+    """One object of the scene file, kept in parts so the depth pass can re-texture it."""
+
+    __slots__ = ("head", "geometry", "texture", "interior", "placement", "plain")
+
+    def __init__(
+        self, head: str, geometry: str, texture: str, interior: str, placement: str, plain: Callable[[], str] | None
+    ) -> None:
+        self.head, self.geometry, self.texture = head, geometry, texture
+        self.interior, self.placement, self.plain = interior, placement, plain
+
+    def sdl(self) -> str:
+        return f"{self.head}object {{\n  {self.geometry}\n{self.texture}{self.interior}{self.placement}}}\n"
+
+    def depth_sdl(self) -> str:
+        geometry = self.plain() if self.plain is not None else self.geometry
+        # the texture comes after the matrix, so its pattern is evaluated in world coordinates
+        return f"object {{\n  {geometry}\n{self.placement}  texture {{ OM_DEPTH }}\n}}\n"
+
+
+def depth_texture(view: np.ndarray, far: float) -> str:
+    """A self-lit texture whose red channel is depth / far and green channel frac(256 depth / far).
+
+    Depth is the eye-space distance along the viewing axis,
+    ``-(view @ p).z``.  Two pigments are averaged, so each colour map goes
+    to 2 (the average halves it).  Decoded by :func:`decode_depth`.
+    """
+    row = -np.asarray(view, dtype=np.float64)[2]  # depth = row . (x, y, z, 1)
+    a, b, c, d = (sdl.number(v / far) for v in row)
+    f = f"({a})*x + ({b})*y + ({c})*z + ({d})"
+    coarse = f"function {{ min(max({f}, 0), 1) }} color_map {{ [0 rgb 0] [1 rgb <2,0,0>] }}"
+    fine = f"function {{ mod(max({f}, 0) * 256, 1) }} color_map {{ [0 rgb 0] [1 rgb <0,2,0>] }}"
+    return (
+        f"texture {{ pigment {{ average pigment_map {{ [1 {coarse}] [1 {fine}] }} }}"
+        " finish { ambient 0 diffuse 0 emission 1 } }"
+    )
+
+
+def decode_depth(rgb16: np.ndarray, far: float) -> np.ndarray:
+    """Depth from the 16-bit RGB depth-pass image (inf where the blue background shows)."""
+    r = rgb16[:, :, 0].astype(np.float64) / 65535.0
+    g = rgb16[:, :, 1].astype(np.float64) / 65535.0
+    coarse = r * 256.0
+    n = np.floor(coarse)
+    best = n + g
+    for k in (-1.0, 1.0):  # the fine digit decides between neighbouring coarse steps
+        cand = n + k + g
+        better = np.abs(cand - coarse) < np.abs(best - coarse)
+        best = np.where(better, cand, best)
+    depth = (best / 256.0 * far).astype(np.float32)
+    depth[coverage(rgb16) == 0] = np.inf
+    return depth
+
+
+def coverage(rgb16: np.ndarray) -> np.ndarray:
+    """(H, W) uint8 alpha of the depth pass: 255 on objects, 0 on the (blue) background."""
+    return np.where(rgb16[:, :, 2] < 32768, 255, 0).astype(np.uint8)

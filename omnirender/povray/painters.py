@@ -181,7 +181,7 @@ class TriangleSetPainter(ShapePainter):
             lin = np.asarray(colors, dtype=np.float64).copy()
             lin[:, :3] = srgb_to_linear(lin[:, :3])
             text = mesh2_text(vertices, indices, normals, uvs, lin, finish_name(engine), engine._owner())
-            engine.emit(text, None)
+            engine.emit(text, None, plain=lambda: mesh2_text(vertices, indices))
         else:
             text = mesh2_text(vertices, indices, normals, uvs, None, None, engine._owner())
             engine.emit(text, texture_name(engine, uv=uvs is not None))

@@ -168,3 +168,24 @@ def read_png(path: Path) -> Any:
 
     with PILImage.open(path) as img:
         return np.asarray(img.convert("RGBA"), dtype=np.uint8)
+
+
+def read_ppm(path: Path) -> Any:
+    """The (H, W, 3) array of a binary PPM (uint16 for 16-bit files; Pillow would drop to 8 bits)."""
+    import numpy as np
+
+    data = Path(path).read_bytes()
+    token = re.compile(rb"\s*(#[^\n]*\n|\S+)")
+    pos, fields = 0, []
+    while len(fields) < 4:
+        m = token.match(data, pos)
+        if m is None:
+            raise POVRayError(f"POV-Ray wrote a malformed PPM file {path}")
+        pos = m.end()
+        if not m.group(1).startswith(b"#"):
+            fields.append(m.group(1))
+    if fields[0] != b"P6":
+        raise POVRayError(f"POV-Ray wrote {fields[0]!r} instead of a binary PPM in {path}")
+    w, h, maxval = (int(v) for v in fields[1:])
+    dtype = ">u2" if maxval > 255 else "u1"
+    return np.frombuffer(data, dtype, count=w * h * 3, offset=pos + 1).reshape(h, w, 3).astype(np.uint16)

@@ -113,16 +113,17 @@ def test_parse_errors_carry_povrays_lines():
     assert "POV-Ray failed" in str(info.value)
 
 
-def test_temporary_files_are_removed_and_progress_is_reported():
-    before = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("omnirender-povray-")}
+def test_temporary_files_are_removed_and_progress_is_reported(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # a private temp folder: other runs cannot interfere
     seen = []
     s = om.Node("s")
     s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    s.add(om.Fog(mode="exp", density=0.1))  # two passes, more files
     s.add(om.Sphere())
-    _render(s, size=(64, 64), progress=lambda done, total: seen.append((done, total)))
-    after = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("omnirender-povray-")}
-    assert after == before
+    img = _render(s, size=(64, 64), progress=lambda done, total: seen.append((done, total)), depth=True)
+    assert list(tmp_path.iterdir()) == []
     assert seen and seen[-1] == (64 * 64, 64 * 64)
+    assert img.mask[32, 32] and not img.mask[0, 0]  # fog does not make the background opaque
 
 
 def test_timeout_stops_povray():
@@ -173,3 +174,31 @@ def test_every_conversion_parses_and_renders():
     assert img.mask.mean() > 0.3
     top = img.pixel(32, 1)
     assert top[3] == 0  # the background stays transparent (no om.Background)
+
+
+@pytest.mark.parametrize("ortho", [False, True], ids=["perspective", "orthographic"])
+def test_depth_pass_gives_eye_space_depth(ortho):
+    if ortho:
+        cam = om.Camera.orthographic(eye=(3, 2, 7), center=(0.3, 0.2, 0), height=4, far=100)
+    else:
+        cam = om.Camera.look_at(eye=(3, 2, 7), center=(0.3, 0.2, 0), fov=40, far=100)
+    s = om.Node("s")
+    s.add(cam)
+    moved = s.add(om.Node("moved"))
+    moved.add(om.Translation(1, 0.5, 0))
+    moved.add(om.Scaling(0.8))
+    moved.add(om.Sphere())
+    s.add(om.TriangleSet(vertices=[[-3, -1, -1], [-1, -1, -1], [-2, 0, -1]], colors=[[1, 0, 0]] * 3))
+    img = _render(s, depth=True)
+    o, d = pixel_rays(cam, SIZE)
+    oc = o - np.array([1, 0.5, 0])
+    b = np.sum(oc * d, -1)
+    disc = b * b - (np.sum(oc * oc, -1) - 0.64)
+    t = -b - np.sqrt(np.maximum(disc, 0))
+    forward = np.array([-2.7, -1.8, -7.0]) / np.linalg.norm([-2.7, -1.8, -7.0])
+    ref = np.where(disc >= 0, t * (d @ forward) + (o - cam.eye) @ forward, np.inf)
+    sphere = np.isfinite(ref)
+    assert np.abs(img.depth[sphere] - ref[sphere]).max() < 1e-4  # 16-bit coarse + fine digits of far=100
+    triangle = np.isfinite(img.depth) & ~sphere
+    assert triangle.sum() > 50  # the vertex-coloured mesh is in the depth pass too
+    assert np.array_equal(img.mask, np.isfinite(img.depth))
