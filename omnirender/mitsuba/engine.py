@@ -35,6 +35,14 @@ DEFAULT_INTEGRATOR: dict[str, Any] = {"type": "path", "max_depth": 8, "hide_emit
 #: A cheap pass for the pixel coverage (alpha) and depth: first hits only
 #: (Mitsuba's ``depth`` integrator writes the ray distance to R, G, B and the hit to A).
 COVERAGE_INTEGRATOR: dict[str, Any] = {"type": "depth"}
+#: The coverage pass for scenes with ``mask`` BSDFs (opacity, texture alpha), which the
+#: ``depth`` integrator does not see through: a short path tracer's alpha, depth as an AOV
+#: (channels R, G, B, A, depth).
+MASKED_COVERAGE_INTEGRATOR: dict[str, Any] = {
+    "type": "aov",
+    "aovs": "dd.y:depth",
+    "hits": {"type": "path", "max_depth": 2, "hide_emitters": True},
+}
 
 _WRAP = {"repeat": "repeat", "clamp": "clamp", "mirror": "mirror"}
 _FILTER = {"linear": "bilinear", "nearest": "nearest"}
@@ -88,6 +96,8 @@ class MitsubaEngine(Engine):
         self.surface_stack: list[Any] = []
         #: whether some shape got an area emitter (then emitters cannot be hidden)
         self.has_area_emitters = False
+        #: whether some BSDF is a ``mask`` (see-through parts change the coverage)
+        self.has_masks = False
         self._count = 0
         self._lights_converted = False
 
@@ -177,7 +187,9 @@ class MitsubaEngine(Engine):
 
     def _bsdf_dict(self, user, tex, material, color, two_sided, vertex_colors) -> dict[str, Any]:
         if user is not None:
-            return user.plugin_dict()
+            plugin = user.plugin_dict()
+            self.has_masks |= plugin.get("type") == "mask"
+            return plugin
         reflectance = None
         if tex is not None:
             reflectance = self._texture_dict(tex)
@@ -193,7 +205,15 @@ class MitsubaEngine(Engine):
             bsdf, opacity = convert.color_bsdf(color, reflectance), 1.0
         if color is not None:
             opacity *= color.a
-        return convert.wrap_bsdf(bsdf, float(opacity), two_sided)
+        bsdf = convert.wrap_bsdf(bsdf, float(opacity), two_sided)
+        if tex is not None and tex.image_array()[:, :, 3].min() < 255:
+            # the texture's alpha cuts the surface out (GL multiplies it into the alpha)
+            alpha = np.ascontiguousarray(tex.image_array()[::-1, :, 3:4].astype(np.float32) / 255.0)
+            cutout = {"type": "bitmap", "bitmap": mitsuba().Bitmap(alpha), "raw": True}
+            cutout["wrap_mode"] = _WRAP.get(tex.wrap, "repeat")
+            bsdf = {"type": "mask", "opacity": cutout, "material": bsdf}
+        self.has_masks |= bsdf["type"] == "mask"
+        return bsdf
 
     def _texture_dict(self, tex: Texture) -> dict[str, Any]:
         mi = mitsuba()
@@ -248,6 +268,10 @@ class MitsubaEngine(Engine):
             "component_format": "float32",
             "rfilter": {"type": rfilter},
         }
+
+    def coverage_integrator(self) -> dict[str, Any]:
+        """The integrator of the coverage/depth pass; its output has alpha in channel 3 and depth last."""
+        return dict(MASKED_COVERAGE_INTEGRATOR if self.has_masks else COVERAGE_INTEGRATOR)
 
     def integrator_dict(self, integrator: dict[str, Any] | None = None) -> dict[str, Any]:
         """The integrator to use: ``integrator``, else the scene's, else :data:`DEFAULT_INTEGRATOR`."""

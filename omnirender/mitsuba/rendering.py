@@ -14,7 +14,7 @@ from ..image import Image
 from ..scene import Node
 from . import convert, painters  # noqa: F401  (painters registers the default handlers)
 from ._mi import VARIANT, mitsuba
-from .engine import COVERAGE_INTEGRATOR, MitsubaEngine
+from .engine import MitsubaEngine
 
 __all__ = ["render", "develop", "eye_depth"]
 
@@ -66,7 +66,7 @@ def render(
     # alpha is 1 wherever an environment is visible.
     mi = mitsuba()
     hits = np.array(
-        mi.render(mi_scene, integrator=mi.load_dict(COVERAGE_INTEGRATOR), spp=min(spp, 64), seed=seed),
+        mi.render(mi_scene, integrator=mi.load_dict(engine.coverage_integrator()), spp=min(spp, 64), seed=seed),
         dtype=np.float32,
     )
     alpha = np.clip(hits[:, :, 3], 0.0, 1.0)
@@ -74,7 +74,7 @@ def render(
     hdr = np.concatenate([data[:, :, :3], alpha[..., None]], axis=2)
     camera, _ = engine.camera_or_default()
     image = develop(hdr, background=engine.background, premultiplied=premultiplied)
-    dmap = eye_depth(hits[:, :, 0], alpha, camera, size) if depth else None
+    dmap = eye_depth(hits[:, :, 4 if hits.shape[2] > 4 else 0], alpha, camera, size) if depth else None
     info = {
         "spp": spp,
         "variant": VARIANT,

@@ -291,3 +291,21 @@ def test_lines_and_points_are_drawn_pixels_wide_like_gl():
     quad = om.TriangleSet(vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], indices=[(0, 1, 2), (0, 2, 3)])
     img = om.render(_flat(camera, wire, quad), engine="mitsuba", size=(W, H), spp=16)
     assert not img.mask[H // 2 - 3, W // 2 - 8] and img.mask.sum() > 50  # hollow: edges only
+
+
+def test_texture_alpha_cuts_out_and_progress_rendering_in_chunks_agrees():
+    camera = om.Camera.look_at(eye=(0, 0, 4), center=(0, 0, 0), fov=40)
+    image = np.full((4, 4, 4), 255, np.uint8)
+    image[:, :2, 3] = 0  # left half transparent
+    quad = om.TriangleSet(
+        vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)],
+        indices=[(0, 1, 2), (0, 2, 3)],
+        texcoords=[(0, 0), (1, 0), (1, 1), (0, 1)],
+    )
+    scene = _flat(camera, om.Texture(image, filter="nearest"), quad)
+    img = om.render(scene, engine="mitsuba", size=(W, H), spp=8)
+    assert img.pixel(W // 2 - 6, H // 2)[3] == 0 and img.pixel(W // 2 + 6, H // 2)[3] == 255
+    chunked = om.render(scene, engine="mitsuba", size=(W, H), spp=8, progress=True)
+    assert np.mean(chunked.mask != img.mask) < 0.01  # same coverage
+    a, b = chunked.hdr[..., :3][img.mask], img.hdr[..., :3][img.mask]
+    assert abs(a.mean() - b.mean()) < 0.03 * b.mean()  # same radiance up to noise
