@@ -85,6 +85,18 @@ class GLTFEngine(NodeTrackingEngine):
         self._textures: dict[tuple, int] = {}
         self._lights: list[tuple[Any, np.ndarray]] = []
         self.triangle_count = 0
+        self._origin: str | None = None
+
+    def eval(self, shape: Any) -> None:
+        """Evaluate ``shape``, remembering the class of the outermost shape for the mesh names."""
+        if self._origin is not None:
+            super().eval(shape)
+            return
+        self._origin = type(shape).__name__
+        try:
+            super().eval(shape)
+        finally:
+            self._origin = None
 
     # -- structure ------------------------------------------------------------
     def _attach(self, index: int) -> None:
@@ -108,7 +120,12 @@ class GLTFEngine(NodeTrackingEngine):
         self._stack.pop()
 
     def add_primitive(self, kind: str, primitive: dict[str, Any]) -> int:
-        """Add a one-primitive mesh under a node placed by the current model matrix."""
+        """Add a one-primitive mesh under a node placed by the current model matrix.
+
+        Mesh and node are named after the shape the scene holds (``Torus``), not the
+        triangle set it was simplified to.
+        """
+        kind = self._origin or kind
         mesh = self.gltf.append("meshes", {"name": kind, "primitives": [primitive]})
         entry: dict[str, Any] = {"name": kind, "mesh": mesh}
         parent_world = self._stack[-1][1] if self._stack else np.eye(4)

@@ -224,3 +224,16 @@ def test_failed_export_leaves_no_file(tmp_path):
     with pytest.raises(ValueError):
         om.export(om.Node("s", [om.Sphere()]), target, size=(0, 10))
     assert not target.exists() and not list(tmp_path.iterdir())
+
+
+def test_mesh_nodes_are_named_after_the_scene_shapes_and_color_follows_gl_rules():
+    scene = om.Node("s")
+    scene.add(om.Material(diffuse=(1, 0, 0)))
+    scene.add(om.Color(0, 0, 1, 0.5))
+    scene.add(om.Torus())
+    scene.add(om.Node("n", [om.Color(0, 1, 0), om.Material(diffuse=(1, 1, 0)), om.Box()]))
+    doc, _ = _parse(gltf.to_bytes(scene))
+    assert [m["name"] for m in doc["meshes"]] == ["Torus", "Box"]
+    torus, box = (doc["materials"][m["primitives"][0]["material"]] for m in doc["meshes"])
+    assert torus["pbrMetallicRoughness"]["baseColorFactor"] == pytest.approx([0, 0, 1, 0.5])
+    assert box["pbrMetallicRoughness"]["baseColorFactor"] == pytest.approx([1, 1, 0, 1])  # Color before: ignored

@@ -192,3 +192,10 @@ def test_om_rib_is_the_surface_attribute():
     s = om.rib.Surface("metal", Ks=0.9)
     assert s.parameters() == {"name": "metal", "Ks": 0.9}
     assert s.rib() == 'Surface "metal" "Ks" [0.9]'
+
+
+def test_color_after_material_replaces_its_colour():
+    scene = om.Node("s", [om.Material(diffuse=(1, 0, 0), opacity=0.5), om.Color(0, 0, 1), om.Sphere()])
+    args = dict(parse(rib.to_text(scene)))
+    assert args["Color"] == [[0.0, 0.0, 1.0]] and args["Opacity"] == [[0.5, 0.5, 0.5]]
+    assert args["Surface"][0] == "matte"
