@@ -180,10 +180,20 @@ class MitsubaEngine(Engine):
         )
         found = self._bsdfs.get(key)
         if found is None:
-            found = self._bsdfs[key] = mitsuba().load_dict(
-                self._bsdf_dict(user, tex, material, color, two_sided, vertex_colors)
-            )
+            plugin = self._bsdf_dict(user, tex, material, color, two_sided, vertex_colors)
+            found = self._bsdfs[key] = self.instantiate(plugin, "om.mitsuba.BSDF" if user is not None else "BSDF")
         return found
+
+    def instantiate(self, plugin: dict[str, Any], what: str) -> Any:
+        """``mi.load_dict(plugin)``; Mitsuba's refusal becomes a ValueError naming ``what`` and the node."""
+        try:
+            return mitsuba().load_dict(plugin)
+        except RuntimeError as exc:
+            where = self.node_path or "/"
+            raise ValueError(
+                f"{what} {plugin.get('type')!r} in node {where}: Mitsuba rejected the plugin dict: {exc}; "
+                f"check the plugin name and parameters against Mitsuba's plugin reference"
+            ) from None
 
     def _bsdf_dict(self, user, tex, material, color, two_sided, vertex_colors) -> dict[str, Any]:
         if user is not None:
@@ -234,7 +244,7 @@ class MitsubaEngine(Engine):
         areas = [e for e in self.poly(Emitter) if e.is_area]
         if areas:
             self.has_area_emitters = True
-            return mi.load_dict(areas[-1].plugin_dict())
+            return self.instantiate(areas[-1].plugin_dict(), "om.mitsuba.Emitter")
         material, _ = self.surface()
         if material is not None and max(material.emission) > 0.0:
             self.has_area_emitters = True
@@ -323,4 +333,12 @@ class MitsubaEngine(Engine):
 
     def load(self, **options: Any) -> Any:
         """Instantiate the scene of the last traversal as an ``mi.Scene`` (options: see :meth:`scene_dict`)."""
-        return mitsuba().load_dict(self.scene_dict(**options))
+        d = self.scene_dict(**options)
+        try:
+            return mitsuba().load_dict(d)
+        except RuntimeError as exc:
+            raise ValueError(
+                f"MitsubaEngine: Mitsuba could not build the scene (integrator {d['integrator'].get('type')!r}, "
+                f"{len(self.emitters)} emitters, {len(self.shapes)} shapes): {exc}; check om.mitsuba.Integrator "
+                f"and om.mitsuba.Emitter plugin dicts"
+            ) from None

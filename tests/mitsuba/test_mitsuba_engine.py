@@ -309,3 +309,12 @@ def test_texture_alpha_cuts_out_and_progress_rendering_in_chunks_agrees():
     assert np.mean(chunked.mask != img.mask) < 0.01  # same coverage
     a, b = chunked.hdr[..., :3][img.mask], img.hdr[..., :3][img.mask]
     assert abs(a.mean() - b.mean()) < 0.03 * b.mean()  # same radiance up to noise
+
+
+def test_mitsuba_refusals_name_the_plugin_and_node():
+    bad = om.Node("scene", [om.Node("shiny", [om.mitsuba.BSDF({"type": "no_such_bsdf"}), om.Sphere()])])
+    with pytest.raises(ValueError, match=r"om.mitsuba.BSDF 'no_such_bsdf' in node /scene/shiny"):
+        om.render(bad, engine="mitsuba", size=(8, 8), spp=1)
+    bad = om.Node("scene", [om.mitsuba.Integrator({"type": "no_such_integrator"}), om.Sphere()])
+    with pytest.raises(ValueError, match="no_such_integrator"):
+        om.render(bad, engine="mitsuba", size=(8, 8), spp=1)
