@@ -5,7 +5,9 @@ painters (``painters.py``) call :meth:`POVRayEngine.emit` with the geometry
 text of one object and the engine adds the texture, interior, model matrix,
 clip planes and object-level ``Raw`` text from the rendering context.  Like
 the GL engine, a global ambient of 0.2 is added to the lights' ambient terms
-and a scene without lights gets a headlight.  Lights,
+and a scene without lights gets a headlight.  Objects under a ``LightSwitch``
+that leaves only some lights on are wrapped in a ``light_group`` with copies
+of those lights (``global_lights off``).  Lights,
 background, fog and global settings are recorded by attribute painters;
 :meth:`POVRayEngine.sdl` assembles the file.  The engine writes the scene in
 omnirender's right-handed world coordinates unchanged and gives the camera
@@ -23,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core import Camera, Engine, Technique
+from ..core import Camera, Engine, LightSwitch, Technique
 from . import sdl
 from .attributes import GlobalSettings, Interior, Raw
 
@@ -100,6 +102,8 @@ class POVRayEngine(Engine):
         self.fog: Any = None
         self.ambient = np.full(3, GLOBAL_AMBIENT)
         self.light_count = 0
+        #: id(light) -> its light_source text (for light groups under a LightSwitch)
+        self.light_texts: dict[int, str] = {}
         self.global_settings: GlobalSettings | None = None
         self.camera_text: str | None = None
         self._declared: dict[Any, str] = {}
@@ -158,16 +162,20 @@ class POVRayEngine(Engine):
                 placement.append(f"  {raw.text}\n")
         interior = self.mono(Interior)
         path = self.node_path
-        self.objects.append(
-            _Object(
-                sdl.comment(path) + "\n" if path else "",
-                geometry,
-                f"  texture {{ {texture} }}\n" if texture else "",
-                f"  {interior.sdl()}\n" if interior is not None else "",
-                "".join(placement),
-                plain,
-            )
+        obj = _Object(
+            sdl.comment(path) + "\n" if path else "",
+            geometry,
+            f"  texture {{ {texture} }}\n" if texture else "",
+            f"  {interior.sdl()}\n" if interior is not None else "",
+            "".join(placement),
+            plain,
         )
+        if self.mono(LightSwitch) is not None:
+            lit = [id(light) for light, _ in self.lights()]
+            if len(lit) != len(self.light_texts) or any(i not in self.light_texts for i in lit):
+                # only some lights reach this object: a light group with copies of them
+                obj.group = "".join(self.light_texts[i] for i in lit if i in self.light_texts)
+        self.objects.append(obj)
 
     def _owner(self) -> str:
         path = self.node_path
@@ -243,16 +251,20 @@ def _rgb(attr: Any) -> tuple[float, float, float]:
 class _Object:
     """One object of the scene file, kept in parts so the depth pass can re-texture it."""
 
-    __slots__ = ("head", "geometry", "texture", "interior", "placement", "plain")
+    __slots__ = ("head", "geometry", "texture", "interior", "placement", "plain", "group")
 
     def __init__(
         self, head: str, geometry: str, texture: str, interior: str, placement: str, plain: Callable[[], str] | None
     ) -> None:
         self.head, self.geometry, self.texture = head, geometry, texture
         self.interior, self.placement, self.plain = interior, placement, plain
+        self.group: str | None = None  # light_source texts when a LightSwitch leaves only some lights on
 
     def sdl(self) -> str:
-        return f"{self.head}object {{\n  {self.geometry}\n{self.texture}{self.interior}{self.placement}}}\n"
+        text = f"object {{\n  {self.geometry}\n{self.texture}{self.interior}{self.placement}}}\n"
+        if self.group is not None:
+            text = f"light_group {{\n{self.group}{text}global_lights off\n}}\n"
+        return self.head + text
 
     def depth_sdl(self) -> str:
         geometry = self.plain() if self.plain is not None else self.geometry

@@ -341,6 +341,7 @@ class LightPainter(AttributePainter):
                 )
             text += " }\n"
         engine.lights_sdl.append(text)
+        engine.light_texts[id(light)] = text
 
 
 for _cls in (SpotLight, DirectionalLight, AmbientLight):

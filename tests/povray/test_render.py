@@ -202,3 +202,13 @@ def test_depth_pass_gives_eye_space_depth(ortho):
     triangle = np.isfinite(img.depth) & ~sphere
     assert triangle.sum() > 50  # the vertex-coloured mesh is in the depth pass too
     assert np.array_equal(img.mask, np.isfinite(img.depth))
+
+
+def test_light_switch_limits_lights_to_a_subgraph():
+    a, b = om.PointLight(position=(5, 0, 3)), om.PointLight(position=(-5, 0, 3))
+    s = om.Node("s", [om.Camera.look_at(eye=(0, 0, 8)), a, b])
+    s.add(om.Node("only_a", [om.Translation(-1.2, 0, 0), om.LightSwitch(on=True, lights=[a]), om.Sphere()]))
+    s.add(om.Node("both", [om.Translation(1.2, 0, 0), om.Sphere()]))
+    img = _render(s, size=(160, 80))
+    assert img.pixel(48, 40)[0] < 40 < img.pixel(74, 40)[0]  # only the light on the right reaches it
+    assert img.pixel(86, 40)[0] > 100 and img.pixel(112, 40)[0] > 100  # both lights

@@ -240,3 +240,15 @@ def test_component_lists_and_unknown_options():
     s = _scene(om.Node("a", [om.Sphere()], groups=["debug"]), om.Node("b", [om.Box()]))
     text, _ = scene_sdl(s, mask="!debug")
     assert "sphere" not in text and "box" in text
+
+
+def test_light_switch_makes_light_groups():
+    a, b = om.PointLight(position=(5, 0, 0)), om.PointLight(position=(-5, 0, 0))
+    only_a = om.Node("only_a", [om.LightSwitch(on=True, lights=[a]), om.Sphere()])
+    dark = om.Node("dark", [om.LightSwitch(on=False), om.Box()])
+    text, _ = scene_sdl(_scene(a, b, only_a, dark, om.Cylinder()))
+    groups = re.findall(r"light_group \{\n(.*?)global_lights off\n\}", text, re.S)
+    assert len(groups) == 2
+    assert "<5,0,0>" in groups[0] and "<-5,0,0>" not in groups[0] and "sphere" in groups[0]
+    assert "light_source" not in groups[1] and "box" in groups[1]
+    assert "cylinder" not in "".join(groups)  # unswitched objects see every light
