@@ -108,6 +108,8 @@ class GLEngine(Engine):
     """
 
     service = "gl.paint"
+    #: Drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind.
+    _default_drawers: dict[str, Any] = {}
 
     def __init__(
         self,
@@ -120,6 +122,9 @@ class GLEngine(Engine):
         on_missing: str = "raise",
         mask: Any = None,
     ) -> None:
+        from . import _load
+
+        _load()  # painters register on first use
         super().__init__(technique=technique or GLTechnique(), on_missing=on_missing, mask=mask)
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
@@ -160,7 +165,7 @@ class GLEngine(Engine):
         self._fill = "filled"
         self._transient: dict[Any, tuple[Any, Any, int]] = {}
         self._gl_state: dict[str, Any] = {}
-        self._drawers: dict[str, Any] = {}
+        self._drawers: dict[str, Any] = GLEngine._default_drawers
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
         self.stats: dict[str, Any] = {}
         self._view = np.eye(4)
