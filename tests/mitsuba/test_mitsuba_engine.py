@@ -318,3 +318,15 @@ def test_mitsuba_refusals_name_the_plugin_and_node():
     bad = om.Node("scene", [om.mitsuba.Integrator({"type": "no_such_integrator"}), om.Sphere()])
     with pytest.raises(ValueError, match="no_such_integrator"):
         om.render(bad, engine="mitsuba", size=(8, 8), spp=1)
+
+
+def test_orthographic_depth_and_nearer_shapes_have_smaller_depth():
+    camera = om.Camera.orthographic(eye=(0, 0, 5), center=(0, 0, 0), height=4)
+    near = om.Node("near", [om.Translation(-1, 0, 1), om.Box(size=(1, 1, 1))])  # front face at z = 1.5
+    far = om.Node("far", [om.Translation(1, 0, -1), om.Box(size=(1, 1, 1))])  # front face at z = -0.5
+    img = om.render(_flat(camera, near, far), engine="mitsuba", size=(W, H), spp=4)
+    x_near, y = _project(camera, (-1, 0, 1))
+    x_far, _ = _project(camera, (1, 0, -1))
+    assert img.depth[int(y), int(x_near)] == pytest.approx(3.5, rel=1e-3)
+    assert img.depth[int(y), int(x_far)] == pytest.approx(5.5, rel=1e-3)
+    assert np.isinf(img.depth[2, 2])
