@@ -81,8 +81,30 @@ class Engine:
             self._eval_node,
             self._run_technique,
         ]
+        cls = type(self)
+        if cls.on_enter is not Engine.on_enter or cls.on_leave is not Engine.on_leave:
+            self._ops[7] = self._enter_hooked
+            self._ops[8] = self._leave_hooked
         self._technique: Technique = technique if technique is not None else Technique()
         self._select_caches()
+
+    # -- node hooks -------------------------------------------------------
+    def on_enter(self, node: Any) -> None:
+        """Called before a node's contents are evaluated (override in subclasses).
+
+        Engines that mirror the graph's structure (exporters, the GL engine's
+        per-node caches) use it; the plain engine does not pay for it.
+        """
+
+    def on_leave(self, node: Any) -> None:
+        """Called after a node's contents were evaluated and undone."""
+
+    def _enter_hooked(self, node: Any) -> None:
+        self._node_stack.append(node)
+        self.on_enter(node)
+
+    def _leave_hooked(self, _arg: Any) -> None:
+        self.on_leave(self._node_stack.pop())
 
     # -- technique ----------------------------------------------------------
     @property

@@ -2,8 +2,7 @@
 
 Exporters mirror the scene graph's structure (glTF nodes, RIB attribute
 blocks), so they need to know where nodes begin and end, and the model matrix
-at that moment.  The hooks replace the engine's ENTER/LEAVE micro-program ops
-and keep the engine's own node stack (and thus ``node_path``) intact.
+at that moment.  The core engine's ``on_enter`` / ``on_leave`` hooks provide that.
 """
 
 from __future__ import annotations
@@ -14,7 +13,6 @@ import numpy as np
 
 from ..attributes import Color, Material, PBRMaterial
 from ..core import AttributePainter, Engine, default_for
-from ..core.program import ENTER, LEAVE
 
 __all__ = ["NodeTrackingEngine", "track_surfaces"]
 
@@ -24,11 +22,6 @@ class NodeTrackingEngine(Engine):
 
     def __init__(self, **options: Any) -> None:
         super().__init__(**options)
-        ops = self._ops
-        if not isinstance(ops, list):  # the core keeps a mutable op table; be tolerant of a tuple
-            ops = self._ops = list(ops)
-        ops[ENTER] = self._enter_op
-        ops[LEAVE] = self._leave_op
         #: Color / Material / PBRMaterial in activation order (kept by :func:`track_surfaces` painters)
         self.surface_stack: list[Any] = []
 
@@ -45,12 +38,10 @@ class NodeTrackingEngine(Engine):
                 break
         return material, color
 
-    def _enter_op(self, node: Any) -> None:
-        self._node_stack.append(node)
+    def on_enter(self, node: Any) -> None:
         self.enter_node(node, self.model_matrix())
 
-    def _leave_op(self, _arg: Any) -> None:
-        node = self._node_stack.pop()
+    def on_leave(self, node: Any) -> None:
         self.leave_node(node)
 
     def enter_node(self, node: Any, world: np.ndarray) -> None:

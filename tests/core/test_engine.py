@@ -516,3 +516,19 @@ def test_transforms_rebuild_from_their_parameters():
         again = type(t)(**t.parameters())
         assert again.parameters() == t.parameters()
         np.testing.assert_array_equal(again.matrix, t.matrix)
+
+
+def test_node_hooks_see_structure_and_paths():
+    events = []
+
+    class Hooked(Recorder):
+        def on_enter(self, node):
+            events.append(("enter", self.node_path))
+
+        def on_leave(self, node):
+            events.append(("leave", node.name))
+
+    engine = Hooked()
+    engine.install(RecordS())
+    om.Node("a", [om.Node("b", [S()])]).evaluate(engine)
+    assert events == [("enter", "/a"), ("enter", "/a/b"), ("leave", "b"), ("leave", "a")]
