@@ -8,7 +8,7 @@ import numpy as np
 
 from ..core.transform import Matrix, Transform
 from .frame import ViewCamera
-from .renderable import TRANSPARENT, TWO_DIMENSIONAL, NodeRenderable
+from .renderable import TRANSPARENT, NodeRenderable
 
 __all__ = ["pick_in_viewer", "viewer_camera", "PickHighlight", "shape_world_matrix"]
 
@@ -62,7 +62,12 @@ def shape_world_matrix(root: Any, path: str, shape: Any) -> np.ndarray:
 
 
 class PickHighlight:
-    """Overlay renderable drawing a picked shape translucent in the highlight colour, on top of everything."""
+    """Renderable drawing a picked shape again, translucent in the highlight colour, over its visible parts.
+
+    It is drawn in the transparent pass with the depth test ``lequal``, so the
+    copy covers exactly the visible pixels of the shape (the same geometry lies
+    at the same depth) and nothing in front of it.
+    """
 
     def __init__(self, root: Any, path: str, shape: Any, color: tuple[float, float, float] = (1.0, 0.85, 0.1)) -> None:
         self.root = root
@@ -79,7 +84,7 @@ class PickHighlight:
     def render(self, renderer: Any, flags: int) -> None:
         from ..attributes import Color, Highlight
 
-        attributes = [Matrix(self._matrix), Color(*self.color, a=0.5), Highlight(self.color)]
+        attributes = [Matrix(self._matrix), Color(*self.color, a=0.5), Highlight(self.color), *_depth_lequal()]
         for a in attributes:
             renderer.push(a)
         try:
@@ -92,4 +97,13 @@ class PickHighlight:
         pass
 
     def render_hints(self) -> int:
-        return TRANSPARENT | TWO_DIMENSIONAL
+        return TRANSPARENT
+
+
+def _depth_lequal() -> list[Any]:
+    """``gl.DepthTest(func="lequal")`` when the GL adapter is there (other engines ignore it)."""
+    try:
+        from ..gl.attributes import DepthTest
+    except ImportError:
+        return []
+    return [DepthTest(enabled=True, func="lequal")]

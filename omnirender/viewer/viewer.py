@@ -405,13 +405,13 @@ class Viewer:
 
     # -- window --------------------------------------------------------------
     def close(self) -> None:
-        """Close the window (if any) and release the engine."""
-        if self.window is not None:
-            self.window.close()
-            self.window = None
+        """Release the engine, then close the window (if any): GPU objects go while their context lives."""
         if self._driver is not None:
             self._driver.release()
             self._driver = None
+        if self.window is not None:
+            self.window.close()
+            self.window = None
 
     def __repr__(self) -> str:
         w, h = self._size

@@ -377,15 +377,25 @@ class Window:
         self._glfw.set_window_title(self.handle, title)
 
     def close(self) -> None:
+        """Stop the update thread, release the window's GPU objects and destroy it (the viewer's engine first)."""
         self._stop.set()
         if self._update_thread is not None:
             self._update_thread.join(timeout=5)
-        if not self._closed:
-            self._closed = True
-            if self._texture is not None:
-                self._texture.release()
-            self._glfw.destroy_window(self.handle)
-            self.handle = None
+        if self._closed:
+            return
+        self._closed = True
+        driver = getattr(self.viewer, "_driver", None)
+        if driver is not None and getattr(driver.engine, "ctx", None) is self.ctx:
+            driver.release()
+            self.viewer._driver = None
+        self._glfw.make_context_current(self.handle)
+        for obj in (self._texture, self._vao, self._program):
+            if obj is not None:
+                obj.release()
+        self._texture = None
+        self._glfw.make_context_current(None)
+        self._glfw.destroy_window(self.handle)
+        self.handle = None
 
 
 def view(

@@ -193,7 +193,7 @@ def test_pick_highlight_overlay(viewer):
     viewer.set_picked(hit)
     after = viewer.rerender()
     p0, p1 = before.pixel(x, y), after.pixel(x, y)
-    assert p1[0] > p0[0] + 60  # yellow-ish overlay on the picked sphere
+    assert p1[0] > p0[0] + 40 and p1[1] > p0[1] + 40 and p1[2] < p0[2]  # yellow-ish overlay on the blue sphere
     assert after.pixel(40, 60) == before.pixel(40, 60)  # the box is untouched
     viewer.set_picked(None)
     assert np.array_equal(viewer.rerender().array, before.array)

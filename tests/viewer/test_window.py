@@ -191,8 +191,7 @@ def test_frame_rate_is_independent_of_a_slow_application_update(window):
     assert 1 <= len(calls) <= 4
     assert drawn >= 10, drawn  # many frames while the update ran 3 slow steps
     assert slowest < 0.25
-    window.close()
-    window.viewer.window = None
+    window.viewer.close()
     moved = centroid_x(red_mask(window.last_frame))
     assert moved > start + 5  # the updates were applied and shown
 
