@@ -12,6 +12,7 @@ viewer applies automatically when a Node is added.
 
 from __future__ import annotations
 
+import weakref
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -25,6 +26,9 @@ __all__ = [
     "as_renderable",
     "node_render_hints",
     "node_bounds",
+    "node_prerender",
+    "node_render",
+    "node_update_bounds",
 ]
 
 #: Hint/flag: drawn after opaque renderables, back to front, with blending.
@@ -120,6 +124,32 @@ def as_renderable(obj: Any) -> Any:
         f"{type(obj).__name__} is not renderable: it lacks {', '.join(missing)}; implement the "
         f"om.IsRenderable protocol or add an om.Node"
     )
+
+
+# -- the IsRenderable methods of om.Node delegate to these -----------------------------------
+_node_cache: weakref.WeakKeyDictionary[Any, NodeRenderable] = weakref.WeakKeyDictionary()
+
+
+def _adapter(node: Any) -> NodeRenderable:
+    adapter = _node_cache.get(node)
+    if adapter is None:
+        adapter = _node_cache[node] = NodeRenderable(node)
+    return adapter
+
+
+def node_prerender(node: Any, render_list: Any) -> None:
+    """``Node.prerender``: what :meth:`NodeRenderable.prerender` does."""
+    _adapter(node).prerender(render_list)
+
+
+def node_render(node: Any, renderer: Any, flags: int = 0) -> None:
+    """``Node.render``: evaluate the node with ``renderer`` (highlighted with the HIGHLIGHT flag)."""
+    _adapter(node).render(renderer, flags)
+
+
+def node_update_bounds(node: Any, pmin: np.ndarray, pmax: np.ndarray) -> None:
+    """``Node.update_bounds``: grow ``pmin``/``pmax`` by the node's world box (cached per version)."""
+    _adapter(node).update_bounds(pmin, pmax)
 
 
 def node_render_hints(node: Any) -> int:

@@ -259,3 +259,29 @@ def test_bad_renderables_and_sizes_are_rejected(recorder):
         v.background = (2, 0, 0)
     v.set_background_color((1, 0, 0))
     assert v.get_background_color() == (1.0, 0.0, 0.0, 1.0)
+
+
+def test_node_renderable_functions_for_node_methods(recorder):
+    from omnirender.viewer import renderable as rmod
+
+    scene = om.Node("scene")
+    scene.add(om.Material(diffuse=(1, 0, 0), opacity=0.5))
+    scene.add(om.Box(size=(2, 2, 2), center=(1, 0, 0)))
+    assert rmod.node_render_hints(scene) == TRANSPARENT
+    pmin, pmax = np.full(3, np.inf), np.full(3, -np.inf)
+    rmod.node_update_bounds(scene, pmin, pmax)
+    assert np.allclose(pmin, (0, -1, -1)) and np.allclose(pmax, (2, 1, 1))
+    scene.add(om.Text("label", (0, 0, 0), 12))
+    assert rmod.node_render_hints(scene) == TRANSPARENT | TWO_DIMENSIONAL
+    rl = RenderList()
+    rmod.node_prerender(scene, rl)
+    seen = []
+    probe = om.Node("probe", [Dot("d")])
+    rmod.node_render(probe, recorder, 0)
+    seen = recorder.drawn()
+    assert seen == ["d"]
+    # a node drawn by a viewer lands in the sublist its hints say
+    v = Viewer(engine=recorder)
+    v.add_renderable(scene)
+    v.rerender()
+    assert len(v.render_list.transparent_2d) == 1

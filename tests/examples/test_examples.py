@@ -1,0 +1,96 @@
+"""Every example runs as a script and writes a non-blank image into the folder it is given."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def run_example(name: str, out: Path) -> str:
+    result = subprocess.run(
+        [sys.executable, str(EXAMPLES / name), str(out)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=EXAMPLES.parent,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    return result.stdout
+
+
+def check_image(path: Path, min_colors: int = 50) -> np.ndarray:
+    from PIL import Image
+
+    assert path.is_file(), f"{path} was not written"
+    rgb = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    assert rgb.std() > 10, f"{path.name} looks blank"
+    colors = len(np.unique(rgb.reshape(-1, 3), axis=0))
+    assert colors >= min_colors, f"{path.name} has only {colors} colours"
+    return rgb
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_01_two_engines(tmp_path):
+    out = run_example("01_two_engines.py", tmp_path)
+    both = check_image(tmp_path / "01-two-engines.png")
+    gl = check_image(tmp_path / "01-gl-preview.png")
+    pov = check_image(tmp_path / "01-povray-final.png")
+    assert both.shape[1] == gl.shape[1] + pov.shape[1] + 4  # side by side
+    assert (tmp_path / "knot.obj").is_file() and "01-two-engines.png" in out
+    # the knot (orange) is in the middle of both renders
+    for img in (gl, pov):
+        h, w, _ = img.shape
+        centre = img[h // 3 : 2 * h // 3, w // 3 : 2 * w // 3]
+        orange = (centre[:, :, 0] > centre[:, :, 2] + 60).mean()
+        assert orange > 0.2
+
+
+@pytest.mark.gl
+def test_02_data_sequences(tmp_path):
+    run_example("02_data_sequences.py", tmp_path)
+    img = check_image(tmp_path / "02-data-sequences.png")
+    yellowish = (img[:, :, 0] > 200) & (img[:, :, 1] > 150) & (img[:, :, 2] < 150)
+    magenta = (img[:, :, 0] > 180) & (img[:, :, 1] < 150) & (img[:, :, 2] > 100)
+    assert yellowish.sum() > 200 and magenta.sum() > 200  # both alternating colours show
+
+
+@pytest.mark.gl
+def test_03_custom_shape(tmp_path):
+    out = run_example("03_custom_shape.py", tmp_path)
+    img = check_image(tmp_path / "03-custom-shape.png")
+    h, w, _ = img.shape
+    left, right = img[:, : w // 2], img[:, w // 2 :]
+    assert (left[:, :, 2] > left[:, :, 0] + 60).sum() > 2000  # blue stars from the simplifier
+    assert (right[:, :, 0] > right[:, :, 2] + 60).sum() > 2000  # orange stars from the painter
+    assert "picked: /scene/simplified/" in out and "StarPrism" in out
+    lines = EXAMPLES.joinpath("03_custom_shape.py").read_text().splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.startswith("class StarPrism"))
+    end = next(i for i, ln in enumerate(lines) if ln.startswith("# --- using them"))
+    assert len([ln for ln in lines[start:end] if ln.strip()]) < 40  # "a custom shape in under 40 lines"
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_04_simulation(tmp_path):
+    out = run_example("04_simulation.py", tmp_path)
+    img = check_image(tmp_path / "04-simulation.png")
+    assert img.shape[1] > 4 * 320  # four moments and the top view
+    frames = [img[:, i * 324 : i * 324 + 320] for i in range(4)]
+    assert not np.array_equal(frames[0], frames[3])  # the balls moved
+    assert "physics steps" in out
+
+
+@pytest.mark.gl
+def test_05_picking(tmp_path):
+    out = run_example("05_picking.py", tmp_path)
+    check_image(tmp_path / "05-picking.png")
+    assert "/scene/toys/ball" in out and "/scene/toys/ring" in out and "/scene/toys/cone" in out
+    assert "nothing (background)" in out
