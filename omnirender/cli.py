@@ -196,7 +196,6 @@ def engine_support(scene: Any) -> dict[str, str]:
     """Engine name -> whether it can render every shape class in ``scene`` (by handler look-up)."""
     import importlib
 
-    from .core.engine import Engine
     from .core.handler import SIMPLIFY, registry
     from .render import _engines, engines
 
@@ -213,14 +212,7 @@ def engine_support(scene: Any) -> dict[str, str]:
         except Exception as exc:
             out[name] = f"cannot import {module_name}: {exc}"
             continue
-        engine_cls = next(
-            (
-                v
-                for v in vars(module).values()
-                if isinstance(v, type) and issubclass(v, Engine) and v is not Engine and v.service != Engine.service
-            ),
-            None,
-        )
+        engine_cls = _engine_class(module)
         if engine_cls is None:
             out[name] = "available (no engine class to check handlers against)"
             continue
@@ -233,6 +225,21 @@ def engine_support(scene: Any) -> dict[str, str]:
                 missing.append(cls.__name__)
         out[name] = "can render it" if not missing else f"cannot render: no handler for {', '.join(missing)}"
     return out
+
+
+def _engine_class(module: Any) -> Any:
+    """The engine class an adapter module exports (``GLEngine``, ``POVRayEngine``...), or None."""
+    from .core.engine import Engine
+
+    names = [n for n in getattr(module, "__all__", ()) if n.endswith("Engine")] + list(vars(module))
+    for name in names:
+        try:
+            value = getattr(module, name)
+        except AttributeError:
+            continue
+        if isinstance(value, type) and issubclass(value, Engine) and value.service != Engine.service:
+            return value
+    return None
 
 
 def _is_shape(component: Any) -> bool:
