@@ -252,3 +252,18 @@ def test_light_switch_makes_light_groups():
     assert "<5,0,0>" in groups[0] and "<-5,0,0>" not in groups[0] and "sphere" in groups[0]
     assert "light_source" not in groups[1] and "box" in groups[1]
     assert "cylinder" not in "".join(groups)  # unswitched objects see every light
+
+
+def test_engine_micro_program():
+    e = POVRayEngine((320, 240))
+    mat, rot, torus = om.Material(diffuse=(1, 0, 0)), om.Rotation(180, (0, 1, 0)), om.Torus()
+    e.push(mat)
+    e.push(rot)
+    e.eval(torus)
+    e.pop(rot.category)
+    e.pop(mat.category)
+    e.eval(om.Sphere())
+    text = e.sdl()
+    assert "torus { 1, 0.25 }" in text and re.search(r"matrix <-1,0,[-0-9.e]+,0,1,0,[-0-9.e]+,0,-1,0,0,0>", text)
+    assert text.count("#declare OM_T") == 2  # red for the torus, the default grey for the sphere
+    assert e.context.is_empty()
