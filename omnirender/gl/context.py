@@ -105,6 +105,27 @@ class RawGL:
             self._op.argtypes = [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]
             self._mask = lib.glStencilMask
             self._mask.argtypes = [ctypes.c_uint]
+            for name, args in (
+                ("glGenFramebuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                ("glGenRenderbuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                ("glDeleteRenderbuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                ("glBindFramebuffer", [ctypes.c_uint, ctypes.c_uint]),
+                ("glBindRenderbuffer", [ctypes.c_uint, ctypes.c_uint]),
+                (
+                    "glRenderbufferStorageMultisample",
+                    [ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_int, ctypes.c_int],
+                ),
+                ("glFramebufferRenderbuffer", [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]),
+                ("glCheckFramebufferStatus", [ctypes.c_uint]),
+                ("glClearStencil", [ctypes.c_int]),
+                ("glClear", [ctypes.c_uint]),
+                ("glGetIntegerv", [ctypes.c_uint, ctypes.POINTER(ctypes.c_int)]),
+                ("glColorMask", [ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte]),
+                ("glDepthMask", [ctypes.c_ubyte]),
+            ):
+                fn = getattr(lib, name)
+                fn.argtypes = args
+                setattr(self, name, fn)
 
     def stencil(self, ctx: Any, state: tuple | None) -> None:
         """Apply ``(func, ref, mask, fail, zfail, zpass, write_mask)`` or disable the stencil test (None)."""
@@ -118,3 +139,66 @@ class RawGL:
         self._func(_STENCIL_FUNCS[func], int(ref), int(mask) & 0xFFFFFFFF)
         self._op(_STENCIL_OPS[fail], _STENCIL_OPS[zfail], _STENCIL_OPS[zpass])
         self._mask(int(write) & 0xFFFFFFFF)
+
+
+GL_FRAMEBUFFER = 0x8D40
+GL_RENDERBUFFER = 0x8D41
+GL_COLOR_ATTACHMENT0 = 0x8CE0
+GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
+GL_DEPTH24_STENCIL8 = 0x88F0
+GL_FRAMEBUFFER_COMPLETE = 0x8CD5
+GL_STENCIL_BUFFER_BIT = 0x400
+GL_FRAMEBUFFER_BINDING = 0x8CA6
+
+
+def depth_stencil_framebuffer(ctx: Any, raw: RawGL, color: Any, size: tuple[int, int], samples: int) -> Any:
+    """A framebuffer with ``color`` (a moderngl renderbuffer) and a 24/8 depth-stencil renderbuffer, or None.
+
+    moderngl offers no stencil attachment; the framebuffer is built with raw GL
+    calls and wrapped with ``ctx.detect_framebuffer``.  Returns None when the
+    raw entry points are unavailable or the driver rejects the format.
+    """
+    if not raw.available:
+        return None
+    try:
+        previous = ctypes.c_int(0)
+        raw.glGetIntegerv(GL_FRAMEBUFFER_BINDING, ctypes.byref(previous))
+        fbo = ctypes.c_uint(0)
+        rbo = ctypes.c_uint(0)
+        raw.glGenFramebuffers(1, ctypes.byref(fbo))
+        raw.glGenRenderbuffers(1, ctypes.byref(rbo))
+        raw.glBindRenderbuffer(GL_RENDERBUFFER, rbo.value)
+        raw.glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH24_STENCIL8, size[0], size[1])
+        raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color.glo)
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, rbo.value)
+        ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+        raw.glBindFramebuffer(GL_FRAMEBUFFER, previous.value)
+        if not ok:
+            raw.glDeleteRenderbuffers(1, ctypes.byref(rbo))
+            return None
+        wrapped = ctx.detect_framebuffer(fbo.value)
+        return wrapped, rbo.value
+    except Exception:  # pragma: no cover - depends on the driver
+        return None
+
+
+def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth: bool | None = None) -> None:
+    """Set colour and depth write masks (raw GL when available: moderngl ignores them on detected framebuffers)."""
+    if raw.available:
+        if color is not None:
+            raw.glColorMask(*(1 if c else 0 for c in color))
+        if depth is not None:
+            raw.glDepthMask(1 if depth else 0)
+        return
+    if color is not None:
+        fbo.color_mask = tuple(bool(c) for c in color)
+    if depth is not None:
+        fbo.depth_mask = bool(depth)
+
+
+def clear_stencil(raw: RawGL, value: int = 0) -> None:
+    """Clear the stencil buffer of the bound framebuffer."""
+    if raw.available:
+        raw.glClearStencil(int(value))
+        raw.glClear(GL_STENCIL_BUFFER_BIT)

@@ -31,7 +31,15 @@ from ..core.technique import Technique
 from ..core.transform import Transform
 from ..image import Image
 from . import attributes as glattr
-from .context import GLError, RawGL, check_size, create_context
+from .context import (
+    GLError,
+    RawGL,
+    check_size,
+    clear_stencil,
+    create_context,
+    depth_stencil_framebuffer,
+    set_masks,
+)
 from .drawlist import Batch, DrawItem, DrawState, plan_batches, uniform_material
 from .geometry import Geometry, GeometryCache, unit_box, unit_cylinder, unit_sphere
 from .lighting import LightUniforms
@@ -197,8 +205,11 @@ class GLEngine(Engine):
             self._create_targets()
 
     def _create_targets(self) -> None:
+        seen = set()
         for obj in self._targets.values():
-            obj.release()
+            if id(obj) not in seen:
+                seen.add(id(obj))
+                obj.release()
         self._targets.clear()
         ctx, size = self.ctx, self._size
         t = self._targets
@@ -207,13 +218,29 @@ class GLEngine(Engine):
         t["fbo"] = ctx.framebuffer(t["color"], t["depth"])
         if self._samples:
             t["ms_color"] = gpu_call(ctx.renderbuffer, size, 4, samples=self._samples, what="the colour buffer")
-            t["ms_depth"] = gpu_call(ctx.depth_renderbuffer, size, samples=self._samples, what="the depth buffer")
-            t["ms_fbo"] = ctx.framebuffer(t["ms_color"], t["ms_depth"])
+            target = "ms_fbo"
+            color = t["ms_color"]
+        else:
+            target = "draw_fbo"
+            color = t["color"]
+        # draw into a framebuffer with a depth-stencil attachment (StencilTest needs it); fall back to depth only
+        made = depth_stencil_framebuffer(ctx, self.raw, color, size, self._samples)
+        if made is not None:
+            t[target] = made[0]
+            self._stencil_rbo = made[1]
+            self.has_stencil = True
+        else:
+            if self._samples:
+                t["ms_depth"] = gpu_call(ctx.depth_renderbuffer, size, samples=self._samples, what="the depth buffer")
+                t[target] = ctx.framebuffer(color, t["ms_depth"])
+            else:
+                t[target] = t["fbo"]
+            self.has_stencil = False
 
     @property
     def framebuffer(self) -> Any:
         """The framebuffer drawn into (multisampled when samples > 0)."""
-        return self._targets["ms_fbo" if self._samples else "fbo"]
+        return self._targets["ms_fbo" if self._samples else "draw_fbo"]
 
     # -- compile -------------------------------------------------------------
     def compile(self, scene: Any, mask: Any = None) -> list[DrawItem]:
@@ -749,9 +776,10 @@ class GLEngine(Engine):
         fbo.use()
         ctx.viewport = (0, 0, *self._size)
         self._gl_state.clear()
-        fbo.depth_mask = True
-        fbo.color_mask = (True, True, True, True)
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         fbo.clear(*self.clear_color(background), depth=1.0)
+        if self.has_stencil:
+            clear_stencil(self.raw, 0)
         ctx.enable(ctx.PROGRAM_POINT_SIZE)
         camera, view, proj = self._camera_matrices()
         self._camera_used = camera
@@ -855,7 +883,7 @@ class GLEngine(Engine):
             cur["depth"] = depth
         dmask = state.depth_mask if depth_mask is None else (depth_mask and state.depth_mask)
         if cur.get("dmask") != dmask:
-            self.framebuffer.depth_mask = dmask
+            set_masks(ctx, self.raw, self.framebuffer, depth=dmask)
             cur["dmask"] = dmask
         blend = state.blend if blend_override is None else blend_override
         if cur.get("blend") != blend:
@@ -879,7 +907,7 @@ class GLEngine(Engine):
             ctx.polygon_offset = state.polygon_offset or (0.0, 0.0)
             cur["offset"] = state.polygon_offset
         if cur.get("cmask") != state.color_mask:
-            self.framebuffer.color_mask = state.color_mask
+            set_masks(ctx, self.raw, self.framebuffer, color=state.color_mask)
             cur["cmask"] = state.color_mask
         if cur.get("stencil", None) != state.stencil:
             self.raw.stencil(ctx, state.stencil)
@@ -907,8 +935,7 @@ class GLEngine(Engine):
         ctx.depth_func = "<"
         ctx.wireframe = False
         ctx.polygon_offset = (0.0, 0.0)
-        self.framebuffer.depth_mask = True
-        self.framebuffer.color_mask = (True, True, True, True)
+        set_masks(ctx, self.raw, self.framebuffer, color=(True, True, True, True), depth=True)
         if self._gl_state.get("stencil") is not None:
             self.raw.stencil(ctx, None)
         for i in range(self._gl_state.get("nclip", 0)):
@@ -918,7 +945,9 @@ class GLEngine(Engine):
     def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, compact: bool = False) -> Any:
         self._ensure_uploaded(geometry)
         content = geometry.content(program)
-        if compact:
+        if buffer is None:
+            pass
+        elif compact:
             content.append((buffer, "16f 4f/i", "i_model", "i_color"))
         else:
             content.append((buffer, INSTANCE_FORMAT, *INSTANCE_ATTRIBUTES))
@@ -958,16 +987,25 @@ class GLEngine(Engine):
         if drawer is not None:
             return drawer(self, batch.items, state)
         n = len(batch.items)
-        prog = self.programs.get(state.kind, self._features(state, batch.rows, batch.uniform))
-        stride = 20 if batch.uniform else ROW
-        if batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None or batch.stride != stride:
+        features = self._features(state, batch.rows, batch.uniform)
+        single = n == 1 and batch.uniform and state.kind == "mesh"
+        if single:
+            # one instance: model matrix and colour as uniforms, like a hand-written draw call
+            features = features + (("SINGLE", True),)
+        prog = self.programs.get(state.kind, features)
+        stride = 0 if single else 20 if batch.uniform else ROW
+        if batch.geometry.buffers is None or batch.stride != stride or (stride and batch.capacity < n):
             if batch.vao is not None:
                 batch.vao.release()
                 batch.vao = None
             if batch.buffer is not None:
                 batch.buffer.release()
+                batch.buffer = None
             capacity = max(n, 1)
-            batch.buffer = gpu_call(self.ctx.buffer, reserve=capacity * stride * 4, dynamic=True, what="instance data")
+            if stride:
+                batch.buffer = gpu_call(
+                    self.ctx.buffer, reserve=capacity * stride * 4, dynamic=True, what="instance data"
+                )
             batch.capacity = capacity
             batch.stride = stride
             batch.dirty = (0, n)
@@ -977,10 +1015,17 @@ class GLEngine(Engine):
             batch.program = prog
             batch.vao = self._vao(batch.geometry, prog, batch.buffer, state.kind, compact=stride == 20)
         if batch.dirty is not None:
-            lo, hi = batch.dirty
-            data = batch.rows[lo:hi] if stride == ROW else np.ascontiguousarray(batch.rows[lo:hi, :20])
-            batch.buffer.write(data.tobytes(), offset=lo * stride * 4)
+            if stride:
+                lo, hi = batch.dirty
+                data = batch.rows[lo:hi] if stride == ROW else np.ascontiguousarray(batch.rows[lo:hi, :20])
+                batch.buffer.write(data.tobytes(), offset=lo * stride * 4)
             batch.dirty = None
+        if single:
+            row = batch.rows[0]
+            prog["i_model"].write(row[:16].tobytes())
+            u = prog.get("i_color", None)
+            if u is not None:
+                u.write(row[16:20].tobytes())
         self._apply_state(state)
         self._set_uniforms(prog, state)
         if batch.uniform:
@@ -1060,8 +1105,9 @@ class GLEngine(Engine):
     def read(self, read_depth: bool = True) -> Image:
         """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
         t = self._targets
-        if self._samples:
-            self.ctx.copy_framebuffer(t["fbo"], t["ms_fbo"])
+        drawn = self.framebuffer
+        if drawn is not t["fbo"]:
+            self.ctx.copy_framebuffer(t["fbo"], drawn)
         fbo = t["fbo"]
         w, h = self._size
         data = fbo.read(components=4, alignment=1)
@@ -1120,8 +1166,11 @@ class GLEngine(Engine):
         for entry in self.__dict__.get("_textures", {}).values():
             entry[2].release()
         self.programs.release()
+        seen = set()
         for obj in self._targets.values():
-            obj.release()
+            if id(obj) not in seen:
+                seen.add(id(obj))
+                obj.release()
         self._targets.clear()
         self._list = []
         self._node_cache.clear()

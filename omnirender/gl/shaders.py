@@ -54,8 +54,13 @@ in vec2 in_texcoord;
 #ifdef VSIZE
 in float in_size;
 #endif
+#ifdef SINGLE
+uniform mat4 i_model;
+uniform vec4 i_color;
+#else
 in mat4 i_model;
 in vec4 i_color;
+#endif
 in vec4 i_spec;
 in vec4 i_emis;
 in vec4 i_amb;

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..core.handler import ShapePainter, default_for
 from ..shapes import Volume
+from .context import set_masks
 from .engine import GLEngine
 from .geometry import Geometry, unit_box
 
@@ -139,7 +140,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     ctx.depth_func = "<"
     ctx.cull_face = "back"
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
-    engine.framebuffer.depth_mask = True
+    set_masks(ctx, engine.raw, engine.framebuffer, depth=True)
     view, proj = engine._view, engine._proj
     calls = 0
     for item in items:
