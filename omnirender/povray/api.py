@@ -156,7 +156,12 @@ def render(
         if threads is not None:
             args.append(f"+WT{int(threads)}")
         t0 = time.perf_counter()
-        run_povray(args, folder, timeout=timeout, progress=progress, total_pixels=w * h)
+        try:
+            run_povray(args, folder, timeout=timeout, progress=progress, total_pixels=w * h)
+        except POVRayError as exc:
+            if keep is None and "Error" in str(exc):
+                exc.args = (f"{exc}\n  (pass keep='<folder>' to keep scene.pov for inspection)",)
+            raise
         out = folder / "image.png"
         if not out.exists():
             raise POVRayError("POV-Ray finished without writing an image (see its output above)")
