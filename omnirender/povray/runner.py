@@ -14,7 +14,6 @@ import shutil
 import subprocess
 import sys
 import threading
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -131,7 +130,6 @@ def run_povray(
 
     reader = threading.Thread(target=read, daemon=True)
     reader.start()
-    started = time.monotonic()
     try:
         proc.wait(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -157,7 +155,6 @@ def run_povray(
         lines = error_lines(output)
         detail = "\n  ".join(lines) if lines else output[-2000:]
         raise POVRayError(f"POV-Ray failed (exit status {proc.returncode}):\n  {detail}", output)
-    _ = time.monotonic() - started
     return output
 
 
