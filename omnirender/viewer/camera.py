@@ -369,7 +369,8 @@ class ViewerCamera:
 
 
 def _check_depths(name: str, near: float, far: float, orthogonal: bool) -> None:
-    if not (near < far) or (not orthogonal and near <= 0):
+    # orthogonal views could take near <= 0 in OpenGL, but om.Camera (and depth read-back) need 0 < near
+    if not (0 < near < far):
         raise ValueError(f"{name}: need 0 < near < far, got near={near}, far={far}")
 
 

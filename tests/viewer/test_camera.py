@@ -204,3 +204,14 @@ def test_auto_fit_of_a_single_point_still_gives_a_usable_camera(recorder):
     v.auto_fit()
     assert np.allclose(v.get_center(), 3)
     assert 0 < v.view_plane_distance < np.linalg.norm(v.get_eye() - 3) < v.far_plane_distance
+
+
+def test_orthogonal_needs_positive_near_and_resizing_follows_aspect():
+    v = viewer(size=(400, 200))
+    with pytest.raises(ValueError, match="near"):
+        v.set_orthogonal(2, 0, 10)
+    v.set_perspective(60, 1, 10)
+    assert np.isclose(v.view_plane_width, 2 * v.view_plane_height)
+    v.set_size(200, 400)
+    assert np.isclose(v.view_plane_width, 0.5 * v.view_plane_height)
+    assert np.isclose(v.get_projection_matrix()[0, 0], 2 * v.get_projection_matrix()[1, 1])
