@@ -285,9 +285,18 @@ class GLEngine(Engine):
             self._end_traversal()
             self._mask_fn = saved_mask_fn
         self._compiled = (weakref.ref(scene), scene._version, mask_key)
+        self._prune_caches()
         self._install_list(items)
         self.stats["compiled"] = True
         return items
+
+    def _prune_caches(self) -> None:
+        """Drop cache entries of nodes that no longer exist (amortised: when a cache doubled)."""
+        limit = self.__dict__.get("_prune_limit", 4096)
+        if len(self._pre_cache) + len(self._node_cache) > limit:
+            self._pre_cache = {k: v for k, v in self._pre_cache.items() if v[0]() is not None}
+            self._node_cache = {k: v for k, v in self._node_cache.items() if v.ref() is not None}
+            self._prune_limit = max(4096, 2 * (len(self._pre_cache) + len(self._node_cache)))
 
     def _begin_traversal(self, lights: list[tuple[Any, np.ndarray]]) -> None:
         ctx = self.context
@@ -410,8 +419,6 @@ class GLEngine(Engine):
                     background = item
         result = (lights, camera, background)
         self._pre_cache[id(node)] = (weakref.ref(node), node._version, result, self._mask_fn)
-        if len(self._pre_cache) > 4096 and len(self._pre_cache) > 4 * len(self._node_cache):
-            self._pre_cache = {k: v for k, v in self._pre_cache.items() if v[0]() is not None}
         return result
 
     # -- what painters call ----------------------------------------------------
