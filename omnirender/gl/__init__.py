@@ -19,6 +19,8 @@ __all__ = [
     "available",
     "GLEngine",
     "GLTechnique",
+    "FramebufferStack",
+    "DepthSprite",
     "DepthTest",
     "DepthMask",
     "Blend",

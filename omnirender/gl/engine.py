@@ -146,6 +146,7 @@ class GLEngine(Engine):
         self.raw = RawGL()
         self.unit = {"sphere": unit_sphere(), "box": unit_box(), "cylinder": unit_cylinder()}
         self._targets: dict[str, Any] = {}
+        self._target_stack: list[Any] = []
         self._make_targets()
         # compile state
         self._items: list[DrawItem] = []
@@ -240,6 +241,8 @@ class GLEngine(Engine):
     @property
     def framebuffer(self) -> Any:
         """The framebuffer drawn into (multisampled when samples > 0)."""
+        if self._target_stack:
+            return self._target_stack[-1].fbo
         return self._targets["ms_fbo" if self._samples else "draw_fbo"]
 
     # -- compile -------------------------------------------------------------
@@ -776,17 +779,25 @@ class GLEngine(Engine):
         srgb = np.where(lin <= 0.0031308, lin * 12.92, 1.055 * lin ** (1 / 2.4) - 0.055)
         return (float(srgb[0]), float(srgb[1]), float(srgb[2]), float(color[3]))
 
-    def draw(self, background: Any = None) -> None:
-        """Draw the installed draw list into the framebuffer (opaque, transparent sorted, overlays)."""
+    def draw(self, background: Any = None, clear: bool = True) -> None:
+        """Draw the installed draw list into the framebuffer (opaque, transparent sorted, overlays).
+
+        ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        """
+        with self.ctx:
+            self._draw(background, clear)
+
+    def _draw(self, background: Any, clear: bool) -> None:
         ctx = self.ctx
         fbo = self.framebuffer
         fbo.use()
         ctx.viewport = (0, 0, *self._size)
         self._gl_state.clear()
         set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        fbo.clear(*self.clear_color(background), depth=1.0)
-        if self.has_stencil:
-            clear_stencil(self.raw, 0)
+        if clear:
+            fbo.clear(*self.clear_color(background), depth=1.0)
+            if self.has_stencil and not self._target_stack:
+                clear_stencil(self.raw, 0)
         ctx.enable(ctx.PROGRAM_POINT_SIZE)
         camera, view, proj = self._camera_matrices()
         self._camera_used = camera
@@ -1111,11 +1122,18 @@ class GLEngine(Engine):
     # -- read back -------------------------------------------------------------
     def read(self, read_depth: bool = True) -> Image:
         """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
+        with self.ctx:
+            return self._read(read_depth)
+
+    def _read(self, read_depth: bool) -> Image:
         t = self._targets
         drawn = self.framebuffer
-        if drawn is not t["fbo"]:
-            self.ctx.copy_framebuffer(t["fbo"], drawn)
-        fbo = t["fbo"]
+        if self._target_stack:
+            fbo = drawn
+        else:
+            if drawn is not t["fbo"]:
+                self.ctx.copy_framebuffer(t["fbo"], drawn)
+            fbo = t["fbo"]
         w, h = self._size
         data = fbo.read(components=4, alignment=1)
         array = np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1]
