@@ -342,6 +342,20 @@ class ViewerCamera:
         self._eye_to_world = m
         self._center = center.copy()
 
+    # -- saving / restoring ---------------------------------------------------
+    def state(self) -> tuple:
+        """Everything that defines the view (for :meth:`restore`, e.g. a window's reset key)."""
+        return (self._eye_to_world.copy(), self._center.copy(), self._orthogonal, self._fov, self._field_height,
+                self._frustum, self._near, self._far)  # fmt: skip
+
+    def restore(self, state: tuple) -> None:
+        """Go back to a view saved by :meth:`state`."""
+        eye_to_world, center, self._orthogonal, self._fov, self._field_height, self._frustum, self._near, self._far = (
+            state
+        )
+        self._eye_to_world = eye_to_world.copy()
+        self._center = center.copy()
+
     # -- conversion -------------------------------------------------------
     def to_camera(self) -> Camera:
         """An equivalent ``om.Camera`` (field-of-view/height form; explicit frusta are approximated)."""

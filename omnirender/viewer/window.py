@@ -140,7 +140,7 @@ class Window:
         self._dirty = True
         self._needs_prerender = True
         self._external_generation = -1
-        self._initial: tuple[np.ndarray, tuple] | None = None
+        self._initial: tuple | None = None
         self._closed = False
         self._update_thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -157,9 +157,7 @@ class Window:
     # -- state ---------------------------------------------------------------
     def remember_view(self) -> None:
         """Store the current camera as the one R resets to."""
-        cam = self.viewer.camera
-        self._initial = (cam.get_eye_to_world(), (cam.center, cam._orthogonal, cam._fov, cam._field_height,
-                                                   cam._frustum, cam._near, cam._far))  # fmt: skip
+        self._initial = self.viewer.camera.state()
 
     def request_repaint(self) -> None:
         self._dirty = True
@@ -351,15 +349,11 @@ class Window:
 
     # -- view helpers -------------------------------------------------------------
     def reset_view(self) -> None:
+        """Back to the view remembered when the scene was opened (auto-fit if none)."""
         if self._initial is None:
             self.viewer.auto_fit()
-            return
-        eye_to_world, (center, ortho, fov, field, frustum, near, far) = self._initial
-        cam = self.viewer.camera
-        cam._eye_to_world = eye_to_world.copy()
-        cam._center = center.copy()
-        cam._orthogonal, cam._fov, cam._field_height, cam._frustum = ortho, fov, field, frustum
-        cam._near, cam._far = near, far
+        else:
+            self.viewer.camera.restore(self._initial)
 
     def pick(self, x: float, y: float) -> Any:
         """Pick at window pixel (x, y) (origin top left): highlight the nearest shape, show its path."""

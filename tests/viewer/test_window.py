@@ -208,3 +208,17 @@ def test_cli_view_opens_a_window(display, tmp_path, capsys):
     path = tmp_path / "scene.json"
     om.save(two_shapes(), path)
     assert main(["view", str(path), "--size", "200x150", "--duration", "0.3"]) == 0
+
+
+def test_om_view_runs_an_application_update(display):
+    scene = two_shapes()
+    move = scene["/scene/left"].items[0]
+    calls = []
+
+    def update(t):
+        calls.append(t)
+        return lambda: setattr(move, "offset", (-1.3, 0.2 * len(calls), 0))
+
+    viewer = om.view(scene, size=SIZE, duration=0.5, update=update, update_interval=0.05)
+    assert len(calls) >= 2 and move.offset[1] > 0
+    assert viewer.window is None
