@@ -171,7 +171,7 @@ def test_frame_rate_is_independent_of_a_slow_application_update(window):
     calls = []
 
     def update(t):
-        time.sleep(0.3)  # a slow simulation step, computed without any lock
+        time.sleep(0.4)  # a slow simulation step, computed without any lock
         calls.append(t)
         x = -1.3 + 0.5 * len(calls)
         return lambda: setattr(move, "offset", (x, 0, 0))
@@ -188,9 +188,9 @@ def test_frame_rate_is_independent_of_a_slow_application_update(window):
         window.step()
         slowest = max(slowest, time.monotonic() - t0)
     drawn = window.frames - frames
-    assert 1 <= len(calls) <= 4
-    assert drawn >= 10, drawn  # many frames while the update ran 3 slow steps
-    assert slowest < 0.25
+    assert 1 <= len(calls) <= 3
+    assert drawn >= 8, drawn  # many frames while the update ran its slow steps
+    assert slowest < 0.3  # no frame ever waited for a whole update step (0.4 s)
     window.viewer.close()
     moved = centroid_x(red_mask(window.last_frame))
     assert moved > start + 5  # the updates were applied and shown
