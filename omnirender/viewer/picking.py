@@ -48,16 +48,32 @@ def _with_root(hit: Any, root: Any) -> Any:
 
 
 def shape_world_matrix(root: Any, path: str, shape: Any) -> np.ndarray:
-    """Model matrix of ``shape`` held by the node at ``path`` under ``root`` (transforms before it)."""
-    from ..techniques.base import world_matrix_of
+    """Model matrix of ``shape`` in the node at ``path`` under ``root``, following that very path.
 
-    node = root[path]
-    m = world_matrix_of(node)
-    for item in node:
-        if item is shape:
-            break
-        if isinstance(item, Transform):
-            m = m @ item.matrix
+    Transforms met before each child on the way (and before the shape in its
+    node) compose, as during evaluation; a node shared by several parents is
+    placed where ``path`` says, not where its first parent puts it.
+    """
+    names = [p for p in path.split("/") if p]
+    if names and names[0] == root.name:
+        names = names[1:]
+    m = np.eye(4)
+    node = root
+    for name in [*names, None]:
+        target = None
+        for item in node:
+            if name is None and item is shape:
+                return m
+            if name is not None and hasattr(item, "_items") and item.name == name:
+                target = item
+                break
+            if isinstance(item, Transform):
+                m = m @ item.matrix
+        if name is None:
+            return m
+        if target is None:
+            raise KeyError(f"no node {name!r} under {node.path} on the path {path!r}")
+        node = target
     return m
 
 

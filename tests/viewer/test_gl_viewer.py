@@ -197,3 +197,18 @@ def test_pick_highlight_overlay(viewer):
     assert after.pixel(40, 60) == before.pixel(40, 60)  # the box is untouched
     viewer.set_picked(None)
     assert np.array_equal(viewer.rerender().array, before.array)
+
+
+def test_pick_highlight_follows_the_path_of_a_shared_node():
+    from omnirender.viewer.picking import shape_world_matrix
+
+    wheel = om.Node("wheel")
+    wheel.add(om.Translation(0, 1, 0))
+    disk = wheel.add(om.Cylinder(radius=0.5, height=0.2))
+    scene = om.Node("car")
+    left = scene.add(om.Node("left", [om.Translation(-2, 0, 0)]))
+    right = scene.add(om.Node("right", [om.Translation(2, 0, 0)]))
+    left.add(wheel)
+    right.add(wheel)
+    assert np.allclose(shape_world_matrix(scene, "/car/right/wheel", disk)[:3, 3], (2, 1, 0))
+    assert np.allclose(shape_world_matrix(scene, "/car/left/wheel", disk)[:3, 3], (-2, 1, 0))
