@@ -193,26 +193,37 @@ def bench_cubes(n: int, frames: int) -> dict[str, float]:
     t = time.perf_counter()
     engine.render(scene, read_depth=False)
     first = time.perf_counter() - t
-    steady = median_time(lambda: engine.render(scene, read_depth=False), frames)
+    with engine.current():
+        hand = HandWritten(engine.ctx, (256, 256), mats, colors, camera)
+        hand.instanced()
+        hand.naive()
+    # interleave the three ways frame by frame so that load changes on a shared machine hit all alike
+    omni_t, inst_t, naive_t = [], [], []
+    for frame in range(frames):
+        omni_t.append(median_time(lambda: engine.render(scene, read_depth=False), 1))
+        with engine.current():
+            inst_t.append(median_time(hand.instanced, 1))
+            if n < 10000 or frame % 3 == 0:
+                naive_t.append(median_time(hand.naive, 1))
+    instanced = statistics.median(inst_t)
+    naive = statistics.median(naive_t)
     rng = np.random.default_rng(5)
     changed = []
     for _ in range(max(5, frames // 2)):
         k = int(rng.integers(n))
         m = mats[k].copy()
         m[:3, 3] += rng.normal(size=3) * 0.1
-        t = time.perf_counter()
         node = scene.child(f"cube{k}")
+        t = time.perf_counter()
         node.remove(transforms[k])
         transforms[k] = node.insert(0, om.Matrix(m))
         engine.render(scene, read_depth=False)
         changed.append(time.perf_counter() - t)
         assert engine.stats["incremental"] == 1, engine.stats
+        # a steady frame right after, for the ratio under the same load
+        omni_t.append(median_time(lambda: engine.render(scene, read_depth=False), 1))
     one_changed = statistics.median(changed)
-    with engine.ctx:
-        hand = HandWritten(engine.ctx, (256, 256), mats, colors, camera)
-        naive_frames = max(3, frames // (10 if n >= 10000 else 1))
-        naive = median_time(hand.naive, naive_frames)
-        instanced = median_time(hand.instanced, frames)
+    steady = statistics.median(omni_t)
     engine.release()
     return {
         "n": n,
@@ -244,8 +255,7 @@ def bench_mesh(frames: int) -> dict[str, float]:
     scene.add(mesh)
     engine = GLEngine(size=(512, 512), samples=0)
     engine.render(scene, read_depth=False)
-    omni = median_time(lambda: engine.render(scene, read_depth=False), frames)
-    with engine.ctx:
+    with engine.current():
         ctx = engine.ctx
         fbo = ctx.simple_framebuffer((512, 512), components=4)
         prog = ctx.program(vertex_shader=VS, fragment_shader=FS)
@@ -272,7 +282,12 @@ def bench_mesh(frames: int) -> dict[str, float]:
             return np.frombuffer(fbo.read(components=4), np.uint8)
 
         hand()
-        handwritten = median_time(hand, frames)
+        omni_t, hand_t = [], []
+        for _ in range(frames):
+            omni_t.append(median_time(lambda: engine.render(scene, read_depth=False), 1))
+            hand_t.append(median_time(hand, 1))
+        omni = statistics.median(omni_t)
+        handwritten = statistics.median(hand_t)
     engine.release()
     return {"triangles": len(tris), "omni": omni, "hand": handwritten}
 

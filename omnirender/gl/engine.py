@@ -13,9 +13,10 @@ depth writes off, then 2D overlays (text) without depth test.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import weakref
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -180,10 +181,23 @@ class GLEngine(Engine):
         self._view = np.eye(4)
         self._proj = np.eye(4)
         self._camera_used: Camera | None = None
-        with self.ctx:
+        with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
 
     # -- targets -----------------------------------------------------------
+    @contextlib.contextmanager
+    def current(self) -> Iterator[Any]:
+        """Make the engine's context current for GL calls (and leave it current afterwards).
+
+        moderngl's ``with ctx:`` restores the previously current context on exit,
+        which breaks when nested on the same context; an engine that owns its
+        context therefore only makes it current.  A wrapped context (a window's)
+        is assumed to be current already.
+        """
+        if self._own_context:
+            self.ctx.mglo.__enter__()
+        yield self.ctx
+
     @property
     def size(self) -> tuple[int, int]:
         """(width, height) in pixels; assigning resizes the framebuffers."""
@@ -202,7 +216,7 @@ class GLEngine(Engine):
         return self._samples
 
     def _make_targets(self) -> None:
-        with self.ctx:
+        with self.current():
             self._create_targets()
 
     def _create_targets(self) -> None:
@@ -627,7 +641,7 @@ class GLEngine(Engine):
         Without a scene, draws what was evaluated into the engine directly
         (``engine.eval(shape)`` and friends) and clears that list.
         """
-        with self.ctx:
+        with self.current():
             if scene is not None:
                 self.compile(scene, mask=mask)
             else:
@@ -784,7 +798,7 @@ class GLEngine(Engine):
 
         ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
         """
-        with self.ctx:
+        with self.current():
             self._draw(background, clear)
 
     def _draw(self, background: Any, clear: bool) -> None:
@@ -1122,7 +1136,7 @@ class GLEngine(Engine):
     # -- read back -------------------------------------------------------------
     def read(self, read_depth: bool = True) -> Image:
         """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
-        with self.ctx:
+        with self.current():
             return self._read(read_depth)
 
     def _read(self, read_depth: bool) -> Image:
@@ -1172,7 +1186,7 @@ class GLEngine(Engine):
 
     def release(self) -> None:
         """Free every GPU resource (and the context when the engine created it)."""
-        with self.ctx:
+        with self.current():
             self._release()
         if self._own_context:
             self.ctx.release()

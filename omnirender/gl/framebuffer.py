@@ -48,8 +48,9 @@ void main() {
 class OffscreenTarget:
     """A single-sample colour texture + depth texture framebuffer."""
 
-    def __init__(self, ctx: Any, size: tuple[int, int]) -> None:
+    def __init__(self, ctx: Any, size: tuple[int, int], current: Any) -> None:
         self.ctx = ctx
+        self.current = current
         self.size = size
         self.color = ctx.texture(size, 4)
         self.depth = ctx.depth_texture(size)
@@ -60,19 +61,19 @@ class OffscreenTarget:
     def color_array(self) -> np.ndarray:
         """(H, W, 4) uint8, top row first."""
         w, h = self.size
-        with self.ctx:
+        with self.current():
             data = self.fbo.read(components=4, alignment=1)
         return np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1].copy()
 
     def depth_array(self) -> np.ndarray:
         """(H, W) window depth in [0, 1], top row first."""
         w, h = self.size
-        with self.ctx:
+        with self.current():
             raw = self.fbo.read(components=1, attachment=-1, dtype="f4", alignment=1)
         return np.frombuffer(raw, np.float32).reshape(h, w)[::-1].copy()
 
     def release(self) -> None:
-        with self.ctx:
+        with self.current():
             self.fbo.release()
             self.color.release()
             self.depth.release()
@@ -87,8 +88,8 @@ class FramebufferStack:
     def push(self, size: tuple[int, int] | None = None, clear: bool = True) -> OffscreenTarget:
         """A new target the engine draws into until :meth:`pop` (cleared to transparent black)."""
         e = self.engine
-        with e.ctx:
-            target = OffscreenTarget(e.ctx, size or e.size)
+        with e.current():
+            target = OffscreenTarget(e.ctx, size or e.size, e.current)
             if clear:
                 target.fbo.use()
                 target.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
@@ -101,7 +102,7 @@ class FramebufferStack:
         if not e._target_stack:
             raise RuntimeError("FramebufferStack.pop: nothing was pushed (unbalanced push/pop)")
         target = e._target_stack.pop()
-        with e.ctx:
+        with e.current():
             e.framebuffer.use()
         return target
 
@@ -119,11 +120,11 @@ class DepthSprite:
     def save(self) -> DepthSprite:
         """Copy the engine's current framebuffer (resolved) into the sprite."""
         e = self.engine
-        with e.ctx:
+        with e.current():
             if self.target is None or self.target.size != e.size:
                 if self.target is not None:
                     self.target.release()
-                self.target = OffscreenTarget(e.ctx, e.size)
+                self.target = OffscreenTarget(e.ctx, e.size, e.current)
             e.ctx.copy_framebuffer(self.target.fbo, e.framebuffer)
         return self
 
@@ -133,7 +134,7 @@ class DepthSprite:
             raise RuntimeError("DepthSprite.restore: save() was not called")
         e = self.engine
         ctx = e.ctx
-        with ctx:
+        with e.current():
             if "sprite" not in e.programs._custom:
                 e.programs.register("sprite", _VS, _FS)
             prog = e.programs.get("sprite")
@@ -156,6 +157,6 @@ class DepthSprite:
 
     def release(self) -> None:
         if self.target is not None:
-            with self.engine.ctx:
+            with self.engine.current():
                 self.target.release()
             self.target = None

@@ -46,7 +46,7 @@ def test_depth_sprite_restores_colour_and_depth_consistently():
     with GLEngine(size=(64, 48), samples=0) as e:
         first = e.render(scene(-0.5, (1, 0, 0)))
         sprite = DepthSprite(e).save()
-        with e.ctx:
+        with e.current():
             e.compile(scene(0.5, (0, 0, 1)))
             e.draw()  # a second renderer draws its own image
             sprite.restore()  # merge the first one back by depth
