@@ -244,6 +244,9 @@ class GLEngine(Engine):
             t[target] = made[0]
             self._stencil_rbo = made[1]
             self.has_stencil = True
+            if not self._samples:
+                t["fbo"].release()
+                t["fbo"] = made[0]  # draw and read the same framebuffer: no copy per frame
         else:
             if self._samples:
                 t["ms_depth"] = gpu_call(ctx.depth_renderbuffer, size, samples=self._samples, what="the depth buffer")

@@ -115,3 +115,64 @@ def test_changing_one_child_updates_only_its_instance(engine):
     img = engine.render(scene)
     assert engine.stats["incremental"] == 1
     assert img.depth.min() == pytest.approx(30 - 3 - 0.25, rel=0.01)
+
+
+def test_bad_geometry_through_the_engine_names_the_node(engine):
+    scene = om.Node("scene")
+    bad = scene.add(om.Node("bad"))
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    mesh = bad.add(om.TriangleSet(v.copy(), [(0, 1, 2)]))
+    engine.render(scene)
+    arr = np.array(mesh.vertices, dtype=np.float32)
+    arr[1, 0] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        mesh.vertices = arr
+    # the engine itself refuses non-finite data even if it reaches a painter
+    from omnirender.gl.geometry import validate_mesh
+
+    with pytest.raises(ValueError, match=r"/scene/bad.*vertex 1"):
+        validate_mesh(arr, None, "TriangleSet", "/scene/bad")
+    # the engine is still usable after an error
+    assert engine.render(red_sphere_blue_box()).mask.any()
+
+
+def test_error_during_compile_leaves_engine_usable(engine):
+    from omnirender.core.handler import ShapePainter
+
+    class Boom(ShapePainter):
+        __slots__ = ()
+        service = "gl.paint"
+        target = om.Sphere
+
+        def exec(self, shape, engine):
+            raise RuntimeError("boom")
+
+    scene = red_sphere_blue_box()
+    scene.insert(0, Boom())
+    with pytest.raises(RuntimeError, match="boom"):
+        engine.render(scene)
+    assert engine.render(red_sphere_blue_box()).pixel(48, 36)[0] > 150
+
+
+def test_default_camera_fits_the_scene(engine):
+    scene = om.Node("scene")
+    scene.add(om.Translation(10, 5, -3))
+    scene.add(om.Sphere(radius=2))
+    img = engine.render(scene)
+    ys, xs = np.nonzero(img.mask)
+    assert img.mask[36, 48]  # centred
+    assert xs.min() > 0 and xs.max() < 95 and ys.min() > 0 and ys.max() < 71  # fully visible
+    assert (ys.max() - ys.min()) > 36  # and large
+
+
+def test_image_conventions(engine):
+    scene = om.Node("scene")
+    scene.add(om.Camera.look_at(eye=(0, 0, 5)))
+    scene.add(om.Color(1, 1, 1))
+    scene.add(om.Sphere(center=(0, 1.2, 0), radius=0.3))  # above the centre
+    img = engine.render(scene, background=(0, 0, 0, 0))
+    assert img.array.shape == (72, 96, 4) and img.array.dtype == np.uint8
+    ys, _ = np.nonzero(img.mask)
+    assert ys.mean() < 36  # top row first
+    assert img.pixel(0, 0)[3] == 0  # transparent background
+    assert img.engine == "gl"
