@@ -122,6 +122,7 @@ class RawGL:
                 ("glGetIntegerv", [ctypes.c_uint, ctypes.POINTER(ctypes.c_int)]),
                 ("glColorMask", [ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte]),
                 ("glDepthMask", [ctypes.c_ubyte]),
+                ("glTexParameteri", [ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
             ):
                 fn = getattr(lib, name)
                 fn.argtypes = args

@@ -642,15 +642,21 @@ class GLEngine(Engine):
         """Compile (if the scene changed) and draw ``scene``; returns an :class:`om.Image`.
 
         Without a scene, draws what was evaluated into the engine directly
-        (``engine.eval(shape)`` and friends) and clears that list.
+        (``engine.push(...)``, ``engine.eval(shape)``, ...) and clears that list;
+        such a frame uses the auto-fit camera and a headlight.
         """
         with self.current():
             if scene is not None:
                 self.compile(scene, mask=mask)
             else:
+                # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
                 self._install_list(self._immediate)
                 self._immediate = []
                 self._items = self._immediate
+                self._compiled = None
+                self.camera = None
+                self._scene_lights = []
+                self._scene_background = None
             self.draw(background=background)
             return self.read(read_depth=read_depth)
 
@@ -900,8 +906,11 @@ class GLEngine(Engine):
             minf = mag
         tex.filter = (minf, mag)
         tex.repeat_x = tex.repeat_y = attr.wrap != "clamp"
-        if attr.wrap == "mirror":
-            tex.repeat_x = tex.repeat_y = True  # moderngl has no mirrored repeat switch; repeat is the closest
+        if attr.wrap == "mirror" and self.raw.available:
+            # moderngl has no mirrored-repeat switch: set GL_MIRRORED_REPEAT on the bound texture
+            tex.use(0)
+            for pname in (0x2802, 0x2803):  # GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
+                self.raw.glTexParameteri(0x0DE1, pname, 0x8370)
         cache[id(attr)] = (weakref.ref(attr), attr._version, tex)
         return tex
 

@@ -176,3 +176,20 @@ def test_image_conventions(engine):
     assert ys.mean() < 36  # top row first
     assert img.pixel(0, 0)[3] == 0  # transparent background
     assert img.engine == "gl"
+
+
+def test_micro_program_on_the_engine(engine):
+    """DESIGN.md's engine-level example: push, eval, pop, then draw what was evaluated."""
+    mat = om.Material(diffuse=(1, 0.4, 0.6))
+    rot = om.Rotation(30, (1, 0, 0))
+    torus = om.Torus(major_radius=1, minor_radius=0.3)
+    engine.push(mat)
+    engine.push(rot)
+    engine.eval(torus)
+    engine.pop(rot.category)
+    engine.pop(mat.category)
+    img = engine.render()
+    assert img.mask.sum() > 500
+    r, g, b, _ = img.array[img.mask].max(axis=0)
+    assert r > g and r > b
+    assert engine.context.is_empty()
