@@ -98,6 +98,7 @@ class DrawListCompiler:
     def begin(self, root: Any) -> None:
         """Pre-evaluation for direct ``node.evaluate(engine)`` calls (uses the incremental walk)."""
         self._check_registry()
+        self._preevaluated = True
         lights, camera, background = self._preevaluate(root)
         self.camera = camera
         self._scene_lights = lights

@@ -100,6 +100,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self.unit = {"sphere": unit_sphere(), "box": unit_box(), "cylinder": unit_cylinder()}
         self._targets: dict[str, Any] = {}
         self._target_stack: list[Any] = []
+        self._preevaluated = False
         self._make_targets()
         # compile state
         self._items: list[DrawItem] = []
@@ -227,7 +228,8 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
 
         Without a scene, draws what was evaluated into the engine directly
         (``engine.push(...)``, ``engine.eval(shape)``, ...) and clears that list;
-        such a frame uses the auto-fit camera and a headlight.
+        such a frame uses the camera and lights of the last ``engine.run(root)``
+        (the viewer's way), else the auto-fit camera and a headlight.
         """
         with self.current():
             if scene is not None:
@@ -238,9 +240,12 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
                 self._immediate = []
                 self._items = self._immediate
                 self._compiled = None
-                self.camera = None
-                self._scene_lights = []
-                self._scene_background = None
+                if not self._preevaluated:
+                    # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
+                    self.camera = None
+                    self._scene_lights = []
+                    self._scene_background = None
+            self._preevaluated = False
             self.draw(background=background)
             return self.read(read_depth=read_depth)
 
