@@ -81,6 +81,22 @@ class Camera(MonoAttribute):
             raise ValueError("Camera: eye and center must differ")
         if np.linalg.norm(np.cross(d, u)) < 1e-12 * np.linalg.norm(d) * max(np.linalg.norm(u), 1e-300):
             raise ValueError("Camera: up must not be parallel to the viewing direction (center - eye)")
+        try:
+            fov = None if fov is None else float(fov)
+            height = None if height is None else float(height)
+            near, far = float(near), float(far)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"Camera: fov, height, near and far must be numbers, got fov={fov!r}, height={height!r}, "
+                f"near={near!r}, far={far!r}"
+            ) from None
+        if mask is not None:
+            from .mask import MaskError, compile_mask
+
+            try:
+                compile_mask(mask)
+            except MaskError as exc:
+                raise ValueError(f"Camera: bad mask: {exc}") from None
         if (fov is None) == (height is None):
             raise ValueError("Camera: give exactly one of fov (perspective) or height (orthographic)")
         if fov is not None and not (0.0 < fov < 180.0):

@@ -33,7 +33,7 @@ class RenderingContext:
         self._transforms: list[Transform] = []
         self._mono[Transform] = self._transforms
         # _matrices[i] = (transform i-1, accumulated matrix of the first i transforms).
-        self._matrices: list[tuple[Transform | None, np.ndarray]] = [(None, _IDENTITY)]
+        self._matrices: list[tuple[Transform | None, np.ndarray, int]] = [(None, _IDENTITY, 0)]
 
     # -- mono stacks -------------------------------------------------------
     def mono_stack(self, category: type) -> list[Any]:
@@ -56,8 +56,9 @@ class RenderingContext:
         """The accumulated model matrix (4x4 float64, read-only).
 
         Composed lazily: ``_matrices[i]`` caches the product of the first ``i``
-        transforms together with the transform it was made from, and is trusted
-        only while that transform is still at position ``i - 1``.  Push and pop
+        transforms together with the transform it was made from and its
+        version, and is trusted only while that transform, unchanged, is still
+        at position ``i - 1``.  Push and pop
         therefore stay plain list operations.
         """
         transforms = self._transforms
@@ -65,7 +66,11 @@ class RenderingContext:
         n = len(transforms)
         valid = 1
         limit = min(n + 1, len(matrices))
-        while valid < limit and matrices[valid][0] is transforms[valid - 1]:
+        while valid < limit:
+            entry = matrices[valid]
+            t = transforms[valid - 1]
+            if entry[0] is not t or entry[2] != t._version:
+                break
             valid += 1
         if valid == n + 1:
             return matrices[n][1] if n else _IDENTITY
@@ -75,7 +80,7 @@ class RenderingContext:
             t = transforms[i]
             current = current @ t.matrix
             current.setflags(write=False)
-            matrices.append((t, current))
+            matrices.append((t, current, t._version))
         return current
 
     # -- poly sets ---------------------------------------------------------

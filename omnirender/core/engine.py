@@ -17,18 +17,19 @@ from typing import Any
 import numpy as np
 
 from .camera import Camera
-from .component import Attribute, Shape
+from .component import Attribute, MonoAttribute, PolyAttribute, Shape
 from .context import RenderingContext
 from .errors import EvaluationError, NoHandlerError
 from .handler import SIMPLIFY, Handler, registry
 from .light import Light, LightSwitch
 from .program import compile_components
 from .technique import Technique
-from .transform import Transform
 
 __all__ = ["Engine"]
 
 _POLICIES = ("raise", "warn", "skip")
+_IDENTITY = np.eye(4)
+_IDENTITY.setflags(write=False)
 _MISSING = object()
 
 
@@ -43,6 +44,10 @@ class Engine:
 
     #: The service the default technique asks handlers for.
     service: str = "analysis"
+    #: Whether a camera's own group mask applies when the engine has none.
+    #: Engines that produce an image of what the camera sees set this; analysis
+    #: engines (bounds, collisions, statistics) see the whole graph.
+    uses_camera_mask: bool = False
 
     def __init__(
         self,
@@ -63,6 +68,9 @@ class Engine:
         self._warned: set[type] = set()
         self._light_matrices: dict[int, np.ndarray] = {}
         self._pre_lights: dict[int, Any] = {}
+        # (light, world matrix) per placement found by pre-evaluation: a light in a
+        # node shared under two transforms shines from both places.
+        self._placements: list[tuple[Light, np.ndarray]] = []
         self._running = 0
         #: (camera, world matrix) found by pre-evaluation, or None.
         self.camera: tuple[Camera, np.ndarray] | None = None
@@ -70,7 +78,7 @@ class Engine:
         self._saved_mask_fn = self._mask_fn
         self._ops = [
             self.push,
-            self.pop,
+            self._pop_op if type(self).pop is Engine.pop else self._pop_expected,
             self.add,
             self.remove,
             self.install,
@@ -139,8 +147,11 @@ class Engine:
         caches = self._caches.get(service)
         if caches is None:
             caches = self._caches[service] = ({}, {})
-        self._shape_fns, self._attr_handlers = caches
-        direct = type(self).eval is Engine.eval and type(self._technique).handle_shape is Technique.handle_shape
+        tcls = type(self._technique)
+        self._attr_via_technique = tcls.handle_attribute is not Technique.handle_attribute
+        # When the technique decides per attribute, push/pop see an empty cache and ask it.
+        self._shape_fns, self._attr_handlers = caches[0], ({} if self._attr_via_technique else caches[1])
+        direct = type(self).eval is Engine.eval and tcls.handle_shape is Technique.handle_shape
         self._ops[6] = self._eval_direct if direct else self.eval
 
     def _invalidate(self) -> None:
@@ -183,12 +194,13 @@ class Engine:
 
     def attribute_handler(self, cls: type) -> Any:
         """The painter or simplifier that applies attributes of ``cls``, or None."""
-        try:
-            return self._attr_handlers[cls]
-        except KeyError:
-            pass
         self._check_registry()
         service = self.active_service
+        cache = self._caches[service][1]
+        try:
+            return cache[cls]
+        except KeyError:
+            pass
         found = None
         for klass in cls.__mro__:
             if klass is object:
@@ -196,7 +208,7 @@ class Engine:
             found = self.find_handler(service, klass) or self.find_handler(SIMPLIFY, klass)
             if found is not None:
                 break
-        self._attr_handlers[cls] = found
+        cache[cls] = found
         return found
 
     def _missing(self, service: str, cls: type) -> Callable[[Any, Engine], Any]:
@@ -220,6 +232,13 @@ class Engine:
         return _skip
 
     # -- the micro program ------------------------------------------------
+    def _handler_for(self, attribute: Attribute) -> Any:
+        # Slow path of push/pop: the class is not in the look-up cache (first
+        # sight, or the active technique decides per attribute).
+        if self._attr_via_technique:
+            return self._technique.handle_attribute(attribute, self)
+        return self.attribute_handler(attribute.__class__)
+
     def push(self, attribute: Attribute) -> None:
         """Make ``attribute`` the active one of its category."""
         h = self._attr_handlers.get(attribute.__class__, _MISSING)
@@ -227,7 +246,12 @@ class Engine:
             self.context._mono[attribute.category].append(attribute)
             return
         if h is _MISSING:
-            h = self.attribute_handler(attribute.__class__)
+            if not isinstance(attribute, MonoAttribute):
+                raise TypeError(
+                    f"push() needs a MonoAttribute, got {type(attribute).__name__}{self._where()}; "
+                    f"poly attributes are add()ed"
+                )
+            h = self._handler_for(attribute)
             if h is None:
                 self.context._mono[attribute.category].append(attribute)
                 return
@@ -258,10 +282,36 @@ class Engine:
         if h is None:
             return attribute
         if h is _MISSING:
-            h = self.attribute_handler(attribute.__class__)
+            h = self._handler_for(attribute)
         if h is not None and h.service != SIMPLIFY:
             h.unexec(attribute, self)
         return attribute
+
+    def _pop_op(self, attribute: Attribute) -> None:
+        # The POP op of compiled programs: pop what the node pushed and check
+        # it is what comes off (a handler that pushed without popping would
+        # otherwise make attributes leak to siblings).  Inlines the common case.
+        if not self._frames:
+            stack = self.context._mono.get(attribute.category)
+            if stack and stack[-1] is attribute:
+                stack.pop()
+                h = self._attr_handlers.get(attribute.__class__, _MISSING)
+                if h is None:
+                    return
+                if h is _MISSING:
+                    h = self._handler_for(attribute)
+                if h is not None and h.service != SIMPLIFY:
+                    h.unexec(attribute, self)
+                return
+        self._pop_expected(attribute)
+
+    def _pop_expected(self, attribute: Attribute) -> None:
+        popped = self.pop(attribute.category)
+        if popped is not attribute:
+            raise EvaluationError(
+                f"unbalanced push/pop{self._where()}: popping {type(attribute).__name__} removed "
+                f"{type(popped).__name__} instead; a handler pushed {type(popped).__name__} without popping it"
+            )
 
     def _record(self, simplifier: Any, attribute: Attribute) -> list[tuple[str, Any]]:
         """Run an attribute simplifier's exec, recording what it pushes, adds and installs."""
@@ -292,9 +342,14 @@ class Engine:
 
     def add(self, attribute: Attribute) -> None:
         """Activate a poly attribute (lights, clip planes, pick ids)."""
+        if not isinstance(attribute, PolyAttribute):
+            raise TypeError(
+                f"add() needs a PolyAttribute, got {type(attribute).__name__}{self._where()}; "
+                f"mono attributes are push()ed"
+            )
         if attribute.category is Light and id(attribute) in self._pre_lights:
             return
-        h = self.attribute_handler(attribute.__class__)
+        h = self._handler_for(attribute)
         if h is not None and h.service == SIMPLIFY:
             self._poly_frames[id(attribute)] = [attribute, h, 0, self._record(h, attribute)]
             return
@@ -319,7 +374,7 @@ class Engine:
                 break
         else:
             raise EvaluationError(f"remove({type(attribute).__name__}){self._where()}: the attribute was not added")
-        h = self.attribute_handler(attribute.__class__)
+        h = self._handler_for(attribute)
         if h is not None and h.service != SIMPLIFY:
             h.unexec(attribute, self)
 
@@ -332,6 +387,8 @@ class Engine:
 
     def deinstall(self, handler: Handler) -> None:
         """Remove ``handler`` from its (service, target) stack."""
+        if not isinstance(handler, Handler):
+            raise TypeError(f"deinstall() needs a Handler, got {type(handler).__name__}{self._where()}")
         stack = self.context.handler_stack(handler.service, handler.target)
         for i in range(len(stack) - 1, -1, -1):
             if stack[i] is handler:
@@ -388,16 +445,28 @@ class Engine:
         if mask is not None:
             self.mask = mask
         self._running += 1
+        snapshot = self._snapshot()
         try:
             self.begin(root)
             self._eval_node(root)
-        except BaseException:
-            self._reset()
+        except BaseException as exc:
+            path = self.node_path
+            self._reset(snapshot)
+            if path and type(exc) in (ValueError, TypeError) and path not in str(exc):
+                raise type(exc)(f"{exc} (in node {path})") from exc
             raise
         else:
             self.end(root)
         finally:
             self._running -= 1
+
+    def _snapshot(self) -> tuple[dict, dict, dict]:
+        ctx = self.context
+        return (
+            {c: len(s) for c, s in ctx._mono.items()},
+            {c: len(s) for c, s in ctx._poly.items()},
+            {k: len(s) for k, s in ctx._handlers.items()},
+        )
 
     def begin(self, root: Any) -> None:
         """Declarative pre-evaluation: activate every light and find the camera."""
@@ -406,16 +475,16 @@ class Engine:
         lights, camera = root.preevaluate(self._mask_fn)
         lights_set = self.context.poly_set(Light)
         for light, matrix in lights:
+            self._placements.append((light, matrix))
             if id(light) not in self._pre_lights:
                 self._pre_lights[id(light)] = light
-                self._light_matrices[id(light)] = matrix
                 lights_set.append(light)
                 h = self.attribute_handler(light.__class__)
                 if h is not None and h.service != SIMPLIFY:
                     h.exec(light, self)
         self.camera = camera
         self._saved_mask_fn = self._mask_fn
-        if camera is not None and camera[0].mask and self._mask_fn is None:
+        if self.uses_camera_mask and camera is not None and camera[0].mask and self._mask_fn is None:
             from .mask import compile_mask
 
             self._mask_fn = compile_mask(camera[0].mask)  # what this camera sees
@@ -429,25 +498,26 @@ class Engine:
                     del lights_set[i]
                     break
         self._pre_lights.clear()
-        self._light_matrices.clear()
+        self._placements.clear()
         self._mask_fn = self._saved_mask_fn
 
-    def _reset(self) -> None:
-        """Drop all traversal state after an error so the engine stays usable."""
+    def _reset(self, snapshot: tuple[dict, dict, dict] | None = None) -> None:
+        """Roll the state back to ``snapshot`` (or empty) after an error so the engine stays usable."""
         ctx = self.context
-        for stack in ctx._mono.values():
-            stack.clear()
-        for items in ctx._poly.values():
-            items.clear()
+        mono, poly, handlers = snapshot if snapshot is not None else ({}, {}, {})
+        for c, stack in ctx._mono.items():
+            del stack[mono.get(c, 0) :]
+        for c, items in ctx._poly.items():
+            del items[poly.get(c, 0) :]
         del ctx._matrices[1:]
-        ctx._transforms = ctx._mono[Transform]
-        for stack in ctx._handlers.values():
-            stack.clear()
+        for k, stack in ctx._handlers.items():
+            del stack[handlers.get(k, 0) :]
         self._invalidate()
         self._node_stack.clear()
         self._frames.clear()
         self._poly_frames.clear()
         self._pre_lights.clear()
+        self._placements.clear()
         self._light_matrices.clear()
         self._mask_fn = self._saved_mask_fn
 
@@ -498,12 +568,17 @@ class Engine:
         return self.context.poly(category)
 
     def lights(self) -> list[tuple[Light, np.ndarray]]:
-        """Active lights with their world matrices, after the light switch."""
+        """Active lights with their world matrices, after the light switch.
+
+        Pre-evaluated lights come first, once per placement; lights added
+        during the traversal follow with the model matrix they were added with.
+        """
         switch = self.context.mono(LightSwitch)
-        out = []
+        out = [(light, m) for light, m in self._placements if switch is None or switch.allows(light)]
+        pre = self._pre_lights
         for light in self.context.poly(Light):
-            if switch is None or switch.allows(light):
-                out.append((light, self._light_matrices.get(id(light), np.eye(4))))
+            if id(light) not in pre and (switch is None or switch.allows(light)):
+                out.append((light, self._light_matrices.get(id(light), _IDENTITY)))
         return out
 
     def view_matrix(self) -> np.ndarray | None:

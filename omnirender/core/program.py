@@ -35,11 +35,13 @@ PUSH, POP, ADD, REMOVE, INSTALL, DEINSTALL, EVAL, ENTER, LEAVE, NODE, TECHNIQUE 
 Program = list[tuple[int, Any]]
 
 
-def compile_components(items: Iterable[Any], program: Program, where: str = "") -> Program:
+def compile_components(items: Iterable[Any], program: Program, where: Any = "") -> Program:
     """Append the ops that evaluate ``items`` in order and then undo them.
 
     A technique among the items takes the rest of the sequence as its own
     program (evaluated once per pass); the items before it are undone after it.
+    ``where`` (a string or an object whose ``str`` is one, computed only on
+    error) says where the items come from in error messages.
     """
     items = list(items)
     undo: list[tuple[int, Any]] = []
@@ -49,7 +51,7 @@ def compile_components(items: Iterable[Any], program: Program, where: str = "") 
             append((EVAL, item))
         elif isinstance(item, MonoAttribute):
             append((PUSH, item))
-            undo.append((POP, item.category))
+            undo.append((POP, item))
         elif isinstance(item, PolyAttribute):
             append((ADD, item))
             undo.append((REMOVE, item))

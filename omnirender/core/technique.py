@@ -32,6 +32,8 @@ class Technique(RenderingComponent):
 
     def __init__(self, service: str | None = None, passes: int = 1) -> None:
         super().__init__()
+        if isinstance(passes, bool) or not isinstance(passes, int):
+            raise ValueError(f"{type(self).__name__}: passes must be an integer >= 1, got {passes!r}")
         if passes < 1:
             raise ValueError(f"{type(self).__name__}: passes must be >= 1, got {passes}")
         object.__setattr__(self, "service", service)
@@ -86,5 +88,9 @@ class Technique(RenderingComponent):
         fn(shape, engine)
 
     def handle_attribute(self, attribute: Any, engine: Engine) -> Any:
-        """The handler that applies ``attribute`` (painter or simplifier), or None."""
+        """The handler that applies ``attribute`` (painter or simplifier), or None for passive.
+
+        Called on push/pop/add/remove.  Override it to apply attributes
+        differently in this technique (e.g. ignore materials in a depth pass).
+        """
         return engine.attribute_handler(attribute.__class__)

@@ -57,6 +57,7 @@ class MitsubaEngine(Engine):
     """
 
     service = "mitsuba.paint"
+    uses_camera_mask = True
 
     def __init__(
         self,

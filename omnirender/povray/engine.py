@@ -73,6 +73,7 @@ class POVRayEngine(Engine):
     """
 
     service = "pov.paint"
+    uses_camera_mask = True
 
     def __init__(
         self,

@@ -18,10 +18,8 @@ import numpy as np
 from ..core.camera import Camera
 from ..core.component import RenderingComponent
 from ..core.engine import Engine
-from ..core.handler import Handler
 from ..core.light import Light
 from ..core.program import ENTER, LEAVE, NODE, compile_components
-from ..core.technique import Technique
 from ..core.transform import Transform
 
 __all__ = ["Node", "Visitor"]
@@ -63,7 +61,7 @@ class Node:
         self._items: list[Any] = []
         self._parents: list[Node] = []
         self._version = 0
-        self._groups = frozenset(_check_group(g) for g in groups)
+        self._groups = _group_set(groups)
         self._program: list[tuple[int, Any]] | None = None
         self._program_version = -1
         self._pre: tuple[int, Any, Any] | None = None
@@ -87,7 +85,7 @@ class Node:
 
     @groups.setter
     def groups(self, value: Iterable[str]) -> None:
-        self._groups = frozenset(_check_group(g) for g in value)
+        self._groups = _group_set(value)
         self.touch()
 
     @property
@@ -115,10 +113,23 @@ class Node:
         return self._version
 
     def touch(self) -> None:
-        """Mark the node changed; the change propagates to every ancestor."""
+        """Mark the node changed; the change reaches every ancestor exactly once."""
         self._version += 1
-        for parent in self._parents:
-            parent.touch()
+        parents = self._parents
+        if not parents:
+            return
+        if len(parents) == 1 and len(parents[0]._parents) <= 1:
+            # a plain chain (the common case): no bookkeeping
+            node = parents[0]
+            while node is not None:
+                node._version += 1
+                up = node._parents
+                if len(up) > 1:
+                    _touch_ancestors(up)
+                    return
+                node = up[0] if up else None
+            return
+        _touch_ancestors(parents)
 
     # -- contents ---------------------------------------------------------
     def add(self, item: Any) -> Any:
@@ -266,14 +277,38 @@ class Node:
         engine.run(self)
 
     def program(self) -> list[tuple[int, Any]]:
-        """The compiled micro program of this node (enter, contents, undo, leave)."""
-        if self._program_version != self._version or self._program is None:
-            program: list[tuple[int, Any]] = [(ENTER, self)]
-            compile_components(self._items, program, f" in node {self.path}")
-            program.append((LEAVE, -1))
-            self._program = program
-            self._program_version = self._version
-        return self._program
+        """The compiled micro program of this node (enter, contents, undo, leave).
+
+        Cached per version.  Stale descendants are compiled first, bottom-up
+        with an explicit stack, so deep graphs need no deep recursion.
+        """
+        if self._program_version == self._version and self._program is not None:
+            return self._program
+        order: list[Node] = []
+        seen: set[int] = set()
+        stack: list[tuple[Node, bool]] = [(self, False)]
+        while stack:
+            node, expanded = stack.pop()
+            if expanded:
+                order.append(node)
+                continue
+            if id(node) in seen or (node._program_version == node._version and node._program is not None):
+                continue
+            seen.add(id(node))
+            stack.append((node, True))
+            for item in node._items:
+                if isinstance(item, Node):
+                    stack.append((item, False))
+        for node in order:  # children before parents
+            node._compile()
+        return self._program  # type: ignore[return-value]
+
+    def _compile(self) -> None:
+        program: list[tuple[int, Any]] = [(ENTER, self)]
+        compile_components(self._items, program, _Where(self))
+        program.append((LEAVE, -1))
+        self._program = program
+        self._program_version = self._version
 
     def _compile_node(self, program: list[tuple[int, Any]]) -> None:
         if self._groups:
@@ -293,7 +328,7 @@ class Node:
             return cached[2]
         lights: list[tuple[Light, np.ndarray]] = []
         camera: list[tuple[Camera, np.ndarray]] = []
-        _collect(self, np.eye(4), mask_fn, lights, camera, set())
+        _collect(self, np.eye(4), mask_fn, lights, camera)
         result = (lights, camera[0] if camera else None)
         self._pre = (self._version, mask_fn, result)
         return result
@@ -302,12 +337,19 @@ class Node:
         """Walk components and structure in evaluation order, without an engine."""
         if visitor.enter_node(self) is False:
             return
-        for item in self._items:
-            if isinstance(item, Node):
-                item.inspect(visitor)
+        stack: list[tuple[Node, Iterator[Any]]] = [(self, iter(self._items))]
+        while stack:
+            node, items = stack[-1]
+            for item in items:
+                if isinstance(item, Node):
+                    if visitor.enter_node(item) is not False:
+                        stack.append((item, iter(item._items)))
+                        break
+                else:
+                    visitor.visit(item, node)
             else:
-                visitor.visit(item, self)
-        visitor.leave_node(self)
+                stack.pop()
+                visitor.leave_node(node)
 
     def __repr__(self) -> str:
         return f"Node({self._name!r}, {len(self._items)} items)"
@@ -324,33 +366,72 @@ class Node:
         return render(self, engine="gl", size=self.repr_size)._repr_png_()
 
 
-def _collect(node: Node, matrix: np.ndarray, mask_fn: Any, lights: list, camera: list, stack: set) -> None:
-    if node._groups and mask_fn is not None and not mask_fn(node._groups):
-        return
-    if id(node) in stack:
-        return
-    stack.add(id(node))
-    for item in node._items:
-        if isinstance(item, Node):
-            _collect(item, matrix, mask_fn, lights, camera, stack)
-        elif isinstance(item, Transform):
-            m = getattr(item, "matrix", None)
-            if m is not None:
-                matrix = matrix @ m
-        elif isinstance(item, Light):
-            lights.append((item, matrix))
-        elif isinstance(item, Camera):
-            if not camera:
-                camera.append((item, matrix))
-        elif isinstance(item, (Handler, Technique)):
+class _Where:
+    """Lazy " in node /path" for error messages (paths cost O(depth) to build)."""
+
+    __slots__ = ("node",)
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+
+    def __str__(self) -> str:
+        return f" in node {self.node.path}"
+
+    def __format__(self, spec: str) -> str:
+        return str(self)
+
+
+def _touch_ancestors(start: list[Node]) -> None:
+    seen: set[int] = set()
+    stack = list(start)
+    while stack:
+        node = stack.pop()
+        if id(node) in seen:
             continue
-    stack.discard(id(node))
+        seen.add(id(node))
+        node._version += 1
+        stack.extend(node._parents)
+
+
+def _collect(root: Node, matrix: np.ndarray, mask_fn: Any, lights: list, camera: list, _unused: Any = None) -> None:
+    """Walk ``root`` accumulating static transforms; collect lights and the first camera."""
+    if root._groups and mask_fn is not None and not mask_fn(root._groups):
+        return
+    active: set[int] = {id(root)}  # nodes on the current path (guards against cycles)
+    stack: list[list[Any]] = [[root, iter(root._items), matrix]]
+    while stack:
+        frame = stack[-1]
+        node, items = frame[0], frame[1]
+        for item in items:
+            if isinstance(item, Node):
+                if id(item) in active or (item._groups and mask_fn is not None and not mask_fn(item._groups)):
+                    continue
+                active.add(id(item))
+                stack.append([item, iter(item._items), frame[2]])
+                break
+            if isinstance(item, Transform):
+                m = getattr(item, "matrix", None)
+                if m is not None:
+                    frame[2] = frame[2] @ m
+            elif isinstance(item, Light):
+                lights.append((item, frame[2]))
+            elif isinstance(item, Camera) and not camera:
+                camera.append((item, frame[2]))
+        else:
+            stack.pop()
+            active.discard(id(node))
 
 
 def _check_name(name: str) -> str:
     if not isinstance(name, str) or not name or "/" in name:
         raise ValueError(f"Node: name must be a non-empty string without '/', got {name!r}")
     return name
+
+
+def _group_set(groups: Iterable[str] | str) -> frozenset[str]:
+    if isinstance(groups, str):  # one group, not its characters
+        groups = [groups]
+    return frozenset(_check_group(g) for g in groups)
 
 
 def _check_group(group: str) -> str:

@@ -532,3 +532,92 @@ def test_node_hooks_see_structure_and_paths():
     engine.install(RecordS())
     om.Node("a", [om.Node("b", [S()])]).evaluate(engine)
     assert events == [("enter", "/a"), ("enter", "/a/b"), ("leave", "b"), ("leave", "a")]
+
+
+def test_bare_engine_sees_a_transform_changed_between_pushes():
+    engine = om.Engine()
+    t = om.Translation(1, 0, 0)
+    engine.push(t)
+    assert engine.model_matrix()[0, 3] == 1
+    engine.pop(om.Transform)
+    t.offset = (5, 0, 0)
+    engine.push(t)
+    assert engine.model_matrix()[0, 3] == 5
+    t.offset = (7, 0, 0)  # changed while pushed
+    assert engine.model_matrix()[0, 3] == 7
+
+
+def test_technique_can_override_attribute_handling():
+    class NoColours(om.Technique):
+        __slots__ = ()
+
+        def handle_attribute(self, attribute, engine):
+            return _Swallow() if isinstance(attribute, Colour) else super().handle_attribute(attribute, engine)
+
+    class _Swallow(om.AttributeSimplifier):
+        __slots__ = ()
+
+        def exec(self, attribute, engine):
+            pass  # the colour is not applied in this technique
+
+    engine = recorder()
+    node = om.Node("n", [Colour("red"), S("a")])
+    with engine.using(NoColours()):
+        node.evaluate(engine)
+    node.evaluate(engine)
+    assert engine.seen == [("a", None), ("a", "red")]
+
+
+def test_a_handler_that_pushes_without_popping_is_caught():
+    class Leaky(om.ShapePainter):
+        __slots__ = ()
+        service = "record"
+        target = S
+
+        def exec(self, shape, engine):
+            engine.push(Colour("leak"))
+
+    engine = Recorder()
+    engine.install(Leaky())
+    with pytest.raises(om.EvaluationError, match=r"unbalanced push/pop in node /n: popping Colour removed Colour"):
+        om.Node("n", [Colour("mine"), S()]).evaluate(engine)
+    assert engine.mono(Colour) is None
+
+
+def test_an_error_keeps_what_was_set_up_before_the_frame():
+    engine = recorder()
+    outer = Colour("outer")
+    engine.push(outer)
+    with pytest.raises(om.NoHandlerError):
+        om.Node("bad", [Colour("inner"), Composite()]).evaluate(engine)
+    assert engine.mono(Colour) is outer
+    om.Node("good", [S("ok")]).evaluate(engine)  # the installed painter is still there
+    assert engine.seen[-1] == ("ok", "outer")
+
+
+def test_simplifier_errors_name_the_node():
+    class Broken(om.ShapeSimplifier):
+        __slots__ = ()
+        target = Composite
+
+        def exec(self, shape, engine):
+            return [42]
+
+    engine = recorder()
+    engine.install(Broken())
+    with pytest.raises(TypeError, match=r"cannot evaluate int.*in node /scene/deep"):
+        om.Node("scene", [om.Node("deep", [Composite()])]).evaluate(engine)
+
+
+def test_wrong_types_raise_type_errors():
+    engine = om.Engine()
+    with pytest.raises(TypeError, match="MonoAttribute"):
+        engine.push(3)
+    with pytest.raises(TypeError, match="PolyAttribute"):
+        engine.add(Colour("x"))
+    with pytest.raises(TypeError, match="Handler"):
+        engine.deinstall(3)
+    with pytest.raises(TypeError, match="Handler"):
+        engine.install("painter")
+    with pytest.raises(ValueError, match="passes"):
+        om.Technique(passes="2")

@@ -299,9 +299,64 @@ def test_evaluate_components_without_node():
 
 
 def test_camera_mask_selects_what_it_sees_unless_the_engine_has_a_mask():
+    class Imaging(om.TraceEngine):
+        uses_camera_mask = True
+
     scene = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5), mask="!debug")])
     scene.add(om.Node("dbg", [S("d")], groups=["debug"]))
     scene.add(S("x"))
-    evals = lambda mask: [o.label for op, o in om.trace(scene, mask=mask) if op == "eval"]  # noqa: E731
-    assert evals(None) == ["x"]
-    assert evals("debug") == ["d", "x"]
+
+    def evals(engine):
+        scene.evaluate(engine)
+        return [o.label for op, o in engine.program if op == "eval"]
+
+    assert evals(Imaging()) == ["x"]
+    assert evals(Imaging(mask="debug")) == ["d", "x"]
+    assert evals(om.TraceEngine()) == ["d", "x"]  # analysis engines see the whole graph
+    with pytest.raises(ValueError, match="Camera: bad mask.*position"):
+        om.Camera.look_at(eye=(0, 0, 5), mask="a &")
+
+
+def test_shared_light_shines_from_every_placement():
+    lamp = Lamp("lamp")
+    lamp_node = om.Node("lamp", [lamp])
+    scene = om.Node("scene", [S("x")])
+    scene.add(om.Node("left", [om.Translation(-3, 0, 0), lamp_node]))
+    scene.add(om.Node("right", [om.Translation(4, 0, 0), lamp_node]))
+    engine = probe()
+    scene.evaluate(engine)
+    assert sorted(engine.seen["x"]) == [("lamp", -3.0), ("lamp", 4.0)]
+
+
+def test_deep_graphs_need_no_deep_recursion():
+    root = node = om.Node("n0")
+    for i in range(1, 3000):
+        node = node.add(om.Node(f"n{i}", [om.Translation(1, 0, 0)]))
+    node.add(S("deep"))
+    engine = probe()
+    root.evaluate(engine)
+    assert "deep" in engine.seen
+    assert om.statistics(root)["nodes"] == 3000
+    assert node.path.count("/") == 3000
+    node.add(S("again"))  # touch through 3000 ancestors
+    assert [o.label for op, o in om.trace(root) if op == "eval"] == ["deep", "again"]
+
+
+def test_touch_visits_each_ancestor_once_in_a_dag():
+    # 20 layers, each node shared by two parents: 2**20 paths, 40 ancestors
+    bottom = om.Node("bottom")
+    layer = [bottom]
+    for i in range(20):
+        a, b = om.Node(f"a{i}"), om.Node(f"b{i}")
+        for n in layer:
+            a.add(n)
+            b.add(n)
+        layer = [a, b]
+    top = om.Node("top", layer)
+    before = top.version
+    bottom.add(S("x"))
+    assert top.version == before + 1
+
+
+def test_a_string_is_one_group():
+    assert om.Node("n", groups="debug").groups == frozenset({"debug"})
