@@ -354,6 +354,31 @@ class Node:
     def __repr__(self) -> str:
         return f"Node({self._name!r}, {len(self._items)} items)"
 
+    # -- the viewer's IsRenderable protocol (ArtiSynth style) -----------------
+    def prerender(self, render_list: Any) -> None:
+        """Cache what :meth:`render` needs and file this node into ``render_list``."""
+        from ..viewer.renderable import node_prerender
+
+        node_prerender(self, render_list)
+
+    def render(self, renderer: Any, flags: int = 0) -> None:
+        """Send this node's components to ``renderer`` (an engine)."""
+        from ..viewer.renderable import node_render
+
+        node_render(self, renderer, flags)
+
+    def update_bounds(self, pmin: Any, pmax: Any) -> None:
+        """Grow ``pmin``/``pmax`` (numpy arrays, updated in place) by this node's world bounds."""
+        from ..viewer.renderable import node_update_bounds
+
+        node_update_bounds(self, pmin, pmax)
+
+    def render_hints(self) -> int:
+        """TRANSPARENT / TWO_DIMENSIONAL flags derived from the node's components."""
+        from ..viewer.renderable import node_render_hints
+
+        return node_render_hints(self)
+
     #: Size of the picture a node shows of itself in a notebook.
     repr_size: tuple[int, int] = (480, 360)
 

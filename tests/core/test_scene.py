@@ -360,3 +360,19 @@ def test_touch_visits_each_ancestor_once_in_a_dag():
 
 def test_a_string_is_one_group():
     assert om.Node("n", groups="debug").groups == frozenset({"debug"})
+
+
+def test_node_is_a_renderable():
+    from omnirender.viewer import TRANSPARENT, IsRenderable, RenderList
+
+    solid = om.Node("solid", [om.Sphere(radius=2)])
+    glass = om.Node("glass", [om.Material(opacity=0.5), om.Sphere(radius=1)])
+    assert isinstance(solid, IsRenderable)
+    assert solid.render_hints() & TRANSPARENT == 0 and glass.render_hints() & TRANSPARENT
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    solid.update_bounds(lo, hi)
+    np.testing.assert_allclose([lo, hi], [[-2, -2, -2], [2, 2, 2]])
+    rl = RenderList()
+    rl.prerender([solid, glass])
+    assert solid in [getattr(r, "node", r) for r in rl.opaque]
+    assert glass in [getattr(r, "node", r) for r in rl.transparent]
