@@ -56,6 +56,9 @@ def test_atomic_write_leaves_the_old_file_on_failure(tmp_path):
     with atomic_write(target) as fh:
         fh.write("new")
     assert target.read_text() == "new"
+    umask = os.umask(0)
+    os.umask(umask)
+    assert target.stat().st_mode & 0o777 == 0o666 & ~umask  # not the private mode of mkstemp
 
 
 def test_render_rejects_unknown_engines_and_bad_sizes():
