@@ -19,12 +19,13 @@ import numpy as np
 from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMaterial, Texture
 from ..core.camera import Camera
 from ..core.component import MonoAttribute, PolyAttribute, Shape
-from ..core.engine import Engine
 from ..core.handler import Handler
 from ..core.light import Light, LightSwitch
 from ..core.mask import compile_mask
+from ..core.program import compile_components
 from ..core.technique import Technique
 from ..core.transform import Transform
+from ..scene.node import Node
 from . import attributes as glattr
 from .drawlist import DrawItem, DrawState
 from .geometry import Geometry
@@ -123,38 +124,46 @@ class DrawListCompiler:
             out.extend(entry.items)
             return
         members = node._items
-        own = tuple(x if hasattr(x, "_items") else (x, x._version) for x in members)
+        own = tuple([x if x.__class__ is Node else (x, x._version) for x in members])
         sub_forced = forced or not same or entry.own != own
         start = len(out)
         stack = self._node_stack
         stack.append(node)
-        if any(isinstance(x, Technique) for x in members):
-            # A technique takes over the rest of the list: let the core run it (no caching inside).
-            stack.pop()
-            Engine.run_program(self, node.program())
-        else:
-            undo: list[tuple[Any, Any]] = []
-            push, pop, add, remove = self.push, self.pop, self.add, self.remove
-            evaluate = self._ops[6]
-            for index, item in enumerate(members):
-                if hasattr(item, "_items"):
-                    self._compile_node(item, (key, index), sub_forced)
-                elif isinstance(item, Shape):
-                    evaluate(item)
-                elif isinstance(item, MonoAttribute):
-                    push(item)
-                    undo.append((pop, item.category))
-                elif isinstance(item, PolyAttribute):
-                    add(item)
-                    undo.append((remove, item))
-                elif isinstance(item, Handler):
-                    self.install(item)
-                    undo.append((self.deinstall, item))
-                else:
-                    raise TypeError(f"GLEngine: cannot evaluate {type(item).__name__} in node {self.node_path}")
-            for fn, arg in reversed(undo):
-                fn(arg)
-            stack.pop()
+        undo: list[tuple[Any, Any]] = []
+        push, pop, add, remove = self.push, self.pop, self.add, self.remove
+        evaluate = self._ops[6]
+        cache_get = self._node_cache.get
+        for index, item in enumerate(members):
+            if item.__class__ is Node or isinstance(item, Node):
+                child_key = (key, index)
+                if not sub_forced:
+                    # inline cache hit: most children of a big node are unchanged
+                    hit = cache_get(child_key)
+                    if hit is not None and hit.version == item._version and hit.ref() is item:
+                        out.extend(hit.items)
+                        continue
+                self._compile_node(item, child_key, sub_forced)
+            elif isinstance(item, Shape):
+                evaluate(item)
+            elif isinstance(item, MonoAttribute):
+                push(item)
+                undo.append((pop, item.category))
+            elif isinstance(item, PolyAttribute):
+                add(item)
+                undo.append((remove, item))
+            elif isinstance(item, Technique):
+                # a technique takes over the rest of the list, once per pass (core machinery, no caching inside)
+                rest = compile_components(members[index + 1 :], [], f" in node {self.node_path}")
+                self._run_technique((item, rest))
+                break
+            elif isinstance(item, Handler):
+                self.install(item)
+                undo.append((self.deinstall, item))
+            else:
+                raise TypeError(f"GLEngine: cannot evaluate {type(item).__name__} in node {self.node_path}")
+        for fn, arg in reversed(undo):
+            fn(arg)
+        stack.pop()
         self._node_cache[key] = _NodeEntry(node, own, out[start:])
 
     def _preevaluate(self, root: Any) -> tuple[list, Any, Any]:
@@ -173,9 +182,17 @@ class DrawListCompiler:
         camera = None
         background = None
         m = None
+        cache_get = self._pre_cache.get
+        mask_fn = self._mask_fn
         for item in node._items:
-            if hasattr(item, "_items"):
-                sub_lights, sub_camera, sub_bg = self._pre_node(item, background_cls)
+            if item.__class__ is Node or isinstance(item, Node):
+                hit = cache_get(id(item))
+                if hit is not None and hit[1] == item._version and hit[3] is mask_fn and hit[0]() is item:
+                    sub_lights, sub_camera, sub_bg = hit[2]
+                    if not sub_lights and sub_camera is None and sub_bg is None:
+                        continue
+                else:
+                    sub_lights, sub_camera, sub_bg = self._pre_node(item, background_cls)
                 if sub_lights:
                     lights.extend(sub_lights if m is None else [(light, m @ lm) for light, lm in sub_lights])
                 if camera is None and sub_camera is not None:
@@ -227,9 +244,15 @@ class DrawListCompiler:
         row[37] = self._point_size
         if kind is None:
             kind = self._kind_for(geometry)
-        state = self._state_for(kind, geometry, extra)
         if transparent is None:
             transparent = self._blend_on or row[19] < 1.0 or geometry.translucent
+        cull = None
+        if geometry.closed and not transparent and kind == "mesh":
+            base = self._state_base
+            if base[3] == "none" and not base[10] and not base[7]:
+                # a closed opaque surface never shows its back faces: cull them (mirrored instances: the front)
+                cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
+        state = self._state_for(kind, geometry, extra, cull)
         item = DrawItem(geometry, state, row, transparent, "")
         self._items.append(item)
         return item
@@ -290,7 +313,7 @@ class DrawListCompiler:
         )
         self._state_dirty = False
 
-    def _state_for(self, kind: str, geometry: Geometry, extra: Any) -> DrawState:
+    def _state_for(self, kind: str, geometry: Geometry, extra: Any, cull_override: str | None = None) -> DrawState:
         base = self._state_base
         texture = base[9]
         features = []
@@ -306,7 +329,7 @@ class DrawListCompiler:
             features.append(("FOG", True))
         if kind == "points" and geometry.sizes is not None:
             features.append(("VSIZE", True))
-        key = (kind, tuple(features), extra, base)
+        key = (kind, tuple(features), extra, base, cull_override)
         state = self._states.get(key)
         if state is None:
             depth_func, depth_mask, blend, cull, offset, cmask, stencil, wire, width, tex, clip, fog, switch, _ = base
@@ -316,7 +339,7 @@ class DrawListCompiler:
                 depth_func=depth_func,
                 depth_mask=depth_mask,
                 blend=blend,
-                cull=cull,
+                cull=cull_override or cull,
                 polygon_offset=offset,
                 color_mask=cmask,
                 stencil=stencil,

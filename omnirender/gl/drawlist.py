@@ -91,6 +91,7 @@ class Batch:
         "dirty",
         "uniform",
         "stride",
+        "sorted_for",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -107,6 +108,8 @@ class Batch:
         self.uniform = False
         #: floats per instance in the GPU buffer (20 = matrix + colour when the material is uniform).
         self.stride = 0
+        #: the view (bytes of the view matrix) the instances were last sorted front to back for, or None.
+        self.sorted_for: bytes | None = None
 
     def mark(self, index: int) -> None:
         d = self.dirty

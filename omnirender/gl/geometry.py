@@ -36,6 +36,7 @@ class Geometry:
         "persistent",
         "label",
         "translucent",
+        "closed",
         "__weakref__",
     )
 
@@ -50,6 +51,7 @@ class Geometry:
         indices: np.ndarray | None = None,
         persistent: bool = False,
         label: str = "",
+        closed: bool = False,
     ) -> None:
         self.mode = mode  # "triangles", "lines" or "points"
         self.positions = np.ascontiguousarray(positions, dtype=np.float32)
@@ -64,6 +66,8 @@ class Geometry:
         self.count = len(self.indices) if self.indices is not None else len(p)
         self.persistent = persistent
         self.label = label
+        #: a closed, consistently wound surface (its back faces may be culled when opaque)
+        self.closed = closed
         self.translucent = bool(self.colors is not None and len(self.colors) and self.colors[:, 3].min() < 1.0)
 
     @property
@@ -189,7 +193,9 @@ def unit_sphere(segments: int = 48, rings: int = 24) -> Geometry:
                 idx.append((a, b, a + 1))
             if i != rings - 1:
                 idx.append((a + 1, b, b + 1))
-    return Geometry("triangles", pos, pos, texcoords=uv, indices=np.array(idx), persistent=True, label="unit sphere")
+    return Geometry(
+        "triangles", pos, pos, texcoords=uv, indices=np.array(idx), persistent=True, label="unit sphere", closed=True
+    )
 
 
 def unit_box() -> Geometry:
@@ -219,6 +225,7 @@ def unit_box() -> Geometry:
         indices=np.array(idx),
         persistent=True,
         label="unit box",
+        closed=True,
     )
 
 
@@ -255,4 +262,5 @@ def unit_cylinder(segments: int = 48) -> Geometry:
         indices=np.array(idx),
         persistent=True,
         label="unit cylinder",
+        closed=True,
     )

@@ -36,6 +36,8 @@ _DEPTH_FUNCS = {
     "always": "1",
 }
 _GL_CLIP_DISTANCE0 = 0x3000
+#: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
+SORT_MIN = 64
 
 
 class BatchRenderer:
@@ -137,6 +139,7 @@ class BatchRenderer:
         camera, view, proj = self._camera_matrices()
         self._camera_used = camera
         self._view = view
+        self._view_key = view.tobytes()
         self._proj = proj
         self._frame_uniforms = {
             "u_view": view.T.astype(np.float32).tobytes(),
@@ -370,7 +373,17 @@ class BatchRenderer:
                 batch.vao.release()
             batch.program = prog
             batch.vao = self._vao(batch.geometry, prog, batch.buffer, state.kind, compact=stride == 20)
-        if batch.dirty is not None:
+        if stride and n >= SORT_MIN and not state.special:
+            # opaque instances front to back: early depth tests then skip hidden fragments
+            if batch.dirty is not None or batch.sorted_for != self._view_key:
+                view = self._view
+                z = batch.rows[:, 12:15] @ view[2, :3]
+                order = np.argsort(-z, kind="stable")
+                data = batch.rows[order] if stride == ROW else batch.rows[order, :20]
+                batch.buffer.write(np.ascontiguousarray(data).tobytes())
+                batch.sorted_for = self._view_key
+                batch.dirty = None
+        elif batch.dirty is not None:
             if stride:
                 lo, hi = batch.dirty
                 data = batch.rows[lo:hi] if stride == ROW else np.ascontiguousarray(batch.rows[lo:hi, :20])

@@ -122,12 +122,14 @@ def test_popping_restores_state(engine):
     a.add(om.gl.Blend())
     a.add(om.gl.CullFace("front"))
     a.add(om.Sphere())
+    s.add(om.Torus())
     s.add(om.Box())
     engine.compile(s)
-    special, plain = engine._list
+    special, plain, box = engine._list
     assert special.state.depth_func is None and special.state.blend is not None and special.state.cull == "front"
     assert plain.state.depth_func == "less" and plain.state.blend is None and plain.state.cull == "none"
     assert special.transparent and not plain.transparent
+    assert box.state.cull == "back"  # closed opaque native shapes cull their back faces automatically
 
 
 def test_gl_attributes_are_ignored_by_other_engines():

@@ -87,3 +87,26 @@ def test_light_added_later_lights_everything(engine):
     img = engine.render(s)
     left = img.pixel(22, 24)
     assert left[0] > left[1] + 60  # red light on top of the white ambient term
+
+
+def test_technique_in_a_node_takes_over_the_rest(engine):
+    from omnirender.core.technique import Technique
+
+    class Twice(Technique):
+        __slots__ = ()
+
+        def __init__(self) -> None:
+            super().__init__(passes=2)
+
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    n = s.add(om.Node("n"))
+    n.add(om.Color(1, 0, 0))
+    n.add(Twice())
+    n.add(om.Sphere(radius=0.5))
+    s.add(om.Box(size=0.2, center=(1, 1, 0)))
+    engine.render(s)
+    kinds = [it.geometry.label for it in engine._list]
+    assert kinds == ["unit sphere", "unit sphere", "unit box"]
+    assert float(engine._list[0].row[16]) == 1.0  # the colour before the technique applies inside it
+    assert float(engine._list[2].row[16]) != 1.0 or float(engine._list[2].row[17]) != 0.0  # and not after the node
