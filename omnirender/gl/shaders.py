@@ -305,25 +305,20 @@ in vec4 i_hl;
 in vec4 i_extra;
 uniform mat4 u_view;
 uniform mat4 u_proj;
-#if NCLIP > 0
-uniform vec4 u_clip[NCLIP];
-out float gl_ClipDistance[NCLIP];
-#endif
 out vec3 g_pos;
 out vec4 g_color;
+out vec4 g_world;
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
     vec4 eye = u_view * world;
     g_pos = eye.xyz;
+    g_world = world;
 #ifdef VCOLOR
     g_color = vec4(in_color.rgb, in_color.a * i_color.a);
 #else
     g_color = i_color;
 #endif
     if (i_hl.w > 0.0) g_color.rgb = mix(g_color.rgb, i_hl.rgb, 0.6);
-#if NCLIP > 0
-    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
-#endif
     gl_Position = u_proj * eye;
 }
 """
@@ -333,8 +328,9 @@ layout(lines) in;
 layout(triangle_strip, max_vertices = 4) out;
 in vec3 g_pos[];
 in vec4 g_color[];
+in vec4 g_world[];
 #if NCLIP > 0
-in gl_PerVertex { vec4 gl_Position; float gl_ClipDistance[NCLIP]; } gl_in[];
+uniform vec4 u_clip[NCLIP];
 out float gl_ClipDistance[NCLIP];
 #endif
 uniform vec2 u_viewport;
@@ -347,7 +343,7 @@ void emit(int i, vec2 offset) {
     v_pos = g_pos[i];
     v_color = g_color[i];
 #if NCLIP > 0
-    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = gl_in[i].gl_ClipDistance[k];
+    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], g_world[i]);
 #endif
     EmitVertex();
 }

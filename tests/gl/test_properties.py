@@ -219,3 +219,18 @@ def test_transparent_shapes_are_sorted_back_to_front(engine):
     # the nearest (blue) sphere dominates the centre
     r, g, bl, _ = a[36, 48]
     assert bl > r and bl > g
+
+
+def test_clip_planes_and_fog_apply_to_lines_and_points(engine):
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 6)))
+    s.add(om.ClipPlane(normal=(1, 0, 0), offset=0.0))
+    s.add(om.Fog(color=(0.5, 0.5, 0.5), start=2, end=10))
+    s.add(om.DrawStyle(line_width=3, point_size=6))
+    s.add(om.Polyline([(-2, -1, 0), (2, 1, 0)]))
+    s.add(om.PointSet(np.random.default_rng(0).normal(size=(50, 3))))
+    s.add(om.DrawStyle(mode="points", point_size=3))
+    s.add(om.Torus())
+    img = engine.render(s)
+    assert img.mask[:, 50:].sum() > 50
+    assert img.mask[:, :46].sum() == 0  # everything with x < 0 is clipped
