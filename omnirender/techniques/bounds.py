@@ -27,10 +27,12 @@ from ..shapes import (
     Polyline,
     Rectangle,
     Sphere,
+    Text,
     Torus,
     TriangleSet,
+    Volume,
 )
-from .base import AnalysisEngine, evaluate_in_place
+from .base import AnalysisEngine, run_analysis
 
 __all__ = ["BoundsEngine", "BoundsHandler", "bounds", "analytic_bounds"]
 
@@ -136,18 +138,41 @@ class PolygonBounds(_VertexBounds):
     target = Polygon
 
 
+@default_for(BoundsEngine)
+class TextBounds(BoundsHandler):
+    """A label's anchor point: its glyphs have a size in pixels, not in world units."""
+
+    __slots__ = ()
+    target = Text
+
+    def exec(self, shape: Text, engine: BoundsEngine) -> None:
+        engine.include(gb.points_bounds(np.asarray([shape.position], dtype=np.float64), engine.model_matrix()))
+
+
+@default_for(BoundsEngine)
+class VolumeBounds(BoundsHandler):
+    """The whole grid box (``Volume.bounds()``), not just the isosurface other engines show."""
+
+    __slots__ = ()
+    target = Volume
+
+    def exec(self, shape: Volume, engine: BoundsEngine) -> None:
+        lo, hi = shape.bounds()
+        engine.include(gb.box_bounds((lo + hi) / 2.0, hi - lo, engine.model_matrix()))
+
+
 def bounds(scene_or_node: Any, mask: str | None = None) -> tuple[np.ndarray, np.ndarray] | None:
     """World-space axis-aligned bounds ``(min, max)`` of a scene or subgraph, None when empty.
 
     A node that is not a root is measured where it sits: the transforms before
-    it along its first-parent chain apply.  A list of components is measured
-    in world coordinates as given.
+    it along its first-parent chain apply (evaluated from the root, so a
+    ``Billboard`` above it turns towards the root's camera).  A list of
+    components is measured in world coordinates as given.  Texts count as
+    their anchor point; volumes as their whole grid box.  Anything else raises
+    TypeError.
     """
     engine = BoundsEngine(mask=mask)
-    if hasattr(scene_or_node, "_compile_node"):
-        evaluate_in_place(engine, scene_or_node, mask)
-    else:
-        engine.evaluate(scene_or_node)
+    run_analysis(engine, "bounds", scene_or_node, mask)
     if engine.box is None:
         return None
     return engine.box[0].copy(), engine.box[1].copy()

@@ -24,7 +24,7 @@ from ..core.handler import ShapePainter, default_for
 from ..geometry import intersect as gi
 from ..geometry.bvh import BVH
 from ..shapes import LineSet, PointSet, Polyline, TriangleSet
-from .base import AnalysisEngine
+from .base import AnalysisEngine, run_analysis
 
 __all__ = ["CollisionEngine", "collisions", "bodies_collide"]
 
@@ -32,26 +32,44 @@ COLLIDE = "collide"
 
 
 class CollisionEngine(AnalysisEngine):
-    """Collects world triangles of collidable shapes per node path in ``bodies``."""
+    """Collects world triangles of collidable shapes in ``bodies``, one body per outermost shape.
+
+    A body's key is ``(node path, index)``: the index of the shape among the
+    shapes evaluated directly in that node (0-based, in the node's order,
+    counting untagged shapes too), so it stays the same whatever else is tagged.
+    """
 
     service = COLLIDE
 
     def __init__(self, *, mask: Any = None, on_missing: str = "warn") -> None:
         super().__init__(mask=mask, on_missing=on_missing)
-        self.bodies: dict[str, list[np.ndarray]] = {}
+        self.bodies: dict[tuple[str, int], list[np.ndarray]] = {}
         self.skipped = 0
+        self._counts: dict[str, int] = {}
+        self._key: tuple[str, int] = ("", 0)
 
     def accepts(self, shape: Any) -> bool:
+        path = self.node_path
+        index = self._counts.get(path, 0)
+        self._counts[path] = index + 1
         tag = self.mono(Collidable)
         if tag is None or not tag.enabled:
             self.skipped += 1
             return False
+        self._key = (path, index)
         return True
 
     def collect(self, triangles: np.ndarray) -> None:
-        """Add world-space triangles (K, 3, 3) to the body of the shape being evaluated."""
+        """Add world-space triangles (K, 3, 3) to the body of the outermost shape being evaluated."""
         if len(triangles):
-            self.bodies.setdefault(self.scene_path, []).append(triangles)
+            self.bodies.setdefault(self._key, []).append(triangles)
+
+    def labels(self) -> dict[tuple[str, int], str]:
+        """Report names of the bodies: the node path, plus ``#index`` when several bodies share the path."""
+        per_path: dict[str, int] = {}
+        for path, _ in self.bodies:
+            per_path[path] = per_path.get(path, 0) + 1
+        return {(p, i): (p if per_path[p] == 1 else f"{p}#{i}") for p, i in self.bodies}
 
 
 @default_for(CollisionEngine)
@@ -127,22 +145,28 @@ def bodies_collide(a: np.ndarray, b: np.ndarray, chunk: int = 65536) -> bool:
 
 
 def collisions(scene: Any, mask: str | None = None) -> list[tuple[str, str]]:
-    """Pairs of node paths ``(a, b)``, a < b, whose collidable shapes intersect at triangle level."""
+    """Pairs ``(a, b)``, a < b, of collidable shapes that intersect at triangle level, named by path.
+
+    Each outermost shape tagged ``Collidable`` is one body, named by its node
+    path; when several collidable shapes sit in the same node their names get
+    the suffix ``#i``, the shape's 0-based index among the node's shapes
+    (``"/scene/a#1"``).  The parts of one simplified shape (an Arrow's shaft
+    and head) never collide with each other.  A subgraph is tested where it
+    sits in its graph.
+    """
     engine = CollisionEngine(mask=mask)
-    if hasattr(scene, "_compile_node"):
-        scene.evaluate(engine)
-    else:
-        engine.evaluate(scene)
-    paths = sorted(engine.bodies)
-    soups = {p: np.concatenate(engine.bodies[p]) for p in paths}
-    boxes = {p: (s.reshape(-1, 3).min(axis=0), s.reshape(-1, 3).max(axis=0)) for p, s in soups.items()}
+    run_analysis(engine, "collisions", scene, mask)
+    labels = engine.labels()
+    keys = sorted(engine.bodies, key=lambda k: labels[k])
+    soups = {k: np.concatenate(engine.bodies[k]) for k in keys}
+    boxes = {k: (s.reshape(-1, 3).min(axis=0), s.reshape(-1, 3).max(axis=0)) for k, s in soups.items()}
     out = []
-    for i, pa in enumerate(paths):
-        for pb in paths[i + 1 :]:
-            (la, ha), (lb, hb) = boxes[pa], boxes[pb]
+    for i, ka in enumerate(keys):
+        for kb in keys[i + 1 :]:
+            (la, ha), (lb, hb) = boxes[ka], boxes[kb]
             scale = 1e-9 * float(max(np.ptp(np.stack([la, ha, lb, hb]), axis=0).max(), 1e-300))
             if not gi.boxes_overlap(la, ha, lb, hb, scale):
                 continue
-            if bodies_collide(soups[pa], soups[pb]):
-                out.append((pa, pb))
+            if bodies_collide(soups[ka], soups[kb]):
+                out.append((labels[ka], labels[kb]))
     return out

@@ -30,7 +30,7 @@ from ..core.mask import compile_mask
 from ..geometry import intersect as gi
 from ..geometry.bvh import bvh_for, embree_available
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
-from .base import AnalysisEngine
+from .base import AnalysisEngine, check_scene, root_of, run_analysis
 from .bounds import analytic_bounds
 
 __all__ = ["Hit", "PickEngine", "pick", "pixel_ray", "ClipPlaneTracker"]
@@ -311,6 +311,11 @@ def pixel_ray(camera: Camera, camera_world: np.ndarray | None, pixel: Any, size:
         raise ValueError(f"pick: pixel must be (x, y), got {pixel!r}") from None
     if not (np.isfinite(px) and np.isfinite(py)):
         raise ValueError(f"pick: pixel must be finite, got {pixel!r}")
+    if not (0.0 <= px < w and 0.0 <= py < h):
+        raise ValueError(
+            f"pick: pixel {pixel!r} is outside the {w}x{h} image; x must lie in [0, {w}) and y in [0, {h}) "
+            f"(pixel (0, 0) is the top-left one)"
+        )
     ndc_x = 2.0 * (px + 0.5) / w - 1.0
     ndc_y = 1.0 - 2.0 * (py + 0.5) / h
     inv_proj = np.linalg.inv(camera.projection_matrix(w / h))
@@ -329,10 +334,14 @@ def pixel_ray(camera: Camera, camera_world: np.ndarray | None, pixel: Any, size:
 
 
 def _size(size: Any) -> tuple[int, int]:
+    """(width, height) as positive whole numbers of pixels; ValueError naming ``size`` otherwise."""
     try:
-        w, h = (int(c) for c in size)
+        values = [float(c) for c in size]
     except (TypeError, ValueError):
         raise ValueError(f"size must be (width, height) in pixels, got {size!r}") from None
+    if len(values) != 2 or not all(np.isfinite(values)) or any(v != int(v) for v in values):
+        raise ValueError(f"size must be two whole numbers of pixels (width, height), got {size!r}")
+    w, h = (int(v) for v in values)
     if w <= 0 or h <= 0:
         raise ValueError(f"size must be positive, got {size!r}")
     return w, h
@@ -346,7 +355,8 @@ def scene_camera(scene: Any, camera: Camera | None, mask: Any) -> tuple[Camera, 
         return camera, None
     found = None
     if hasattr(scene, "preevaluate"):
-        _, found = scene.preevaluate(compile_mask(mask) if isinstance(mask, str) else mask)
+        root = root_of(scene)  # a subgraph is seen by the camera of its graph
+        _, found = root.preevaluate(compile_mask(mask) if isinstance(mask, str) else mask)
     if found is None:
         raise ValueError(
             "pick/image_info: the scene has no camera; add an om.Camera to the scene "
@@ -373,7 +383,11 @@ def pick(
     pixel's centre (pixel (0, 0) top-left) for ``camera`` or, by default, the
     camera found in the scene; then the camera's group mask applies unless
     ``mask`` is given.  ``nearest=True`` returns at most the nearest hit.
+    ``scene`` is a Node (a subgraph is picked where it sits: everything before
+    it from its root applies, and its root's camera is the default camera) or
+    a list of components.  A pixel outside the image raises ValueError.
     """
+    scene = check_scene("pick", scene)  # a Node, or the components as a list (a generator is read once)
     if (ray is None) == (pixel is None):
         raise ValueError("pick: give exactly one of ray=(origin, direction) or pixel=(x, y) with size=(w, h)")
     if pixel is not None:
@@ -389,8 +403,5 @@ def pick(
         except (TypeError, ValueError):
             raise ValueError(f"pick: ray must be (origin, direction), got {ray!r}") from None
     engine = PickEngine(origin, direction, mask=mask, nearest=nearest, backend=backend)
-    if hasattr(scene, "_compile_node"):
-        scene.evaluate(engine)
-    else:
-        engine.evaluate(scene)
+    run_analysis(engine, "pick", scene, mask)
     return engine.sorted_hits()

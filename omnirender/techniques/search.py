@@ -2,8 +2,8 @@
 
 The :class:`AttributeSearchEngine` evaluates the scene without evaluating any
 shape and captures the rendering context at the end of the node's contents
-(just before the node's own attributes are undone, or when it is left if it
-has none): the top attribute of every mono category and the active members of
+(just before the node's own attributes are undone, or in the engine's
+``on_leave`` hook if it has none): the top attribute of every mono category and the active members of
 every poly category, including the pre-evaluated lights (after any
 ``LightSwitch``) and the pre-evaluated camera.  The ``Transform`` category maps
 to the accumulated model matrix.
@@ -19,7 +19,7 @@ import numpy as np
 from ..core.camera import Camera
 from ..core.light import Light
 from ..core.transform import Transform
-from .base import AnalysisEngine
+from .base import AnalysisEngine, check_scene, evaluate_in_place
 
 __all__ = ["AttributeSearch", "AttributeSearchEngine", "attribute_search"]
 
@@ -43,7 +43,13 @@ class AttributeSearch:
 
 
 class AttributeSearchEngine(AnalysisEngine):
-    """Captures the context at the end of the node at ``path`` (first occurrence)."""
+    """Captures the context at the end of the contents of the node at ``path`` (its first-parent occurrence).
+
+    The node is the engine's scope (see :class:`AnalysisEngine`): the context
+    is captured at the first pop/remove made directly in it (its own
+    attributes being undone) or, when it has none, when it is left
+    (``on_leave``), where the context equals the one its shapes saw.
+    """
 
     service = "attribute.search"
 
@@ -56,7 +62,7 @@ class AttributeSearchEngine(AnalysisEngine):
         return False  # shapes are never evaluated: nothing is simplified or drawn
 
     def _capture(self) -> None:
-        if self.result is not None or self.node_path != self.path:
+        if self.result is not None:
             return
         result = AttributeSearch(self.path)
         ctx = self.context
@@ -64,12 +70,13 @@ class AttributeSearchEngine(AnalysisEngine):
             items = ctx.poly(category)
             if items:
                 result.poly[category] = list(items)
-            elif category is Transform:
-                result.mono[Transform] = np.array(self.model_matrix())
-            else:
+            elif category is not Transform and ctx.mono(category) is not None:
                 result.mono[category] = ctx.mono(category)
         result.mono[Transform] = np.array(self.model_matrix())
-        lights = [light for light, _ in self.lights()]
+        lights: list[Any] = []
+        for light, _ in self.lights():
+            if not any(light is seen for seen in lights):
+                lights.append(light)
         if lights:
             result.poly[Light] = lights
         else:
@@ -79,16 +86,17 @@ class AttributeSearchEngine(AnalysisEngine):
         self.result = result
 
     def pop(self, category: type) -> Any:
-        self._capture()
+        if self.scope_level == 1:
+            self._capture()
         return super().pop(category)
 
     def remove(self, attribute: Any) -> None:
-        self._capture()
+        if self.scope_level == 1:
+            self._capture()
         super().remove(attribute)
 
-    def _leave(self, node: Any) -> None:
+    def leave_scope(self, node: Any) -> None:
         self._capture()
-        super()._leave(node)
 
 
 def attribute_search(scene: Any, path: str, mask: str | None = None) -> AttributeSearch:
@@ -98,9 +106,14 @@ def attribute_search(scene: Any, path: str, mask: str | None = None) -> Attribut
     KeyError naming the closest existing prefix when there is no such node, and
     ValueError when the node is masked out.
     """
+    check_scene("attribute_search", scene)
+    if not hasattr(scene, "_compile_node"):
+        raise TypeError(
+            f"attribute_search: scene must be an om.Node (paths name its nodes), got {type(scene).__name__}"
+        )
     node = scene[path]
     engine = AttributeSearchEngine(node.path, mask=mask)
-    scene.evaluate(engine)
+    evaluate_in_place(engine, node, mask)
     if engine.result is None:
         raise ValueError(
             f"attribute_search: node {node.path} is not evaluated (its groups do not match the mask {mask!r}); "

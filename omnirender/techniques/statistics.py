@@ -12,7 +12,7 @@ from typing import Any
 from ..core.handler import ShapePainter, default_for
 from ..scene import register_statistic
 from ..shapes import LineSet, PointSet, Polyline, TriangleSet
-from .base import AnalysisEngine
+from .base import AnalysisEngine, run_analysis
 
 __all__ = ["TriangleCountEngine", "count_triangles"]
 
@@ -66,12 +66,9 @@ class PointSetCounter(_Zero):
 
 
 def count_triangles(scene: Any, mask: str | None = None) -> int:
-    """Triangles the scene's shapes become after simplification."""
+    """Triangles the scene's shapes become after simplification (a subgraph as it sits in its graph)."""
     engine = TriangleCountEngine(mask=mask)
-    if hasattr(scene, "_compile_node"):
-        scene.evaluate(engine)
-    else:
-        engine.evaluate(scene)
+    run_analysis(engine, "count_triangles", scene, mask)
     return engine.triangles
 
 
