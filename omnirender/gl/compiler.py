@@ -18,7 +18,7 @@ import numpy as np
 
 from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMaterial, Texture
 from ..core.camera import Camera
-from ..core.component import MonoAttribute, PolyAttribute, Shape
+from ..core.component import MonoAttribute, PolyAttribute, RenderingComponent, Shape
 from ..core.handler import Handler
 from ..core.light import Light, LightSwitch
 from ..core.mask import compile_mask
@@ -418,7 +418,7 @@ class DrawListCompiler:
         if mask is not None:
             self.mask = mask
         if not hasattr(scene, "_items"):
-            scene = _Sequence(scene)
+            scene = _Sequence([scene] if isinstance(scene, RenderingComponent) else scene)
         mask_key = self._mask
         c = self._compiled
         if c is not None and c[0]() is scene and c[1] == scene._version and c[2] == mask_key:

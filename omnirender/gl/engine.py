@@ -28,6 +28,7 @@ from ..core.technique import Technique
 from ..image import Image
 from .compiler import DrawListCompiler
 from .context import (
+    GLError,
     RawGL,
     check_size,
     create_context,
@@ -171,6 +172,10 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
     def _make_targets(self) -> None:
         with self.current():
             self._create_targets()
+            # releasing a detected (raw) framebuffer may leave a harmless GL error behind: drop it
+            err = self.ctx.error
+            if "OUT_OF_MEMORY" in err:
+                raise GLError(f"GLEngine: out of memory creating {self._size[0]}x{self._size[1]} framebuffers")
 
     def _create_targets(self) -> None:
         seen = set()

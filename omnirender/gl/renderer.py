@@ -127,6 +127,7 @@ class BatchRenderer:
     def _draw(self, background: Any, clear: bool) -> None:
         ctx = self.ctx
         fbo = self.framebuffer
+        _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
         fbo.use()
         ctx.viewport = (0, 0, *self._size)
         self._gl_state.clear()

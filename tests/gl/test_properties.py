@@ -234,3 +234,19 @@ def test_clip_planes_and_fog_apply_to_lines_and_points(engine):
     img = engine.render(s)
     assert img.mask[:, 50:].sum() > 50
     assert img.mask[:, :46].sum() == 0  # everything with x < 0 is clipped
+
+
+def test_orthographic_depth_resize_and_single_shapes():
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=(40, 30)) as e:
+        s = om.Node("scene")
+        s.add(om.Camera.orthographic(eye=(0, 0, 5), height=3))
+        s.add(om.Sphere(radius=0.8))
+        img = e.render(s)
+        assert img.depth[15, 20] == pytest.approx(4.2, rel=0.01)
+        e.size = (80, 60)
+        img = e.render(s)
+        assert img.array.shape == (60, 80, 4) and img.depth[30, 40] == pytest.approx(4.2, rel=0.01)
+        assert e.render(om.Box()).mask.any()  # a lone shape renders with the auto-fit camera
+        assert e.render([om.Color(1, 0, 0), om.Sphere()]).pixel(40, 30)[0] > 100
