@@ -132,11 +132,13 @@ def uniform_material(rows: np.ndarray) -> bool:
 
 
 def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], list[tuple | None], list[DrawItem]]:
-    """Group opaque items by (geometry, state, segment); returns groups, per-item (key, index) slots, others.
+    """Group opaque items by (geometry, state); returns groups, per-item (key, index) slots, other items.
 
     Items with special raster state (stencil, colour mask, depth function or
-    mask changes) start a new segment, so grouping never moves a draw across
-    such an item and order-dependent tricks keep working.
+    depth mask) are grouped only with consecutive items of the same state, so
+    two stencil-writing or masking items are never merged across each other
+    and their relative order is kept.  Plain items are merged freely (a batch
+    draws at the position of its first item).
     """
     groups: dict[tuple, list[DrawItem]] = {}
     slots: list[tuple | None] = []
