@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["newell_normal", "triangulate_polygon", "project_to_plane"]
+__all__ = ["newell_normal", "triangulate_polygon", "project_to_plane", "best_fit_plane", "crossing_edges"]
 
 
 def newell_normal(points: np.ndarray) -> np.ndarray:
@@ -33,6 +33,46 @@ def project_to_plane(points: np.ndarray, normal: np.ndarray) -> np.ndarray:
     v = np.cross(n, u)
     p = np.asarray(points, dtype=np.float64)
     return np.stack([p @ u, p @ v], axis=1)
+
+
+def best_fit_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """(centroid, unit normal, max distance of a point from the plane) of the least-squares plane of 3D points."""
+    p = np.asarray(points, dtype=np.float64)
+    centroid = p.mean(axis=0)
+    _, _, vt = np.linalg.svd(p - centroid, full_matrices=False)
+    normal = vt[-1]
+    return centroid, normal, float(np.max(np.abs((p - centroid) @ normal)))
+
+
+def crossing_edges(q: np.ndarray, limit: int = 2000) -> tuple[int, int] | None:
+    """The first pair of non-adjacent edges of a closed 2D outline that properly cross, or None.
+
+    Edge i runs from point i to point i + 1.  Touching (a vertex on another
+    edge) does not count.  Outlines longer than ``limit`` are not checked
+    (the test is quadratic) and give None.
+    """
+    q = np.asarray(q, dtype=np.float64)
+    n = len(q)
+    if n < 4 or n > limit:
+        return None
+    a, b = q, np.roll(q, -1, axis=0)
+    scale = float(np.max(np.ptp(q, axis=0))) or 1.0
+    eps = 1e-12 * scale * scale
+    for i in range(n - 2):
+        j = np.arange(i + 2, n if i else n - 1)  # not adjacent to i (edge n-1 touches edge 0)
+        if not len(j):
+            continue
+        c, d = a[j], b[j]
+        d1 = _cross2(a[i], b[i], c)
+        d2 = _cross2(a[i], b[i], d)
+        d3 = _cross2(c, d, a[i])
+        d4 = _cross2(c, d, b[i])
+        hit = (((d1 > eps) & (d2 < -eps)) | ((d1 < -eps) & (d2 > eps))) & (
+            ((d3 > eps) & (d4 < -eps)) | ((d3 < -eps) & (d4 > eps))
+        )
+        if np.any(hit):
+            return i, int(j[np.argmax(hit)])
+    return None
 
 
 def _cross2(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..geometry.normals import smooth_normals
-from ..geometry.triangulate import triangulate_polygon
+from ..geometry.triangulate import best_fit_plane, crossing_edges, project_to_plane, triangulate_polygon
 from . import _check
 from .base import DeclaredShape, parameter
 
@@ -157,6 +157,7 @@ class Polygon(_VertexShape):
                 name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), (3,), count=n
             )
             derived["normals"] = normals
+        _check_polygon_outline(v)
         derived["triangles"] = triangulate_polygon(v, owner=name)
         return p, derived
 
@@ -167,6 +168,31 @@ class Polygon(_VertexShape):
     def normal_array(self) -> np.ndarray | None:
         """(N, 3) float32 given normals, or None (the plane normal applies)."""
         return self._cached("normals", lambda: None)
+
+
+def _check_polygon_outline(v: np.ndarray) -> None:
+    """ValueError for a non-planar or self-intersecting outline (before triangulation, which says "zero area")."""
+    p = np.asarray(v, dtype=np.float64)
+    extent = float(np.max(np.ptp(p, axis=0)))
+    if extent == 0.0:
+        return  # all vertices equal: triangulation reports the zero area
+    _, normal, deviation = best_fit_plane(p)
+    tolerance = 1e-6 * extent
+    if deviation > tolerance:
+        worst = int(np.argmax(np.abs((p - p.mean(axis=0)) @ normal)))
+        raise ValueError(
+            f"Polygon: the {len(p)} vertices are not planar: vertex {worst} deviates by {deviation:.6g} from their "
+            f"best-fit plane (tolerance {tolerance:.3g} = 1e-6 x extent {extent:.6g}); split it into planar polygons "
+            f"or use a TriangleSet"
+        )
+    crossing = crossing_edges(project_to_plane(p, normal))
+    if crossing is not None:
+        i, j = crossing
+        n = len(p)
+        raise ValueError(
+            f"Polygon: the outline is self-intersecting: edge {i}-{(i + 1) % n} crosses edge {j}-{(j + 1) % n}; "
+            f"give a simple outline (e.g. reorder the vertices) or split it into several polygons"
+        )
 
 
 class LineSet(_VertexShape):

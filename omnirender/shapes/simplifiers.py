@@ -7,6 +7,13 @@ shapes read the density from the context's ``Tessellation`` mono attribute
 default level 3).  Results are cached per (shape, version, level) in a
 weak-keyed table, so evaluating a scene again neither re-tessellates nor hands
 the engine new objects (engines that upload per (shape, version) reuse theirs).
+
+Dependency rule exception (deliberate, decided by the lead, who documents it in
+DESIGN.md): shapes import only core/data/geometry, but two simplifiers need
+attribute classes: ``Tessellation`` (to read the density) and
+``Material``/``PBRMaterial``/``Texture`` (MeshFile parts).  They are imported
+LAZILY inside the functions that need them, never at module level, so
+importing ``omnirender.shapes`` does not import ``omnirender.attributes``.
 """
 
 from __future__ import annotations
@@ -60,6 +67,7 @@ def _tessellation() -> Any:
     """The Tessellation attribute class (imported lazily: attributes are a sibling declaration package)."""
     global _tessellation_class
     if _tessellation_class is None:
+        # Deliberate exception to the dependency rule: lazy import of an attribute class (see the module docstring).
         try:
             from ..attributes import Tessellation
         except ImportError:  # pragma: no cover - attributes always ship with shapes
@@ -354,6 +362,7 @@ class MeshPartSimplifier(ShapeSimplifier):
 def _material_attributes(material: dict[str, Any] | None, has_texcoords: bool) -> list[Any]:
     if material is None:
         return []
+    # Deliberate exception to the dependency rule: lazy import of attribute classes (see the module docstring).
     try:
         from .. import attributes
     except ImportError:  # pragma: no cover

@@ -330,3 +330,52 @@ def test_mesh_file_parameters_round_trip():
     mf = om.MeshFile(DATA / "cube.off")
     copy = type(mf)(**mf.parameters())
     assert copy.path == mf.path and copy.triangle_count == 12
+
+
+def _write_gltf(path, embedded: bool) -> None:
+    """A text glTF: one red quad (2 triangles) in the xy plane, its buffer in a .bin file or a data URI."""
+    import base64
+    import json
+
+    positions = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]], dtype=np.float32)
+    indices = np.array([0, 1, 2, 0, 2, 3], dtype=np.uint16)
+    blob = positions.tobytes() + indices.tobytes()
+    if embedded:
+        uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
+    else:
+        uri = path.with_suffix(".bin").name
+        path.with_suffix(".bin").write_bytes(blob)
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "translation": [0, 0, 5]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1], "metallicFactor": 0.0}}],
+        "buffers": [{"uri": uri, "byteLength": len(blob)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": positions.nbytes, "target": 34962},
+            {"buffer": 0, "byteOffset": positions.nbytes, "byteLength": indices.nbytes, "target": 34963},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [2, 1, 0]},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    }
+    path.write_text(json.dumps(doc))
+
+
+@pytest.mark.parametrize("embedded", [False, True], ids=["separate-bin", "data-uri"])
+def test_text_gltf_mesh_files_load(tmp_path, embedded, simplify):
+    path = tmp_path / "quad.gltf"
+    _write_gltf(path, embedded)
+    found = simplify(om.MeshFile(path))
+    assert len(found) == 1
+    part = found[0]
+    assert len(part.shape.index_array()) == 2
+    world = part.world_vertices()
+    assert world.min(axis=0) == pytest.approx([0, 0, 5]) and world.max(axis=0) == pytest.approx([2, 1, 5])
+    assert isinstance(part.material, om.PBRMaterial)
+    assert part.material.base_color[:3] == pytest.approx((1, 0, 0))
+    lo, hi = om.bounds(om.Node("m", [om.MeshFile(path)]))
+    assert lo == pytest.approx([0, 0, 5]) and hi == pytest.approx([2, 1, 5])

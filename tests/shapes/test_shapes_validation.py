@@ -215,3 +215,38 @@ def test_changing_one_parameter_keeps_the_other_validated_arrays():
     v = ts.vertex_array()
     ts.colors = (1, 0, 0)
     assert ts.vertex_array() is v and ts.color_array().shape == (3, 4)
+
+
+def test_non_planar_polygon_raises_naming_the_deviation():
+    with pytest.raises(ValueError, match=r"Polygon: the 4 vertices are not planar: .*deviates by 0\.13"):
+        om.Polygon([[0, 0, 0], [1, 0, 0], [1, 1, 0.5], [0, 1, 0]])
+    # within 1e-6 of the extent counts as planar (rounding in data files)
+    assert len(om.Polygon([[0, 0, 0], [10, 0, 0], [10, 10, 1e-6], [0, 10, 0]]).triangle_indices()) == 2
+    with pytest.raises(ValueError, match="not planar"):
+        om.Polygon([[0, 0, 0], [10, 0, 0], [10, 10, 1e-3], [0, 10, 0]])
+
+
+def test_bow_tie_polygon_is_reported_as_self_intersecting():
+    with pytest.raises(ValueError, match=r"self-intersecting: edge 0-1 crosses edge 2-3"):
+        om.Polygon([[0, 0, 0], [1, 1, 0], [1, 0, 0], [0, 1, 0]])
+    with pytest.raises(ValueError, match="self-intersecting"):  # a star drawn in one stroke
+        angles = np.radians(90 + 144 * np.arange(5))
+        om.Polygon(np.stack([np.cos(angles), np.sin(angles), np.zeros(5)], axis=1))
+    # concave and touching outlines stay valid
+    assert len(om.Polygon([[0, 0, 0], [2, 0, 0], [2, 2, 0], [1, 0.5, 0], [0, 2, 0]]).triangle_indices()) == 3
+
+
+def test_simplifiers_import_attributes_only_lazily():
+    """Dependency rule: shapes import only core/data/geometry at module level (attributes lazily, by exception)."""
+    import ast
+    from pathlib import Path
+
+    import omnirender.shapes as shapes_pkg
+
+    for path in Path(shapes_pkg.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in tree.body:  # module level only
+            if isinstance(node, ast.ImportFrom) and node.level >= 2:
+                names = [node.module.split(".")[0]] if node.module else [alias.name for alias in node.names]
+                for name in names:
+                    assert name in ("core", "data", "geometry"), f"{path.name} imports ..{name} at module level"
