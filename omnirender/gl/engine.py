@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes import Tessellation
 from ..core.camera import Camera
 from ..core.engine import Engine
 from ..core.technique import Technique
@@ -35,7 +36,7 @@ from .context import (
     depth_stencil_framebuffer,
 )
 from .drawlist import Batch, DrawItem, DrawState
-from .geometry import GeometryCache, unit_box, unit_cylinder, unit_sphere
+from .geometry import Geometry, GeometryCache, unit_mesh
 from .renderer import BatchRenderer
 from .resources import gpu_call
 from .shaders import ROW, ProgramCache
@@ -98,7 +99,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self.programs = ProgramCache(self.ctx)
         self.geometry_cache = GeometryCache()
         self.raw = RawGL()
-        self.unit = {"sphere": unit_sphere(), "box": unit_box(), "cylinder": unit_cylinder()}
+        self._units: dict[tuple[str, int], Geometry] = {}
         self._targets: dict[str, Any] = {}
         self._target_stack: list[Any] = []
         self._preevaluated = False
@@ -137,6 +138,15 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self._camera_used: Camera | None = None
         with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
+
+    def unit_geometry(self, kind: str) -> Geometry:
+        """The shared unit mesh of ``kind`` at the active Tessellation level (native painters use it)."""
+        stack = self.context._mono.get(Tessellation)
+        level = stack[-1].level if stack else Tessellation.DEFAULT_LEVEL
+        geom = self._units.get((kind, level))
+        if geom is None:
+            geom = self._units[(kind, level)] = unit_mesh(kind, level)
+        return geom
 
     # -- targets -----------------------------------------------------------
     @contextlib.contextmanager

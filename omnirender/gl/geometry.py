@@ -10,13 +10,12 @@ native painters.
 
 from __future__ import annotations
 
-import math
 import weakref
 from typing import Any
 
 import numpy as np
 
-__all__ = ["Geometry", "GeometryCache", "unit_sphere", "unit_box", "unit_cylinder", "validate_mesh"]
+__all__ = ["Geometry", "GeometryCache", "unit_mesh", "validate_mesh", "CLOSED"]
 
 
 class Geometry:
@@ -177,90 +176,42 @@ class GeometryCache:
 
 
 # -- unit meshes ---------------------------------------------------------------
-def unit_sphere(segments: int = 48, rings: int = 24) -> Geometry:
-    """A UV sphere of radius 1 at the origin."""
-    theta = np.linspace(0.0, math.pi, rings + 1)
-    phi = np.linspace(0.0, 2.0 * math.pi, segments + 1)
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    pos = np.stack([np.sin(t) * np.cos(p), np.cos(t), -np.sin(t) * np.sin(p)], axis=-1).reshape(-1, 3)
-    uv = np.stack([p / (2 * math.pi), 1.0 - t / math.pi], axis=-1).reshape(-1, 2)
-    idx = []
-    cols = segments + 1
-    for i in range(rings):
-        for j in range(segments):
-            a, b = i * cols + j, (i + 1) * cols + j
-            if i != 0:
-                idx.append((a, b, a + 1))
-            if i != rings - 1:
-                idx.append((a + 1, b, b + 1))
-    return Geometry(
-        "triangles", pos, pos, texcoords=uv, indices=np.array(idx), persistent=True, label="unit sphere", closed=True
-    )
+#: Closed unit meshes: their back faces are never seen when they are opaque.
+CLOSED = frozenset({"sphere", "box", "cylinder", "cone"})
 
 
-def unit_box() -> Geometry:
-    """A cube from -0.5 to 0.5 with flat face normals."""
-    faces = [
-        ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
-        ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
-        ((0, 1, 0), (1, 0, 0), (0, 0, -1)),
-        ((0, -1, 0), (1, 0, 0), (0, 0, 1)),
-        ((0, 0, 1), (1, 0, 0), (0, 1, 0)),
-        ((0, 0, -1), (-1, 0, 0), (0, 1, 0)),
-    ]
-    pos, nrm, uv, idx = [], [], [], []
-    for n, u, v in faces:
-        n, u, v = np.array(n, float), np.array(u, float), np.array(v, float)
-        base = len(pos)
-        for su, sv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-            pos.append(0.5 * n + 0.5 * su * u + 0.5 * sv * v)
-            nrm.append(n)
-            uv.append(((su + 1) / 2, (sv + 1) / 2))
-        idx += [(base, base + 1, base + 2), (base, base + 2, base + 3)]
+def unit_mesh(kind: str, level: int = 3) -> Geometry:
+    """The unit shape the native painters scale per instance, from the shared tessellation.
+
+    Sphere radius 1; box edge 1; cylinder and cone radius 1, y in [-1, 1]; disk
+    radius 1 and rectangle 1 x 1 in the xz plane facing +y.  ``level`` is the
+    Tessellation level: 6 * 2**level segments around (48 at the default 3,
+    finer than the simplifiers' 32 because instances share one mesh), at most 384.
+    """
+    from ..geometry import tessellate
+
+    seg = min(384, max(8, 6 * 2 ** int(level)))
+    if kind == "sphere":
+        m = tessellate.sphere(1.0, segments=seg)
+    elif kind == "box":
+        m = tessellate.box((1.0, 1.0, 1.0))
+    elif kind == "cylinder":
+        m = tessellate.cylinder(1.0, 2.0, seg)
+    elif kind == "cone":
+        m = tessellate.cone(1.0, 2.0, seg)
+    elif kind == "disk":
+        m = tessellate.disk(1.0, seg)
+    elif kind == "rectangle":
+        m = tessellate.rectangle((1.0, 1.0))
+    else:
+        raise ValueError(f"unit_mesh: unknown kind {kind!r}")
     return Geometry(
         "triangles",
-        np.array(pos),
-        np.array(nrm),
-        texcoords=np.array(uv),
-        indices=np.array(idx),
+        m.vertices,
+        m.normals,
+        texcoords=m.texcoords,
+        indices=m.indices,
         persistent=True,
-        label="unit box",
-        closed=True,
-    )
-
-
-def unit_cylinder(segments: int = 48) -> Geometry:
-    """A capped cylinder of radius 1 from y = -1 to y = 1."""
-    a = np.linspace(0.0, 2.0 * math.pi, segments + 1)
-    x, z = np.cos(a), -np.sin(a)
-    pos, nrm, uv, idx = [], [], [], []
-    for k in range(segments + 1):
-        for y in (-1.0, 1.0):
-            pos.append((x[k], y, z[k]))
-            nrm.append((x[k], 0.0, z[k]))
-            uv.append((k / segments, (y + 1) / 2))
-    for k in range(segments):
-        i = 2 * k
-        idx += [(i, i + 2, i + 1), (i + 1, i + 2, i + 3)]
-    for y, sign in ((1.0, 1.0), (-1.0, -1.0)):
-        center = len(pos)
-        pos.append((0.0, y, 0.0))
-        nrm.append((0.0, sign, 0.0))
-        uv.append((0.5, 0.5))
-        for k in range(segments + 1):
-            pos.append((x[k], y, z[k]))
-            nrm.append((0.0, sign, 0.0))
-            uv.append((0.5 + 0.5 * x[k], 0.5 + 0.5 * z[k]))
-        for k in range(segments):
-            a0, a1 = center + 1 + k, center + 2 + k
-            idx.append((center, a0, a1) if sign > 0 else (center, a1, a0))
-    return Geometry(
-        "triangles",
-        np.array(pos),
-        np.array(nrm),
-        texcoords=np.array(uv),
-        indices=np.array(idx),
-        persistent=True,
-        label="unit cylinder",
-        closed=True,
+        label=f"unit {kind}",
+        closed=kind in CLOSED,
     )

@@ -2,10 +2,11 @@
 
 Painters turn a shape into draw items through ``engine.submit``; they never
 call OpenGL.  TriangleSet, LineSet, Polyline and PointSet upload their arrays
-once per (shape, version).  Sphere, Box and Cylinder are native: they reuse a
-unit mesh scaled by a local matrix, so they need no tessellation and any
-number of them instance automatically.  Every other shape (Torus, Cone,
-Arrow, Disk, MeshFile, ...) reaches the engine through its simplifier.
+once per (shape, version).  Sphere, Box, Cylinder, Cone, Disk and Rectangle
+are native: they reuse one unit mesh per Tessellation level scaled by a local
+matrix, so they need no per-shape tessellation and any number of them
+instance automatically.  Every other shape (Torus, Arrow, Polygon,
+Heightfield, MeshFile, ...) reaches the engine through its simplifier.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..core.handler import ShapePainter, default_for
-from ..shapes import Box, Cylinder, LineSet, PointSet, Polyline, Sphere, TriangleSet
+from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
 
@@ -24,6 +25,9 @@ __all__ = [
     "SpherePainter",
     "BoxPainter",
     "CylinderPainter",
+    "ConePainter",
+    "DiskPainter",
+    "RectanglePainter",
     "LineSetPainter",
     "PolylinePainter",
     "PointSetPainter",
@@ -82,7 +86,7 @@ class SpherePainter(ShapePainter):
 
     def exec(self, shape: Sphere, engine: GLEngine) -> None:
         r = shape.radius
-        engine.submit(engine.unit["sphere"], _scale_translate(r, r, r, shape.center))
+        engine.submit(engine.unit_geometry("sphere"), _scale_translate(r, r, r, shape.center))
 
 
 @default_for(GLEngine)
@@ -95,7 +99,7 @@ class BoxPainter(ShapePainter):
 
     def exec(self, shape: Box, engine: GLEngine) -> None:
         sx, sy, sz = shape.size
-        engine.submit(engine.unit["box"], _scale_translate(sx, sy, sz, shape.center))
+        engine.submit(engine.unit_geometry("box"), _scale_translate(sx, sy, sz, shape.center))
 
 
 @default_for(GLEngine)
@@ -108,7 +112,46 @@ class CylinderPainter(ShapePainter):
 
     def exec(self, shape: Cylinder, engine: GLEngine) -> None:
         r = shape.radius
-        engine.submit(engine.unit["cylinder"], _scale_translate(r, shape.height / 2.0, r))
+        engine.submit(engine.unit_geometry("cylinder"), _scale_translate(r, shape.height / 2.0, r))
+
+
+@default_for(GLEngine)
+class ConePainter(ShapePainter):
+    """Native cone (base at y = -height/2, apex at +height/2): the shared unit cone scaled per instance."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Cone
+
+    def exec(self, shape: Cone, engine: GLEngine) -> None:
+        r = shape.radius
+        engine.submit(engine.unit_geometry("cone"), _scale_translate(r, shape.height / 2.0, r))
+
+
+@default_for(GLEngine)
+class DiskPainter(ShapePainter):
+    """Native disk in the xz plane (double-sided through two-sided lighting)."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Disk
+
+    def exec(self, shape: Disk, engine: GLEngine) -> None:
+        r = shape.radius
+        engine.submit(engine.unit_geometry("disk"), _scale_translate(r, 1.0, r))
+
+
+@default_for(GLEngine)
+class RectanglePainter(ShapePainter):
+    """Native rectangle in the xz plane (double-sided through two-sided lighting)."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = Rectangle
+
+    def exec(self, shape: Rectangle, engine: GLEngine) -> None:
+        sx, sz = shape.size
+        engine.submit(engine.unit_geometry("rectangle"), _scale_translate(sx, 1.0, sz))
 
 
 class _LinePainter(ShapePainter):

@@ -19,7 +19,7 @@ from ..core.handler import ShapePainter, default_for
 from ..shapes import Volume
 from .context import set_masks
 from .engine import GLEngine
-from .geometry import Geometry, unit_box
+from .geometry import Geometry, unit_mesh
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
 
@@ -94,7 +94,7 @@ class VolumeGeometry(Geometry):
     __slots__ = ("data", "table", "range", "textures")
 
     def __init__(self, volume: Volume, label: str) -> None:
-        box = unit_box()
+        box = unit_mesh("box")
         super().__init__("triangles", box.positions, box.normals, indices=box.indices, label=label)
         self.data = volume.data_array()
         tf = volume.transfer_function

@@ -250,3 +250,21 @@ def test_orthographic_depth_resize_and_single_shapes():
         assert img.array.shape == (60, 80, 4) and img.depth[30, 40] == pytest.approx(4.2, rel=0.01)
         assert e.render(om.Box()).mask.any()  # a lone shape renders with the auto-fit camera
         assert e.render([om.Color(1, 0, 0), om.Sphere()]).pixel(40, 30)[0] > 100
+
+
+def test_native_shapes_instance_and_follow_tessellation(engine):
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 3, 12)))
+    for i in range(20):
+        n = s.add(om.Node(f"c{i}"))
+        n.add(om.Translation(i % 5 - 2, 0, i // 5 - 2))
+        n.add(om.Color(i / 20, 0.5, 0.5))
+        n.add(om.Cone(radius=0.3, height=0.6 + i * 0.01))
+    coarse = s.add(om.Node("coarse"))
+    coarse.add(om.Tessellation(0))
+    coarse.add(om.Sphere(center=(0, 2, 0), radius=0.5))
+    engine.render(s)
+    labels = sorted((b.geometry.label, len(b.items)) for b in engine._batch_order)
+    assert labels == [("unit cone", 20), ("unit sphere", 1)]
+    sphere = [b for b in engine._batch_order if b.geometry.label == "unit sphere"][0]
+    assert sphere.geometry.count < engine.unit_geometry("sphere").count  # level 0 is coarser than the default
