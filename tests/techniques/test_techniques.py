@@ -368,9 +368,11 @@ def test_statistics_count_triangles_after_simplification():
     assert om.statistics(s)["triangles"] == 12 + 1
 
 
-def test_every_shape_goes_through_every_technique():
+def test_every_shape_goes_through_every_technique(tmp_path):
     rng = np.random.default_rng(0)
     tf = om.TransferFunction([(0, (0, 0, 0, 0)), (1, (1, 1, 1, 1))])
+    obj = tmp_path / "tetra.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
     shapes = [
         om.Sphere(),
         om.Box(),
@@ -387,16 +389,25 @@ def test_every_shape_goes_through_every_technique():
         om.PointSet([[0, 0, 0]]),
         om.Heightfield(rng.random((5, 5)), 0.5),
         om.Volume(rng.random((8, 8, 8)), (0.2, 0.2, 0.2), tf),
+        om.MeshFile(obj),
+        om.Text("label", (0, 0, 0), size=12),
     ]
+    # the small box m crosses these surfaces; it sits inside the closed sphere, box, cylinder (no contact),
+    # in the torus' hole, and lines, points and labels have no volume
+    crossing = {"Cone", "Disk", "Rectangle", "Arrow", "TriangleSet", "Polygon", "Heightfield", "Volume", "MeshFile"}
     for shape in shapes:
-        s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10)), om.Collidable()])
+        tag = om.Collidable()
+        s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10)), tag])
         s.add(om.Node("n", [shape]))
         s.add(om.Node("m", [om.Translation(0.2, 0.1, 0.1), om.Box((0.5, 0.5, 0.5))]))
         name = type(shape).__name__
         assert len(om.pick(s, ray=((0.1, 0.1, 10), (0, 0, -1)))) >= 2, name
         assert om.bounds(s["/scene/n"]) is not None, name
         assert om.image_info(s, "/scene/n", (100, 100)).visible, name
-        assert isinstance(om.collisions(s), list)
+        expected = [("/scene/m", "/scene/n")] if name in crossing else []
+        assert om.collisions(s) == expected, name
+        found = om.attribute_search(s, "/scene/n")
+        assert found.mono[om.Collidable] is tag and isinstance(found.mono[om.Camera], om.Camera), name
         assert om.statistics(s)["triangles"] >= 12, name
 
 
