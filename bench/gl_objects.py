@@ -124,9 +124,9 @@ class HandWritten:
         self.ctx = ctx
         self.size = size
         self.fbo = ctx.simple_framebuffer(size, components=4)
-        from omnirender.gl.geometry import unit_box
+        from omnirender.gl.geometry import unit_mesh
 
-        g = unit_box()
+        g = unit_mesh("box")
         self.vbo = ctx.buffer(g.positions)
         self.nbo = ctx.buffer(g.normals)
         self.ibo = ctx.buffer(g.indices)
