@@ -352,6 +352,8 @@ class DrawListCompiler:
                 extra=extra,
                 overlay=kind in ("text",),
             )
+            if len(self._states) > 4096:  # e.g. text labels that change every frame
+                self._states.clear()
             self._states[key] = state
         return state
 
