@@ -142,16 +142,11 @@ def evaluate_in_place(engine: AnalysisEngine, node: Any, mask: Any = None) -> No
     """Evaluate ``node``'s subgraph as it sits in its graph, under everything before it from the root.
 
     The engine runs over the root with ``node`` as its scope (lights and the
-    camera are pre-evaluated from the root); a root is simply run.
+    camera are pre-evaluated from the root); a root is its own scope.
     """
-    root = root_of(node)
-    if root is node:
-        engine.scope(None)
-        engine.run(node, mask=mask)
-        return
     engine.scope(node)
     try:
-        engine.run(root, mask=mask)
+        engine.run(root_of(node), mask=mask)
     finally:
         engine.scope(None)
 

@@ -160,3 +160,28 @@ def test_pixel_outside_the_image_and_fractional_sizes_raise():
     assert om.pick(s, pixel=(5, 5), size=(10.0, 10))  # a whole float is fine
     with pytest.raises(ValueError, match="whole numbers"):
         om.image_info(s, "/scene", (100, 99.5))
+
+
+def test_analysis_engines_ignore_the_cameras_mask_and_pixel_queries_apply_it():
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 10), mask="!hidden"), om.Collidable()])
+    s.add(om.Node("veil", [om.Translation(0, 0, 3), om.Box(size=(4, 4, 0.5))], groups=["hidden"]))
+    s.add(om.Node("ball", [om.Translation(0, 0, 2), om.Sphere(radius=0.9)]))
+    assert om.bounds(s)[1] == pytest.approx([2, 2, 3.25])  # the hidden veil counts
+    assert om.pick(s, ray=((0, 0, 10), (0, 0, -1)))[0].path == "/scene/veil"
+    assert om.collisions(s) == [("/scene/ball", "/scene/veil")]
+    assert count_triangles(s) > 12
+    assert om.attribute_search(s, "/scene/veil").mono[om.Collidable] is s.components[1]
+    # what the camera shows is what its pixels pick and where image_info finds things
+    assert om.pick(s, pixel=(50, 50), size=(100, 100))[0].path == "/scene/ball"
+    assert not om.image_info(s, "/scene/veil", (100, 100)).visible
+    assert om.image_info(s, "/scene/ball", (100, 100)).visible
+
+
+def test_attribute_search_of_the_root_and_of_a_masked_out_node():
+    mat = om.Material()
+    s = om.Node("scene", [mat, om.Sphere()])
+    s.add(om.Node("off", [om.Sphere()], groups=["x"]))
+    assert om.attribute_search(s, "/scene").mono[om.Material] is mat
+    assert om.attribute_search(om.Node("bare", [om.Sphere()]), "/bare").mono[om.Transform] == pytest.approx(np.eye(4))
+    with pytest.raises(ValueError, match="not evaluated"):
+        om.attribute_search(s, "/scene/off", mask="!x")
