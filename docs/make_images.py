@@ -1,0 +1,70 @@
+"""Regenerate the pictures shown in README.md (docs/images/).
+
+Run: .venv/bin/python docs/make_images.py
+It renders the demo scene with every available engine, puts the images side by
+side with labels, and runs the examples, copying their images here.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from PIL import Image, ImageDraw
+
+import omnirender as om
+from omnirender.demo import demo_scene
+
+HERE = Path(__file__).parent / "images"
+ROOT = Path(__file__).parent.parent
+LABELS = {"gl": "OpenGL (real time)", "povray": "POV-Ray 3.7", "mitsuba": "Mitsuba 3 (path traced)"}
+
+
+def side_by_side(paths: list[Path], labels: list[str], out: Path, gap: int = 6) -> None:
+    images = [Image.open(p).convert("RGB") for p in paths]
+    w, h = images[0].size
+    sheet = Image.new("RGB", (len(images) * w + (len(images) - 1) * gap, h), "white")
+    draw = ImageDraw.Draw(sheet)
+    for i, (im, label) in enumerate(zip(images, labels, strict=True)):
+        x = i * (w + gap)
+        sheet.paste(im, (x, 0))
+        draw.rectangle([x, 0, x + 8 + 7 * len(label), 20], fill=(0, 0, 0))
+        draw.text((x + 5, 4), label, fill=(255, 255, 255))
+    sheet.save(out)
+
+
+def demo_images(size: tuple[int, int] = (480, 360)) -> None:
+    scene = demo_scene()
+    paths, labels = [], []
+    for name, (ok, why) in om.engines().items():
+        if not ok:
+            print(f"{name}: skipped ({why})")
+            continue
+        options = {"spp": 128} if name == "mitsuba" else {"antialias": True} if name == "povray" else {}
+        path = HERE / f"demo_{name}.png"
+        om.render(scene, engine=name, size=size, **options).save(path)
+        paths.append(path)
+        labels.append(LABELS.get(name, name))
+        print("wrote", path)
+    side_by_side(paths, labels, HERE / "demo_engines.png")
+    print("wrote", HERE / "demo_engines.png")
+
+
+def example_images() -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        for script in sorted((ROOT / "examples").glob("0*.py")):
+            subprocess.run([sys.executable, str(script), tmp], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
+        for png in sorted(Path(tmp).glob("0*.png")):
+            if png.stem in {"01-gl-preview", "01-povray-final"}:
+                continue
+            shutil.copy(png, HERE / f"example_{png.stem}.png")
+            print("wrote", HERE / f"example_{png.stem}.png")
+
+
+if __name__ == "__main__":
+    HERE.mkdir(exist_ok=True)
+    demo_images()
+    example_images()
