@@ -78,9 +78,9 @@ class Camera(MonoAttribute):
         u = finite_vector("Camera", "up", up, 3)
         d = c - e
         if np.linalg.norm(d) == 0.0:
-            raise ValueError("Camera: eye and center must differ")
+            raise ValueError("Camera: center must differ from eye")
         if np.linalg.norm(np.cross(d, u)) < 1e-12 * np.linalg.norm(d) * max(np.linalg.norm(u), 1e-300):
-            raise ValueError("Camera: up must not be parallel to the viewing direction (center - eye)")
+            raise ValueError("Camera: up must not be parallel to the viewing direction center - eye")
         try:
             fov = None if fov is None else float(fov)
             height = None if height is None else float(height)
