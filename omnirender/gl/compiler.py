@@ -31,7 +31,18 @@ from .drawlist import DrawItem, DrawState
 from .geometry import Geometry
 from .shaders import ROW
 
-__all__ = ["DrawListCompiler"]
+__all__ = ["DrawListCompiler", "linear_rgb"]
+
+
+def _lin(c: float) -> float:
+    """One sRGB-encoded channel to linear (the IEC 61966-2-1 curve)."""
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
+def linear_rgb(rgb: Any) -> tuple[float, float, float]:
+    """An sRGB colour (display values, as every engine reads colours) as linear values for lighting."""
+    r, g, b = rgb[:3]
+    return (_lin(float(r)), _lin(float(g)), _lin(float(b)))
 
 
 class _NodeEntry:
@@ -294,7 +305,7 @@ class DrawListCompiler:
         fog_key = None
         if fog is not None:
             mode = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}[fog.mode]
-            fog_key = (tuple(fog.color), float(fog.start), float(fog.end), float(fog.density), mode)
+            fog_key = (linear_rgb(fog.color), float(fog.start), float(fog.end), float(fog.density), mode)
         self._state_base = (
             ("less" if depth is None else depth.func) if depth is None or depth.enabled else None,
             True if dmask is None else dmask.enabled,
@@ -386,31 +397,35 @@ class DrawListCompiler:
         row = base[1]
         if color is not None:
             row = row.copy()
-            row[0:4] = (color._r, color._g, color._b, color._a * row[3])
+            row[0:4] = (_lin(color._r), _lin(color._g), _lin(color._b), color._a * row[3])
             if not isinstance(material, PBRMaterial):
                 row[15] = 1.0  # colour material: ambient follows the colour
         self._surface_row = row
         self._surface_dirty = False
 
     def _material_row(self, material: Any, highlight: Any) -> np.ndarray:
-        """The 24 material floats of an instance row (colour, specular, emission, ambient, highlight, extra)."""
+        """The 24 material floats of an instance row (colour, specular, emission, ambient, highlight, extra).
+
+        Surface colours are display (sRGB) values, as in the other engines; the
+        shaders light in linear space, so they are linearised here.
+        """
         row = np.zeros(ROW - 16, np.float32)
         if isinstance(material, PBRMaterial):
-            row[0:4] = (*material.base_color, material.opacity)
-            row[8:12] = (*material.emission, 1.0)
+            row[0:4] = (*linear_rgb(material.base_color), material.opacity)
+            row[8:12] = (*linear_rgb(material.emission), 1.0)
             row[12:16] = (0.0, 0.0, 0.0, material.roughness)
             row[20] = material.metallic
         elif material is not None:
-            row[0:4] = (*material.diffuse, material.opacity)
-            row[4:8] = (*material.specular, material.shininess)
-            row[8:12] = (*material.emission, 0.0)
-            row[12:16] = (*material.ambient, 0.0)
+            row[0:4] = (*linear_rgb(material.diffuse), material.opacity)
+            row[4:8] = (*linear_rgb(material.specular), material.shininess)
+            row[8:12] = (*linear_rgb(material.emission), 0.0)
+            row[12:16] = (*linear_rgb(material.ambient), 0.0)
         else:
-            row[0:4] = (0.8, 0.8, 0.8, 1.0)
+            row[0:4] = (*linear_rgb((0.8, 0.8, 0.8)), 1.0)
             row[4:8] = (0.0, 0.0, 0.0, 32.0)
             row[12:16] = (0.0, 0.0, 0.0, 1.0)  # ambient follows the colour
         if highlight is not None:
-            row[16:20] = (*highlight.color, 1.0)
+            row[16:20] = (*linear_rgb(highlight.color), 1.0)
         return row
 
     # -- draw ------------------------------------------------------------------

@@ -329,9 +329,8 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         color = tuple(getattr(bg, "color", bg))
         if len(color) == 3:
             color = (*color, 1.0)
-        lin = np.clip(np.asarray(color[:3], dtype=np.float64), 0.0, 1.0)
-        srgb = np.where(lin <= 0.0031308, lin * 12.92, 1.055 * lin ** (1 / 2.4) - 0.055)
-        return (float(srgb[0]), float(srgb[1]), float(srgb[2]), float(color[3]))
+        # a display (sRGB) colour, like every colour in a scene: cleared as it is
+        return tuple(float(min(max(c, 0.0), 1.0)) for c in color[:4])  # type: ignore[return-value]
 
     def live_buffers(self) -> int:
         """GPU buffers this engine holds now (geometry, instance data, transient), for leak checks."""

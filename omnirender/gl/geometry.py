@@ -55,7 +55,12 @@ class Geometry:
         self.mode = mode  # "triangles", "lines" or "points"
         self.positions = np.ascontiguousarray(positions, dtype=np.float32)
         self.normals = None if normals is None else np.ascontiguousarray(normals, dtype=np.float32)
-        self.colors = None if colors is None else np.ascontiguousarray(colors, dtype=np.float32)
+        if colors is not None:
+            # per-vertex colours are display (sRGB) values; the GPU gets them linear (alpha unchanged)
+            colors = np.array(colors, dtype=np.float32)
+            rgb = colors[:, :3]
+            colors[:, :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((np.maximum(rgb, 0) + 0.055) / 1.055) ** 2.4)
+        self.colors = colors
         self.texcoords = None if texcoords is None else np.ascontiguousarray(texcoords, dtype=np.float32)
         self.sizes = None if sizes is None else np.ascontiguousarray(sizes, dtype=np.float32)
         self.indices = None if indices is None else np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
@@ -185,12 +190,12 @@ def unit_mesh(kind: str, level: int = 3) -> Geometry:
 
     Sphere radius 1; box edge 1; cylinder and cone radius 1, y in [-1, 1]; disk
     radius 1 and rectangle 1 x 1 in the xz plane facing +y.  ``level`` is the
-    Tessellation level: 6 * 2**level segments around (48 at the default 3,
-    finer than the simplifiers' 32 because instances share one mesh), at most 384.
+    Tessellation level: 4 * 2**level segments around (32 at the default 3, the
+    simplifiers' density, so wireframes look alike), at least 8, at most 512.
     """
     from ..geometry import tessellate
 
-    seg = min(384, max(8, 6 * 2 ** int(level)))
+    seg = min(512, max(8, 4 * 2 ** int(level)))
     if kind == "sphere":
         m = tessellate.sphere(1.0, segments=seg)
     elif kind == "box":

@@ -98,7 +98,10 @@ class VolumeGeometry(Geometry):
         super().__init__("triangles", box.positions, box.normals, indices=box.indices, label=label)
         self.data = volume.data_array()
         tf = volume.transfer_function
-        self.table = tf.table(256).astype(np.float32)
+        table = tf.table(256).astype(np.float32)
+        rgb = table[:, :3]  # transfer-function colours are display (sRGB) values: linear for compositing
+        table[:, :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((np.maximum(rgb, 0) + 0.055) / 1.055) ** 2.4)
+        self.table = table
         self.range = tf.range
         self.textures: tuple[Any, Any] | None = None
 

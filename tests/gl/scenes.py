@@ -22,7 +22,7 @@ def stage(*, eye=(2.6, 2.0, 3.6), center=(0, 0.1, 0), floor: bool = True, lights
         s.add(om.AmbientLight(intensity=0.1))
     if floor:
         f = s.add(om.Node("floor"))
-        f.add(om.Material(ambient=(0.3, 0.3, 0.32), diffuse=(0.3, 0.3, 0.32)))
+        f.add(om.Material(ambient=(0.55, 0.55, 0.58), diffuse=(0.55, 0.55, 0.58)))
         f.add(om.Box(size=(6, 0.1, 6), center=(0, -1.05, 0)))
     return s
 
