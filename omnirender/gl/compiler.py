@@ -264,7 +264,8 @@ class DrawListCompiler:
                 # a closed opaque surface never shows its back faces: cull them (mirrored instances: the front)
                 cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
         state = self._state_for(kind, geometry, extra, cull)
-        item = DrawItem(geometry, state, row, transparent, "")
+        stack = self._node_stack
+        item = DrawItem(geometry, state, row, transparent, stack[-1] if stack else None)
         self._items.append(item)
         return item
 

@@ -61,16 +61,22 @@ class DrawState:
 
 
 class DrawItem:
-    """One shape occurrence: geometry, state, instance row, transparency and the node path it came from."""
+    """One shape occurrence: geometry, state, instance row, transparency and the node it was evaluated in."""
 
-    __slots__ = ("geometry", "state", "row", "transparent", "path")
+    __slots__ = ("geometry", "state", "row", "transparent", "node")
 
-    def __init__(self, geometry: Any, state: DrawState, row: np.ndarray, transparent: bool, path: str = "") -> None:
+    def __init__(self, geometry: Any, state: DrawState, row: np.ndarray, transparent: bool, node: Any = None) -> None:
         self.geometry = geometry
         self.state = state
         self.row = row
         self.transparent = transparent
-        self.path = path
+        self.node = node
+
+    @property
+    def path(self) -> str:
+        """Path of the node the shape was evaluated in ("" outside any node)."""
+        node = self.node
+        return "" if node is None else node.path
 
     def __repr__(self) -> str:
         return f"DrawItem({self.geometry.label}, {self.state.kind}, transparent={self.transparent})"

@@ -174,9 +174,6 @@ class BatchRenderer:
             self._light_cache[key] = lu
         return lu
 
-    def _program(self, state: DrawState) -> Any:
-        return self.programs.get(state.kind, state.features)
-
     def _set_uniforms(self, prog: Any, state: DrawState) -> None:
         for name, data in self._frame_uniforms.items():
             u = prog.get(name, None)

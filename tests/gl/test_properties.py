@@ -268,3 +268,16 @@ def test_native_shapes_instance_and_follow_tessellation(engine):
     assert labels == [("unit cone", 20), ("unit sphere", 1)]
     sphere = [b for b in engine._batch_order if b.geometry.label == "unit sphere"][0]
     assert sphere.geometry.count < engine.unit_geometry("sphere").count  # level 0 is coarser than the default
+
+
+def test_draw_items_know_their_node_and_clip_planes_are_limited(engine):
+    scene = red_sphere_blue_box()
+    engine.compile(scene)
+    assert sorted(item.path for item in engine._list) == ["/scene/box", "/scene/sphere"]
+    s = om.Node("scene")
+    deep = s.add(om.Node("deep"))
+    for i in range(7):
+        deep.add(om.ClipPlane(normal=(1, 0, i * 0.1), offset=-5))
+    deep.add(om.Sphere())
+    with pytest.raises(ValueError, match=r"/scene/deep.*at most 6 clip planes"):
+        engine.render(s)
