@@ -108,7 +108,8 @@ class FrameSimplifier(ShapeSimplifier):
                     engine.push(attribute)
                 base = PASS_FLAGS[name]
                 for r in items:
-                    r.render(engine, base | HIGHLIGHT if id(r) in highlighted else base)
+                    lit = id(r) in highlighted or id(getattr(r, "owner", None)) in highlighted  # a node's parts
+                    r.render(engine, base | HIGHLIGHT if lit else base)
                 for attribute in reversed(attributes):
                     engine.pop(attribute.category)
             if driver is not None:

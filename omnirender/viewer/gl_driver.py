@@ -4,7 +4,7 @@ The GL engine compiles what painters submit into a draw list and draws that
 list with the camera it pre-evaluated.  A viewer frame therefore runs the
 frame root through the engine (renderables push/eval/pop; painters submit
 draw items), then ``engine.render(None)`` installs and draws those items.  A
-repaint whose render lists, scene node versions, highlights and overrides are
+repaint whose render lists (their prerender generations), highlights and overrides are
 unchanged skips the traversal: only the camera and lights are re-evaluated and
 the installed list is drawn again (orbiting a big scene costs one draw).
 """
@@ -12,8 +12,6 @@ the installed list is drawn again (orbiting a big scene costs one draw).
 from __future__ import annotations
 
 from typing import Any
-
-from .renderable import NodeRenderable
 
 __all__ = ["GLDriver"]
 
@@ -46,10 +44,10 @@ class GLDriver:
         """What decides whether the installed draw list is still right for this frame."""
         shape = root._shape
         lists = shape._lists
-        nodes = tuple((id(r.node), r.node.version) for rl in lists for r in rl if isinstance(r, NodeRenderable))
+        # No node versions: nodes draw the snapshot their prerender took, so a node changed since then
+        # shows only after the next prerender (which bumps the list's generation).
         return (
             tuple((id(rl), rl.generation) for rl in lists),
-            nodes,
             frozenset(shape._highlighted),
             tuple(type(a).__name__ + repr(a.parameters()) for a in shape._overrides),
         )

@@ -23,6 +23,8 @@ __all__ = [
     "TWO_DIMENSIONAL",
     "HIGHLIGHT",
     "NodeRenderable",
+    "NodePart",
+    "split_program",
     "as_renderable",
     "node_render_hints",
     "node_bounds",
@@ -57,16 +59,29 @@ class IsRenderable(Protocol):
 
 
 class NodeRenderable:
-    """Adapter making an :class:`om.Node` renderable.
+    """Adapter making an :class:`om.Node` renderable, double-buffered like any renderable.
 
-    ``render`` evaluates the node with the renderer (so its lights and
-    attributes apply as in ``om.render``); ``HIGHLIGHT`` pushes a
-    ``Highlight`` attribute around it.  Bounds come from ``om.bounds`` and are
-    cached per node version, like the render hints.  Mutate a node drawn by a
+    ``prerender`` takes a snapshot of the node: its compiled program (a list the
+    node replaces, never mutates, when it changes) with the matrices of the
+    core transforms (``Translation``, ``Rotation``, ``Scaling``, ``Matrix``)
+    copied, so moving or replacing a transform shows only after the next
+    prerender.  Other component objects are shared with the scene: changing
+    one of *their* parameters in place (a colour, a radius) is visible at the
+    next repaint that traverses again.  ``render`` draws the snapshot.
+
+    The snapshot is split by render hints, shape by shape: shapes that are 2D
+    (``Text``) or translucent (under a translucent ``Material``/``Color``) go
+    into sub-renderables (:class:`NodePart`) filed in their own sublists, each
+    replaying the node's whole attribute structure (scoped attributes and
+    transforms above the shape still apply) but evaluating only its shapes.  The
+    adapter itself draws the first non-empty kind (normally the opaque 3D shapes).
+
+    ``HIGHLIGHT`` pushes a ``Highlight`` attribute around it.  Bounds come from
+    ``om.bounds`` and are cached per node version.  Mutate a node drawn by a
     viewer from another thread only while holding the render list's lock.
     """
 
-    __slots__ = ("node", "_hints", "_hints_version", "_bounds", "_bounds_version", "visible", "z_order")
+    __slots__ = ("node", "_hints", "_hints_version", "_bounds", "_bounds_version", "visible", "z_order", "_snapshot")
 
     def __init__(self, node: Any) -> None:
         self.node = node
@@ -76,10 +91,20 @@ class NodeRenderable:
         self._bounds_version = -1
         self.visible = True
         self.z_order = 0
+        self._snapshot: _Snapshot | None = None
 
     def prerender(self, render_list: Any) -> None:
-        # Nodes keep their compiled program per version; nothing else to cache.
-        self.node.program()
+        parts, used = split_program(self.node.program())
+        kinds = sorted(used) or [0]
+        main = kinds[0]
+        groups = self.node.groups
+        self._snapshot = _Snapshot(groups, parts[main])
+        self._hints = main
+        self._hints_version = None  # type: ignore[assignment]  # fixed until the next prerender
+        for kind in kinds[1:]:
+            part = NodePart(self, kind, _Snapshot(groups, parts[kind]))
+            if render_list is not None:
+                render_list.add_if_visible(part)
 
     def render(self, renderer: Any, flags: int = 0) -> None:
         highlight = None
@@ -88,7 +113,7 @@ class NodeRenderable:
             if highlight is not None:
                 renderer.push(highlight)
         try:
-            renderer.evaluate(self.node)
+            _draw(renderer, self._snapshot, self.node)
         finally:
             if highlight is not None:
                 renderer.pop(highlight.category)
@@ -102,13 +127,163 @@ class NodeRenderable:
             np.maximum(pmax, self._bounds[1], out=pmax)
 
     def render_hints(self) -> int:
-        if self._hints_version != self.node.version:
-            self._hints = node_render_hints(self.node)
+        """The kind of what this adapter draws (fixed by prerender; before it: from the node's shapes)."""
+        if self._hints_version is not None and self._hints_version != self.node.version:
+            kinds = sorted(split_program(self.node.program())[1]) or [0]
+            self._hints = kinds[0]
             self._hints_version = self.node.version
         return self._hints
 
     def __repr__(self) -> str:
         return f"NodeRenderable({self.node.path})"
+
+
+class NodePart:
+    """The 2D and/or translucent shapes of a prerendered node, filed in their own sublist.
+
+    ``owner`` is the node's :class:`NodeRenderable` (a highlighted owner
+    highlights its parts too).
+    """
+
+    __slots__ = ("owner", "hints", "visible", "z_order", "_snapshot")
+
+    def __init__(self, owner: NodeRenderable, hints: int, snapshot: _Snapshot) -> None:
+        self.owner = owner
+        self.hints = hints
+        self.visible = True
+        self.z_order = owner.z_order
+        self._snapshot = snapshot
+
+    @property
+    def node(self) -> Any:
+        return self.owner.node
+
+    def prerender(self, render_list: Any) -> None:
+        pass  # made by the owner's prerender
+
+    def render(self, renderer: Any, flags: int = 0) -> None:
+        highlight = _highlight_attribute() if flags & HIGHLIGHT else None
+        if highlight is not None:
+            renderer.push(highlight)
+        try:
+            _draw(renderer, self._snapshot, None)
+        finally:
+            if highlight is not None:
+                renderer.pop(highlight.category)
+
+    def update_bounds(self, pmin: np.ndarray, pmax: np.ndarray) -> None:
+        pass  # the owner's bounds cover the whole node
+
+    def render_hints(self) -> int:
+        return self.hints
+
+    def __repr__(self) -> str:
+        return f"NodePart({self.owner.node.path}, hints={self.hints})"
+
+
+class _Snapshot:
+    """A frozen program with the groups of its node: what ``engine.run`` needs inside a traversal."""
+
+    __slots__ = ("groups", "_program")
+
+    def __init__(self, groups: frozenset[str], program: list[tuple[int, Any]]) -> None:
+        self.groups = groups
+        self._program = program
+
+    def program(self) -> list[tuple[int, Any]]:
+        return self._program
+
+
+def _draw(renderer: Any, snapshot: _Snapshot | None, node: Any) -> None:
+    """Run ``snapshot`` inside the renderer's traversal (a viewer frame); outside one, evaluate ``node``."""
+    if snapshot is None or not getattr(renderer, "_running", 0):
+        if node is not None:
+            renderer.evaluate(node)  # not prerendered, or drawn on its own: the live node with its lights
+        elif snapshot is not None:
+            renderer.run_program(snapshot.program())
+        return
+    renderer.run(snapshot)
+
+
+def _snapshot_transform(attribute: Any, memo: dict[int, Any]) -> Any:
+    """A ``Matrix`` with the current matrix of a core transform (same object for its push and pop)."""
+    from ..core.transform import Matrix, Rotation, Scaling, Translation
+
+    if type(attribute) not in (Translation, Rotation, Scaling, Matrix):
+        return attribute  # engine-dependent transforms (Billboard, LookAt) stay live
+    frozen = memo.get(id(attribute))
+    if frozen is None:
+        frozen = memo[id(attribute)] = Matrix(np.array(attribute.matrix, dtype=np.float64))
+    return frozen
+
+
+def split_program(program: list[tuple[int, Any]]) -> tuple[dict[int, list[tuple[int, Any]]], set[int]]:
+    """Split a compiled node program by the render hints of its shapes.
+
+    Returns ``({hints: program} for hints 0..3, hints present)``, hints being 0,
+    TRANSPARENT, TWO_DIMENSIONAL or both: every program keeps all the attribute,
+    handler and node ops (with core transforms frozen into matrices) and only
+    the shapes of its kind.
+    """
+    from ..core.program import ADD, EVAL, NODE, POP, PUSH, REMOVE, TECHNIQUE
+
+    stacks: dict[Any, list[Any]] = {}
+    polys: list[Any] = []
+    memo: dict[int, Any] = {}
+
+    def kind_of(shape: Any) -> int:
+        tags = getattr(shape, "hints", ()) or ()
+        kind = TWO_DIMENSIONAL if "2d" in tags else 0
+        if (
+            "transparent" in tags
+            or any(stack and _translucent(stack[-1]) for stack in stacks.values())
+            or any(_translucent(p) for p in polys)
+        ):
+            kind |= TRANSPARENT
+        return kind
+
+    def split(ops: list[tuple[int, Any]]) -> tuple[dict[int, list[tuple[int, Any]]], set[int]]:
+        out: dict[int, list[tuple[int, Any]]] = {k: [] for k in range(4)}
+        used: set[int] = set()
+        for code, arg in ops:
+            if code == EVAL:
+                kind = kind_of(arg)
+                used.add(kind)
+                out[kind].append((code, arg))
+                continue
+            if code == NODE:
+                subs, sub_used = split(arg.program())
+                used |= sub_used
+                for k in range(4):
+                    out[k].append((NODE, _Snapshot(arg.groups, subs[k])))
+                continue
+            if code == TECHNIQUE:
+                technique, rest = arg
+                subs, sub_used = split(rest)
+                used |= sub_used
+                for k in range(4):
+                    out[k].append((TECHNIQUE, (technique, subs[k])))
+                continue
+            if code == PUSH:
+                stacks.setdefault(arg.category, []).append(arg)
+                arg = _snapshot_transform(arg, memo)
+            elif code == POP:
+                stack = stacks.get(arg.category)
+                if stack:
+                    stack.pop()
+                arg = _snapshot_transform(arg, memo)
+            elif code == ADD:
+                polys.append(arg)
+            elif code == REMOVE:
+                for i in range(len(polys) - 1, -1, -1):
+                    if polys[i] is arg:
+                        del polys[i]
+                        break
+            for k in range(4):
+                out[k].append((code, arg))
+        return out, used
+
+    return split(program)
 
 
 def as_renderable(obj: Any) -> Any:

@@ -212,3 +212,79 @@ def test_pick_highlight_follows_the_path_of_a_shared_node():
     right.add(wheel)
     assert np.allclose(shape_world_matrix(scene, "/car/right/wheel", disk)[:3, 3], (2, 1, 0))
     assert np.allclose(shape_world_matrix(scene, "/car/left/wheel", disk)[:3, 3], (-2, 1, 0))
+
+
+def moving_sphere_scene():
+    scene = om.Node("scene")
+    body = scene.add(om.Node("body"))
+    move = body.add(om.Translation(-1.0, 0, 0))
+    body.add(om.Material(diffuse=(0.9, 0.1, 0.1)))
+    body.add(om.Sphere(radius=0.6))
+    return scene, body, move
+
+
+def red_centroid_x(img):
+    return float(np.nonzero(red(img))[1].mean())
+
+
+@pytest.mark.parametrize("how", ["mutate", "replace"])
+def test_node_repaint_draws_the_prerendered_state(viewer, how):
+    scene, body, move = moving_sphere_scene()
+    viewer.add_renderable(scene)
+    viewer.set_eye_to_world((0, 0, 8), (0, 0, 0), (0, 1, 0))
+    first = viewer.rerender()
+    x0 = red_centroid_x(first)
+    if how == "mutate":
+        move.offset = (1.0, 0, 0)
+    else:
+        body.remove(move)
+        body.insert(0, om.Translation(1.0, 0, 0))
+    assert np.array_equal(viewer.repaint().array, first.array)  # repaint: what was prerendered
+    viewer.camera.orbit(0, 0)
+    viewer.set_highlight(scene)  # even a repaint that has to traverse again draws the snapshot
+    viewer.set_highlight(scene, False)
+    viewer.wireframe = True
+    wire = viewer.repaint()
+    assert abs(red_centroid_x(wire) - x0) < 3
+    viewer.wireframe = False
+    after = viewer.rerender()
+    assert red_centroid_x(after) > x0 + 20  # rerender shows the move
+
+
+def test_text_in_a_node_keeps_depth_testing_for_its_3d_shapes(viewer):
+    # a red sphere behind a blue box, plus a Text label in the same node
+    scene = om.Node("scene")
+    scene.add(om.Node("back", [om.Translation(0, 0, -2), om.Material(diffuse=(0.9, 0.1, 0.1)), om.Sphere(radius=0.8)]))
+    scene.add(
+        om.Node("front", [om.Translation(0, 0, 1), om.Material(diffuse=(0.1, 0.1, 0.9)), om.Box(size=(2.5, 2.5, 0.5))])
+    )
+    viewer.set_eye_to_world((0, 0, 10), (0, 0, 0), (0, 1, 0))
+    viewer.set_perspective(35, 1, 50)
+    viewer.add_renderable(scene)
+    without = viewer.rerender()
+    assert red(without).sum() == 0  # hidden by the box
+    scene.add(om.Text("label", (0, 2.5, 0), 14))
+    with_text = viewer.rerender()
+    assert red(with_text).sum() == 0  # still hidden: only the text is drawn without depth test
+    lists = viewer.render_list
+    assert len(lists.opaque) == 1 and len(lists.opaque_2d) == 1
+    assert not np.array_equal(with_text.array, without.array)  # the label is drawn
+
+
+def test_one_translucent_shape_does_not_make_the_whole_node_transparent(viewer):
+    scene = om.Node("scene")
+    scene.add(om.Node("solid", [om.Material(diffuse=(0.9, 0.1, 0.1)), om.Sphere(radius=0.5)]))
+    scene.add(om.Node("glass", [om.Translation(1.5, 0, 0), om.Material(diffuse=(0.1, 0.1, 0.9), opacity=0.4),
+                                 om.Box(size=(1, 1, 1))]))  # fmt: skip
+    viewer.add_renderable(scene)
+    viewer.set_eye_to_world((0, 0, 8), (0, 0, 0), (0, 1, 0))
+    img = viewer.rerender()
+    lists = viewer.render_list
+    assert len(lists.opaque) == 1 and len(lists.transparent) == 1
+    assert red(img).sum() > 100
+    # the translucent part still carries the scoped attributes above it: box at x = +1.5, bluish
+    part = lists.transparent[0]
+    assert part.node is scene and part.render_hints() == TRANSPARENT
+    x, y = int(SIZE[0] / 2 + 1.5 * SIZE[1] / (2 * 8 * np.tan(np.radians(17.5)))), SIZE[1] // 2
+    r, g, b, _ = img.pixel(x, y)
+    assert b > r + 20
