@@ -4,13 +4,14 @@
 renders; ``om.export(scene, "scene.pov")`` writes the SDL alone.
 ``POVRayEngine`` is the engine (service ``"pov.paint"``); ``Finish``,
 ``Pigment``, ``Normal``, ``Interior``, ``GlobalSettings`` and ``Raw`` are
-POV-Ray-specific attributes that other engines ignore.
+POV-Ray-specific attributes that other engines ignore (``Block`` writes nested
+blocks with arguments).
 """
 
 from __future__ import annotations
 
 from .api import available, export, render, scene_sdl
-from .attributes import Finish, GlobalSettings, Interior, Normal, Pigment, Raw, SDLBlock
+from .attributes import Block, Finish, GlobalSettings, Interior, Normal, Pigment, Raw, SDLBlock
 from .engine import POVRayEngine
 from .runner import POVRayError
 from .sdl import SDLError
@@ -24,6 +25,7 @@ __all__ = [
     "POVRayError",
     "SDLError",
     "SDLBlock",
+    "Block",
     "Finish",
     "Pigment",
     "Normal",

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -12,13 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from ..fileio import atomic_path, atomic_write
+from ..fileio import atomic_path
 from ..image import Image
 from . import painters as _painters  # noqa: F401  (registers the default handlers)
 from .engine import POVRayEngine, coverage, decode_depth
 from .runner import POVRayError, find_povray, read_png, read_ppm, run_povray
 
-__all__ = ["render", "export", "available", "scene_sdl"]
+__all__ = ["render", "export", "available", "scene_sdl", "node_at_line"]
 
 _ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix"}
 
@@ -54,34 +56,71 @@ def scene_sdl(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: 
     return engine.sdl(), engine
 
 
-def _write_resources(engine: POVRayEngine, folder: Path) -> list[Path]:
-    written = []
-    for name, data in engine.resources:
-        target = folder / name
-        if isinstance(data, str):
-            if not os.path.exists(data):
-                raise FileNotFoundError(f"POV-Ray: texture image {data!r} does not exist")
-            with atomic_path(target) as tmp:
-                shutil.copyfile(data, tmp)
-        else:
-            from PIL import Image as PILImage
+def _write_resource(data: Any, tmp: Path) -> None:
+    if isinstance(data, str):
+        if not os.path.exists(data):  # checked when the texture was met; it may have gone since
+            raise FileNotFoundError(f"POV-Ray: texture image {data!r} does not exist; check the path or pass an array")
+        shutil.copyfile(data, tmp)
+    else:
+        from PIL import Image as PILImage
 
-            arr = np.asarray(data, dtype=np.uint8)
-            with atomic_path(target) as tmp:
-                PILImage.fromarray(arr, "RGBA" if arr.shape[2] == 4 else "RGB").save(tmp, format="PNG")
-        written.append(target)
-    return written
+        arr = np.asarray(data, dtype=np.uint8)
+        PILImage.fromarray(arr, "RGBA" if arr.shape[2] == 4 else "RGB").save(tmp, format="PNG")
+
+
+def _write_files(folder: Path, text: str, name: str, resources: list[tuple[str, Any]]) -> list[Path]:
+    """Write the SDL ``text`` as ``folder/name`` and the texture images, all or nothing.
+
+    Every file is first written to a temporary file next to its target; only
+    when all of them are complete do they replace their targets, so a failure
+    (a texture that vanished, a full disk) leaves neither new files nor
+    half-written ones behind, and existing files unchanged.
+    """
+    targets = [folder / res_name for res_name, _ in resources] + [folder / name]
+    with contextlib.ExitStack() as stack:
+        for (_, data), target in zip(resources, targets, strict=False):
+            _write_resource(data, stack.enter_context(atomic_path(target)))
+        with open(stack.enter_context(atomic_path(targets[-1])), "w", encoding="utf-8") as fh:
+            fh.write(text)
+    return targets
 
 
 def export(scene: Any, path: str | os.PathLike[str], size: tuple[int, int] = (640, 480), **options: Any) -> Path:
-    """Write ``scene`` as POV-Ray SDL to ``path`` (atomically); texture images go next to it."""
+    """Write ``scene`` as POV-Ray SDL to ``path``; texture images go next to it.
+
+    The SDL is generated first; then the SDL file and the images are written
+    together atomically: on any failure nothing is left behind.
+    """
     target = Path(path)
     prefix = "".join(ch if ch.isalnum() or ch in "_-" else "_" for ch in target.stem) + "_"
     text, engine = scene_sdl(scene, size, resource_prefix=prefix, **options)
-    _write_resources(engine, target.parent if str(target.parent) else Path("."))
-    with atomic_write(target) as fh:
-        fh.write(text)
+    _write_files(target.parent if str(target.parent) else Path("."), text, target.name, engine.resources)
     return target
+
+
+_LINE = re.compile(r"File '(scene|depth)\.pov' line (\d+)")
+
+
+def node_at_line(text: str, line: int) -> str | None:
+    """The node path of the ``// /node/path`` comment nearest before 1-based ``line`` of generated SDL."""
+    lines = text.splitlines()
+    for i in range(min(line, len(lines)) - 1, -1, -1):
+        if lines[i].startswith("// /"):
+            return lines[i][3:].strip()
+    return None
+
+
+def _locate_error(exc: POVRayError, texts: dict[str, str], keep: Any) -> None:
+    """Add the scene-graph node that produced the failing SDL line (and the keep= hint) to ``exc``."""
+    message = str(exc)
+    found = _LINE.search(message)
+    if found:
+        node = node_at_line(texts.get(found.group(1), ""), int(found.group(2)))
+        if node is not None:
+            message += f"\n  {found.group(1)}.pov line {found.group(2)} was written for node {node}"
+    if keep is None and "Error" in message:
+        message += "\n  (pass keep='<folder>' to keep scene.pov for inspection)"
+    exc.args = (message,)
 
 
 def _background(engine: POVRayEngine) -> np.ndarray | None:
@@ -110,8 +149,8 @@ def render(
     or a threshold turns on adaptive anti-aliasing; ``timeout`` seconds (None:
     no limit); ``progress`` None (a bar on a terminal), True/False, or a
     callable ``(done_pixels, total_pixels)``; ``threads`` limits POV-Ray's
-    render threads; ``keep`` a folder to copy the scene file into (for
-    debugging); ``depth`` True adds ``image.depth`` (eye-space depth along the
+    render threads; ``keep`` a folder to write the scene file and its texture
+    images into (atomically, for debugging); ``depth`` True adds ``image.depth`` (eye-space depth along the
     viewing axis, inf on the background) from a second quick pass, else it is
     None.  The background is transparent in the alpha channel (so
     ``image.mask`` marks the objects) unless an ``om.Background`` with alpha
@@ -128,10 +167,9 @@ def render(
     sdl_seconds = time.perf_counter() - started
     with tempfile.TemporaryDirectory(prefix="omnirender-povray-") as tmp:
         folder = Path(tmp)
-        _write_resources(engine, folder)
-        (folder / "scene.pov").write_text(text, encoding="utf-8")
-        if keep is not None:
-            shutil.copyfile(folder / "scene.pov", Path(keep) / "scene.pov")
+        _write_files(folder, text, "scene.pov", engine.resources)
+        if keep is not None:  # the scene file and its textures, so the kept scene renders on its own
+            _write_files(Path(keep), text, "scene.pov", engine.resources)
         args = [
             "+Iscene.pov",
             "+Oimage.png",
@@ -159,8 +197,7 @@ def render(
         try:
             run_povray(args, folder, timeout=timeout, progress=progress, total_pixels=w * h)
         except POVRayError as exc:
-            if keep is None and "Error" in str(exc):
-                exc.args = (f"{exc}\n  (pass keep='<folder>' to keep scene.pov for inspection)",)
+            _locate_error(exc, {"scene": text}, keep)
             raise
         out = folder / "image.png"
         if not out.exists():
@@ -170,14 +207,19 @@ def render(
             # A second, quick pass (quality 0, no anti-aliasing, 16 bits, linear) with every object
             # self-lit by a pigment that encodes its eye-space depth.  Its alpha is also the
             # coverage: POV-Ray fogs the background too, making it opaque in the colour pass.
-            (folder / "depth.pov").write_text(engine.sdl(depth=True), encoding="utf-8")
+            depth_text = engine.sdl(depth=True)
+            (folder / "depth.pov").write_text(depth_text, encoding="utf-8")
             pass_args = [
                 "+Idepth.pov", "+Odepth.ppm", f"+W{w}", f"+H{h}", "-D", "-P", "+FP16", "+Q0", "-A",
                 "File_Gamma=1.0", "-GS", "-GD", "-GR", "-V",
             ]  # fmt: skip
             if threads is not None:
                 pass_args.append(f"+WT{int(threads)}")
-            run_povray(pass_args, folder, timeout=timeout, progress=False, total_pixels=w * h)
+            try:
+                run_povray(pass_args, folder, timeout=timeout, progress=False, total_pixels=w * h)
+            except POVRayError as exc:
+                _locate_error(exc, {"depth": depth_text}, keep)
+                raise
             rgb16 = read_ppm(folder / "depth.ppm")
             if depth:
                 depth_map = decode_depth(rgb16, engine.depth_range())

@@ -131,6 +131,11 @@ def finish_name(engine: Any) -> str:
 
 def _image_pigment(engine: Any, texture: Any, transmit: float, uv: bool) -> str:
     path = texture.path
+    if path is not None and not os.path.isfile(path):
+        raise FileNotFoundError(
+            f"POV-Ray: the Texture image {path!r} in node {engine.node_path or '/'} does not exist; "
+            "check the path or pass an array (om.Texture(numpy_array))"
+        )
     if path is not None and _suffix(path) != "":
         name = engine.resource(("path", path), path, suffix=_suffix(path))
     else:  # arrays and files of other formats are written as PNG

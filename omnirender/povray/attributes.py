@@ -17,7 +17,22 @@ from typing import Any
 from ..core import MonoAttribute, PolyAttribute
 from . import sdl
 
-__all__ = ["SDLBlock", "Finish", "Pigment", "Normal", "Interior", "GlobalSettings", "Raw"]
+__all__ = ["SDLBlock", "Block", "Finish", "Pigment", "Normal", "Interior", "GlobalSettings", "Raw"]
+
+
+class Block(dict):
+    """A nested SDL block whose body starts with comma-separated arguments.
+
+    POV-Ray writes some blocks with positional arguments, e.g. a medium's
+    ``scattering { TYPE, COLOR extinction E }``.  ``Block(1, (0.1, 0.1, 0.1),
+    extinction=0.5)`` as a parameter value writes ``scattering { 1,
+    <0.1,0.1,0.1> extinction 0.5 }``.  Arguments are numbers, vectors or
+    keywords.  It is a dict (``{"$args": [...], **params}``), so scene files
+    store it as plain data.
+    """
+
+    def __init__(self, *args: Any, **params: Any) -> None:
+        super().__init__({sdl.ARGS: list(args), **params})
 
 
 class SDLBlock(MonoAttribute):
@@ -120,7 +135,20 @@ class Normal(SDLBlock):
 
 
 class Interior(SDLBlock):
-    """An object's ``interior`` (``ior``, ``caustics``, ``fade_distance``, ``media={...}``)."""
+    """An object's ``interior`` (``ior``, ``caustics``, ``fade_distance``, ``media={...}``).
+
+    Nested blocks are dicts; blocks that take arguments use :class:`Block`::
+
+        Interior(ior=1.3, media={"absorption": (0.2, 0.4, 0.6),
+                                 "scattering": Block(1, (0.1, 0.1, 0.1), extinction=0.5)})
+
+    writes ``interior { ior 1.3 media { absorption <0.2,0.4,0.6> scattering
+    { 1, <0.1,0.1,0.1> extinction 0.5 } } }``.  A bare value for
+    ``scattering`` is rejected (it would be invalid SDL); anything this form
+    cannot express can be written with :class:`Raw` (``placement="object"``).
+    The object must be ``hollow`` for media to show: add
+    ``Raw("hollow", placement="object")``.
+    """
 
     __slots__ = ()
     keyword = "interior"
@@ -160,9 +188,14 @@ class Raw(PolyAttribute):
     scene file where the attribute is met; ``placement="object"`` appends it
     inside every object that follows while the attribute is active (object
     modifiers such as ``no_shadow`` or ``hollow``).
+
+    Scene files refuse it unless loaded with ``om.load(path, trusted=True)``
+    (``scene_file_trusted_only``): its text could hold any SDL directive.
     """
 
     __slots__ = ("text", "placement")
+    #: scene files load this type only with ``trusted=True`` (see omnirender.scene.files)
+    scene_file_trusted_only = True
 
     def __init__(self, text: str, placement: str = "scene") -> None:
         super().__init__()

@@ -124,7 +124,8 @@ class POVRayEngine(Engine):
         if name is None:
             name = f"OM_{kind}{len(self._declared)}"
             self._declared[key] = name
-            self.declarations.append(f"#declare {name} = {body};\n")
+            where = sdl.comment(self.node_path) + "\n" if self.node_path else ""  # for error locations
+            self.declarations.append(f"{where}#declare {name} = {body};\n")
         return name
 
     def resource(self, key: Any, data: Any, suffix: str = ".png") -> str:

@@ -395,8 +395,8 @@ class RawPainter(AttributePainter):
     target = Raw
 
     def exec(self, raw: Raw, engine: POVRayEngine) -> None:
-        if raw.placement == "scene":
-            engine.objects.append(raw.text.rstrip("\n") + "\n")
+        if raw.placement == "scene":  # the node comment lets errors in the text name the node
+            engine.objects.append(sdl.comment(engine.node_path or "/") + "\n" + raw.text.rstrip("\n") + "\n")
 
 
 @default_for(POVRayEngine)

@@ -99,7 +99,9 @@ def run_povray(
         raise POVRayError(f"POV-Ray: the povray program was not found on PATH; {_INSTALL}")
     update, close = _bar(progress, total_pixels)
     env = dict(os.environ)
-    env.setdefault("HOME", str(cwd))
+    # POV-Ray's configuration grants reading %HOME%: point it at the (temporary) working folder so a
+    # scene cannot read the user's files through it (nor pick up a user povray.conf).
+    env["HOME"] = str(cwd)
     try:
         proc = subprocess.Popen(
             [exe, *args],
@@ -113,20 +115,25 @@ def run_povray(
         close()
         raise POVRayError(f"POV-Ray: cannot start {exe}: {exc}; {_INSTALL}") from None
     chunks: list[bytes] = []
+    failures: list[BaseException] = []  # an exception of the progress callback, re-raised in this thread
 
     def read() -> None:
         assert proc.stdout is not None
         pending = b""
-        while True:
+        while True:  # drain everything, even after a failure, so POV-Ray never blocks on a full pipe
             data = proc.stdout.read1(4096) if hasattr(proc.stdout, "read1") else proc.stdout.read(4096)
             if not data:
                 break
             chunks.append(data)
             pending = (pending + data)[-256:]
             found = _PROGRESS.findall(pending.decode("latin-1"))
-            if found:
+            if found and not failures:
                 done, total = found[-1]
-                update(int(done), int(total))
+                try:
+                    update(int(done), int(total))
+                except BaseException as exc:  # noqa: BLE001 - handed to the main thread
+                    failures.append(exc)
+                    proc.kill()  # the caller's progress handler failed: stop rendering
 
     reader = threading.Thread(target=read, daemon=True)
     reader.start()
@@ -150,6 +157,8 @@ def run_povray(
         raise
     reader.join(5)
     close()
+    if failures:
+        raise failures[0]
     output = b"".join(chunks).decode("latin-1")
     if proc.returncode != 0:
         lines = error_lines(output)

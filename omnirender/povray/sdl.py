@@ -97,6 +97,24 @@ def file_name(name: str, owner: str = "POV-Ray") -> str:
     return f'"{name}"'
 
 
+#: Blocks whose body starts with comma-separated arguments (``scattering { 1, <0.1,0.1,0.1> }``).
+ARGUMENT_BLOCKS = frozenset({"scattering"})
+#: The key of a nested block's positional arguments (see ``om.povray.Block``).
+ARGS = "$args"
+
+
+def _argument(value: Any, owner: str) -> str:
+    if isinstance(value, str):
+        return identifier(value, owner)
+    if isinstance(value, (bool, int, float, np.integer, np.floating)):
+        return number(value, owner)
+    try:
+        seq = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise SDLError(f"{owner}: block argument {value!r} must be a number, a vector or a keyword") from None
+    return vector(seq, owner)
+
+
 def _value(key: str, value: Any, owner: str) -> str | None:
     if value is None or value is False:
         return None
@@ -104,6 +122,11 @@ def _value(key: str, value: Any, owner: str) -> str | None:
         return key
     if isinstance(value, Mapping):
         return block(key, value, owner)
+    if key in ARGUMENT_BLOCKS:
+        raise SDLError(
+            f"{owner}: {key} is a POV-Ray block with arguments ({key} {{ TYPE, COLOR ... }}), not a {key} value; "
+            f"write it as om.povray.Block(1, (0.1, 0.1, 0.1), extinction=0.5) or use om.povray.Raw for other SDL"
+        )
     if isinstance(value, str):
         # Only bare identifiers (pattern or keyword names) may appear as text.
         return f"{key} {identifier(value, owner)}"
@@ -127,8 +150,22 @@ def params_text(params: Mapping[str, Any], owner: str = "POV-Ray") -> str:
 
 
 def block(name: str, params: Mapping[str, Any], owner: str = "POV-Ray") -> str:
-    """``name { key value ... }``."""
-    return f"{identifier(name, owner)} {{ {params_text(params, owner)} }}"
+    """``name { key value ... }``; an ``"$args"`` entry (a list) is written first, comma-separated.
+
+    ``block("scattering", {"$args": [1, (0.1, 0.1, 0.1)], "extinction": 0.5})``
+    gives ``scattering { 1, <0.1,0.1,0.1> extinction 0.5 }``.
+    """
+    params = dict(params)
+    args = params.pop(ARGS, None)
+    parts = []
+    if args is not None:
+        if isinstance(args, (str, Mapping)) or not hasattr(args, "__iter__"):
+            raise SDLError(f"{owner}: the arguments of the {name} block must be a list, got {args!r}")
+        parts.append(", ".join(_argument(a, owner) for a in args))
+    rest = params_text(params, owner)
+    if rest:
+        parts.append(rest)
+    return f"{identifier(name, owner)} {{ {' '.join(parts)} }}"
 
 
 def _finite(array: np.ndarray, owner: str, what: str) -> None:

@@ -31,8 +31,14 @@ A document looks like this (JSON; YAML is the same structure)::
 
 Loading never executes code: JSON through :mod:`json`, YAML through
 ``yaml.safe_load``, types only from the registry (or ``omnirender``'s own
-subpackages).  Unknown types and bad parameters raise :class:`SceneFileError`
-(a ValueError) with the JSON path of the offending element, e.g.
+subpackages).  Component classes that declare ``scene_file_trusted_only =
+True`` (``povray.Raw``, whose text goes verbatim into the renderer's input)
+are refused unless the caller vouches for the file with ``trusted=True``: a
+scene file from elsewhere cannot smuggle renderer directives.  Dict parameters
+whose keys look like entries (``type``, ``node``, ``$ref``...), such as Mitsuba
+plugin dicts, are written as ``{"$dict": {...}}`` so they load back as data.
+Unknown types and bad parameters raise :class:`SceneFileError` (a ValueError)
+with the JSON path of the offending element, e.g.
 ``root.contents[2].contents[1].radius: must be > 0, got -1.0 (Sphere)``.
 Third-party components become loadable with :func:`register_type`.
 """
@@ -106,6 +112,8 @@ _ABSTRACT_NAMES = {"DeclaredShape", "LightSource"}
 _BUILTIN_MODULES = ("omnirender.core", "omnirender.shapes", "omnirender.attributes")
 # Parameters holding file paths, stored relative to the scene file.
 _BUILTIN_PATHS = {"MeshFile": ("path",), "Texture": ("image",)}
+# Keys that make a dict read as an entry or special value; dicts holding one are wrapped in {"$dict": ...}.
+_MARKERS = frozenset({"type", "node", "$ref", "$id", "$array", "$dict"})
 
 
 def _build_translation(offset: Any = (0.0, 0.0, 0.0)) -> Any:
@@ -441,7 +449,9 @@ class _Writer:
         if isinstance(value, (list, tuple)):
             return [self.value(v, where) for v in value]
         if isinstance(value, dict):
-            return {str(k): self.value(v, where) for k, v in value.items()}
+            data = {str(k): self.value(v, where) for k, v in value.items()}
+            # plain data (e.g. a Mitsuba plugin dict with a "type" key) must not read back as a component
+            return {"$dict": data} if _MARKERS & data.keys() else data
         if isinstance(value, os.PathLike):
             return os.fspath(value)
         if hasattr(value, "array") and callable(value.array):  # om.data sequences
@@ -515,9 +525,10 @@ def _json_text(value: Any, indent: int = 0) -> str:
 
 # -- reading ----------------------------------------------------------------------
 class _Reader:
-    def __init__(self, base_dir: str | None, source: str | None) -> None:
+    def __init__(self, base_dir: str | None, source: str | None, trusted: bool = False) -> None:
         self.base_dir = base_dir
         self.source = source
+        self.trusted = trusted
         self.objects: dict[str, Any] = {}
 
     def error(self, where: str, message: str) -> SceneFileError:
@@ -607,6 +618,14 @@ class _Reader:
             cls = _resolve(name, f"{where}.type")
         except SceneFileError as exc:
             raise self.error(exc.path, exc.reason) from None
+        if getattr(cls, "scene_file_trusted_only", False) and not self.trusted:
+            raise self.error(
+                f"{where}.type",
+                f"{name} is trusted-only: its text goes verbatim into the renderer's input, so a scene file "
+                "could use it to inject directives; it is refused by default. If you wrote this file yourself "
+                "or trust its author, load it with om.load(path, trusted=True) / om.scene.files.loads(text, "
+                "trusted=True)",
+            )
         params = {k: v for k, v in data.items() if k not in ("type", "$id")}
         for key in params:
             if not isinstance(key, str):
@@ -648,6 +667,10 @@ class _Reader:
         if isinstance(value, list):
             return [self.value(v, f"{where}[{i}]") for i, v in enumerate(value)]
         if isinstance(value, dict):
+            if "$dict" in value:
+                if len(value) != 1 or not isinstance(value["$dict"], dict):
+                    raise self.error(where, "a '$dict' wrapper holds only '$dict' with an object/mapping")
+                return {k: self.value(v, f"{where}.{k}") for k, v in value["$dict"].items()}
             if "$array" in value:
                 return self.array(value, where)
             if "type" in value or "node" in value or "$ref" in value:
@@ -711,8 +734,19 @@ def _describe(value: Any) -> str:
     return f"{type(value).__name__} {text[:40]}{'...' if len(text) > 40 else ''}"
 
 
-def loads(text: str, fmt: str = "json", base_dir: str | os.PathLike[str] | None = None, *, source: str | None = None):
-    """Parse scene-file text; relative file paths are resolved against ``base_dir`` (cwd when None)."""
+def loads(
+    text: str,
+    fmt: str = "json",
+    base_dir: str | os.PathLike[str] | None = None,
+    *,
+    source: str | None = None,
+    trusted: bool = False,
+):
+    """Parse scene-file text; relative file paths are resolved against ``base_dir`` (cwd when None).
+
+    ``trusted=True`` allows trusted-only components (``povray.Raw``); pass it
+    only for files you wrote yourself.
+    """
     fmt = _check_format(fmt)
     where = source or "<scene text>"
     if fmt == "json":
@@ -731,15 +765,19 @@ def loads(text: str, fmt: str = "json", base_dir: str | os.PathLike[str] | None 
         except yaml.YAMLError as exc:
             raise SceneFileError("", f"invalid YAML: {exc}", where) from None
     base = None if base_dir is None else os.path.abspath(os.fspath(base_dir))
-    return _Reader(base, source).document(doc)
+    return _Reader(base, source, trusted).document(doc)
 
 
 def _reject_constant(name: str) -> Any:
     raise ValueError(f"{name} is not allowed (numbers must be finite)")
 
 
-def load(path: str | os.PathLike[str]) -> Node:
-    """Read a scene file (``.json``, ``.yaml``, ``.yml``) and return its root node."""
+def load(path: str | os.PathLike[str], *, trusted: bool = False) -> Node:
+    """Read a scene file (``.json``, ``.yaml``, ``.yml``) and return its root node.
+
+    ``trusted=True`` allows trusted-only components such as ``povray.Raw``
+    (hand-written SDL); without it they are refused with a SceneFileError.
+    """
     target = Path(path)
     fmt = _format_of(target)
     try:
@@ -748,7 +786,7 @@ def load(path: str | os.PathLike[str]) -> Node:
         raise FileNotFoundError(f"scene file {str(target)!r} does not exist") from None
     except UnicodeDecodeError as exc:
         raise SceneFileError("", f"not a UTF-8 text file ({exc})", str(target)) from None
-    return loads(text, fmt, base_dir=target.resolve().parent, source=str(target))
+    return loads(text, fmt, base_dir=target.resolve().parent, source=str(target), trusted=trusted)
 
 
 # -- helpers ----------------------------------------------------------------------

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+import time
 
 import numpy as np
 import pytest
@@ -104,13 +105,43 @@ def test_vertex_colours_and_texture_orientation():
     assert top_right[2] > 200 and top_right[0] < 50
 
 
-def test_parse_errors_carry_povrays_lines():
+def test_parse_errors_carry_povrays_lines_and_the_node(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))  # a private temp folder: other runs cannot interfere
     s = om.Node("s")
     s.add(om.Camera.look_at(eye=(0, 0, 5)))
-    s.add(om.povray.Raw("sphere { <0,0,0>, 1 texture { finsh { } } }"))
+    s.add(om.Node("fine", [om.Sphere(radius=0.1)]))
+    s.add(om.Node("broken", [om.povray.Raw("sphere { <0,0,0>, 1 texture { finsh { } } }")]))
+    s.add(om.Node("later", [om.Box()]))
     with pytest.raises(POVRayError, match=r"(?s)File 'scene.pov' line \d+: Parse Error.*finsh") as info:
         _render(s, size=(8, 8))
     assert "POV-Ray failed" in str(info.value)
+    assert "was written for node /s/broken" in str(info.value)
+    assert list(tmp_path.iterdir()) == []  # the temporary folder is gone after the failure
+
+
+def test_an_exception_in_the_progress_callback_stops_povray_and_reaches_the_caller(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    s = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5)), om.Sphere()])
+    calls = []
+
+    def progress(done, total):
+        calls.append(done)
+        raise ValueError("progress display broke")
+
+    t0 = time.perf_counter()
+    with pytest.raises(ValueError, match="progress display broke"):
+        _render(s, size=(400, 400), progress=progress, antialias=True, quality=11)
+    assert len(calls) == 1  # not called again after failing
+    assert time.perf_counter() - t0 < 30
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_keep_writes_the_scene_and_its_textures(tmp_path):
+    tex = np.zeros((4, 4, 3), np.uint8)
+    s = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5)), om.Texture(tex), om.Rectangle(size=(2, 2))])
+    _render(s, size=(16, 16), keep=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["om_tex0.png", "scene.pov"]
+    assert '"om_tex0.png"' in (tmp_path / "scene.pov").read_text()
 
 
 def test_temporary_files_are_removed_and_progress_is_reported(tmp_path, monkeypatch):
@@ -126,7 +157,8 @@ def test_temporary_files_are_removed_and_progress_is_reported(tmp_path, monkeypa
     assert img.mask[32, 32] and not img.mask[0, 0]  # fog does not make the background opaque
 
 
-def test_timeout_stops_povray():
+def test_timeout_stops_povray(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     s = om.Node("s")
     s.add(om.Camera.look_at(eye=(0, 0, 5)))
     s.add(om.povray.GlobalSettings(radiosity={"count": 1600, "recursion_limit": 3}))
@@ -134,6 +166,7 @@ def test_timeout_stops_povray():
     s.add(om.Sphere())
     with pytest.raises(POVRayError, match="timeout"):
         _render(s, size=(400, 400), timeout=0.3, antialias=True)
+    assert list(tmp_path.iterdir()) == []  # the temporary folder is gone after the timeout
 
 
 def test_every_conversion_parses_and_renders():

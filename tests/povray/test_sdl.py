@@ -267,3 +267,127 @@ def test_engine_micro_program():
     assert "torus { 1, 0.25 }" in text and re.search(r"matrix <-1,0,[-0-9.e]+,0,1,0,[-0-9.e]+,0,-1,0,0,0>", text)
     assert text.count("#declare OM_T") == 2  # red for the torus, the default grey for the sphere
     assert e.context.is_empty()
+
+
+def test_blocks_with_arguments_and_bare_argument_values_are_rejected():
+    media = {"absorption": (0.2, 0.4, 0.6), "scattering": om.povray.Block(1, (0.1, 0.1, 0.1), extinction=0.5)}
+    interior = om.povray.Interior(ior=1.3, media=media)
+    assert interior.sdl() == (
+        "interior { ior 1.3 media { absorption <0.2,0.4,0.6> scattering { 1, <0.1,0.1,0.1> extinction 0.5 } } }"
+    )
+    with pytest.raises(sdl.SDLError, match=r"scattering is a POV-Ray block with arguments.*om\.povray\.Block"):
+        om.povray.Interior(media={"scattering": (1, 0.1)})
+    with pytest.raises(sdl.SDLError, match="not a valid POV-Ray keyword"):
+        om.povray.Interior(media={"scattering": om.povray.Block(1, "x } #include")})
+    with pytest.raises(sdl.SDLError, match="block argument"):
+        om.povray.Interior(media={"scattering": om.povray.Block(1, {"a": 1})})
+    with pytest.raises(sdl.SDLError, match="not a valid POV-Ray keyword"):
+        om.povray.Finish(**{"$args": [1]})  # arguments only inside nested blocks
+    # a Block is plain data: it survives a scene-file round trip and writes the same SDL
+    from omnirender.scene import files
+
+    loaded = files.loads(files.dumps(om.Node("s", [interior]))).components[0]
+    assert loaded.sdl() == interior.sdl()
+
+
+def test_node_at_line_maps_sdl_lines_to_the_node_that_wrote_them():
+    bad = om.Node("bad", [om.Material(diffuse=(1, 0, 0)), om.povray.Raw("sphere { 0, 1 finsh { } }")])
+    s = _scene(om.Node("good", [om.Sphere()]), bad, om.Node("after", [om.Box()]))
+    text, _ = scene_sdl(s)
+    lines = text.splitlines()
+    raw_line = next(i for i, ln in enumerate(lines, start=1) if "finsh" in ln)
+    box_line = next(i for i, ln in enumerate(lines, start=1) if ln.strip().startswith("box {"))
+    assert om.povray.api.node_at_line(text, raw_line) == "/scene/bad"
+    assert om.povray.api.node_at_line(text, box_line) == "/scene/after"
+    assert om.povray.api.node_at_line(text, 1) is None  # the header belongs to no node
+    declared = next(i for i, ln in enumerate(lines, start=1) if ln.startswith("#declare OM_T"))
+    assert om.povray.api.node_at_line(text, declared) == "/scene/good"
+
+
+def test_missing_texture_files_name_the_node_and_the_fix(tmp_path):
+    for name in ("gone.png", "gone.bmp"):  # a format POV-Ray reads itself, and one converted to PNG
+        s = _scene(om.Node("box", [om.Texture(str(tmp_path / name)), om.Box()]))
+        with pytest.raises(FileNotFoundError, match=r"in node /scene/box does not exist; check the path or pass"):
+            scene_sdl(s)
+        with pytest.raises(FileNotFoundError, match="/scene/box"):
+            om.export(s, tmp_path / "x.pov")
+        assert list(tmp_path.iterdir()) == []
+
+
+def _textured_scene():
+    a = np.zeros((4, 4, 3), np.uint8)
+    b = np.full((4, 4, 3), 200, np.uint8)
+    return _scene(
+        om.Node("a", [om.Texture(a), om.Rectangle(size=(2, 2))]),
+        om.Node("b", [om.Texture(b), om.Rectangle(size=(1, 1))]),
+    )
+
+
+def test_export_is_all_or_nothing_when_a_texture_fails_midway(tmp_path, monkeypatch):
+    from omnirender.povray import api
+
+    target = tmp_path / "scene.pov"
+    target.write_text("old scene")
+    (tmp_path / "scene_tex0.png").write_bytes(b"old texture")
+    real = api._write_resource
+    calls = []
+
+    def failing(data, tmp):
+        calls.append(tmp)
+        if len(calls) == 2:  # the second image: half written, then the disk is full
+            tmp.write_bytes(b"half")
+            raise OSError(28, "No space left on device")
+        real(data, tmp)
+
+    monkeypatch.setattr(api, "_write_resource", failing)
+    with pytest.raises(OSError, match="No space"):
+        om.export(_textured_scene(), target)
+    assert target.read_text() == "old scene" and (tmp_path / "scene_tex0.png").read_bytes() == b"old texture"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.pov", "scene_tex0.png"]  # no temp files, no tex1
+
+
+def test_export_is_atomic_when_the_sdl_write_fails_midway(tmp_path, monkeypatch):
+    import builtins
+
+    from omnirender.povray import api
+
+    target = tmp_path / "scene.pov"
+    target.write_text("old scene")
+
+    class Half:
+        def __init__(self, fh):
+            self.fh = fh
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            self.fh.close()
+
+        def write(self, text):
+            self.fh.write(text[: len(text) // 2])
+            self.fh.flush()
+            raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(api, "open", lambda *a, **k: Half(builtins.open(*a, **k)), raising=False)
+    with pytest.raises(OSError, match="No space"):
+        om.export(_textured_scene(), target)
+    assert target.read_text() == "old scene"
+    assert [p.name for p in tmp_path.iterdir()] == ["scene.pov"]
+
+
+def test_povray_runs_with_home_set_to_its_temporary_folder(tmp_path, monkeypatch):
+    from omnirender.povray import runner
+
+    seen = {}
+
+    def fake_popen(args, cwd=None, env=None, **kw):
+        seen.update(cwd=cwd, home=env["HOME"])
+        raise OSError("stop here")
+
+    monkeypatch.setenv("HOME", "/root")
+    monkeypatch.setattr(runner, "find_povray", lambda: "/usr/bin/povray")
+    monkeypatch.setattr(runner.subprocess, "Popen", fake_popen)
+    with pytest.raises(POVRayError, match="cannot start"):
+        runner.run_povray(["+Iscene.pov"], tmp_path, progress=False)
+    assert seen == {"cwd": tmp_path, "home": str(tmp_path)}

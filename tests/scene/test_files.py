@@ -422,3 +422,88 @@ def test_examples_load_and_agree():
     assert paths
     assert any(isinstance(c, om.Camera) for c in from_json.components)
     assert from_json["/demo/wheels/left"].children[0] is from_json["/demo/wheels/right"].children[0]
+
+
+def test_trusted_only_types_are_refused_unless_the_caller_trusts_the_file(tmp_path):
+    pytest.importorskip("omnirender.povray")
+    from omnirender import povray
+
+    text = json.dumps(
+        {
+            "format": "omnirender-scene",
+            "version": 1,
+            "root": {"node": "s", "contents": [{"type": "povray.Raw", "text": '#fopen F "x" write'}]},
+        }
+    )
+    with pytest.raises(SceneFileError, match=r"root\.contents\[0\]\.type: povray\.Raw is trusted-only") as info:
+        files.loads(text)
+    assert "trusted=True" in str(info.value)  # the message names the fix
+    path = tmp_path / "raw.json"
+    path.write_text(text)
+    with pytest.raises(SceneFileError, match="trusted-only"):
+        om.load(path)
+    # nested inside a parameter value it is refused too
+    nested = (
+        text.replace('"contents": [', '"contents": [{"type": "Technique", "service": "x"}, ')
+        .replace('{"type": "povray.Raw"', '{"node": "inner", "contents": [{"type": "povray.Raw"')
+        .replace('write"}]', 'write"}]}]')
+    )
+    with pytest.raises(SceneFileError, match=r"root\.contents\[1\]\.contents\[0\]\.type"):
+        files.loads(nested)
+    for loaded in (files.loads(text, trusted=True), om.load(path, trusted=True)):
+        raw = loaded.components[0]
+        assert type(raw) is povray.Raw and raw.text == '#fopen F "x" write'
+    # saving still works (the author trusts their own scene)
+    assert '"type": "povray.Raw"' in files.dumps(om.Node("s", [povray.Raw("// hi")]))
+
+
+def test_any_class_can_declare_itself_trusted_only():
+    class Script(om.MonoAttribute):
+        __slots__ = ("code",)
+        scene_file_trusted_only = True
+
+        def __init__(self, code: str = "") -> None:
+            super().__init__()
+            self.code = code
+
+    om.register_type("tests.Script", Script)
+    try:
+        text = files.dumps(om.Node("s", [Script("x")]))
+        with pytest.raises(SceneFileError, match="tests.Script is trusted-only"):
+            files.loads(text)
+        assert files.loads(text, trusted=True).components[0].code == "x"
+    finally:
+        files.unregister_type("tests.Script")
+
+
+@pytest.mark.parametrize("fmt", ["json", "yaml"])
+def test_mitsuba_plugin_dicts_round_trip_as_data(fmt):
+    pytest.importorskip("omnirender.mitsuba")
+    from omnirender import mitsuba
+
+    nested = {"type": "dielectric", "int_ior": 1.5, "specular_reflectance": {"type": "rgb", "value": [1, 0.5, 0]}}
+    samples = [
+        mitsuba.BSDF(nested),
+        mitsuba.Emitter({"type": "constant", "radiance": {"type": "rgb", "value": [0.2, 0.2, 0.2]}}),
+        mitsuba.Integrator({"type": "path", "max_depth": 8, "hide_emitters": True}),
+    ]
+    text = files.dumps(om.Node("s", samples), fmt)
+    loaded = files.loads(text, fmt).components
+    assert [type(c) for c in loaded] == [type(c) for c in samples]
+    for a, b in zip(samples, loaded, strict=True):
+        assert b.plugin == a.plugin
+    # saved again: the same document
+    assert files.dumps(om.Node("s", loaded), fmt) == text
+    # a plain dict parameter without marker keys stays a plain mapping in the file
+    assert '"$dict"' not in files.dumps(om.Node("s", [om.Technique()]))
+
+
+def test_dict_wrapper_errors_name_the_json_path():
+    doc = {
+        "format": "omnirender-scene",
+        "version": 1,
+        "root": {"node": "s", "contents": [{"type": "mitsuba.BSDF", "plugin": {"$dict": 3}}]},
+    }
+    pytest.importorskip("omnirender.mitsuba")
+    with pytest.raises(SceneFileError, match=r"root\.contents\[0\]\.plugin: a '\$dict' wrapper"):
+        files.loads(json.dumps(doc))
