@@ -187,7 +187,13 @@ class ViewerCamera:
         self._center += shift
 
     def zoom(self, factor: float) -> None:
-        """Scale the eye-centre distance (perspective) or field height (orthogonal) by ``factor``."""
+        """Scale the eye-centre distance (perspective) or field height (orthogonal) by ``factor``.
+
+        In perspective the eye moves along its axis, so the near and far planes
+        move with it (by the change of distance): what was between them before
+        the zoom still is.  Zooming in past the near plane keeps the near plane
+        at 1/1000 of the far one (so depth precision holds), never behind the eye.
+        """
         if not (factor > 0 and math.isfinite(factor)):
             raise ValueError(f"zoom factor must be > 0, got {factor}")
         if self._orthogonal:
@@ -198,6 +204,14 @@ class ViewerCamera:
             return
         offset = self._eye_to_world[:3, 3] - self._center
         self._eye_to_world[:3, 3] = self._center + offset * factor
+        delta = float(np.linalg.norm(offset)) * (factor - 1.0)
+        far = self._far + delta
+        if not far > 0:
+            return
+        near = max(self._near + delta, 1e-3 * far)
+        if self._frustum is not None:  # an explicit frustum lies on the near plane: keep its angles
+            self._frustum = tuple(v * near / self._near for v in self._frustum)  # type: ignore[assignment]
+        self._near, self._far = near, far
 
     def field_height_at(self, depth: float) -> float:
         """Height of the visible region at ``depth`` in front of the eye."""

@@ -288,3 +288,25 @@ def test_one_translucent_shape_does_not_make_the_whole_node_transparent(viewer):
     x, y = int(SIZE[0] / 2 + 1.5 * SIZE[1] / (2 * 8 * np.tan(np.radians(17.5)))), SIZE[1] // 2
     r, g, b, _ = img.pixel(x, y)
     assert b > r + 20
+
+
+def test_zoom_moves_near_and_far_with_the_eye(viewer):
+    viewer.add_renderable(om.Node("s", [om.Material(diffuse=(0.9, 0.1, 0.1)), om.Sphere(radius=1)]))
+    viewer.set_eye_to_world((3, 2, 4), (0, 0, 0), (0, 1, 0))
+    viewer.auto_fit()
+    fitted = red(viewer.rerender()).sum()
+    centre = (SIZE[0] // 2, SIZE[1] // 2)
+    coverage = [fitted]
+    for _ in range(8):  # wheel notches out: the sphere shrinks but is never cut by the far plane
+        viewer.camera.zoom(1 / 0.9)
+        img = viewer.repaint()
+        coverage.append(red(img).sum())
+        assert img.pixel(*centre)[0] > 150
+    assert all(a > b > 0 for a, b in zip(coverage, coverage[1:], strict=False))
+    viewer.auto_fit()
+    for _ in range(8):  # notches in: the sphere grows and its front is never cut by the near plane
+        viewer.camera.zoom(0.9)
+        img = viewer.repaint()
+        assert img.pixel(*centre)[0] > 150, viewer.camera.view_plane_distance
+    assert red(img).sum() > 3 * fitted
+    assert 0 < viewer.view_plane_distance < viewer.far_plane_distance
