@@ -281,3 +281,21 @@ def test_draw_items_know_their_node_and_clip_planes_are_limited(engine):
     deep.add(om.Sphere())
     with pytest.raises(ValueError, match=r"/scene/deep.*at most 6 clip planes"):
         engine.render(s)
+
+
+def test_wrapping_an_existing_context():
+    import moderngl
+
+    from omnirender.gl import GLEngine
+
+    ctx = moderngl.create_standalone_context(backend="egl", require=330)
+    try:
+        e = GLEngine(size=(32, 24), context=ctx)
+        s = om.Node("scene")
+        s.add(om.Color(1, 0, 0))
+        s.add(om.Sphere())
+        assert e.render(s).pixel(16, 12)[0] > 200
+        e.release()
+        assert ctx.info["GL_VERSION"]  # the engine leaves a context it did not create alive
+    finally:
+        ctx.release()
