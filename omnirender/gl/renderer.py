@@ -107,6 +107,12 @@ class BatchRenderer:
         for geom in list(self._uploaded()):
             if id(geom) not in used and not geom.persistent:
                 geom.release()
+        textures = self.__dict__.get("_textures")
+        if textures:
+            # textures of attributes the list no longer uses (e.g. re-simplified mesh files) are freed
+            live = {id(it.state.texture) for it in items if it.state.texture is not None}
+            for key in [k for k in textures if k not in live]:
+                textures.pop(key)[2].release()
 
     def _uploaded(self) -> list[Geometry]:
         return [g for g in self.__dict__.setdefault("_uploaded_set", weakref.WeakSet())]

@@ -299,3 +299,15 @@ def test_wrapping_an_existing_context():
         assert ctx.info["GL_VERSION"]  # the engine leaves a context it did not create alive
     finally:
         ctx.release()
+
+
+def test_textures_of_replaced_attributes_are_released(engine):
+    image = np.zeros((4, 4, 3), np.uint8)
+    scene = om.Node("scene")
+    holder = scene.add(om.Node("holder"))
+    for _ in range(5):
+        holder.clear()
+        holder.add(om.Texture(image.copy()))
+        holder.add(om.Box())
+        engine.render(scene, read_depth=False)
+        assert len(engine._textures) == 1
