@@ -192,8 +192,15 @@ class GLTFEngine(NodeTrackingEngine):
             from PIL import Image as PILImage
         except ImportError:  # pragma: no cover - Pillow comes with the gl extra
             raise RuntimeError("glTF export of textures needs Pillow: pip install pillow") from None
+        try:
+            rgba = tex.image_array()
+        except (FileNotFoundError, ValueError) as exc:
+            raise type(exc)(
+                f"glTF export: {exc} (Texture in node {self.node_path or '/'}); "
+                "check the path or pass an array (om.Texture(numpy_array))"
+            ) from None
         buf = io.BytesIO()
-        PILImage.fromarray(np.asarray(tex.image_array()), "RGBA").save(buf, format="PNG")
+        PILImage.fromarray(np.asarray(rgba), "RGBA").save(buf, format="PNG")
         view = self.gltf.buffer_view(buf.getvalue())
         image = self.gltf.append("images", {"bufferView": view, "mimeType": "image/png"})
         wrap = _WRAP[tex.wrap]
@@ -223,7 +230,7 @@ class GLTFEngine(NodeTrackingEngine):
         ambient = [0.0, 0.0, 0.0]
         lights: list[dict[str, Any]] = []
         for light, world in self._lights:
-            color = [float(c) for c in light.color]
+            color = [float(c) for c in srgb_to_linear(light.color)]  # glTF colours are linear
             if isinstance(light, AmbientLight):
                 ambient = [a + float(b) for a, b in zip(ambient, light.ambient, strict=True)]
                 continue
@@ -388,9 +395,14 @@ class LightExporter(AttributePainter):
 
 
 def to_bytes(
-    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "warn", mask: str | None = None
+    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "raise", mask: str | None = None
 ) -> bytes:
-    """The GLB file of ``scene`` as bytes (``size`` gives the camera's aspect ratio)."""
+    """The GLB file of ``scene`` as bytes (``size`` gives the camera's aspect ratio).
+
+    ``on_missing``: what a shape without a handler does — ``"raise"`` (the
+    default, as in every engine: an export must not silently lose geometry),
+    ``"warn"`` or ``"skip"``.
+    """
     if not isinstance(scene, Node):
         scene = Node("scene", scene)
     engine = GLTFEngine(size, on_missing=on_missing, mask=mask)

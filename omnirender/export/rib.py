@@ -43,9 +43,20 @@ from ..scene import Node
 from ..shapes import Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from .walk import NodeTrackingEngine, track_surfaces
 
-__all__ = ["Surface", "RIBEngine", "export", "to_text", "rib_string", "rib_numbers"]
+__all__ = ["Surface", "RIBEngine", "export", "to_text", "rib_string", "rib_identifier", "rib_numbers"]
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_ ]*$")
+_UNSAFE = re.compile(r'["\\\x00-\x1f\x7f]')
+
+
+def rib_identifier(name: str) -> str:
+    """A node name as a RIB string literal: quotes, backslashes and control characters become ``_``.
+
+    Node names are free text and only label the blocks, so an odd name must
+    not stop the export; shader names and parameters are still rejected by
+    :func:`rib_string`.
+    """
+    return rib_string(_UNSAFE.sub("_", str(name)), "node name")
 
 
 def rib_string(value: str, what: str = "string") -> str:
@@ -182,7 +193,7 @@ class RIBEngine(NodeTrackingEngine):
     def enter_node(self, node: Any, world: np.ndarray) -> None:
         parent = self._stack[-1] if self._stack else np.eye(4)
         self.begin_block()
-        self.emit(f'Attribute "identifier" "name" [{rib_string(node.name, "node name")}]')
+        self.emit(f'Attribute "identifier" "name" [{rib_identifier(node.name)}]')
         local = np.linalg.solve(parent, world)
         if not np.allclose(local, np.eye(4), atol=1e-12):
             self.emit(f"ConcatTransform {_matrix(local)}")
@@ -315,7 +326,7 @@ class RIBEngine(NodeTrackingEngine):
 
     def document(self, name: str = "scene") -> str:
         """The whole RIB file after a traversal."""
-        head = ["##RenderMan RIB", f"# {name}: written by omnirender", "version 3.04"]
+        head = ["##RenderMan RIB", f"# {_UNSAFE.sub('_', str(name))}: written by omnirender", "version 3.04"]
         head.append(f'Display {rib_string(self.display)} "file" "rgba"')
         head += self.camera_lines()
         head.append("WorldBegin")
@@ -470,13 +481,18 @@ def to_text(
     *,
     size: Sequence[int] = (640, 480),
     display: str | None = None,
-    on_missing: str = "warn",
+    on_missing: str = "raise",
     mask: str | None = None,
 ) -> str:
-    """The RIB text of ``scene`` (``display``: the image file name RenderMan writes)."""
+    """The RIB text of ``scene`` (``display``: the image file name RenderMan writes).
+
+    ``on_missing``: what a shape without a handler does — ``"raise"`` (the
+    default, as in every engine: an export must not silently lose geometry),
+    ``"warn"`` or ``"skip"``.
+    """
     if not isinstance(scene, Node):
         scene = Node("scene", scene)
-    engine = RIBEngine(tuple(size), display or f"{scene.name}.tif", on_missing=on_missing, mask=mask)
+    engine = RIBEngine(tuple(size), display or f"{_UNSAFE.sub('_', scene.name)}.tif", on_missing=on_missing, mask=mask)
     engine.run(scene)
     return engine.document(scene.name)
 

@@ -203,6 +203,7 @@ class MitsubaEngine(Engine):
             return plugin
         reflectance = None
         if tex is not None:
+            self.texture_image(tex)  # a missing image file fails here, naming the node
             reflectance = self._texture_dict(tex)
         elif vertex_colors:
             reflectance = {"type": "mesh_attribute", "name": "vertex_color"}
@@ -225,6 +226,16 @@ class MitsubaEngine(Engine):
             bsdf = {"type": "mask", "opacity": cutout, "material": bsdf}
         self.has_masks |= bsdf["type"] == "mask"
         return bsdf
+
+    def texture_image(self, tex: Texture) -> np.ndarray:
+        """``tex.image_array()``; a missing or unreadable image file raises naming the node and the fix."""
+        try:
+            return tex.image_array()
+        except (FileNotFoundError, ValueError) as exc:
+            raise type(exc)(
+                f"MitsubaEngine: {exc} (Texture in node {self.node_path or '/'}); "
+                "check the path or pass an array (om.Texture(numpy_array))"
+            ) from None
 
     def _texture_dict(self, tex: Texture) -> dict[str, Any]:
         mi = mitsuba()

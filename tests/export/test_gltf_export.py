@@ -237,3 +237,57 @@ def test_mesh_nodes_are_named_after_the_scene_shapes_and_color_follows_gl_rules(
     torus, box = (doc["materials"][m["primitives"][0]["material"]] for m in doc["meshes"])
     assert torus["pbrMetallicRoughness"]["baseColorFactor"] == pytest.approx([0, 0, 1, 0.5])
     assert box["pbrMetallicRoughness"]["baseColorFactor"] == pytest.approx([1, 1, 0, 1])  # Color before: ignored
+
+
+class _Blob(om.Shape):
+    """A shape no engine knows (no painter, no simplifier)."""
+
+    __slots__ = ()
+
+
+def test_unknown_shapes_raise_by_default_and_warn_on_request():
+    scene = om.Node("s", [om.Node("odd", [_Blob()])])
+    with pytest.raises(om.NoHandlerError):
+        gltf.to_bytes(scene)
+    with pytest.warns(UserWarning):
+        gltf.to_bytes(scene, on_missing="warn")
+
+
+def test_light_colours_are_linear():
+    scene = om.Node("s", [om.PointLight(position=(1, 2, 3), color=(0.5, 0.25, 1.0)), om.Sphere()])
+    doc, _ = _parse(gltf.to_bytes(scene))
+    (light,) = doc["extensions"]["KHR_lights_punctual"]["lights"]
+    assert light["color"] == pytest.approx([0.21404114, 0.05087609, 1.0], rel=1e-6)
+
+
+def test_missing_texture_files_name_the_node_and_the_fix(tmp_path):
+    scene = om.Node("s", [om.Node("crate", [om.Texture(str(tmp_path / "gone.png")), om.Box()])])
+    with pytest.raises(FileNotFoundError, match=r"Texture in node /s/crate.*check the path or pass an array"):
+        om.export(scene, tmp_path / "x.glb")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_write_failing_midway_leaves_the_existing_file_unchanged(tmp_path, monkeypatch):
+    import contextlib
+
+    target = tmp_path / "scene.glb"
+    target.write_bytes(b"old file")
+    real = gltf.atomic_write
+
+    @contextlib.contextmanager
+    def half_then_full_disk(path, mode="w", **kw):
+        with real(path, mode, **kw) as fh:
+
+            class Half:
+                def write(self, data):
+                    fh.write(data[: len(data) // 2])
+                    fh.flush()
+                    raise OSError(28, "No space left on device")
+
+            yield Half()
+
+    monkeypatch.setattr(gltf, "atomic_write", half_then_full_disk)
+    with pytest.raises(OSError, match="No space"):
+        om.export(_scene(), target)
+    assert target.read_bytes() == b"old file"
+    assert [p.name for p in tmp_path.iterdir()] == ["scene.glb"]

@@ -199,3 +199,54 @@ def test_color_after_material_replaces_its_colour():
     args = dict(parse(rib.to_text(scene)))
     assert args["Color"] == [[0.0, 0.0, 1.0]] and args["Opacity"] == [[0.5, 0.5, 0.5]]
     assert args["Surface"][0] == "matte"
+
+
+def test_odd_node_names_are_sanitised_not_refused():
+    scene = om.Node('scene"\nWorldEnd', [om.Node('a"b\\c\td\x7f', [om.Sphere()])])
+    text = rib.to_text(scene)
+    requests = [name for name, _ in parse(text)]
+    assert requests.count("WorldEnd") == 1 and requests[-1] == "WorldEnd"  # nothing injected
+    names = [args[2] for name, args in parse(text) if name == "Attribute" and args[:2] == ["identifier", "name"]]
+    assert names == [["scene__WorldEnd"], ["a_b_c_d_"]]
+    assert 'Display "scene__WorldEnd.tif"' in text
+    assert "# scene__WorldEnd: written by omnirender" in text
+
+
+class _Blob(om.Shape):
+    """A shape no engine knows (no painter, no simplifier)."""
+
+    __slots__ = ()
+
+
+def test_unknown_shapes_raise_by_default_and_warn_on_request():
+    scene = om.Node("s", [om.Node("odd", [_Blob()])])
+    with pytest.raises(om.NoHandlerError):
+        rib.to_text(scene)
+    with pytest.warns(UserWarning):
+        rib.to_text(scene, on_missing="warn")
+
+
+def test_a_write_failing_midway_leaves_the_existing_file_unchanged(tmp_path, monkeypatch):
+    import contextlib
+
+    target = tmp_path / "scene.rib"
+    target.write_text("old file")
+    real = rib.atomic_write
+
+    @contextlib.contextmanager
+    def half_then_full_disk(path, mode="w", **kw):
+        with real(path, mode, **kw) as fh:
+
+            class Half:
+                def write(self, data):
+                    fh.write(data[: len(data) // 2])
+                    fh.flush()
+                    raise OSError(28, "No space left on device")
+
+            yield Half()
+
+    monkeypatch.setattr(rib, "atomic_write", half_then_full_disk)
+    with pytest.raises(OSError, match="No space"):
+        om.export(om.Node("s", [om.Sphere()]), target)
+    assert target.read_text() == "old file"
+    assert [p.name for p in tmp_path.iterdir()] == ["scene.rib"]
