@@ -8,10 +8,14 @@ file write) and compared with trimesh's own OBJ export of the same mesh
 slow as trimesh's OBJ export.  Then the test scene of
 ``tests/test_engines_agree.py`` is rendered with POV-Ray at 640x480.
 
-Mitsuba half: ``mitsuba_half`` below (filled in by the Mitsuba adapter's
-author) builds the same mesh as a Mitsuba mesh and renders the test scene.
+Mitsuba half: ``mitsuba_half`` below builds the same mesh as a Mitsuba mesh
+(raw arrays, and through the engine) and renders the test scene; both build
+times are also printed as a ratio to trimesh's OBJ export of the same run.
 
-Run: .venv/bin/python bench/offline_export.py [--repeat N] [--no-render]
+``--triangles N`` changes the mesh size (a grid of about N triangles, twice as
+wide as deep; the exact count is printed).
+
+Run: .venv/bin/python bench/offline_export.py [--triangles N] [--repeat N] [--no-render]
 """
 
 from __future__ import annotations
@@ -43,6 +47,15 @@ def wave_mesh(nx: int = 1001, nz: int = 501) -> tuple[np.ndarray, np.ndarray, np
     a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(), i[1:, :-1].ravel()
     faces = np.concatenate([np.column_stack([a, c, b]), np.column_stack([a, d, c])])
     return vertices, normals, faces
+
+
+def grid_for(triangles: int) -> tuple[int, int]:
+    """(nx, nz) of a wave_mesh grid with about ``triangles`` triangles, twice as wide as deep."""
+    if triangles < 2:
+        raise ValueError(f"--triangles must be at least 2, got {triangles}")
+    rows = max(1, round((triangles / 4) ** 0.5))
+    cols = max(1, round(triangles / (2 * rows)))
+    return cols + 1, rows + 1
 
 
 def best_of(fn, repeat: int) -> float:
@@ -137,13 +150,22 @@ def mitsuba_half(vertices, normals, faces, repeat: int, render: bool) -> dict[st
 
 def main(argv: list[str] | None = None) -> dict[str, float]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--triangles", type=int, default=1_000_000, help="mesh size (default 1,000,000)")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--no-render", action="store_true")
     args = parser.parse_args(argv)
-    vertices, normals, faces = wave_mesh()
+    try:
+        nx, nz = grid_for(args.triangles)
+    except ValueError as exc:
+        parser.error(str(exc))
+    vertices, normals, faces = wave_mesh(nx, nz)
     print(f"mesh: {len(vertices)} vertices, {len(faces)} triangles")
     results = povray_half(vertices, normals, faces, args.repeat, not args.no_render)
     results.update(mitsuba_half(vertices, normals, faces, args.repeat, not args.no_render))
+    obj = results.get("trimesh_obj_s")
+    for name in ("mitsuba_build_mesh_s", "mitsuba_engine_mesh_s"):
+        if obj and name in results:  # the Mitsuba mesh build against the same trimesh OBJ export
+            results[f"ratio_{name[:-2]}_over_obj"] = results[name] / obj
     for key, value in results.items():
         print(f"{key:34s} {value:10.3f}")
     if "ratio_pov_over_obj" in results:
