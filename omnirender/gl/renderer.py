@@ -255,7 +255,12 @@ class BatchRenderer:
             else:
                 ctx.enable(ctx.BLEND)
                 src, dst, eq = blend
-                ctx.blend_func = (_factor(ctx, src), _factor(ctx, dst))
+                if src == "src_alpha" and dst == "one_minus_src_alpha":
+                    # "over": the alpha channel accumulates coverage (a + (1 - a) dst), so a transparent
+                    # background keeps the right opacity
+                    ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
+                else:
+                    ctx.blend_func = (_factor(ctx, src), _factor(ctx, dst))
                 ctx.blend_equation = _equation(ctx, eq)
             cur["blend"] = blend
         cull = cur.get("cull_override") or state.cull

@@ -149,7 +149,7 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     calls = 0
     ctx.disable(ctx.DEPTH_TEST)
     ctx.enable(ctx.BLEND)
-    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
     engine._gl_state.clear()
     clip = engine._proj @ engine._view
     for item in items:

@@ -142,7 +142,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     ctx.enable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
     ctx.depth_func = "<"
     ctx.cull_face = "back"
-    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
     set_masks(ctx, engine.raw, engine.framebuffer, depth=True)
     view, proj = engine._view, engine._proj
     calls = 0

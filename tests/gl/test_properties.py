@@ -311,3 +311,15 @@ def test_textures_of_replaced_attributes_are_released(engine):
         holder.add(om.Box())
         engine.render(scene, read_depth=False)
         assert len(engine._textures) == 1
+
+
+def test_transparent_shape_over_transparent_background_keeps_its_opacity(engine):
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 5)))
+    s.add(om.Material(diffuse=(1, 0, 0), opacity=0.4))
+    s.add(om.Rotation(90, (1, 0, 0)))
+    s.add(om.Rectangle(size=(3, 3)))  # one surface: alpha 0.4
+    s.add(om.Box(size=(1, 1, 1), center=(0, 0, 0)))  # two more surfaces at the centre
+    img = engine.render(s, background=(0, 0, 0, 0))
+    assert img.pixel(10, 36)[3] == pytest.approx(0.4 * 255, abs=2)
+    assert img.pixel(48, 36)[3] == pytest.approx((1 - 0.6**3) * 255, abs=3)
