@@ -321,5 +321,5 @@ def test_transparent_shape_over_transparent_background_keeps_its_opacity(engine)
     s.add(om.Rectangle(size=(3, 3)))  # one surface: alpha 0.4
     s.add(om.Box(size=(1, 1, 1), center=(0, 0, 0)))  # two more surfaces at the centre
     img = engine.render(s, background=(0, 0, 0, 0))
-    assert img.pixel(10, 36)[3] == pytest.approx(0.4 * 255, abs=2)
+    assert img.pixel(25, 36)[3] == pytest.approx(0.4 * 255, abs=2)
     assert img.pixel(48, 36)[3] == pytest.approx((1 - 0.6**3) * 255, abs=3)
