@@ -276,13 +276,15 @@ class Window:
     # -- event handlers (glfw callbacks) --------------------------------------------
     def on_mouse_button(self, handle: Any, button: int, action: int, mods: int) -> None:
         glfw = self._glfw
-        x, y = self._cursor
+        # where the button went down, not where the last motion event left the cursor
+        x, y = glfw.get_cursor_pos(self.handle) if self.handle else self._cursor
+        self._cursor = (x, y)
         if action == glfw.PRESS:
             self._buttons[button] = (x, y, False)
         elif action == glfw.RELEASE:
             start = self._buttons.pop(button, None)
             if start is not None and button == glfw.MOUSE_BUTTON_LEFT and not start[2]:
-                self.pick(x, y)
+                self.click(x, y)
 
     def on_cursor_pos(self, handle: Any, x: float, y: float) -> None:
         glfw = self._glfw
@@ -296,7 +298,7 @@ class Window:
                 self._buttons[button] = (sx, sy, True)
         shift = glfw.get_key(self.handle, glfw.KEY_LEFT_SHIFT) == glfw.PRESS if self.handle else False
         cam = self.viewer.camera
-        h = self.viewer.size[1]
+        h = self.window_size()[1]  # cursor positions are in window coordinates
         if glfw.MOUSE_BUTTON_LEFT in self._buttons and not shift:
             if self._buttons[glfw.MOUSE_BUTTON_LEFT][2]:
                 cam.orbit(dx * 0.4, dy * 0.4)
@@ -355,11 +357,36 @@ class Window:
         else:
             self.viewer.camera.restore(self._initial)
 
-    def pick(self, x: float, y: float) -> Any:
-        """Pick at window pixel (x, y) (origin top left): highlight the nearest shape, show its path."""
+    def window_size(self) -> tuple[int, int]:
+        """The window's size in window coordinates (cursor units; framebuffer pixels differ on HiDPI screens)."""
+        if self.handle:
+            w, h = self._glfw.get_window_size(self.handle)
+            if w > 0 and h > 0:
+                return w, h
+        return self.viewer.size
+
+    def to_pixel(self, x: float, y: float) -> tuple[int, int] | None:
+        """The image pixel under window position (x, y) (framebuffer pixels), or None outside the image."""
+        ww, wh = self.window_size()
+        fw, fh = self.viewer.size
+        px, py = int(x * fw / ww), int(y * fh / wh)
+        if not (0 <= px < fw and 0 <= py < fh):
+            return None
+        return px, py
+
+    def click(self, x: float, y: float) -> Any:
+        """A click at window position (x, y): pick there (ignored outside the image, e.g. a drag out of it)."""
+        pixel = self.to_pixel(x, y)
+        if pixel is None:
+            return self.picked
+        return self.pick(*pixel)
+
+    def pick(self, x: int, y: int) -> Any:
+        """Pick at image pixel (x, y) (origin top left): highlight the nearest shape, show its path."""
         from .picking import pick_in_viewer
 
-        hit = pick_in_viewer(self.viewer, self.scene, int(x), int(y))
+        w, h = self.viewer.size
+        hit = pick_in_viewer(self.viewer, self.scene, min(max(int(x), 0), w - 1), min(max(int(y), 0), h - 1))
         self.picked = hit
         self.viewer.set_picked(hit)
         self.set_title(f"{self.base_title} - {hit.path}" if hit is not None else self.base_title)
@@ -405,7 +432,8 @@ def view(
     """Open a window on ``scene`` and loop until it is closed (or ``duration`` seconds pass).
 
     The scene's camera (if any) is the initial view, else the view fits the
-    scene; scenes with their own lights replace the viewer's default lights.
+    scene; scenes with their own lights replace the viewer's default lights,
+    and the scene's ``om.Background`` colour (if any) is the window's.
     ``update(t)`` runs in a worker thread (see the module docs).  Returns the viewer.
     """
     from .viewer import Viewer
@@ -422,11 +450,14 @@ def view(
 
 
 def open_scene(viewer: Any, scene: Any) -> None:
-    """Add ``scene`` to ``viewer`` with its camera (or an auto-fit view) and lights."""
+    """Add ``scene`` to ``viewer`` with its camera (or an auto-fit view), lights and ``om.Background``."""
     viewer.add_renderable(scene)
     window = viewer.window
     if window is not None:
         window.scene = scene
+    background = _scene_background(scene)
+    if background is not None:
+        viewer.background = background.color
     if hasattr(scene, "preevaluate"):
         lights, camera = scene.preevaluate()
         if lights:
@@ -441,3 +472,25 @@ def open_scene(viewer: Any, scene: Any) -> None:
     if window is not None:
         window.remember_view()
         window.request_rerender()
+
+
+def _scene_background(scene: Any) -> Any:
+    """The first ``om.Background`` in ``scene`` (evaluation order), or None."""
+    if not hasattr(scene, "inspect"):
+        return None
+    from ..attributes import Background
+    from ..scene.node import Visitor
+
+    class _Find(Visitor):
+        found: Any = None
+
+        def enter_node(self, node: Any) -> bool:
+            return self.found is None
+
+        def visit(self, component: Any, node: Any) -> None:
+            if self.found is None and isinstance(component, Background):
+                self.found = component
+
+    finder = _Find()
+    scene.inspect(finder)
+    return finder.found

@@ -310,3 +310,20 @@ def test_zoom_moves_near_and_far_with_the_eye(viewer):
         assert img.pixel(*centre)[0] > 150, viewer.camera.view_plane_distance
     assert red(img).sum() > 3 * fitted
     assert 0 < viewer.view_plane_distance < viewer.far_plane_distance
+
+
+def test_open_scene_adopts_the_scene_background(viewer):
+    from omnirender.viewer.window import open_scene
+
+    scene = scene_with_sphere()
+    scene["/scene/body"].add(om.Background((0.0, 0.6, 0.2)))
+    open_scene(viewer, scene)
+    assert viewer.background == (0.0, 0.6, 0.2, 1.0)
+    img = viewer.rerender()
+    assert img.pixel(0, 0)[:3] == (0, 153, 51)
+    plain = Viewer(size=SIZE, samples=0)
+    try:
+        open_scene(plain, scene_with_sphere())  # no Background: the viewer's default stays
+        assert plain.background == Viewer(size=SIZE, engine=om.Engine()).background
+    finally:
+        plain.close()

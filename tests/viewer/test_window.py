@@ -55,6 +55,17 @@ def window(display):
     viewer.close()
 
 
+@pytest.fixture
+def xinput(display, window):
+    """Real X events (XTest) for the window; the pointer starts over a background pixel of it."""
+    from viewer_helpers import XInput
+
+    x = XInput(display, window)
+    x.move(5, 5)
+    yield x
+    x.close()
+
+
 def red_mask(img):
     a = img.array.astype(int)
     return (a[:, :, 0] > a[:, :, 1] + 60) & (a[:, :, 0] > a[:, :, 2] + 60)
@@ -69,6 +80,11 @@ def centroid_x(mask):
     return float(np.nonzero(mask)[1].mean())
 
 
+def centroid(mask):
+    ys, xs = np.nonzero(mask)
+    return float(xs.mean()), float(ys.mean())
+
+
 def test_window_shows_the_scene(window):
     shot = window.screenshot()
     assert shot.size == SIZE and window.frames == 1
@@ -78,90 +94,121 @@ def test_window_shows_the_scene(window):
     assert np.array_equal(shot.array, window.last_frame.array)  # the screen shows the rendered frame
 
 
-def test_drag_orbits_and_wheel_zooms(window):
-    import glfw
-
+def test_drag_orbits_and_wheel_zooms(window, xinput):
     before = window.screenshot()
     cam = window.viewer.camera
     distance = cam.distance
-    window.on_cursor_pos(window.handle, 100, 90)
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
-    for x in range(110, 330, 20):  # drag right: 225 pixels = 90 degrees of yaw
-        window.on_cursor_pos(window.handle, x, 90)
-        assert window.step()  # the real glfw loop iteration redraws
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
+    frames = window.frames
+    xinput.drag((30, 90), (230, 90))  # drag right over 200 pixels: 80 degrees of yaw
+    assert window.frames > frames + 3  # the real glfw loop redrew during the drag
     assert window.picked is None  # a drag is not a click
     assert np.isclose(cam.distance, distance)  # orbit keeps the centre distance
     after = window.screenshot()
     assert not np.array_equal(before.array, after.array)
-    # after a quarter turn the shapes are one behind the other, no longer side by side
+    # after (nearly) a quarter turn the shapes are one behind the other, no longer side by side
     assert (
         abs(centroid_x(red_mask(after)) - centroid_x(blue_mask(after)))
         < 0.5 * abs(centroid_x(red_mask(before)) - centroid_x(blue_mask(before)))
         or min(red_mask(after).sum(), blue_mask(after).sum()) < 50
     )
-    window.on_key(window.handle, glfw.KEY_R, 0, glfw.PRESS, 0)  # reset
-    window.step()
+    xinput.key("r")  # reset
     assert np.abs(window.screenshot().array.astype(int) - before.array.astype(int)).max() <= 2
     covered = (red_mask(before) | blue_mask(before)).sum()
-    window.on_scroll(window.handle, 0, 3)
-    window.step()
+    xinput.wheel(3)  # wheel up: zoom in
     zoomed = window.screenshot()
+    assert cam.distance < 0.8 * distance
     assert (red_mask(zoomed) | blue_mask(zoomed)).sum() > 1.5 * covered
+    xinput.wheel(-6)  # three notches out from the start: everything still shown, smaller
+    out = window.screenshot()
+    assert cam.distance > 1.3 * distance
+    assert 0.3 * red_mask(before).sum() < red_mask(out).sum() < red_mask(before).sum()
+    assert 0.3 * blue_mask(before).sum() < blue_mask(out).sum() < blue_mask(before).sum()
 
 
-def test_click_picks_highlights_and_titles(window):
-    import glfw
-
+def test_right_drag_pans(window, xinput):
     before = window.screenshot()
-    red = red_mask(before)
-    ys, xs = np.nonzero(red)
-    x, y = int(xs.mean()), int(ys.mean())
-    window.on_cursor_pos(window.handle, x, y)
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
-    window.step()
+    center = window.viewer.get_center()
+    red0, blue0 = centroid(red_mask(before)), centroid(blue_mask(before))
+    xinput.drag((120, 60), (150, 100), button=3)  # 30 right, 40 down
+    after = window.screenshot()
+    assert not np.allclose(window.viewer.get_center(), center)
+    assert window.picked is None
+    for c0, c1 in ((red0, centroid(red_mask(after))), (blue0, centroid(blue_mask(after)))):
+        assert 20 < c1[0] - c0[0] < 40 and 30 < c1[1] - c0[1] < 50  # the scene follows the cursor
+
+
+def test_f_auto_fits_and_p_toggles_the_projection(window, xinput):
+    xinput.wheel(-8)  # far out: the shapes are small
+    small = window.screenshot()
+    covered = (red_mask(small) | blue_mask(small)).sum()
+    xinput.key("f")
+    fitted = window.screenshot()
+    mask = red_mask(fitted) | blue_mask(fitted)
+    assert mask.sum() > 2 * covered
+    assert not (mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())  # all inside
+    assert not window.viewer.is_orthogonal()
+    xinput.key("p")
+    assert window.viewer.is_orthogonal()
+    ortho = window.screenshot()
+    assert not np.array_equal(ortho.array, fitted.array)
+    assert red_mask(ortho).sum() > 200 and blue_mask(ortho).sum() > 200
+    xinput.key("p")
+    assert not window.viewer.is_orthogonal()
+
+
+def test_click_picks_highlights_and_titles(window, xinput):
+    before = window.screenshot()
+    x, y = (int(v) for v in centroid(red_mask(before)))
+    xinput.click(x, y)
     assert window.picked is not None and window.picked.path == "/scene/left"
     assert window.title == "test - /scene/left"
     after = window.screenshot()
     r, g, b, _ = after.pixel(x, y)
     assert g > before.pixel(x, y)[1] + 60 and r > 150  # yellow overlay on the red sphere
     assert blue_mask(after).sum() == blue_mask(before).sum()
+    # the press position counts, even when the last motion event was elsewhere
+    bx, by = (int(v) for v in centroid(blue_mask(before)))
+    xinput.move(bx, by)
+    window.on_cursor_pos(window.handle, 5, 5)  # a stale position the press must not use
+    xinput.button(1, True)
+    xinput.button(1, False)
+    xinput.pump()
+    assert window.picked is not None and window.picked.path == "/scene/right"
     # clicking the background clears the selection
-    window.on_cursor_pos(window.handle, 5, 5)
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
-    window.on_mouse_button(window.handle, glfw.MOUSE_BUTTON_LEFT, glfw.RELEASE, 0)
-    window.step()
+    xinput.click(5, 5)
     assert window.picked is None and window.title == "test"
 
 
-def test_keys_axial_views_wireframe_screenshot_and_quit(window, tmp_path):
-    import glfw
+def test_clicks_outside_the_image_are_ignored(window):
+    assert window.to_pixel(SIZE[0] + 3, 10) is None and window.to_pixel(-1, 10) is None
+    assert window.to_pixel(SIZE[0] - 1, SIZE[1] - 1) == (SIZE[0] - 1, SIZE[1] - 1)
+    assert window.click(SIZE[0] + 50, SIZE[1] + 50) is None  # no ValueError from om.pick
+    assert window.pick(SIZE[0] + 50, 5) is None  # clamped to the image
 
+
+def test_keys_axial_views_wireframe_screenshot_and_quit(window, xinput, tmp_path):
     before = window.screenshot()
     filled = (red_mask(before) | blue_mask(before)).sum()
-    window.on_key(window.handle, glfw.KEY_W, 0, glfw.PRESS, 0)
-    window.step()
+    xinput.key("w")
+    assert window.viewer.wireframe
     wire = window.screenshot()
     assert 0 < (red_mask(wire) | blue_mask(wire)).sum() < 0.8 * filled
-    window.on_key(window.handle, glfw.KEY_W, 0, glfw.PRESS, 0)
-    window.on_key(window.handle, glfw.KEY_3, 0, glfw.PRESS, 0)  # top view: x right, -z up
-    window.step()
+    xinput.key("w")
+    xinput.key("3")  # top view: x right, -z up
     assert np.allclose(window.viewer.get_view_matrix()[:3, :3] @ (0, 0, -1), (0, 1, 0))
     top = window.screenshot()
     assert centroid_x(red_mask(top)) < centroid_x(blue_mask(top))
-    window.on_key(window.handle, glfw.KEY_1, 0, glfw.PRESS, glfw.MOD_SHIFT)  # back view: mirrored
-    window.step()
+    xinput.key("1", shift=True)  # back view: mirrored
     back = window.screenshot()
     assert centroid_x(red_mask(back)) > centroid_x(blue_mask(back))
     window.screenshot_dir = tmp_path
-    window.on_key(window.handle, glfw.KEY_S, 0, glfw.PRESS, 0)
+    xinput.key("s")
     assert window.screenshots == [tmp_path / "omnirender-screenshot-1.png"]
     from PIL import Image
 
     saved = np.asarray(Image.open(window.screenshots[0]))
     assert saved.shape == (SIZE[1], SIZE[0], 4) and np.array_equal(saved, back.array)
-    window.on_key(window.handle, glfw.KEY_Q, 0, glfw.PRESS, 0)
+    xinput.key("q")
     assert window.should_close
 
 
