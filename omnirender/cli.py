@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,10 @@ examples:
   omnirender export scene.yaml scene.glb         also .pov and .rib
   omnirender info scene.yaml                     tree, statistics, bounds, engines
 """
+
+
+#: Extensions ``om.Image.save`` writes (checked before rendering).
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 
 
 class UsageError(Exception):
@@ -97,11 +102,13 @@ def _render(args: argparse.Namespace) -> int:
         except Exception as exc:
             raise UsageError(f"bad --mask expression {args.mask!r}: {exc}") from None
         options["mask"] = args.mask
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
+    if output.suffix.lower() not in IMAGE_EXTENSIONS:
+        raise UsageError(f"cannot write an image to {str(output)!r}: use one of {', '.join(IMAGE_EXTENSIONS)}")
     ok, why = engines()[args.engine]
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
     scene = _load(args.scene)
-    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -113,8 +120,21 @@ def _spp_option(engine: str, spp: int) -> dict[str, Any]:
     if engine == "povray":
         return {"antialias": spp > 1}
     if engine == "gl":
-        return {"samples": spp}
+        return {"samples": _msaa_samples(spp)}
     return {"spp": spp}
+
+
+def _msaa_samples(spp: int) -> int:
+    """The MSAA sample count GL can use for ``--spp``: the largest power of two <= spp (1: no multisampling).
+
+    OpenGL multisampling takes powers of two; the GL engine further limits the
+    count to the GPU's maximum.  A changed count is reported on stderr.
+    """
+    samples = 1 << (spp.bit_length() - 1)
+    if samples != spp:
+        print(f"omnirender render: note: --spp {spp} with gl uses {samples} MSAA samples (a power of two)",
+              file=sys.stderr)  # fmt: skip
+    return 0 if samples == 1 else samples
 
 
 def _view(args: argparse.Namespace) -> int:
@@ -146,7 +166,7 @@ def _info(args: argparse.Namespace) -> int:
 def scene_report(scene: Any, engines: bool = True) -> str:
     """The text of ``omnirender info``: tree with paths, statistics, bounds, capable engines."""
     lines = ["tree:"]
-    _tree(scene, lines, "  ", set())
+    _tree(scene, lines, "  ", set(), "/" + scene.name)
     from .scene import statistics
 
     lines.append("statistics:")
@@ -160,16 +180,17 @@ def scene_report(scene: Any, engines: bool = True) -> str:
     return "\n".join(lines)
 
 
-def _tree(node: Any, lines: list[str], indent: str, seen: set[int]) -> None:
+def _tree(node: Any, lines: list[str], indent: str, seen: set[int], path: str) -> None:
+    """List ``node`` at ``path`` (built on the way down: a shared node shows each of its paths)."""
     groups = f"  groups={sorted(node.groups)}" if node.groups else ""
     shared = "  (shared, listed above)" if id(node) in seen else ""
-    lines.append(f"{indent}{node.path}{groups}{shared}")
+    lines.append(f"{indent}{path}{groups}{shared}")
     if shared:
         return
     seen.add(id(node))
     for item in node:
         if hasattr(item, "_compile_node"):
-            _tree(item, lines, indent + "  ", seen)
+            _tree(item, lines, indent + "  ", seen, f"{path}/{item.name}")
         else:
             text = repr(item)
             lines.append(f"{indent}  - {text if len(text) <= 100 else text[:97] + '...'}")
@@ -257,9 +278,15 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    # --debug is also accepted after the command; SUPPRESS keeps a value given before it
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("render", help="render a scene file to an image")
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=help, parents=[common])
+
+    p = command("render", help="render a scene file to an image")
     p.add_argument("scene", help="scene file (.json, .yaml)")
     p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
     p.add_argument("-o", "--output", help="image file (.png, .jpg...; default SCENE-ENGINE.png)")
@@ -268,26 +295,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mask", help="group mask expression, e.g. '!debug & (left|shared)'")
     p.set_defaults(func=_render)
 
-    p = sub.add_parser("view", help="open a scene file in an interactive window")
+    p = command("view", help="open a scene file in an interactive window")
     p.add_argument("scene", help="scene file (.json, .yaml)")
     p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
     p.add_argument("--duration", type=float, help="close the window after this many seconds (demos, tests)")
     p.set_defaults(func=_view)
 
-    p = sub.add_parser("export", help="write a scene file in another format (.glb, .pov, .rib)")
+    p = command("export", help="write a scene file in another format (.glb, .pov, .rib)")
     p.add_argument("scene", help="scene file (.json, .yaml)")
     p.add_argument("output", help="output file; the extension chooses the format")
     p.set_defaults(func=_export)
 
-    p = sub.add_parser("info", help="print the node tree with paths, statistics, bounds and capable engines")
+    p = command("info", help="print the node tree with paths, statistics, bounds and capable engines")
     p.add_argument("scene", help="scene file (.json, .yaml)")
     p.add_argument("--no-engines", action="store_true", help="skip checking which engines can render it")
     p.set_defaults(func=_info)
 
-    p = sub.add_parser("engines", help="list engines and exporters and whether they work here")
+    p = command("engines", help="list engines and exporters and whether they work here")
     p.set_defaults(func=_engines)
 
-    p = sub.add_parser("demo", help="render the demo scene with every available engine")
+    p = command("demo", help="render the demo scene with every available engine")
     p.add_argument("-o", "--output", default="demo-output", help="folder for the images (default: demo-output)")
     p.add_argument("--size", type=_size, default=(640, 480), help="image size WxH (default 640x480)")
     p.set_defaults(func=_demo)
@@ -304,7 +331,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except UsageError as exc:
         if args.debug:
-            raise
+            traceback.print_exc()
         parser.print_usage(sys.stderr)
         print(f"omnirender {args.command}: error: {exc}", file=sys.stderr)
         return 2

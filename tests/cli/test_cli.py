@@ -59,6 +59,8 @@ def test_help_lists_every_command(capsys):
         (["render", "SCENE", "-e", "blender"], "unknown engine"),
         (["render", "SCENE", "--mask", "a &"], "bad --mask"),
         (["export", "SCENE", "out.xyz"], "cannot export"),
+        (["render", "SCENE", "-o", "out.xyz"], "cannot write an image"),
+        (["render", "SCENE", "-e", "povray", "-o", "x.bmpx"], "cannot write an image"),
         (["info", "missing.yaml"], "not found"),
     ],
 )
@@ -174,8 +176,6 @@ def test_export_glb_and_rib(capsys, scene_file, tmp_path):
     for ext, magic in ((".glb", b"glTF"), (".rib", None)):
         target = tmp_path / f"scene{ext}"
         code, out, err = run(capsys, "export", str(scene_file), str(target))
-        if code == 1 and "No module named" in err:
-            pytest.skip(f"exporter for {ext} not available yet: {err.strip()}")
         assert code == 0, err
         data = target.read_bytes()
         assert len(data) > 100
@@ -183,15 +183,77 @@ def test_export_glb_and_rib(capsys, scene_file, tmp_path):
             assert data.startswith(magic)
 
 
-def test_rendering_error_exits_1_without_traceback(capsys, tmp_path):
+def test_rendering_error_exits_1_without_traceback(capsys, tmp_path, monkeypatch):
     scene = om.Node("scene")
     scene.add(om.Camera.look_at(eye=(0, 0, 5)))
     scene.add(om.Sphere())
     path = tmp_path / "ok.json"
     om.save(scene, path)
-    code, _, err = run(capsys, "render", str(path), "-e", "povray", "--size", "20x20", "-o", str(tmp_path / "x.bmpx"))
+    monkeypatch.setenv("PATH", str(tmp_path))  # no povray program on the PATH
+    code, _, err = run(capsys, "render", str(path), "-e", "povray", "--size", "20x20", "-o", str(tmp_path / "x.png"))
     assert code == 1
-    assert err.count("\n") == 1 and "Traceback" not in err and "extension" in err
+    assert err.count("\n") == 1 and "Traceback" not in err and "not available" in err and "not installed" in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_engines_says_why_an_engine_is_unavailable(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # an empty PATH: no povray program
+    code, out, _ = run(capsys, "engines")
+    assert code == 0
+    line = next(ln for ln in out.splitlines() if ln.startswith("povray"))
+    assert "unavailable" in line and "povray program is not installed" in line
+
+
+def test_debug_is_accepted_after_the_command_and_usage_errors_still_exit_2(capsys, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "omnirender-scene", "version": 1, "root": {"node": "s", "contents": '
+                   '[{"type": "Sphere", "radius": -1}]}}')  # fmt: skip
+    with pytest.raises(ValueError, match="radius"):
+        main(["info", str(bad), "--debug"])
+    for argv in (["--debug", "render", "missing.json"], ["render", "missing.json", "--debug"]):
+        code, _, err = run(capsys, *argv)
+        assert code == 2 and "not found" in err and "Traceback" in err  # the traceback is allowed with --debug
+    code, _, err = run(capsys, "render", "missing.json")
+    assert code == 2 and "Traceback" not in err
+
+
+def test_info_builds_the_path_of_every_instance_of_a_shared_node(capsys, tmp_path):
+    wheel = om.Node("wheel", [om.Cylinder(radius=0.5, height=0.2)])
+    scene = om.Node("car")
+    scene.add(om.Node("left", [om.Translation(-2, 0, 0), wheel]))
+    scene.add(om.Node("right", [om.Translation(2, 0, 0), wheel]))
+    path = tmp_path / "car.json"
+    om.save(scene, path)
+    code, out, _ = run(capsys, "info", str(path), "--no-engines")
+    assert code == 0
+    tree = out.split("statistics:")[0]
+    assert "/car/left/wheel\n" in tree
+    assert "/car/right/wheel  (shared, listed above)" in tree
+
+
+@pytest.mark.gl
+def test_gl_spp_becomes_a_power_of_two(capsys, scene_file, tmp_path):
+    from omnirender.cli import _msaa_samples
+
+    target = tmp_path / "gl3.png"
+    code, out, err = run(capsys, "render", str(scene_file), "-o", str(target), "--size", "40x30", "--spp", "3")
+    assert code == 0, err
+    assert target.is_file() and "uses 2 MSAA samples" in err
+    assert [_msaa_samples(n) for n in (1, 2, 3, 4, 7, 8, 9)] == [0, 2, 2, 4, 4, 8, 8]
+
+
+@pytest.mark.mitsuba
+def test_render_with_mitsuba_and_spp(capsys, scene_file, tmp_path):
+    from PIL import Image
+
+    target = tmp_path / "mi.png"
+    code, out, err = run(capsys, "render", str(scene_file), "-e", "mitsuba", "--spp", "4", "-o", str(target),
+                         "--size", "32x24")  # fmt: skip
+    assert code == 0, err
+    assert out.strip() == str(target)
+    img = np.asarray(Image.open(target).convert("RGB")).astype(int)
+    assert img.shape == (24, 32, 3) and img.std() > 5  # not blank
+    assert (img[:, :, 0] > img[:, :, 1] + 40).sum() > 5  # the red sphere
 
 
 @pytest.mark.slow
