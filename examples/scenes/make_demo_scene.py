@@ -18,7 +18,8 @@ HERE = Path(__file__).resolve().parent
 
 def demo_scene() -> om.Node:
     scene = om.Node("demo")
-    scene.add(om.Camera.look_at(eye=(5, 3.5, 7), center=(0, 0.8, 0), up=(0, 1, 0), fov=35))
+    # the debug sphere (group "debug") is for interactive views, not for this camera's pictures
+    scene.add(om.Camera.look_at(eye=(5, 3.5, 7), center=(0, 0.8, 0), up=(0, 1, 0), fov=35, mask="!debug"))
     scene.add(om.Background((0.85, 0.9, 1.0)))
     scene.add(om.PointLight(position=(5, 6, 5), color=(1, 1, 1), intensity=0.9))
     scene.add(om.PointLight(position=(-5, 4, 2), color=(0.6, 0.7, 1.0), intensity=0.5))

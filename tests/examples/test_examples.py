@@ -94,3 +94,32 @@ def test_05_picking(tmp_path):
     check_image(tmp_path / "05-picking.png")
     assert "/scene/toys/ball" in out and "/scene/toys/ring" in out and "/scene/toys/cone" in out
     assert "nothing (background)" in out
+
+
+@pytest.mark.parametrize("name", ["demo.json", "demo.yaml"])
+def test_demo_scene_camera_skips_the_debug_group(name):
+    import omnirender as om
+
+    scene = om.load(EXAMPLES / "scenes" / name)
+    lights, (camera, _) = scene.preevaluate()
+    assert camera.mask == "!debug"  # POV-Ray and Mitsuba pictures leave out the wireframe debug sphere
+    assert "debug" in scene["/demo/debug"].groups
+    sys.path.insert(0, str(EXAMPLES / "scenes"))
+    try:
+        from make_demo_scene import demo_scene
+    finally:
+        sys.path.pop(0)
+    built = demo_scene()
+    built_camera = built.preevaluate()[1][0]
+    assert built_camera.parameters() == camera.parameters()  # the files are what the script writes
+
+
+@pytest.mark.gl
+def test_demo_scene_renders_without_the_debug_sphere():
+    import omnirender as om
+
+    scene = om.load(EXAMPLES / "scenes" / "demo.json")
+    shown = om.render(scene, engine="gl", size=(96, 72), samples=0).array
+    scene.remove(scene["/demo/debug"])
+    without = om.render(scene, engine="gl", size=(96, 72), samples=0).array
+    assert np.abs(shown.astype(int) - without.astype(int)).max() <= 1
