@@ -53,6 +53,25 @@ def demo_images(size: tuple[int, int] = (480, 360)) -> None:
     print("wrote", HERE / "demo_engines.png")
 
 
+def gl_gallery(columns: int = 9, scale: int = 2) -> None:
+    """A contact sheet of the GL engine's reference images (tests/gl/references)."""
+    refs = sorted((ROOT / "tests" / "gl" / "references").glob("*.png"))
+    if not refs:
+        return
+    w, h = Image.open(refs[0]).size
+    w, h = w * scale, h * scale
+    rows = -(-len(refs) // columns)
+    label_h = 14
+    sheet = Image.new("RGB", (columns * w, rows * (h + label_h)), "white")
+    draw = ImageDraw.Draw(sheet)
+    for i, ref in enumerate(refs):
+        x, y = (i % columns) * w, (i // columns) * (h + label_h)
+        sheet.paste(Image.open(ref).convert("RGB").resize((w, h), Image.NEAREST), (x, y))
+        draw.text((x + 3, y + h + 1), ref.stem.replace("shape_", "").replace("_", " "), fill=(0, 0, 0))
+    sheet.save(HERE / "gl_gallery.png")
+    print("wrote", HERE / "gl_gallery.png")
+
+
 def example_images() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for script in sorted((ROOT / "examples").glob("0*.py")):
@@ -67,4 +86,5 @@ def example_images() -> None:
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)
     demo_images()
+    gl_gallery()
     example_images()

@@ -1,0 +1,35 @@
+"""Run every benchmark in this folder, one after the other.
+
+Run: .venv/bin/python bench/all.py [--quick]
+Each script prints its own figures and ratios against a baseline measured in
+the same run (plain Python loop, hand-written moderngl, trimesh).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+SCRIPTS = {
+    "traversal.py": [],
+    "picking.py": [],
+    "gl_objects.py": [],
+    "offline_export.py": ["--repeat", "1"],
+}
+QUICK = {"gl_objects.py": ["--quick"], "offline_export.py": ["--repeat", "1", "--triangles", "200000"]}
+
+
+def main() -> int:
+    quick = "--quick" in sys.argv[1:]
+    here = Path(__file__).parent
+    failed = 0
+    for name, args in SCRIPTS.items():
+        args = QUICK.get(name, args) if quick else args
+        print(f"\n=== {name} {' '.join(args)}", flush=True)
+        failed += subprocess.run([sys.executable, str(here / name), *args]).returncode != 0
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
