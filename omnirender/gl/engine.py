@@ -61,6 +61,9 @@ class GLTechnique(Technique):
     def __init__(self) -> None:
         super().__init__(service="gl.paint", passes=1)
 
+    def parameters(self) -> dict:
+        return {}  # fixed service and passes: nothing to save in scene files
+
 
 class GLEngine(DrawListCompiler, BatchRenderer, Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
@@ -71,6 +74,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
     """
 
     service = "gl.paint"
+    uses_camera_mask = True
     #: Drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind.
     _default_drawers: dict[str, Any] = {}
 
