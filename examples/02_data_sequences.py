@@ -23,7 +23,7 @@ def star_polygon(tips: int = 7, outer: float = 1.4, inner: float = 0.6) -> om.Po
     outline = np.stack([radii * np.cos(angles), radii * np.sin(angles), np.zeros(2 * tips)], axis=1)
     vertices = om.data.Array(outline)  # the array itself, no copy
     normals = om.data.Constant((0.0, 0.0, 1.0), len(vertices))  # one normal, stored once
-    pattern = [(1.0, 0.78, 0.1, 1.0), (0.75, 0.1, 0.35, 1.0)]  # tip colour, notch colour
+    pattern = [(1.0, 0.78, 0.1, 1.0), (0.8, 0.1, 0.6, 1.0)]  # tip colour, notch colour
     colors = om.data.Repeat(pattern, times=tips)  # tip, notch, tip, notch, ...
     assert vertices.array() is outline and colors.array().shape == (2 * tips, 4)
     return om.Polygon(vertices, normals=normals, colors=colors)

@@ -33,16 +33,14 @@ class StarPrism(om.Shape):
         self.tips, self.outer, self.inner, self.height = int(tips), float(outer), float(inner), float(height)
 
     def mesh(self) -> tuple[np.ndarray, np.ndarray]:
-        n = 2 * self.tips
-        a = np.arange(n) * np.pi / self.tips
+        n, a = 2 * self.tips, np.arange(2 * self.tips) * np.pi / self.tips
         r = np.where(np.arange(n) % 2 == 0, self.outer, self.inner)
         ring = np.stack([r * np.sin(a), np.zeros(n), r * np.cos(a)], axis=1)
         h = np.array([0, self.height / 2, 0])
         v = np.concatenate([ring + h, ring - h, [h, -h]])  # top ring, bottom ring, two centres
         i, j = np.arange(n), (np.arange(n) + 1) % n
         top, bottom = np.stack([np.full(n, 2 * n), i, j], 1), np.stack([np.full(n, 2 * n + 1), j + n, i + n], 1)
-        sides = np.concatenate([np.stack([i, i + n, j + n], 1), np.stack([i, j + n, j], 1)])
-        return v, np.concatenate([top, bottom, sides])
+        return v, np.concatenate([top, bottom, np.stack([i, i + n, j + n], 1), np.stack([i, j + n, j], 1)])
 
 
 @om.default_for(om.Engine)
@@ -50,7 +48,7 @@ class StarPrismSimplifier(om.ShapeSimplifier):
     target = StarPrism
 
     def exec(self, shape: StarPrism, engine: om.Engine) -> list:
-        return [om.TriangleSet(*shape.mesh())]
+        return [om.TriangleSet(*shape.mesh())]  # now every engine can draw, pick and bound it
 
 
 class FastStarPrismPainter(om.ShapePainter):
@@ -60,9 +58,8 @@ class FastStarPrismPainter(om.ShapePainter):
         geometry = engine.geometry_cache.get(shape)
         if geometry is None:  # once per shape version: flat-shaded, unindexed triangles
             v, f = shape.mesh()
-            tri = v[f].reshape(-1, 3)
             n = np.repeat(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), 3, axis=0)
-            geometry = Geometry("triangles", tri, n / np.linalg.norm(n, axis=1, keepdims=True))
+            geometry = Geometry("triangles", v[f].reshape(-1, 3), n / np.linalg.norm(n, axis=1, keepdims=True))
             engine.geometry_cache.put(shape, geometry)
         engine.submit(geometry)
 
