@@ -186,6 +186,17 @@ def test_clicks_outside_the_image_are_ignored(window):
     assert window.pick(SIZE[0] + 50, 5) is None  # clamped to the image
 
 
+def test_window_coordinates_scale_to_framebuffer_pixels(window, monkeypatch):
+    # a HiDPI screen: the framebuffer has twice the pixels of the window's coordinates
+    monkeypatch.setattr(window, "window_size", lambda: (SIZE[0] // 2, SIZE[1] // 2))
+    assert window.to_pixel(10, 20) == (20, 40)
+    assert window.to_pixel(SIZE[0] // 2 - 0.5, SIZE[1] // 2 - 0.5) == (SIZE[0] - 1, SIZE[1] - 1)
+    assert window.to_pixel(SIZE[0] // 2, 5) is None
+    red = red_mask(window.screenshot())
+    x, y = centroid(red)
+    assert window.click(x / 2, y / 2).path == "/scene/left"  # the click lands on the red sphere's pixels
+
+
 def test_keys_axial_views_wireframe_screenshot_and_quit(window, xinput, tmp_path):
     before = window.screenshot()
     filled = (red_mask(before) | blue_mask(before)).sum()
