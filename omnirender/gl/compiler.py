@@ -90,6 +90,7 @@ class DrawListCompiler:
         ctx = self.context
         del ctx._matrices[1:]
         lights_set = ctx.poly_set(Light)
+        self._placements[:] = lights  # engine.lights(): one entry per placement, as in the core
         for light, matrix in lights:
             self._pre_lights[id(light)] = light
             self._light_matrices[id(light)] = matrix
@@ -106,6 +107,7 @@ class DrawListCompiler:
                     break
         self._pre_lights.clear()
         self._light_matrices.clear()
+        self._placements.clear()
 
     def begin(self, root: Any) -> None:
         """Pre-evaluation for direct ``node.evaluate(engine)`` calls (uses the incremental walk)."""
