@@ -14,7 +14,7 @@ import numpy as np
 
 from .component import MonoAttribute
 
-__all__ = ["Transform", "Matrix", "Translation", "Rotation", "Scaling", "finite_vector"]
+__all__ = ["Transform", "Matrix", "Translation", "Rotation", "Scaling", "finite_vector", "axis_angle_matrix"]
 
 
 def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
@@ -100,7 +100,8 @@ class Translation(Transform):
         return {"offset": list(self.offset)}
 
 
-def _axis_angle_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:
+def axis_angle_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:
+    """4x4 right-handed rotation by ``angle_rad`` radians about the unit vector ``axis``."""
     x, y, z = axis
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     t = 1.0 - c
@@ -137,7 +138,7 @@ class Rotation(Transform):
             a = a / n
         object.__setattr__(self, "_angle", angle)
         object.__setattr__(self, "_axis", tuple(float(c) for c in a))
-        self._set_matrix(_axis_angle_matrix(a, math.radians(angle)))
+        self._set_matrix(axis_angle_matrix(a, math.radians(angle)))
 
     @property
     def angle(self) -> float:

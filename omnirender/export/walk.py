@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Color, Material, PBRMaterial
-from ..core import AttributePainter, Engine, default_for
+from ..attributes.surface import resolve_surface, track_surfaces
+from ..core import Engine
 
 __all__ = ["NodeTrackingEngine", "track_surfaces"]
 
@@ -26,17 +26,8 @@ class NodeTrackingEngine(Engine):
         self.surface_stack: list[Any] = []
 
     def surface(self) -> tuple[Any, Any]:
-        """(material, colour) resolved like the GL engine: the innermost Material or PBRMaterial,
-        and a Color only if it became active after it (it replaces the material's colour)."""
-        material = color = None
-        for attr in reversed(self.surface_stack):
-            if isinstance(attr, Color):
-                if color is None:
-                    color = attr
-            else:
-                material = attr
-                break
-        return material, color
+        """(material, colour) resolved like the GL engine (see :func:`resolve_surface`)."""
+        return resolve_surface(self.surface_stack)
 
     def on_enter(self, node: Any) -> None:
         self.enter_node(node, self.model_matrix())
@@ -49,25 +40,3 @@ class NodeTrackingEngine(Engine):
 
     def leave_node(self, node: Any) -> None:
         """Called after a node's contents were evaluated and undone."""
-
-
-class _SurfaceTracker(AttributePainter):
-    __slots__ = ()
-
-    def exec(self, attribute: Any, engine: NodeTrackingEngine) -> None:
-        engine.surface_stack.append(attribute)
-
-    def unexec(self, attribute: Any, engine: NodeTrackingEngine) -> None:
-        stack = engine.surface_stack
-        for i in range(len(stack) - 1, -1, -1):
-            if stack[i] is attribute:
-                del stack[i]
-                return
-
-
-def track_surfaces(engine_cls: type) -> None:
-    """Register painters keeping ``surface_stack`` for ``engine_cls`` (its ``service``)."""
-    for target in (Color, Material, PBRMaterial):
-        name = f"{engine_cls.__name__}{target.__name__}Tracker"
-        cls = type(name, (_SurfaceTracker,), {"__slots__": (), "service": engine_cls.service, "target": target})
-        default_for(engine_cls)(cls)

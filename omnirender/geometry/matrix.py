@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from ..core.transform import axis_angle_matrix
+
 __all__ = [
     "translation_matrix",
     "scaling_matrix",
@@ -33,17 +35,7 @@ def scaling_matrix(factors) -> np.ndarray:
 def rotation_matrix(angle_degrees: float, axis) -> np.ndarray:
     """Right-handed rotation by ``angle_degrees`` about ``axis`` (normalised here)."""
     a = np.asarray(axis, dtype=np.float64)
-    a = a / np.linalg.norm(a)
-    x, y, z = a
-    t = math.radians(angle_degrees)
-    c, s, k = math.cos(t), math.sin(t), 1.0 - math.cos(t)
-    m = np.eye(4)
-    m[:3, :3] = [
-        [k * x * x + c, k * x * y - s * z, k * x * z + s * y],
-        [k * x * y + s * z, k * y * y + c, k * y * z - s * x],
-        [k * x * z - s * y, k * y * z + s * x, k * z * z + c],
-    ]
-    return m
+    return axis_angle_matrix(a / np.linalg.norm(a), math.radians(angle_degrees))
 
 
 def rotation_between(a, b) -> np.ndarray:

@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Color, Material, PBRMaterial, Texture
+from ..attributes import Material, PBRMaterial, Texture
+from ..attributes.surface import resolve_surface
 from ..core import SIMPLIFY, Camera, Engine, Technique
 from ..core.errors import EvaluationError
 from . import convert
@@ -151,18 +152,9 @@ class MitsubaEngine(Engine):
 
     # -- appearance ---------------------------------------------------------
     def surface(self) -> tuple[Any, Any]:
-        """(material, colour) as the GL engine resolves them: the innermost Material or
-        PBRMaterial, and a Color only if it became active after that material (it then
-        replaces the material's diffuse/base colour and scales its opacity)."""
-        material = color = None
-        for attr in reversed(self.surface_stack):
-            if isinstance(attr, Color):
-                if color is None:
-                    color = attr
-            else:
-                material = attr
-                break
-        return material, color
+        """(material, colour) as the GL engine resolves them (see :func:`resolve_surface`): a
+        Color active after the material replaces its diffuse/base colour and scales its opacity."""
+        return resolve_surface(self.surface_stack)
 
     def current_bsdf(self, *, two_sided: bool = True, vertex_colors: bool = False, texcoords: bool = True) -> Any:
         """The Mitsuba BSDF object for the active appearance attributes (cached).

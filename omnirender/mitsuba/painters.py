@@ -14,11 +14,11 @@ spheres sized in pixels like the GL engine draws them (see :mod:`.strokes`).
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 
-from ..attributes import Background, Color, DrawStyle, LightSource, Material, PBRMaterial
+from ..attributes import Background, DrawStyle, LightSource
+from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, ShapePainter, default_for
 from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, TriangleSet
 from . import convert, strokes
@@ -36,7 +36,6 @@ __all__ = [
     "TriangleSetPainter",
     "LineSetPainter",
     "PointSetPainter",
-    "SurfacePainter",
     "LightPainter",
     "EmitterPainter",
     "IntegratorPainter",
@@ -283,27 +282,7 @@ class PointSetPainter(ShapePainter):
             )
 
 
-class SurfacePainter(AttributePainter):
-    """Keeps ``Color``/``Material``/``PBRMaterial`` in activation order (``engine.surface_stack``)."""
-
-    __slots__ = ()
-    service = SERVICE
-
-    def exec(self, attribute: Any, engine: MitsubaEngine) -> None:
-        engine.surface_stack.append(attribute)
-
-    def unexec(self, attribute: Any, engine: MitsubaEngine) -> None:
-        stack = engine.surface_stack
-        for i in range(len(stack) - 1, -1, -1):
-            if stack[i] is attribute:
-                del stack[i]
-                return
-
-
-for _cls in (Color, Material, PBRMaterial):
-    default_for(MitsubaEngine)(
-        type(f"{_cls.__name__}SurfacePainter", (SurfacePainter,), {"__slots__": (), "target": _cls})
-    )
+track_surfaces(MitsubaEngine)  # Color / Material / PBRMaterial in activation order
 
 
 @default_for(MitsubaEngine)
