@@ -57,13 +57,13 @@ def _positive(text: str) -> int:
     return value
 
 
-def _load(path: str) -> Any:
+def _load(path: str, trusted: bool = False) -> Any:
     p = Path(path)
     if not p.is_file():
         raise UsageError(f"scene file not found: {path}")
     from .scene.files import load
 
-    return load(p)
+    return load(p, trusted=trusted)
 
 
 # -- sub-commands -----------------------------------------------------------
@@ -108,7 +108,7 @@ def _render(args: argparse.Namespace) -> int:
     ok, why = engines()[args.engine]
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene)
+    scene = _load(args.scene, getattr(args, "trusted", False))
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -138,7 +138,7 @@ def _msaa_samples(spp: int) -> int:
 
 
 def _view(args: argparse.Namespace) -> int:
-    scene = _load(args.scene)
+    scene = _load(args.scene, getattr(args, "trusted", False))
     from .viewer import view
 
     view(scene, size=args.size, title=f"omnirender - {Path(args.scene).name}", duration=args.duration)
@@ -151,14 +151,14 @@ def _export(args: argparse.Namespace) -> int:
     ext = Path(args.output).suffix.lower()
     if ext not in exporters():
         raise UsageError(f"cannot export to {args.output!r}: use one of {', '.join(exporters())}")
-    scene = _load(args.scene)
+    scene = _load(args.scene, getattr(args, "trusted", False))
     export(scene, args.output)
     print(args.output)
     return 0
 
 
 def _info(args: argparse.Namespace) -> int:
-    scene = _load(args.scene)
+    scene = _load(args.scene, getattr(args, "trusted", False))
     print(scene_report(scene, engines=not args.no_engines))
     return 0
 
@@ -281,6 +281,11 @@ def build_parser() -> argparse.ArgumentParser:
     # --debug is also accepted after the command; SUPPRESS keeps a value given before it
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks on errors")
+    common.add_argument(
+        "--trusted",
+        action="store_true",
+        help="allow trusted-only components such as povray.Raw (raw SDL) in the scene file",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     def command(name: str, help: str) -> argparse.ArgumentParser:

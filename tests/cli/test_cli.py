@@ -262,3 +262,18 @@ def test_demo_command_still_works(capsys, tmp_path):
     code, out, err = run(capsys, "demo", "-o", str(tmp_path / "demo"), "--size", "64x48")
     assert code == 0, err
     assert (tmp_path / "demo" / "demo-gl.png").is_file()
+
+
+@pytest.mark.povray
+def test_trusted_flag_allows_raw_sdl(tmp_path, capsys):
+    scene = tmp_path / "raw.json"
+    scene.write_text(
+        '{"format": "omnirender-scene", "version": 1, "root": {"node": "s", "contents": ['
+        '{"type": "Camera", "eye": [0, 0, 5], "center": [0, 0, 0]},'
+        '{"type": "povray.Raw", "text": "sphere { <0,0,0>, 1 pigment { rgb <1,0,0> } }"}]}}'
+    )
+    out = tmp_path / "raw.png"
+    assert main(["render", str(scene), "-e", "povray", "-o", str(out), "--size", "32x24"]) == 1
+    assert "trusted-only" in capsys.readouterr().err and not out.exists()
+    assert main(["render", str(scene), "-e", "povray", "-o", str(out), "--size", "32x24", "--trusted"]) == 0
+    assert out.exists()
