@@ -102,12 +102,25 @@ def exporters() -> dict[str, str]:
     return {ext: desc for ext, (_, desc) in sorted(_exporters.items())}
 
 
-def render(scene: Any, engine: str = "gl", size: tuple[int, int] = (640, 480), **options: Any) -> Any:
-    """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`."""
+def render(
+    scene: Any,
+    engine: str = "gl",
+    size: tuple[int, int] = (640, 480),
+    mask: str | None = None,
+    **options: Any,
+) -> Any:
+    """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
+
+    ``mask`` is a group-mask expression (``"!debug & (left | shared)"``);
+    other options go to the engine (``samples`` for GL, ``quality`` and
+    ``antialias`` for POV-Ray, ``spp`` for Mitsuba, ...).
+    """
     entry = _engines.get(engine)
     if entry is None:
         raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
     size = _check_size(size)
+    if mask is not None:
+        options["mask"] = mask
     return _resolve(entry.render)(scene, size=size, **options)
 
 
@@ -124,9 +137,12 @@ def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> Path:
 
 def _check_size(size: Any) -> tuple[int, int]:
     try:
-        w, h = (int(v) for v in size)
+        values = [float(v) for v in size]
     except (TypeError, ValueError):
-        raise ValueError(f"size must be (width, height), got {size!r}") from None
+        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}") from None
+    if len(values) != 2 or any(v != int(v) for v in values):
+        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}")
+    w, h = int(values[0]), int(values[1])
     if w <= 0 or h <= 0:
         raise ValueError(f"size must be positive, got {w}x{h}")
     return w, h

@@ -65,7 +65,7 @@ def test_render_rejects_unknown_engines_and_bad_sizes():
     scene = om.Node("s")
     with pytest.raises(ValueError, match=r"unknown engine 'nope'.*gl.*mitsuba.*povray"):
         om.render(scene, engine="nope")
-    for size in [(0, 10), (10, -1), ("a", 3), 5]:
+    for size in [(0, 10), (10, -1), ("a", 3), 5, (10.5, 10), (1, 2, 3)]:
         with pytest.raises(ValueError, match="size"):
             om.render(scene, engine="gl", size=size)
 
