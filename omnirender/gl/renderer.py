@@ -426,7 +426,15 @@ class BatchRenderer:
             runs: list[tuple[Any, DrawState, list[int]]] = []
             for i in order:
                 it = transparent[i]
-                if runs and runs[-1][0] is it.geometry and runs[-1][1] is it.state:
+                if (
+                    runs
+                    and runs[-1][0] is it.geometry
+                    and runs[-1][1] is it.state
+                    and not _two_faced(it.geometry, it.state)
+                ):
+                    # instances of a two-faced run would draw all back faces, then all front faces: a nearer
+                    # instance's back faces would then land under a farther one's front faces, so those runs
+                    # hold one instance each
                     runs[-1][2].append(i)
                 else:
                     runs.append((it.geometry, it.state, [i]))
@@ -447,7 +455,7 @@ class BatchRenderer:
                 self._apply_state(state, blend_override=state.blend or default_blend, depth_mask=False)
                 self._set_uniforms(prog, state)
                 mode = self._mode(geometry, state.kind)
-                if state.cull == "none" and geometry.mode == "triangles" and state.kind == "mesh":
+                if _two_faced(geometry, state):
                     # back faces first, then front faces: closed transparent shapes blend correctly
                     for face in ("front", "back"):
                         self._gl_state["cull_override"] = face
@@ -524,6 +532,11 @@ class BatchRenderer:
         return out
 
     # -- resources ---------------------------------------------------------------
+
+
+def _two_faced(geometry: Geometry, state: DrawState) -> bool:
+    """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
+    return state.cull == "none" and geometry.mode == "triangles" and state.kind == "mesh"
 
 
 def _factor(ctx: Any, name: str) -> int:
