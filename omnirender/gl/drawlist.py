@@ -143,8 +143,10 @@ def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], li
     Items with special raster state (stencil, colour mask, depth function or
     depth mask) are grouped only with consecutive items of the same state, so
     two stencil-writing or masking items are never merged across each other
-    and their relative order is kept.  Plain items are merged freely (a batch
-    draws at the position of its first item).
+    and their relative order is kept.  Plain items are merged freely within a
+    stretch between special items (a batch draws at the position of its first
+    item), never across a special item, so what is drawn after a special item
+    stays after it.
     """
     groups: dict[tuple, list[DrawItem]] = {}
     slots: list[tuple | None] = []
@@ -160,7 +162,8 @@ def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], li
         if state is not previous and (state.special or (previous is not None and previous.special)):
             segment += 1
         previous = state
-        key = (item.geometry, state, segment if state.special else 0)
+        # plain items are keyed by the segment too: a plain shape after a special-state one stays after it
+        key = (item.geometry, state, segment)
         group = groups.get(key)
         if group is None:
             group = groups[key] = []

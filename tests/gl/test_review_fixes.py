@@ -45,3 +45,21 @@ def test_transparent_instances_of_one_mesh_blend_back_to_front(engine):
         c = 0.5 * np.asarray(color, float) + 0.5 * c
     expected = np.round(c * 255)
     assert np.abs(merged[36, 48, :3] - expected).max() <= 6, (merged[36, 48], expected)
+
+
+def test_plain_shapes_after_a_special_state_shape_are_drawn_after_it(engine):
+    """A green box (plain), a red sphere without depth test, then a blue box in front: blue must win."""
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 6)))
+    x = s.add(om.Node("x"))
+    x.add(om.Color(0, 1, 0))
+    x.add(om.Box(size=(0.5, 0.5, 0.5), center=(-2, 0, 0)))  # same mesh as the blue box: would share its batch
+    sp = s.add(om.Node("s"))
+    sp.add(om.gl.DepthTest(False))
+    sp.add(om.Color(1, 0, 0))
+    sp.add(om.Sphere(radius=1, center=(0, 0, -1)))
+    y = s.add(om.Node("y"))
+    y.add(om.Color(0, 0, 1))
+    y.add(om.Box(size=(1, 1, 1), center=(0, 0, 1)))
+    r, g, b, _ = engine.render(s).pixel(48, 36)
+    assert b > 200 and r < 50, (r, g, b)
