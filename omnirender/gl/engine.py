@@ -132,7 +132,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self._point_size = 1.0
         self._blend_on = False
         self._fill = "filled"
-        self._transient: dict[Any, tuple[Any, Any, int]] = {}
+        self._transient: dict[Any, tuple[Any, ...]] = {}
         self._gl_state: dict[str, Any] = {}
         self._drawers: dict[str, Any] = GLEngine._default_drawers
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
@@ -355,7 +355,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
             batch.release()
         self._batches.clear()
         self._batch_order = []
-        for buf, vao, _ in self._transient.values():
+        for buf, vao, *_ in self._transient.values():
             vao.release()
             buf.release()
         self._transient.clear()

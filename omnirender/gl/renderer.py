@@ -98,9 +98,13 @@ class BatchRenderer:
         self._others = others
         self._list = items
         used = {id(it.geometry) for it in items}
+        # instance buffers of transparent draws whose (geometry, state) the new list no longer has (e.g. a clip
+        # plane or texture that changes every frame gives a new state each frame); entries hold their geometry
+        # and state, so these ids cannot be reused while an entry exists
+        drawn = {(id(it.geometry), id(it.state)) for it in items if it.transparent}
         for transient in list(self._transient):
-            if transient[0] not in used:
-                buf, vao, _ = self._transient.pop(transient)
+            if transient[:2] not in drawn:
+                buf, vao, *_ = self._transient.pop(transient)
                 vao.release()
                 buf.release()
         self.geometry_cache.sweep(used)
@@ -484,7 +488,7 @@ class BatchRenderer:
         capacity = max(n, 4)
         buf = gpu_call(self.ctx.buffer, reserve=capacity * ROW * 4, dynamic=True, what="instance data")
         vao = self._vao(geometry, prog, buf, state.kind)
-        self._transient[key] = (buf, vao, capacity)
+        self._transient[key] = (buf, vao, capacity, geometry, state)
         return buf, vao, prog
 
     # -- read back -------------------------------------------------------------

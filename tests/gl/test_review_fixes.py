@@ -63,3 +63,30 @@ def test_plain_shapes_after_a_special_state_shape_are_drawn_after_it(engine):
     y.add(om.Box(size=(1, 1, 1), center=(0, 0, 1)))
     r, g, b, _ = engine.render(s).pixel(48, 36)
     assert b > 200 and r < 50, (r, g, b)
+
+
+def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
+    """An animated clip plane through a transparent sphere and a per-frame texture / draw style leak nothing."""
+    from omnirender.gl.resources import live_buffers
+
+    scene = om.Node("scene")
+    scene.add(om.Camera.look_at(eye=(0, 0, 4)))
+    clipped = scene.add(om.Node("clipped"))
+    clipped.add(om.Material(diffuse=(1, 0, 0), opacity=0.5))
+    plane = clipped.add(om.ClipPlane(normal=(1, 0, 0), offset=0.0))
+    clipped.add(om.Sphere(radius=0.8))
+    holder = scene.add(om.Node("holder"))
+    rng = np.random.default_rng(2)
+    counts = []
+    for frame in range(40):
+        plane.offset = -0.5 + frame / 40.0
+        holder.clear()
+        holder.add(om.Material(diffuse=(0, 0, 1), opacity=0.5))
+        holder.add(om.Texture(rng.integers(0, 255, (4, 4, 3)).astype(np.uint8)))
+        holder.add(om.DrawStyle(line_width=float(frame + 1)))
+        holder.add(om.Box(center=(0.5, 0, 0)))
+        engine.render(scene, read_depth=False)
+        counts.append((engine.live_buffers(), live_buffers(engine.ctx), len(engine._transient)))
+    assert max(c[0] for c in counts[5:]) <= counts[5][0], counts
+    assert max(c[1] for c in counts[5:]) <= counts[5][1], counts
+    assert max(c[2] for c in counts) <= 2, counts
