@@ -337,19 +337,33 @@ uniform vec2 u_viewport;
 uniform float u_line_width;
 out vec3 v_pos;
 out vec4 v_color;
-void emit(int i, vec2 offset) {
-    vec4 p = gl_in[i].gl_Position;
+void emit(vec4 p, vec3 pos, vec4 color, vec4 world, vec2 offset) {
     gl_Position = vec4(p.xy + offset * p.w, p.zw);
-    v_pos = g_pos[i];
-    v_color = g_color[i];
+    v_pos = pos;
+    v_color = color;
 #if NCLIP > 0
-    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], g_world[i]);
+    for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
 #endif
     EmitVertex();
 }
 void main() {
     vec4 a = gl_in[0].gl_Position;
     vec4 b = gl_in[1].gl_Position;
+    vec3 pa = g_pos[0], pb = g_pos[1];
+    vec4 ca = g_color[0], cb = g_color[1];
+    vec4 wa = g_world[0], wb = g_world[1];
+    // clip the segment against the near plane (z >= -w) before projecting: an endpoint behind the camera
+    // would otherwise project to a mirrored position
+    float da = a.z + a.w;
+    float db = b.z + b.w;
+    if (da < 0.0 && db < 0.0) return;
+    if (da < 0.0) {
+        float t = da / (da - db);
+        a = mix(a, b, t); pa = mix(pa, pb, t); ca = mix(ca, cb, t); wa = mix(wa, wb, t);
+    } else if (db < 0.0) {
+        float t = db / (db - da);
+        b = mix(b, a, t); pb = mix(pb, pa, t); cb = mix(cb, ca, t); wb = mix(wb, wa, t);
+    }
     if (a.w <= 0.0 || b.w <= 0.0) return;
     vec2 sa = a.xy / a.w * u_viewport;
     vec2 sb = b.xy / b.w * u_viewport;
@@ -357,10 +371,10 @@ void main() {
     float len = length(d);
     vec2 dir = len > 1e-6 ? d / len : vec2(1.0, 0.0);
     vec2 n = vec2(-dir.y, dir.x) * (0.5 * u_line_width) / u_viewport;
-    emit(0, n);
-    emit(0, -n);
-    emit(1, n);
-    emit(1, -n);
+    emit(a, pa, ca, wa, n);
+    emit(a, pa, ca, wa, -n);
+    emit(b, pb, cb, wb, n);
+    emit(b, pb, cb, wb, -n);
     EndPrimitive();
 }
 """

@@ -90,3 +90,19 @@ def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
     assert max(c[0] for c in counts[5:]) <= counts[5][0], counts
     assert max(c[1] for c in counts[5:]) <= counts[5][1], counts
     assert max(c[2] for c in counts) <= 2, counts
+
+
+def test_line_with_an_endpoint_behind_the_camera_is_clipped_not_dropped(engine):
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 0), center=(0, 0, -1), fov=60))
+    n = s.add(om.Node("line"))
+    n.add(om.Color(1, 1, 0))
+    n.add(om.DrawStyle(line_width=3))
+    n.add(om.LineSet([(0, -0.5, -5), (0, -0.5, 5)]))  # runs from in front of the camera to behind it
+    img = engine.render(s)
+    column = img.array[:, 46:51, :3].max(axis=1)
+    drawn = np.flatnonzero((column[:, 0] > 150) & (column[:, 1] > 150))
+    # from the projection of (0, -0.5, -5) down to the bottom edge (the segment's near-plane end is off-screen)
+    assert len(drawn) > 20, drawn
+    assert drawn.max() == 71, drawn
+    assert abs(drawn.min() - 36 - 36 * 0.1 / np.tan(np.radians(30))) <= 3, drawn
