@@ -462,12 +462,16 @@ class DrawListCompiler:
         self._running += 1
         try:
             self._compile_node(scene, (), False)
-        except BaseException:
+        except BaseException as exc:
+            path = self.node_path
             self._reset()
             self._surface.clear()
             self._clips.clear()
             self._node_cache.clear()
             self._compiled = None
+            # like Engine.run: a painter's or simplifier's bad-input error names the node it happened in
+            if path and type(exc) in (ValueError, TypeError) and path not in str(exc):
+                raise type(exc)(f"{exc} (in node {path})") from exc
             raise
         finally:
             self._running -= 1

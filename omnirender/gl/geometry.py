@@ -52,9 +52,20 @@ class Geometry:
         label: str = "",
         closed: bool = False,
     ) -> None:
+        name = label or "Geometry"
+        if mode not in _ARITY:
+            raise ValueError(f"{name}: mode {mode!r} is not one of {sorted(_ARITY)}; fix the painter")
         self.mode = mode  # "triangles", "lines" or "points"
-        self.positions = np.ascontiguousarray(positions, dtype=np.float32)
-        self.normals = None if normals is None else np.ascontiguousarray(normals, dtype=np.float32)
+        self.positions = _vertex_array(positions, 3, "vertices", name)
+        n = len(self.positions)
+        normals = None if normals is None else _vertex_array(normals, 3, "normals", name, n)
+        if colors is not None:
+            colors = _vertex_array(colors, 4, "colours", name, n)
+        texcoords = None if texcoords is None else _vertex_array(texcoords, 2, "texture coordinates", name, n)
+        if sizes is not None:
+            sizes = _vertex_array(np.asarray(sizes).reshape(-1, 1), 1, "sizes", name, n).reshape(-1)
+        indices = None if indices is None else _index_array(indices, n, _ARITY[mode], name)
+        self.normals = normals
         if colors is not None:
             # per-vertex colours are display (sRGB) values; the GPU gets them linear (alpha unchanged)
             colors = np.array(colors, dtype=np.float32)
@@ -63,7 +74,7 @@ class Geometry:
         self.colors = colors
         self.texcoords = None if texcoords is None else np.ascontiguousarray(texcoords, dtype=np.float32)
         self.sizes = None if sizes is None else np.ascontiguousarray(sizes, dtype=np.float32)
-        self.indices = None if indices is None else np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
+        self.indices = indices
         p = self.positions
         self.bounds = (p.min(axis=0).astype(np.float64), p.max(axis=0).astype(np.float64))
         self.buffers: dict[str, Any] | None = None
@@ -124,6 +135,48 @@ class Geometry:
                     continue
                 out.append((bufs[name], fmt, name))
         return out
+
+
+_ARITY = {"triangles": 3, "lines": 2, "points": 1}
+
+
+def _vertex_array(values: Any, width: int, what: str, name: str, count: int | None = None) -> np.ndarray:
+    """Per-vertex data as a contiguous (N, width) float32 array; ValueError for a bad shape or non-finite values."""
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: {what} are not numbers ({exc}); fix the array the painter submits") from None
+    if arr.ndim != 2 or arr.shape[1] != width:
+        raise ValueError(f"{name}: {what} have shape {arr.shape}, expected (N, {width}); fix the array's shape")
+    if count is None and len(arr) == 0:
+        raise ValueError(f"{name}: no vertices; give at least one primitive")
+    if count is not None and len(arr) != count:
+        raise ValueError(f"{name}: {len(arr)} {what} for {count} vertices; give one per vertex")
+    finite = np.isfinite(arr).all(axis=1)
+    if not finite.all():
+        bad = int(np.argmin(finite))
+        raise ValueError(f"{name}: {what}[{bad}] = {arr[bad].tolist()} is not finite; fix the {what}")
+    return np.ascontiguousarray(arr, dtype=np.float32)
+
+
+def _index_array(values: Any, count: int, arity: int, name: str) -> np.ndarray:
+    """Indices as a flat uint32 array; ValueError (before any cast) for non-integers, negatives, out-of-range."""
+    arr = np.asarray(values).reshape(-1)
+    if arr.size and arr.dtype.kind not in "iu":
+        if arr.dtype.kind != "f" or not np.all(np.isfinite(arr)) or not np.all(arr == np.round(arr)):
+            raise ValueError(f"{name}: indices must be whole numbers (got dtype {arr.dtype}); fix the index array")
+    if arr.size:
+        lo, hi = arr.min(), arr.max()
+        if lo < 0:
+            raise ValueError(f"{name}: index {int(lo)} is negative; indices must be >= 0; fix the index array")
+        if hi >= count:
+            raise ValueError(
+                f"{name}: index {int(hi)} is out of range for {count} vertices (valid 0..{count - 1}); "
+                "indices must be < number of vertices; fix the index array"
+            )
+    if arr.size % arity:
+        raise ValueError(f"{name}: {arr.size} indices is not a multiple of {arity}; fix the index array")
+    return np.ascontiguousarray(arr, dtype=np.uint32)
 
 
 def validate_mesh(positions: np.ndarray, indices: np.ndarray | None, owner: str, path: str, arity: int = 3) -> None:

@@ -19,30 +19,30 @@ from ..data import as_array
 def scalar(owner: str, name: str, value: Any, *, positive: bool = False, nonnegative: bool = False) -> float:
     """``value`` as a finite float; optionally > 0 or >= 0."""
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}")
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}; pass a number")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}") from None
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}; pass a number") from None
     if not math.isfinite(v):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}; pass a finite number")
     if positive and v <= 0.0:
-        raise ValueError(f"{owner}: {name} must be > 0, got {v}")
+        raise ValueError(f"{owner}: {name} must be > 0, got {v}; pass a positive number")
     if nonnegative and v < 0.0:
-        raise ValueError(f"{owner}: {name} must be >= 0, got {v}")
+        raise ValueError(f"{owner}: {name} must be >= 0, got {v}; pass a non-negative number")
     return v
 
 
 def integer(owner: str, name: str, value: Any, minimum: int = 0) -> int:
     """``value`` as an int >= ``minimum``."""
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}")
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}; pass a whole number")
     try:
         n = operator.index(value)
     except TypeError:
-        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}") from None
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}; pass a whole number") from None
     if n < minimum:
-        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {n}")
+        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {n}; pass a larger value")
     return n
 
 
@@ -51,15 +51,19 @@ def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = Fal
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
+        raise ValueError(
+            f"{owner}: {name} must be {size} numbers, got {value!r} ({exc}); pass {size} numbers"
+        ) from None
     if positive and arr.size == 1:
         arr = np.repeat(arr, size)
     if arr.shape != (size,):
-        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}; pass {size} numbers")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}; replace NaN/inf components")
     if positive and np.any(arr <= 0.0):
-        raise ValueError(f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}")
+        raise ValueError(
+            f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}; pass positive components"
+        )
     return tuple(float(c) for c in arr)
 
 
@@ -79,22 +83,24 @@ def float_array(
     """
     a = as_array(value, None, name=f"{owner}: {name}")
     if a.dtype.kind not in "biuf":
-        raise ValueError(f"{owner}: {name} must hold numbers, got dtype {a.dtype}")
+        raise ValueError(f"{owner}: {name} must hold numbers, got dtype {a.dtype}; pass a numeric array")
     if a.ndim == 1 and len(widths) == 1 and widths[0] > 1 and a.size % widths[0] == 0 and a.size > 0:
         a = a.reshape(-1, widths[0])
     if widths == (1,) and a.ndim == 1:
         a = a.reshape(-1, 1)
     if a.ndim != 2 or a.shape[1] not in widths:
         want = " or ".join(f"(N, {w})" for w in widths)
-        raise ValueError(f"{owner}: {name} must have shape {want}, got {a.shape}")
+        raise ValueError(f"{owner}: {name} must have shape {want}, got {a.shape}; fix the array's shape")
     if count is not None and a.shape[0] != count:
-        raise ValueError(f"{owner}: {name} must have one row per vertex ({count}), got {a.shape[0]}")
+        raise ValueError(
+            f"{owner}: {name} must have one row per vertex ({count}), got {a.shape[0]}; give one row per vertex"
+        )
     if a.shape[0] < minimum:
-        raise ValueError(f"{owner}: {name} needs at least {minimum} rows, got {a.shape[0]}")
+        raise ValueError(f"{owner}: {name} needs at least {minimum} rows, got {a.shape[0]}; add rows")
     out = np.ascontiguousarray(a, dtype=np.float32)
     if not np.all(np.isfinite(out)):
         bad = int(np.argwhere(~np.isfinite(out))[0][0])
-        raise ValueError(f"{owner}: {name} must be finite (row {bad} is {a[bad].tolist()})")
+        raise ValueError(f"{owner}: {name} must be finite (row {bad} is {a[bad].tolist()}); fix or drop that row")
     if out is a:
         out = out.copy()
     out.setflags(write=False)
@@ -105,23 +111,28 @@ def index_array(owner: str, name: str, value: Any, width: int, vertex_count: int
     """``value`` as a read-only (K, width) uint32 array of indices < ``vertex_count``."""
     a = as_array(value, None, name=f"{owner}: {name}")
     if a.size == 0:
-        raise ValueError(f"{owner}: {name} is empty; give at least one primitive")
+        raise ValueError(f"{owner}: {name} is empty; give at least one primitive (or indices=None for all vertices)")
     if a.dtype.kind == "f":
         if not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
-            raise ValueError(f"{owner}: {name} must be integers")
+            raise ValueError(f"{owner}: {name} must be integers; fix the index array")
     elif a.dtype.kind not in "iu":
-        raise ValueError(f"{owner}: {name} must be integers, got dtype {a.dtype}")
+        raise ValueError(f"{owner}: {name} must be integers, got dtype {a.dtype}; fix the index array")
     if a.ndim == 1:
         if a.size % width:
-            raise ValueError(f"{owner}: {name} length {a.size} is not a multiple of {width}")
+            raise ValueError(f"{owner}: {name} length {a.size} is not a multiple of {width}; fix the index array")
         a = a.reshape(-1, width)
     if a.ndim != 2 or a.shape[1] != width:
-        raise ValueError(f"{owner}: {name} must have shape (K, {width}), got {a.shape}")
+        raise ValueError(f"{owner}: {name} must have shape (K, {width}), got {a.shape}; fix the index array")
     lo, hi = int(a.min()), int(a.max())
-    if lo < 0 or hi >= vertex_count:
-        bad = lo if lo < 0 else hi
+    if lo < 0:
         raise ValueError(
-            f"{owner}: {name} has index {bad} out of range for {vertex_count} vertices (valid: 0..{vertex_count - 1})"
+            f"{owner}: {name} has index {lo} out of range for {vertex_count} vertices (valid: 0..{vertex_count - 1}): "
+            "indices must be >= 0; fix the index array"
+        )
+    if hi >= vertex_count:
+        raise ValueError(
+            f"{owner}: {name} has index {hi} out of range for {vertex_count} vertices (valid: 0..{vertex_count - 1}): "
+            "indices must be < number of vertices; fix the index array"
         )
     out = np.ascontiguousarray(a, dtype=np.uint32)
     if out is a:

@@ -106,3 +106,75 @@ def test_line_with_an_endpoint_behind_the_camera_is_clipped_not_dropped(engine):
     assert len(drawn) > 20, drawn
     assert drawn.max() == 71, drawn
     assert abs(drawn.min() - 36 - 36 * 0.1 / np.tan(np.radians(30))) <= 3, drawn
+
+
+class _Custom(om.Shape):
+    """A shape only the test painter below knows how to draw."""
+
+    __slots__ = ()
+
+
+def _custom_scene(make_geometry) -> om.Node:
+    from omnirender.core.handler import ShapePainter
+
+    class Painter(ShapePainter):
+        __slots__ = ()
+        service = "gl.paint"
+        target = _Custom
+
+        def exec(self, shape, engine):
+            engine.submit(make_geometry())
+
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 4)))
+    n = s.add(om.Node("custom"))
+    n.add(Painter())
+    n.add(_Custom())
+    return s
+
+
+TRIANGLE = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0)], np.float32)
+
+
+@pytest.mark.parametrize(
+    "positions, indices, message",
+    [
+        (TRIANGLE, np.array([0, 1, -1], np.int64), "negative"),
+        (TRIANGLE, np.array([0, 1, 3], np.int64), "< number of vertices"),
+        (TRIANGLE, np.array([0, 1], np.int64), "multiple of 3"),
+        (TRIANGLE, np.array([0, 1, 1.5]), "whole numbers"),
+        (np.array([(0, 0, np.nan), (1, 0, 0), (0, 1, 0)], np.float32), None, "not finite"),
+        (np.array([(0, 0, np.inf), (1, 0, 0), (0, 1, 0)]), None, "not finite"),
+        (TRIANGLE[:, :2], None, r"expected \(N, 3\)"),
+    ],
+)
+def test_custom_painters_cannot_send_bad_geometry_to_the_driver(monkeypatch, positions, indices, message):
+    from omnirender.gl.geometry import Geometry
+
+    uploads = []
+    original = Geometry.upload
+    monkeypatch.setattr(Geometry, "upload", lambda self, ctx: uploads.append(self.label) or original(self, ctx))
+    scene = _custom_scene(lambda: Geometry("triangles", positions, indices=indices, label="custom triangle"))
+    with pytest.raises(ValueError, match=message) as info:
+        om.render(scene, engine="gl", size=(32, 32))
+    text = str(info.value)
+    assert "custom triangle" in text and "/scene/custom" in text and "fix" in text, text
+    assert "custom triangle" not in uploads
+
+
+def test_value_errors_from_gl_painters_name_the_node():
+    def fail():
+        raise ValueError("Custom: the thing is broken; fix the thing")
+
+    with pytest.raises(ValueError, match=r"fix the thing \(in node /scene/custom\)"):
+        om.render(_custom_scene(fail), engine="gl", size=(32, 32))
+
+
+def test_shape_construction_errors_say_how_to_fix():
+    v = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    with pytest.raises(ValueError, match="indices must be < number of vertices; fix the index array"):
+        om.TriangleSet(v, [(0, 1, 5)])
+    with pytest.raises(ValueError, match="indices must be >= 0; fix the index array"):
+        om.TriangleSet(v, [(0, 1, -1)])
+    with pytest.raises(ValueError, match="pass a positive number"):
+        om.Sphere(radius=-1)
