@@ -19,30 +19,30 @@ from ..data import as_array
 def scalar(owner: str, name: str, value: Any, *, positive: bool = False, nonnegative: bool = False) -> float:
     """``value`` as a finite float; optionally > 0 or >= 0."""
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}; pass a number")
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}; pass a number") from None
+        raise ValueError(f"{owner}: {name} must be a number, got {value!r}") from None
     if not math.isfinite(v):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}; pass a finite number")
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
     if positive and v <= 0.0:
-        raise ValueError(f"{owner}: {name} must be > 0, got {v}; pass a positive number")
+        raise ValueError(f"{owner}: {name} must be > 0, got {v}")
     if nonnegative and v < 0.0:
-        raise ValueError(f"{owner}: {name} must be >= 0, got {v}; pass a non-negative number")
+        raise ValueError(f"{owner}: {name} must be >= 0, got {v}")
     return v
 
 
 def integer(owner: str, name: str, value: Any, minimum: int = 0) -> int:
     """``value`` as an int >= ``minimum``."""
     if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}; pass a whole number")
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}")
     try:
         n = operator.index(value)
     except TypeError:
-        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}; pass a whole number") from None
+        raise ValueError(f"{owner}: {name} must be an integer, got {value!r}") from None
     if n < minimum:
-        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {n}; pass a larger value")
+        raise ValueError(f"{owner}: {name} must be >= {minimum}, got {n}")
     return n
 
 
@@ -51,19 +51,15 @@ def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = Fal
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError) as exc:
-        raise ValueError(
-            f"{owner}: {name} must be {size} numbers, got {value!r} ({exc}); pass {size} numbers"
-        ) from None
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
     if positive and arr.size == 1:
         arr = np.repeat(arr, size)
     if arr.shape != (size,):
-        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}; pass {size} numbers")
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}; replace NaN/inf components")
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
     if positive and np.any(arr <= 0.0):
-        raise ValueError(
-            f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}; pass positive components"
-        )
+        raise ValueError(f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}")
     return tuple(float(c) for c in arr)
 
 

@@ -176,5 +176,5 @@ def test_shape_construction_errors_say_how_to_fix():
         om.TriangleSet(v, [(0, 1, 5)])
     with pytest.raises(ValueError, match="indices must be >= 0; fix the index array"):
         om.TriangleSet(v, [(0, 1, -1)])
-    with pytest.raises(ValueError, match="pass a positive number"):
-        om.Sphere(radius=-1)
+    with pytest.raises(ValueError, match="; give one row per vertex"):
+        om.TriangleSet(v, colors=[(1, 0, 0), (0, 1, 0)])
