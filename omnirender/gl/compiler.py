@@ -295,6 +295,14 @@ class DrawListCompiler:
         sop = top(glattr.StencilOp)
         fog = top(Fog)
         texture = top(Texture)
+        if texture is not None:
+            checked = self._checked_textures.get(id(texture))
+            if checked is None or checked[0]() is not texture or checked[1] != texture._version:
+                h, w = texture.image_array().shape[:2]
+                self.check_texture_size(f"Texture (image {w}x{h})", (w, h), self.max_texture_size)
+                if len(self._checked_textures) > 4096:
+                    self._checked_textures.clear()
+                self._checked_textures[id(texture)] = (weakref.ref(texture), texture._version)
         switch = top(LightSwitch)
         self._fill = style.mode if style is not None else "filled"
         self._point_size = float(style.point_size) if style is not None else 4.0

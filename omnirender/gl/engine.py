@@ -142,6 +142,24 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self._camera_used: Camera | None = None
         with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
+            info = self.ctx.info
+            #: largest 2D texture side and 3D texture side this GPU accepts (checked before creating textures)
+            self.max_texture_size = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
+            self.max_texture_size_3d = int(info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
+        self._checked_textures: dict[int, tuple[Any, int]] = {}
+
+    def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
+        """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
+
+        Without this check the driver reports a bare GL_INVALID_VALUE at draw time.
+        """
+        if max(shape) > limit:
+            where = f" in node {self.node_path}" if self.node_path else ""
+            dims = "x".join(str(int(d)) for d in shape)
+            raise ValueError(
+                f"{what}{where}: {dims} is larger than this GPU allows ({limit} per side); "
+                f"resize or downsample it to at most {limit} per side"
+            )
 
     def unit_geometry(self, kind: str) -> Geometry:
         """The shared unit mesh of ``kind`` at the active Tessellation level (native painters use it)."""

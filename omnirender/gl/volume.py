@@ -124,6 +124,8 @@ class VolumePainter(ShapePainter):
     def exec(self, shape: Volume, engine: GLEngine) -> None:
         geom = engine.geometry_cache.get(shape)
         if geom is None:
+            d, h, w = shape.data_array().shape
+            engine.check_texture_size(f"Volume (data {w}x{h}x{d})", (w, h, d), engine.max_texture_size_3d)
             geom = VolumeGeometry(shape, f"Volume in {engine.node_path or '/'}")
             engine.geometry_cache.put(shape, geom)
         lo, hi = shape.bounds()

@@ -178,3 +178,26 @@ def test_shape_construction_errors_say_how_to_fix():
         om.TriangleSet(v, [(0, 1, -1)])
     with pytest.raises(ValueError, match="; give one row per vertex"):
         om.TriangleSet(v, colors=[(1, 0, 0), (0, 1, 0)])
+
+
+def test_oversized_texture_and_volume_raise_a_clear_error(engine):
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 4)))
+    n = s.add(om.Node("textured"))
+    # one pixel high, one pixel wider than the GPU allows: tiny in memory, still too large
+    n.add(om.Texture(np.zeros((1, engine.max_texture_size + 1, 3), np.uint8)))
+    n.add(om.Box())
+    with pytest.raises(ValueError, match=r"Texture .*in node /scene/textured: .*resize") as info:
+        engine.render(s)
+    assert "GL_INVALID_VALUE" not in str(info.value)
+    s.remove(n)
+    assert not engine.render(s).mask.any()  # the engine stays usable (an empty scene renders)
+    s.add(om.Sphere())
+    assert engine.render(s).mask.any()
+
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 4)))
+    v = s.add(om.Node("volume"))
+    v.add(om.Volume(np.zeros((engine.max_texture_size_3d + 1, 2, 2), np.float32)))
+    with pytest.raises(ValueError, match=r"Volume .*in node /scene/volume: .*resize"):
+        engine.render(s)
