@@ -2,9 +2,11 @@
 
 The painter records a draw item whose geometry is the volume's bounding box
 (the unit cube scaled to the box the voxel centres span).  The drawer draws
-its front faces; the fragment shader marches the ray front to back through the
-3D texture, maps samples through the transfer function (opacity corrected for
-the step length), composites, and writes ``gl_FragDepth`` at the first sample
+its back faces (so a camera inside the box still gets fragments); the fragment
+shader marches the ray front to back through the 3D texture, from where it
+enters the box or crosses the near plane (whichever is later) to the back
+face, maps samples through the transfer function (opacity corrected for the
+step length), composites, and writes ``gl_FragDepth`` at the first sample
 whose accumulated opacity exceeds 5% -- so depth changes exactly where colour
 does (compositing rule 2).  Rays that stay nearly transparent are discarded.
 """
@@ -22,6 +24,8 @@ from .engine import GLEngine
 from .geometry import Geometry, unit_mesh
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
+
+_GL_DEPTH_CLAMP = 0x864F
 
 _VS = """
 in vec3 in_position;
@@ -59,6 +63,19 @@ void main() {
     vec3 rd = u_eye.w > 0.5 ? normalize(v_local - u_eye.xyz) : normalize(u_eye.xyz);
     vec3 ro = v_local - rd * 4.0;
     vec2 t = box(ro, rd);
+    // the drawn (back) face ends the ray; it starts where the ray enters the box or crosses the near plane,
+    // whichever is later, so a camera inside the box still sees the volume in front of it.  The near plane
+    // is linear in local coordinates: clip.z + clip.w = dot(row 2 + row 3 of u_mvp, p) >= 0.
+    vec4 near = vec4(u_mvp[0][2] + u_mvp[0][3], u_mvp[1][2] + u_mvp[1][3],
+                     u_mvp[2][2] + u_mvp[2][3], u_mvp[3][2] + u_mvp[3][3]);
+    float a0 = dot(near, vec4(ro, 1.0));
+    float b0 = dot(near.xyz, rd);
+    if (abs(b0) > 1e-12) {
+        float tn = -a0 / b0;
+        if (b0 > 0.0) t.x = max(t.x, tn); else t.y = min(t.y, tn);
+    } else if (a0 < 0.0) {
+        discard;
+    }
     if (t.y <= t.x) discard;
     float len = t.y - t.x;
     float dt = 1.7320508 / u_steps;
@@ -143,7 +160,10 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     engine._gl_state.clear()
     ctx.enable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
     ctx.depth_func = "<"
-    ctx.cull_face = "back"
+    # back faces: they exist also when the camera is inside the box (front faces are then behind the near
+    # plane); depth clamping keeps back faces beyond the far plane from being clipped away
+    ctx.cull_face = "front"
+    ctx.enable_direct(_GL_DEPTH_CLAMP)
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
     set_masks(ctx, engine.raw, engine.framebuffer, depth=True)
     view, proj = engine._view, engine._proj
@@ -187,6 +207,8 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         vao.release()
         calls += 1
     ctx.disable(ctx.BLEND | ctx.CULL_FACE)
+    ctx.disable_direct(_GL_DEPTH_CLAMP)
+    ctx.cull_face = "back"
     return calls
 
 

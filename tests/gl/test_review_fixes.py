@@ -201,3 +201,25 @@ def test_oversized_texture_and_volume_raise_a_clear_error(engine):
     v.add(om.Volume(np.zeros((engine.max_texture_size_3d + 1, 2, 2), np.float32)))
     with pytest.raises(ValueError, match=r"Volume .*in node /scene/volume: .*resize"):
         engine.render(s)
+
+
+def volume_scene(eye) -> om.Node:
+    """A 2 x 2 x 2 volume of uniform, half-opaque orange "fog" centred at the origin."""
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=eye, center=(0, 0, -1), fov=60, near=0.05))
+    v = s.add(om.Node("volume"))
+    data = np.ones((9, 9, 9), np.float32)
+    v.add(om.Volume(data, spacing=0.25, transfer_function=[(0, (1, 0.5, 0, 0.5)), (1, (1, 0.5, 0, 0.5))]))
+    return s
+
+
+def test_camera_inside_a_volume_sees_it(engine):
+    outside = engine.render(volume_scene((0, 0, 4)))
+    inside = engine.render(volume_scene((0, 0, 0.5)))
+    assert outside.array[36, 48, 3] > 200
+    # inside, every pixel looks through fog: the volume fills the image
+    assert inside.array[..., 3].min() > 100, inside.array[..., 3].min()
+    r, g, b, _ = inside.array[36, 48]
+    assert r > g > b
+    # depth at the centre: the first significant sample is just in front of the camera, not behind it
+    assert 0.05 <= inside.depth[36, 48] < 0.5
