@@ -7,6 +7,14 @@ one directional light, 256x256, multisampling off everywhere.  Three ways:
 * naive moderngl: one draw call per cube (uniforms per cube);
 * hand-instanced moderngl: one instanced draw call.
 
+Both hand-written ways cull back faces, as the engine does for closed opaque
+shapes.  The summary states the measured naive/instanced ratio: it bounds what
+any instancing renderer can gain over one draw call per object.  On llvmpipe
+(software GL) a draw call costs only microseconds and the per-pixel work
+dominates, so the issue's >= 5x-over-naive target is out of reach even for the
+hand-written instanced code there; on a hardware GPU the per-call overhead is
+what instancing removes.
+
 A frame is render + read-back of the colour image.  Also: the frame after
 changing one cube's transform (incremental recompile), and a 1.3-million-
 triangle single mesh at 512x512 against hand-written moderngl.
@@ -162,7 +170,9 @@ class HandWritten:
 
     def _begin(self) -> None:
         self.fbo.use()
-        self.ctx.enable(moderngl.DEPTH_TEST)
+        # back-face culling, as the engine does for closed opaque shapes: a fair comparison on both sides
+        self.ctx.enable(moderngl.DEPTH_TEST | moderngl.CULL_FACE)
+        self.ctx.cull_face = "back"
         self.fbo.clear(0.16, 0.16, 0.17, 1.0)
 
     def _read(self) -> np.ndarray:
@@ -303,8 +313,10 @@ def main() -> None:
         f"{'N':>6} {'omni ms':>9} {'1 changed':>10} {'naive ms':>9} {'instanced':>10} "
         f"{'omni/inst':>10} {'naive/omni':>11} {'changed/steady':>15} {'first frame':>12}"
     )
+    results = []
     for n in args.sizes:
         r = bench_cubes(n, frames)
+        results.append(r)
         print(
             f"{n:>6} {r['omni'] * 1e3:>9.2f} {r['one_changed'] * 1e3:>10.2f} {r['naive'] * 1e3:>9.2f} "
             f"{r['instanced'] * 1e3:>10.2f} {r['omni'] / r['instanced']:>10.2f} {r['naive'] / r['omni']:>11.1f} "
@@ -316,6 +328,20 @@ def main() -> None:
         f"hand-written {m['hand'] * 1e3:.1f} ms, ratio {m['omni'] / m['hand']:.2f}"
     )
     print("targets at N=10,000: omni/inst <= 1.25, naive/omni >= 5, changed/steady <= 2; mesh ratio <= 1.1")
+    renderer = "unknown"
+    try:
+        ctx = moderngl.create_context(standalone=True, backend="egl")
+        renderer = ctx.info.get("GL_RENDERER", renderer)
+        ctx.release()
+    except Exception:  # noqa: BLE001 - the name is only informative
+        pass
+    ratios = ", ".join(f"N={r['n']}: {r['naive'] / r['instanced']:.1f}x" for r in results)
+    print(f"measured naive/instanced (hand-written, both culling back faces) on {renderer}: {ratios}")
+    print(
+        "naive/omni >= 5 needs naive/instanced >= 5 at least: where one draw call costs microseconds (llvmpipe,"
+        " software GL) and shading dominates, no instancing can reach it; omni/inst is the figure that shows"
+        " the engine's own overhead"
+    )
 
 
 if __name__ == "__main__":
