@@ -156,6 +156,7 @@ def wireframe() -> om.Node:
     s = stage()
     n = s.add(om.Node("wire"))
     n.add(om.DrawStyle(mode="wireframe"))
+    n.add(om.Tessellation(1))  # coarse: at 96x72 the edges stay visibly apart
     n.add(om.Color(0.5, 0.8, 1.0))
     n.add(om.Torus(major_radius=0.8, minor_radius=0.3))
     return s

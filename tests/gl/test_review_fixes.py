@@ -223,3 +223,83 @@ def test_camera_inside_a_volume_sees_it(engine):
     assert r > g > b
     # depth at the centre: the first significant sample is just in front of the camera, not behind it
     assert 0.05 <= inside.depth[36, 48] < 0.5
+
+
+def test_multisampling_is_on_by_default():
+    """om.render's default anti-aliases edges: a tilted white square on black has intermediate grey levels."""
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 5), center=(0, 0, 0), fov=40))
+    s.add(om.Rotation(17, (0, 0, 1)))
+    s.add(om.Material(ambient=(0, 0, 0), diffuse=(0, 0, 0), specular=(0, 0, 0), emission=(1, 1, 1)))
+    s.add(om.Box(size=(1.3, 1.3, 0.1)))
+    default = om.render(s, engine="gl", size=(64, 64), background=(0, 0, 0)).array[..., 0]
+    aliased = om.render(s, engine="gl", size=(64, 64), background=(0, 0, 0), samples=0).array[..., 0]
+    assert len(np.unique(aliased)) == 2  # black and white only
+    edge = (default > 10) & (default < 245)
+    assert len(np.unique(default)) >= 4 and edge.sum() > 40, (np.unique(default), edge.sum())
+
+
+def checker_quad(mipmap: bool) -> om.Node:
+    """A 100x100 one-texel checker on a quad about 16 pixels wide: heavily minified."""
+    board = ((np.indices((100, 100)).sum(axis=0) % 2) * 255).astype(np.uint8)
+    s = om.Node("scene")
+    s.add(om.Camera.look_at(eye=(0, 0, 12), center=(0, 0, 0), fov=40))
+    s.add(om.AmbientLight(intensity=1.0))
+    n = s.add(om.Node("quad"))
+    n.add(om.Texture(np.stack([board] * 3, axis=-1), filter="nearest", mipmap=mipmap))
+    n.add(om.Color(1, 1, 1))
+    n.add(
+        om.TriangleSet(
+            [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)],
+            [(0, 1, 2), (0, 2, 3)],
+            texcoords=[(0, 0), (1, 0), (1, 1), (0, 1)],
+        )
+    )
+    return s
+
+
+def test_mipmaps_average_a_minified_checker(engine):
+    with_mips = engine.render(checker_quad(True)).array[30:42, 42:54, 0].astype(float)
+    without = engine.render(checker_quad(False)).array[30:42, 42:54, 0].astype(float)
+    # mipmapped: an even grey; without mipmaps: texels picked at random, black and white
+    assert with_mips.std() < 12, with_mips.std()
+    assert without.std() > 3 * with_mips.std() + 20, (without.std(), with_mips.std())
+    assert 100 < with_mips.mean() < 220  # grey (0.5 linear, or its sRGB encoding)
+
+
+def test_light_switch_with_a_light_list_is_selective(engine):
+    red = om.DirectionalLight(direction=(0, 0, -1), color=(1, 0, 0))
+    blue = om.DirectionalLight(direction=(0, 0, -1), color=(0, 0, 1))
+
+    def centre(switch):
+        s = om.Node("scene")
+        s.add(om.Camera.look_at(eye=(0, 0, 5)))
+        s.add(red)
+        s.add(blue)
+        n = s.add(om.Node("lit"))
+        if switch is not None:
+            n.add(switch)
+        n.add(om.Material(ambient=(0, 0, 0), diffuse=(1, 1, 1), specular=(0, 0, 0)))
+        n.add(om.Sphere())
+        return engine.render(s).pixel(48, 36)[:3]
+
+    both = centre(None)
+    only_blue = centre(om.LightSwitch(on=False, lights=[red]))
+    only_red = centre(om.LightSwitch(on=True, lights=[red]))
+    assert both[0] > 200 and both[2] > 200, both
+    assert only_blue[0] < 10 and only_blue[2] > 200, only_blue
+    assert only_red[0] > 200 and only_red[2] < 10, only_red
+
+
+def test_wireframe_reference_scene_shows_edges_not_a_surface(engine):
+    from .scenes import wireframe
+
+    def bluish(img):
+        a = img.array[..., :3].astype(int)
+        return int(((a[..., 2] > a[..., 0] + 60) & (a[..., 2] > 150)).sum())
+
+    wire = bluish(engine.render(wireframe()))
+    filled_scene = wireframe()
+    filled_scene.child("wire").remove(filled_scene.child("wire").components[0])  # drop the DrawStyle
+    filled = bluish(engine.render(filled_scene))
+    assert 0 < wire < 0.6 * filled, (wire, filled)
