@@ -71,6 +71,23 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
     renders frame after frame, keeping GPU resources between frames.
     ``samples=0`` turns multisampling off.
+
+    OpenGL version: every shader and call is OpenGL 3.3 core, also when the
+    context offers 4.x.  The 4.x features that would pay off here are not
+    reachable or not needed: moderngl 5 exposes neither base-instance draws
+    (4.2, which would let transparent instances of one mesh share a buffer
+    while drawn one by one) nor immutable buffer storage (4.4), multi-draw
+    indirect (4.3) only saves calls that instancing already saves, and
+    ``#version 450`` shaders would add nothing the 3.3 shaders use.  One code
+    path keeps macOS (3.3/4.1) and software renderers identical to the tested one.
+
+    Colour spaces: lighting, fog and texture filtering happen in linear light
+    (textures are GL_SRGB8_ALPHA8, so the GPU decodes them before filtering and
+    mipmapping); fragment shaders encode their result to sRGB for the 8-bit
+    colour buffer.  Blending of transparent shapes therefore mixes sRGB-encoded
+    values (as most real-time renderers with 8-bit targets do): a 50% surface
+    gives the encoded average of the two colours, slightly darker than the
+    linear-light mix a path tracer computes.
     """
 
     service = "gl.paint"

@@ -36,6 +36,7 @@ _DEPTH_FUNCS = {
     "always": "1",
 }
 _GL_CLIP_DISTANCE0 = 0x3000
+_GL_SRGB8_ALPHA8 = 0x8C43
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
 
@@ -217,7 +218,9 @@ class BatchRenderer:
             entry[2].release()
         img = np.ascontiguousarray(attr.image_array()[::-1])
         h, w = img.shape[:2]
-        tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), what="a texture")
+        # GL_SRGB8_ALPHA8: texture images are display (sRGB) values; the GPU decodes them before filtering
+        # and mipmapping, so minified and magnified textures average light, not encoded values
+        tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=_GL_SRGB8_ALPHA8, what="a texture")
         mipmap = attr.mipmap
         if mipmap:
             tex.build_mipmaps()

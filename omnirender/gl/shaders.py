@@ -220,8 +220,7 @@ void main() {
     vec3 P = v_pos;
     vec4 base = v_color;
 #ifdef TEXTURE
-    vec4 tex = texture(u_texture, v_uv);
-    base *= vec4(to_linear(tex.rgb), tex.a);
+    base *= texture(u_texture, v_uv);  // an sRGB texture: filtered and returned linear by the GPU
 #endif
     vec3 N;
 #ifdef POINTS
