@@ -143,7 +143,9 @@ _ARITY = {"triangles": 3, "lines": 2, "points": 1}
 def _vertex_array(values: Any, width: int, what: str, name: str, count: int | None = None) -> np.ndarray:
     """Per-vertex data as a contiguous (N, width) float32 array; ValueError for a bad shape or non-finite values."""
     try:
-        arr = np.asarray(values, dtype=np.float64)
+        arr = np.asarray(values)
+        if arr.dtype.kind not in "biuf":
+            arr = arr.astype(np.float64)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name}: {what} are not numbers ({exc}); fix the array the painter submits") from None
     if arr.ndim != 2 or arr.shape[1] != width:
