@@ -374,6 +374,8 @@ class Engine:
                 break
         else:
             raise EvaluationError(f"remove({type(attribute).__name__}){self._where()}: the attribute was not added")
+        if attribute.category is Light and not any(x is attribute for x in items):
+            self._light_matrices.pop(id(attribute), None)
         h = self._handler_for(attribute)
         if h is not None and h.service != SIMPLIFY:
             h.unexec(attribute, self)

@@ -376,3 +376,14 @@ def test_node_is_a_renderable():
     rl.prerender([solid, glass])
     assert solid in [getattr(r, "node", r) for r in rl.opaque]
     assert glass in [getattr(r, "node", r) for r in rl.transparent]
+
+
+def test_lights_added_by_hand_use_their_model_matrix_and_are_forgotten_when_removed():
+    engine = probe()
+    lamp = Lamp("hand")
+    engine.push(om.Translation(2, 0, 0))
+    engine.add(lamp)
+    engine.pop(om.Transform)
+    assert [(light.name, m[0, 3]) for light, m in engine.lights()] == [("hand", 2.0)]
+    engine.remove(lamp)
+    assert engine.lights() == [] and engine._light_matrices == {}
