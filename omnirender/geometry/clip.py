@@ -160,9 +160,9 @@ def clip_segments(a: Any, b: Any, planes: Sequence[Any]) -> tuple[np.ndarray, np
         da, db = _signed(a, row), _signed(b, row)
         alive = (da >= 0.0) | (db >= 0.0)
         a, b, da, db, kept = a[alive], b[alive], da[alive], db[alive], kept[alive]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (da / (da - db))[:, None]
-        cut = a + np.nan_to_num(t) * (b - a)  # where the segment crosses the plane (one end is outside at most)
+        span = da - db  # non-zero wherever one end is outside
+        t = np.divide(da, span, out=np.zeros_like(da), where=span != 0.0)[:, None]
+        cut = a + t * (b - a)  # where the segment crosses the plane (one end is outside at most)
         a, b = np.where((da < 0.0)[:, None], cut, a), np.where((db < 0.0)[:, None], cut, b)
     return a, b, kept
 

@@ -9,6 +9,12 @@ under such a matrix they fall back to their simplifier (a mesh).  Triangle
 sets become in-memory meshes.  Cones, tori and all other shapes reach Mitsuba
 through their simplifiers.  Lines and points become thin tubes and small
 spheres sized in pixels like the GL engine draws them (see :mod:`.strokes`).
+
+Mitsuba has no clip planes, so under an active ``ClipPlane`` the geometry is
+clipped before Mitsuba sees it: native shapes fall back to their simplifiers,
+triangle sets are clipped (:func:`omnirender.geometry.clip.clip_triangles`),
+segments are shortened and points outside are dropped, as the GL engine's
+``gl_ClipDistance`` does; a shape clipped away entirely adds nothing.
 """
 
 from __future__ import annotations
@@ -17,9 +23,10 @@ import math
 
 import numpy as np
 
-from ..attributes import Background, DrawStyle, LightSource
+from ..attributes import Background, ClipPlane, DrawStyle, LightSource
 from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, ShapePainter, default_for
+from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..shapes import Box, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, TriangleSet
 from . import convert, strokes
 from ._mi import transform
@@ -40,6 +47,7 @@ __all__ = [
     "EmitterPainter",
     "IntegratorPainter",
     "BackgroundPainter",
+    "ClipPlanePainter",
     "is_similarity",
 ]
 
@@ -77,6 +85,20 @@ def is_similarity(matrix: np.ndarray, tol: float = 1e-6) -> bool:
     return s > 0.0 and bool(np.allclose(g, s * np.eye(3), atol=tol * s))
 
 
+def _clipped_natively(shape, engine: MitsubaEngine) -> bool:
+    """Under active clip planes a native Mitsuba shape cannot be cut: draw its simplification instead."""
+    if engine.clip_planes():
+        engine.simplify(shape)
+        return True
+    return False
+
+
+def _local_planes(engine: MitsubaEngine, matrix: np.ndarray) -> list[np.ndarray]:
+    """The active world clip planes in the coordinates of ``matrix`` (plane rows transform by M^T)."""
+    m = np.asarray(matrix, np.float64)
+    return [m.T @ row for row in engine.clip_planes()]
+
+
 @default_for(MitsubaEngine)
 class SpherePainter(ShapePainter):
     """``Sphere`` -> Mitsuba ``sphere`` (mesh fallback under non-uniform scaling)."""
@@ -86,6 +108,8 @@ class SpherePainter(ShapePainter):
     target = Sphere
 
     def exec(self, shape: Sphere, engine: MitsubaEngine) -> None:
+        if _clipped_natively(shape, engine):
+            return
         m = engine.model_matrix()
         if not is_similarity(m):
             engine.simplify(shape)
@@ -104,6 +128,8 @@ class BoxPainter(ShapePainter):
     target = Box
 
     def exec(self, shape: Box, engine: MitsubaEngine) -> None:
+        if _clipped_natively(shape, engine):
+            return
         sx, sy, sz = (float(v) / 2.0 for v in shape.size)
         to_world = engine.model_matrix() @ _translate(*shape.center) @ _scale(sx, sy, sz)
         engine.add_shape({"type": "cube", "to_world": transform(to_world)}, "box")
@@ -118,6 +144,8 @@ class CylinderPainter(ShapePainter):
     target = Cylinder
 
     def exec(self, shape: Cylinder, engine: MitsubaEngine) -> None:
+        if _clipped_natively(shape, engine):
+            return
         m = engine.model_matrix()
         if not is_similarity(m):
             engine.simplify(shape)
@@ -141,6 +169,8 @@ class DiskPainter(ShapePainter):
     target = Disk
 
     def exec(self, shape: Disk, engine: MitsubaEngine) -> None:
+        if _clipped_natively(shape, engine):
+            return
         r = float(shape.radius)
         to_world = engine.model_matrix() @ Z_TO_Y @ _scale(r, r, 1.0)
         engine.add_shape({"type": "disk", "to_world": transform(to_world)}, "disk")
@@ -155,6 +185,8 @@ class RectanglePainter(ShapePainter):
     target = Rectangle
 
     def exec(self, shape: Rectangle, engine: MitsubaEngine) -> None:
+        if _clipped_natively(shape, engine):
+            return
         sx, sz = (float(v) / 2.0 for v in shape.size)
         to_world = engine.model_matrix() @ Z_TO_Y @ _scale(sx, sz, 1.0)
         engine.add_shape({"type": "rectangle", "to_world": transform(to_world)}, "rectangle")
@@ -181,17 +213,27 @@ class TriangleSetPainter(ShapePainter):
             _edges_or_points(shape, engine, style)
             return
         flat = style is not None and getattr(style, "shading", "smooth") == "flat"
+        matrix = engine.model_matrix()
+        vertices = shape.vertex_array()
+        normals = None if flat else shape.normal_array()
         colors = shape.color_array()
         texcoords = shape.texcoord_array()
+        if engine.clip_planes():
+            planes = _local_planes(engine, matrix)
+            vertices, faces, normals, texcoords, colors = clip_triangles(
+                vertices, faces, planes, normals, texcoords, colors
+            )
+            if len(faces) == 0:
+                return
         linear = None if colors is None else convert.srgb_to_linear(colors[:, :3]).astype(np.float32)
         bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=texcoords is not None)
         name = engine.unique_name("mesh")
         mesh = build_mesh(
             name,
-            shape.vertex_array(),
+            vertices,
             faces,
-            matrix=engine.model_matrix(),
-            normals=None if flat else shape.normal_array(),
+            matrix=matrix,
+            normals=normals,
             texcoords=texcoords,
             colors=linear,
             bsdf=bsdf,
@@ -217,12 +259,18 @@ def _edges_or_points(shape: TriangleSet, engine: MitsubaEngine, style: DrawStyle
     points = transform_points(engine.model_matrix(), np.asarray(shape.vertex_array(), np.float64)).astype(np.float64)
     unit = _world_pixel(engine, points)
     bsdf = engine.current_bsdf(texcoords=False)
+    planes = engine.clip_planes()
     if style.mode == "points":
+        if planes:
+            points = points[keep_points(points, planes)]
         vertices, faces = strokes.octahedra(points, np.full(len(points), 0.5 * style.point_size * unit))
     else:
         tri = shape.index_array()
         edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
-        vertices, faces = strokes.tubes(points[edges[:, 0]], points[edges[:, 1]], 0.5 * style.line_width * unit)
+        a, b = points[edges[:, 0]], points[edges[:, 1]]
+        if planes:
+            a, b, _ = clip_segments(a, b, planes)
+        vertices, faces = strokes.tubes(a, b, 0.5 * style.line_width * unit)
     if len(faces):
         name = engine.unique_name(style.mode)
         engine.shapes[name] = build_mesh(name, vertices, faces, bsdf=bsdf)
@@ -245,7 +293,10 @@ class LineSetPainter(ShapePainter):
         style = engine.mono(DrawStyle)
         width = style.line_width if style is not None else 1.0
         radius = 0.5 * width * _world_pixel(engine, points)
-        vertices, faces = strokes.tubes(points[segments[:, 0]], points[segments[:, 1]], radius)
+        a, b = points[segments[:, 0]], points[segments[:, 1]]
+        if engine.clip_planes():
+            a, b, _ = clip_segments(a, b, engine.clip_planes())
+        vertices, faces = strokes.tubes(a, b, radius)
         if len(faces) == 0:
             return
         name = engine.unique_name("lines")
@@ -270,6 +321,11 @@ class PointSetPainter(ShapePainter):
         sizes = shape.size_array()
         pixels = np.asarray(sizes, np.float64).reshape(-1) if sizes is not None else np.full(len(points), size)
         radii = 0.5 * pixels * _world_pixel(engine, points)
+        if engine.clip_planes():  # GL clips a point by its vertex: drop the points outside
+            inside = keep_points(points, engine.clip_planes())
+            points, radii = points[inside], radii[inside]
+            if len(points) == 0:
+                return
         bsdf = engine.current_bsdf(texcoords=False)
         if len(points) > MAX_SPHERES:
             vertices, faces = strokes.octahedra(points, radii)
@@ -339,3 +395,18 @@ class BackgroundPainter(AttributePainter):
     def exec(self, background: Background, engine: MitsubaEngine) -> None:
         if engine.background is None:
             engine.background = tuple(float(c) for c in background.color)
+
+
+@default_for(MitsubaEngine)
+class ClipPlanePainter(AttributePainter):
+    """``ClipPlane``: remembered in world coordinates while active; the shape painters clip against it."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = ClipPlane
+
+    def exec(self, plane: ClipPlane, engine: MitsubaEngine) -> None:
+        engine.add_clip(plane)
+
+    def unexec(self, plane: ClipPlane, engine: MitsubaEngine) -> None:
+        engine.remove_clip(plane)
