@@ -14,6 +14,18 @@ cylinder, cone, torus and disk are RenderMan quadrics (z-up: a rotation turns
 them to our y axis), rectangles ``Polygon``, triangle sets ``PointsPolygons``,
 line sets ``Curves`` and point sets ``Points``; everything else is simplified.
 Matrices are written in RenderMan's row-vector order (our column-major).
+
+Clip planes: RenderMan's ``ClippingPlane x y z nx ny nz`` removes everything on
+the side its normal points to, but it is a camera *option* (RI spec 3.2, frozen
+at ``WorldBegin``; renderers reject it inside the world block), so it cannot be
+scoped to a subgraph as ``om.ClipPlane`` is.  A ``ClipPlane`` that applies to
+the whole scene (added in the root node before any shape) is written as a
+``ClippingPlane`` before ``WorldBegin``, in world coordinates, with the normal
+negated (omnirender keeps the side its normal points to).  Under any other
+``ClipPlane`` the geometry itself is clipped on export
+(:mod:`omnirender.geometry.clip`): quadrics and rectangles are simplified to
+triangles and cut, curves shortened, points outside dropped; a comment marks
+the block where such a plane was added.
 """
 
 from __future__ import annotations
@@ -29,6 +41,7 @@ import numpy as np
 
 from ..attributes import (
     AmbientLight,
+    ClipPlane,
     DirectionalLight,
     DrawStyle,
     LightSource,
@@ -37,8 +50,10 @@ from ..attributes import (
     PointLight,
     SpotLight,
 )
-from ..core import AttributePainter, Camera, MonoAttribute, ShapePainter, default_for
+from ..core import SIMPLIFY, AttributePainter, Camera, MonoAttribute, ShapePainter, default_for
+from ..core.errors import EvaluationError
 from ..fileio import atomic_write
+from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..scene import Node
 from ..shapes import Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from .walk import NodeTrackingEngine, track_surfaces
@@ -175,6 +190,11 @@ class RIBEngine(NodeTrackingEngine):
         self._depth = 1  # inside WorldBegin
         self._stack: list[np.ndarray] = []
         self._lights: list[tuple[Any, np.ndarray]] = []
+        #: active clip planes: (ClipPlane, world plane row (a, b, c, d), written as a frame option?)
+        self._clips: list[tuple[Any, np.ndarray, bool]] = []
+        #: world plane rows of the clip planes written as ``ClippingPlane`` options
+        self.global_clips: list[np.ndarray] = []
+        self._shapes_written = 0
 
     # -- output -------------------------------------------------------------
     def emit(self, line: str) -> None:
@@ -203,8 +223,60 @@ class RIBEngine(NodeTrackingEngine):
         self._stack.pop()
         self.end_block()
 
+    # -- clip planes ------------------------------------------------------------
+    def add_clip(self, plane: ClipPlane) -> None:
+        """Record an added ``ClipPlane``; one for the whole scene becomes a ``ClippingPlane`` option."""
+        row = plane.world_plane(self.model_matrix())
+        whole_scene = len(self._stack) <= 1 and self._shapes_written == 0
+        self._clips.append((plane, row, whole_scene))
+        if whole_scene:
+            self.global_clips.append(row)
+        else:
+            normal = " ".join(f"{v:.7g}" for v in np.where(np.abs(row[:3]) < 1e-12, 0.0, row[:3]))
+            self.emit(
+                f"# ClipPlane normal [{normal}] offset {-float(row[3]):.7g} (world): applied to the geometry "
+                "below, as RenderMan's ClippingPlane is a frame option"
+            )
+
+    def remove_clip(self, plane: ClipPlane) -> None:
+        """Forget the most recent record of ``plane``."""
+        for i in range(len(self._clips) - 1, -1, -1):
+            if self._clips[i][0] is plane:
+                del self._clips[i]
+                return
+
+    def local_clips(self) -> list[np.ndarray]:
+        """Plane rows in the current model coordinates of the active clip planes the geometry must apply itself."""
+        m = self.model_matrix()
+        return [m.T @ row for _, row, option in self._clips if not option]
+
+    def clipping_plane_lines(self) -> list[str]:
+        """``ClippingPlane`` requests for the whole-scene clip planes (world coordinates, normal negated)."""
+        out = []
+        for row in self.global_clips:
+            normal, d = row[:3], float(row[3])  # |normal| = 1: the plane is normal . p + d = 0
+            values = np.concatenate([-d * normal, -normal])  # a point on the plane; the clipped side's normal
+            values = np.where(np.abs(values) < 1e-12, 0.0, values)
+            out.append("ClippingPlane " + " ".join(f"{v:.7g}" for v in values))
+        return out
+
+    def simplify(self, shape: Any) -> None:
+        """Evaluate ``shape`` through its simplifier (to clip what RenderMan draws as a quadric)."""
+        for klass in type(shape).__mro__:
+            h = self.find_handler(SIMPLIFY, klass)
+            if h is not None:
+                result = h.exec(shape, self)
+                if result is not None:
+                    self.evaluate(result)
+                return
+        raise EvaluationError(
+            f"RIB export: {type(shape).__name__} in node {self.node_path or '/'} must be clipped by a ClipPlane but "
+            "has no simplifier into triangles; register an om.ShapeSimplifier for it"
+        )
+
     def shape_block(self, local: np.ndarray | None = None) -> None:
         """Open a shape's attribute block: transform relative to the node (times ``local``) and appearance."""
+        self._shapes_written += 1
         self.begin_block()
         node_world = self._stack[-1] if self._stack else np.eye(4)
         m = np.linalg.solve(node_world, self.model_matrix())
@@ -322,6 +394,7 @@ class RIBEngine(NodeTrackingEngine):
         out.append(f"Clipping {camera.near:.7g} {camera.far:.7g}")
         view = np.diag([1.0, 1.0, -1.0, 1.0]) @ camera.view_matrix() @ np.linalg.inv(np.asarray(world, np.float64))
         out.append(f"Transform {_matrix(view)}")
+        out += self.clipping_plane_lines()  # after the Transform: world coordinates
         return out
 
     def document(self, name: str = "scene") -> str:
@@ -339,12 +412,22 @@ SERVICE = RIBEngine.service
 track_surfaces(RIBEngine)
 
 
+#: shapes whose writers clip their own geometry; the others are simplified under a scoped clip plane
+_CLIPS_ITSELF = (TriangleSet, LineSet, PointSet)
+
+
 def _painter(target: type):
     def decorate(fn):
+        def exec_(self: Any, shape: Any, engine: RIBEngine) -> None:
+            if target not in _CLIPS_ITSELF and engine.local_clips():
+                engine.simplify(shape)
+                return
+            fn(self, shape, engine)
+
         cls = type(
             f"{target.__name__}RIBWriter",
             (ShapePainter,),
-            {"__slots__": (), "service": SERVICE, "target": target, "exec": fn, "__doc__": fn.__doc__},
+            {"__slots__": (), "service": SERVICE, "target": target, "exec": exec_, "__doc__": fn.__doc__},
         )
         default_for(RIBEngine)(cls)
         return cls
@@ -414,18 +497,24 @@ def _triangles(self: Any, shape: TriangleSet, engine: RIBEngine) -> None:
     faces = shape.index_array()
     if len(faces) == 0:
         return
+    style = engine.mono(DrawStyle)
+    smooth = style is None or getattr(style, "shading", "smooth") != "flat"
+    vertices, normals = shape.vertex_array(), shape.normal_array() if smooth else None
+    colors, uv = shape.color_array(), shape.texcoord_array()
+    planes = engine.local_clips()
+    if planes:
+        vertices, faces, normals, uv, colors = clip_triangles(vertices, faces, planes, normals, uv, colors)
+        if len(faces) == 0:
+            return
     engine.shape_block()
     parts = [
         f"PointsPolygons {_ints(np.full(len(faces), 3))} {_ints(faces)}",
-        f'"P" {rib_numbers(shape.vertex_array())}',
+        f'"P" {rib_numbers(vertices)}',
     ]
-    style = engine.mono(DrawStyle)
-    if style is None or getattr(style, "shading", "smooth") != "flat":
-        parts.append(f'"N" {rib_numbers(shape.normal_array())}')
-    colors = shape.color_array()
+    if normals is not None:
+        parts.append(f'"N" {rib_numbers(normals)}')
     if colors is not None:
         parts.append(f'"Cs" {rib_numbers(colors[:, :3])}')
-    uv = shape.texcoord_array()
     if uv is not None:
         st = np.array(uv, np.float64)
         st[:, 1] = 1.0 - st[:, 1]
@@ -442,10 +531,17 @@ def _lines(self: Any, shape: LineSet, engine: RIBEngine) -> None:
         return
     style = engine.mono(DrawStyle)
     width = 0.01 * (getattr(style, "line_width", 1.0) if style is not None else 1.0)
-    points = shape.vertex_array()[segments.reshape(-1)]
+    vertices = shape.vertex_array()
+    a, b = vertices[segments[:, 0]], vertices[segments[:, 1]]
+    planes = engine.local_clips()
+    if planes:
+        a, b, _ = clip_segments(a, b, planes)
+        if len(a) == 0:
+            return
+    points = np.stack([a, b], axis=1).reshape(-1, 3)
     engine.shape_block()
     engine.emit(
-        f'Curves "linear" {_ints(np.full(len(segments), 2))} "nonperiodic" "P" {rib_numbers(points)} '
+        f'Curves "linear" {_ints(np.full(len(a), 2))} "nonperiodic" "P" {rib_numbers(points)} '
         f'"constantwidth" {rib_numbers(width)}'
     )
     engine.end_block()
@@ -459,6 +555,11 @@ def _points(self: Any, shape: PointSet, engine: RIBEngine) -> None:
         return
     style = engine.mono(DrawStyle)
     width = 0.02 * (getattr(style, "point_size", 1.0) if style is not None else 1.0)
+    planes = engine.local_clips()
+    if planes:
+        vertices = vertices[keep_points(vertices, planes)]
+        if len(vertices) == 0:
+            return
     engine.shape_block()
     engine.emit(f'Points "P" {rib_numbers(vertices)} "constantwidth" {rib_numbers(width)}')
     engine.end_block()
@@ -474,6 +575,21 @@ class LightWriter(AttributePainter):
 
     def exec(self, light: LightSource, engine: RIBEngine) -> None:
         engine.add_light(light)
+
+
+@default_for(RIBEngine)
+class ClipPlaneWriter(AttributePainter):
+    """``ClipPlane``: a ``ClippingPlane`` option for the whole scene, else clipped geometry (module docstring)."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = ClipPlane
+
+    def exec(self, plane: ClipPlane, engine: RIBEngine) -> None:
+        engine.add_clip(plane)
+
+    def unexec(self, plane: ClipPlane, engine: RIBEngine) -> None:
+        engine.remove_clip(plane)
 
 
 def to_text(

@@ -250,3 +250,111 @@ def test_a_write_failing_midway_leaves_the_existing_file_unchanged(tmp_path, mon
         om.export(om.Node("s", [om.Sphere()]), target)
     assert target.read_text() == "old file"
     assert [p.name for p in tmp_path.iterdir()] == ["scene.rib"]
+
+
+# -- ClipPlane: a ClippingPlane option for the whole scene, clipped geometry for a subgraph --------------
+
+CLIP_CAMERA = om.Camera.look_at(eye=(0, 1, 6), center=(0, 0, 0))
+
+
+def _world_geometry(requests) -> list[tuple[str, np.ndarray]]:
+    """(request, world points (K, 3)) of every PointsPolygons / Curves / Points, following the block transforms."""
+    out = []
+    stack, current = [], np.eye(4)
+    world = False
+    for name, args in requests:
+        if name == "WorldBegin":
+            world = True
+        if not world:
+            continue
+        if name == "AttributeBegin":
+            stack.append(current)
+        elif name == "AttributeEnd":
+            current = stack.pop()
+        elif name == "ConcatTransform":
+            current = current @ np.array(args[0]).reshape(4, 4).T  # RIB row-vector order back to ours
+        elif name in ("PointsPolygons", "Curves", "Points"):
+            p = np.array(args[args.index("P") + 1], np.float64).reshape(-1, 3)
+            out.append((name, p @ current[:3, :3].T + current[:3, 3]))
+    return out
+
+
+def _renderman_keeps(args, points) -> np.ndarray:
+    """RI spec: ClippingPlane x y z nx ny nz removes the points on the side the normal points to."""
+    p0, n = np.array(args[:3]), np.array(args[3:])
+    return (np.asarray(points) - p0) @ n <= 1e-9
+
+
+def test_a_plane_for_the_whole_scene_is_a_clipping_plane_option_keeping_the_same_side():
+    clip = om.ClipPlane((1, 2, 0), 0.3)
+    scene = om.Node("scene", [CLIP_CAMERA, om.Translation(0, 0.5, 0), om.Rotation(40, (0, 0, 1)), clip])
+    scene.add(om.Node("ball", [om.Sphere(radius=1.0)]))
+    requests = parse(rib.to_text(scene))
+    _balanced(requests)
+    names = [n for n, _ in requests]
+    assert names.count("ClippingPlane") == 1
+    assert names.index("Transform") < names.index("ClippingPlane") < names.index("WorldBegin")  # an option, in world
+    assert "Sphere" in names and "PointsPolygons" not in names  # the quadric stays a quadric
+    args = dict(requests)["ClippingPlane"]
+    # the same half-space as the GL engine's: world plane of the model matrix where the plane was added
+    m = om.Translation(0, 0.5, 0).matrix @ om.Rotation(40, (0, 0, 1)).matrix
+    samples = np.random.default_rng(1).uniform(-3, 3, (500, 3))
+    local = samples @ np.linalg.inv(m)[:3, :3].T + np.linalg.inv(m)[:3, 3]
+    assert np.array_equal(_renderman_keeps(args, samples), clip.keeps(local))
+    assert abs(np.linalg.norm(args[3:]) - 1.0) < 1e-6
+
+
+def test_a_plane_in_a_subgraph_clips_the_geometry_there_only():
+    cut = om.Node("cut", [om.Translation(1, 0, 0), om.ClipPlane((0, 1, 0), 0.2), om.Scaling(0.5)])
+    cut.add(om.Sphere(radius=1.0))
+    cut.add(om.LineSet(vertices=[(0, -1, 0), (0, 1, 0), (-1, 0.8, 0), (1, 0.8, 0)]))
+    cut.add(om.PointSet(vertices=[(0, -1, 0), (0, 1, 0)]))
+    cut.add(om.Node("gone", [om.Translation(0, -3, 0), om.Cylinder()]))  # entirely below the plane
+    scene = om.Node("scene", [CLIP_CAMERA, om.Node("free", [om.Sphere(radius=0.3)]), cut, om.Torus()])
+    text = rib.to_text(scene)
+    requests = parse(text)
+    _balanced(requests)
+    names = [n for n, _ in requests]
+    assert "ClippingPlane" not in names  # not expressible as an option: it must not clip "free" or the torus
+    assert names.count("Sphere") == 1 and names.count("Torus") == 1  # the unclipped quadrics stay quadrics
+    assert "Cylinder" not in names and names.count("Disk") == 0  # clipped away entirely: nothing written
+    assert "# ClipPlane normal [0 1 0] offset 0.2 (world)" in text
+    geometry = dict(_world_geometry(requests))
+    # the plane y >= 0.2 sits under Translation(1, 0, 0) only: world y >= 0.2; the scaling came after it
+    sphere = geometry["PointsPolygons"]
+    assert sphere[:, 1].min() == pytest.approx(0.2, abs=1e-6) and sphere[:, 1].max() == pytest.approx(0.5, abs=1e-3)
+    radii = np.linalg.norm(sphere - (1, 0, 0), axis=1)  # cut points lie on chords of the tessellation
+    assert radii.max() <= 0.5 + 1e-6 and radii.min() > 0.49
+    curves = geometry["Curves"]
+    assert curves[:, 1].min() == pytest.approx(0.2) and len(curves) == 4  # the vertical one is shortened
+    np.testing.assert_allclose(geometry["Points"], [(1, 0.5, 0)])  # the point below the plane is dropped
+    polygons = next(a for n, a in requests if n == "PointsPolygons")
+    assert len(polygons[polygons.index("N") + 1]) == len(polygons[polygons.index("P") + 1])  # normals follow
+
+
+def test_a_plane_added_after_shapes_clips_only_what_follows():
+    scene = om.Node("scene", [CLIP_CAMERA, om.Sphere(radius=0.5), om.ClipPlane((0, -1, 0), 0.0), om.Sphere(radius=1.0)])
+    requests = parse(rib.to_text(scene))
+    names = [n for n, _ in requests]
+    assert "ClippingPlane" not in names  # an option would also clip the first sphere
+    assert names.count("Sphere") == 1
+    assert dict(_world_geometry(requests))["PointsPolygons"][:, 1].max() <= 1e-9  # y <= 0 kept
+
+
+def test_triangle_sets_keep_colours_and_texture_coordinates_when_clipped():
+    tri = om.TriangleSet(
+        vertices=[(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)],
+        indices=[(0, 1, 2), (0, 2, 3)],
+        colors=[(1, 0, 0, 1), (1, 0, 0, 1), (0, 0, 1, 1), (0, 0, 1, 1)],
+        texcoords=[(0, 0), (1, 0), (1, 1), (0, 1)],
+    )
+    scene = om.Node("scene", [CLIP_CAMERA, om.Node("n", [om.ClipPlane((0, 1, 0), 0.0), tri])])
+    requests = parse(rib.to_text(scene))
+    args = next(a for n, a in requests if n == "PointsPolygons")
+    p = np.array(args[args.index("P") + 1]).reshape(-1, 3)
+    cs = np.array(args[args.index("Cs") + 1]).reshape(-1, 3)
+    st = np.array(args[args.index("st") + 1]).reshape(-1, 2)
+    assert len(p) == len(cs) == len(st) == 5 and p[:, 1].min() == 0.0
+    on_cut = np.isclose(p[:, 1], 0.0)
+    np.testing.assert_allclose(cs[on_cut], [[0.5, 0, 0.5]] * 3)  # half way from red to blue
+    np.testing.assert_allclose(st[on_cut, 1], 0.5)  # t flipped for RenderMan: 1 - 0.5
