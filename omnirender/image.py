@@ -76,7 +76,12 @@ class Image:
         return self.array[:, :, 3] > 0
 
     def pixel(self, x: int, y: int) -> tuple[int, int, int, int]:
-        """RGBA at column ``x``, row ``y`` (row 0 at the top)."""
+        """RGBA at column ``x``, row ``y`` (row 0 at the top); IndexError outside the image."""
+        if not (0 <= x < self.width and 0 <= y < self.height):
+            raise IndexError(
+                f"Image.pixel: ({x}, {y}) is outside the {self.width}x{self.height} image; "
+                f"x must lie in [0, {self.width}) and y in [0, {self.height}) (pixel (0, 0) is the top-left one)"
+            )
         return tuple(int(v) for v in self.array[y, x])  # type: ignore[return-value]
 
     def to_pil(self) -> Any:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import importlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -118,6 +118,7 @@ def render(
     entry = _engines.get(engine)
     if entry is None:
         raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
+    _check_scene(f"om.render(engine={engine!r})", scene)
     size = _check_size(size)
     if mask is not None:
         options["mask"] = mask
@@ -131,8 +132,30 @@ def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> Path:
     found = _exporters.get(ext)
     if found is None:
         raise ValueError(f"cannot export to {p.name!r}: unknown extension {ext!r}; supported: {sorted(_exporters)}")
+    _check_scene(f"om.export({p.name!r})", scene)
     _resolve(found[0])(scene, p, **options)
     return p
+
+
+def _check_scene(function: str, scene: Any) -> None:
+    """TypeError naming the fix unless ``scene`` is a Node or an iterable of components.
+
+    Checked here so that ``om.render(None)`` or ``om.render(5)`` fail with one
+    clear message instead of deep inside an adapter (or, worse, render an
+    empty image).
+    """
+    from .core.component import RenderingComponent
+
+    if hasattr(scene, "_compile_node") or isinstance(scene, RenderingComponent):
+        return
+    fix = "pass an om.Node (e.g. om.Node('scene', [...])) or a list of shapes and attributes"
+    if isinstance(scene, (str, bytes)) or not isinstance(scene, Iterable):
+        raise TypeError(f"{function}: scene must be an om.Node or a list of components, got {scene!r:.60}; {fix}")
+    if not isinstance(scene, (list, tuple)):
+        return  # other iterables (generators) are checked by the adapter; iterating here would consume them
+    for i, item in enumerate(scene):
+        if not isinstance(item, RenderingComponent) and not hasattr(item, "_compile_node"):
+            raise TypeError(f"{function}: scene[{i}] is a {type(item).__name__} ({item!r:.60}), not a component; {fix}")
 
 
 def _check_size(size: Any) -> tuple[int, int]:

@@ -70,6 +70,24 @@ def test_render_rejects_unknown_engines_and_bad_sizes():
             om.render(scene, engine="gl", size=size)
 
 
+def test_render_and_export_reject_what_is_not_a_scene(tmp_path):
+    # before: om.render(None) returned an empty image, om.render(5) failed inside the GL compiler
+    for bad in [None, 5, "scene.yaml", [om.Sphere(), "sphere"]]:
+        with pytest.raises(TypeError, match=r"om\.render\(engine='gl'\): scene.*om\.Node"):
+            om.render(bad, engine="gl", size=(8, 8))
+        with pytest.raises(TypeError, match=r"om\.export\('s\.glb'\): scene.*om\.Node"):
+            om.export(bad, tmp_path / "s.glb")
+    assert not (tmp_path / "s.glb").exists()
+
+
+def test_image_pixel_outside_names_the_valid_range():
+    image = om.Image(np.zeros((4, 6, 4), np.uint8))
+    assert image.pixel(5, 3) == (0, 0, 0, 0)
+    for x, y in [(6, 0), (0, 4), (-1, 0), (0, -1)]:  # negative indices used to wrap around silently
+        with pytest.raises(IndexError, match=r"outside the 6x4 image.*\[0, 6\).*\[0, 4\)"):
+            image.pixel(x, y)
+
+
 def test_export_rejects_unknown_extensions(tmp_path):
     with pytest.raises(ValueError, match=r"unknown extension '\.xyz'.*\.glb.*\.pov.*\.rib"):
         om.export(om.Node("s"), tmp_path / "scene.xyz")
