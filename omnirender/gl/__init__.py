@@ -83,14 +83,27 @@ def render(
     background: Any = None,
     **options: Any,
 ) -> Any:
-    """Render ``scene`` once with a temporary :class:`GLEngine`; returns an ``om.Image``."""
+    """Render ``scene`` once with a temporary :class:`GLEngine`; returns an ``om.Image``.
+
+    ``samples`` is the multisampling count (0 turns it off), ``background`` an
+    RGB(A) colour overriding the scene's ``om.Background``; further options:
+    ``read_depth`` (default True: ``image.depth`` holds eye-space distances),
+    ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes without a
+    handler) and ``technique`` (an ``om.Technique`` replacing the default one).
+    For many frames keep a ``GLEngine`` (or an ``om.Viewer``) instead: this
+    function creates and releases a GL context on every call.
+    """
     _load()
     from .engine import GLEngine
 
     read_depth = options.pop("read_depth", True)
+    engine_options = {key: options.pop(key) for key in ("on_missing", "technique") if key in options}
     if options:
-        raise TypeError(f"om.gl.render: unknown options {sorted(options)}")
-    engine = GLEngine(size=size, samples=samples, background=background)
+        raise TypeError(
+            f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
+            "read_depth, on_missing and technique (spp/quality are options of the mitsuba/povray engines)"
+        )
+    engine = GLEngine(size=size, samples=samples, background=background, **engine_options)
     try:
         return engine.render(scene, mask=mask, read_depth=read_depth)
     finally:

@@ -113,8 +113,10 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
         self._size = check_size(size, self.ctx)
-        if samples < 0:
-            raise ValueError(f"GLEngine: samples must be >= 0, got {samples}")
+        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
+        if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
+            raise ValueError(f"GLEngine: samples must be 0 or a power of two (1, 2, 4, 8, 16), got {samples}")
         self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
         self.background = background
         self.programs = ProgramCache(self.ctx)
@@ -365,7 +367,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
             bg = self._scene_background
         if bg is None:
             return DEFAULT_BACKGROUND
-        color = tuple(getattr(bg, "color", bg))
+        color = _background_color(getattr(bg, "color", bg))
         if len(color) == 3:
             color = (*color, 1.0)
         # a display (sRGB) colour, like every colour in a scene: cleared as it is
@@ -414,3 +416,15 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
 
     def __exit__(self, *exc: Any) -> None:
         self.release()
+
+
+def _background_color(value: Any) -> tuple[float, ...]:
+    """``value`` as 3 or 4 finite numbers; ValueError naming the fix otherwise."""
+    fix = "give 3 or 4 numbers in [0, 1] (sRGB), e.g. background=(1, 1, 1), or an om.Background"
+    try:
+        color = tuple(float(c) for c in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"GLEngine: background must be an RGB(A) colour, got {value!r:.60}; {fix}") from None
+    if len(color) not in (3, 4) or not all(np.isfinite(color)):
+        raise ValueError(f"GLEngine: background must be 3 or 4 finite numbers, got {value!r:.60}; {fix}")
+    return color

@@ -1,0 +1,51 @@
+"""``om.render(engine="gl")`` options: the engine options the other engines take, and a helpful error otherwise."""
+
+from __future__ import annotations
+
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.gl
+
+
+class Unpaintable(om.Shape):
+    __slots__ = ()
+
+
+def scene_with(*items) -> om.Node:
+    return om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5)), om.Node("obj", list(items))])
+
+
+def test_on_missing_is_passed_to_the_engine():
+    scene = scene_with(Unpaintable(), om.Sphere())
+    with pytest.raises(om.NoHandlerError, match="/scene/obj"):
+        om.render(scene, engine="gl", size=(16, 16))
+    image = om.render(scene, engine="gl", size=(16, 16), on_missing="skip")
+    assert image.mask[8, 8]  # the sphere is still drawn
+    with pytest.raises(ValueError, match="on_missing must be one of"):
+        om.render(scene, engine="gl", size=(16, 16), on_missing="ignore")
+
+
+def test_unknown_options_list_the_accepted_ones():
+    with pytest.raises(TypeError, match=r"unknown options \['spp'\]; it takes size, mask, samples.*on_missing"):
+        om.render(scene_with(om.Sphere()), engine="gl", size=(16, 16), spp=4)
+
+
+@pytest.mark.parametrize("samples", [3, 6, -1, "4", 2.0, True])
+def test_bad_sample_counts_are_refused_before_moderngl_sees_them(samples):
+    # before: samples=3 failed inside moderngl ("the number of samples is invalid"), "4" with a bare TypeError
+    with pytest.raises(ValueError, match=r"GLEngine: samples must be .*got"):
+        om.render(scene_with(om.Sphere()), engine="gl", size=(8, 8), samples=samples)
+
+
+@pytest.mark.parametrize("background", ["red", (1, 0), (1, 0, float("nan")), 5])
+def test_bad_backgrounds_name_the_fix(background):
+    # before: "red" raised a bare TypeError comparing str with float; (1, 0) was accepted silently
+    with pytest.raises(ValueError, match=r"GLEngine: background must be .*om\.Background"):
+        om.render(scene_with(om.Sphere()), engine="gl", size=(8, 8), background=background)
+
+
+def test_a_background_argument_sets_the_clear_colour():
+    image = om.render(scene_with(), engine="gl", size=(8, 8), background=(1, 0, 0))
+    assert image.pixel(0, 0) == (255, 0, 0, 255)
