@@ -157,8 +157,21 @@ def render(
     sets it.
     """
     w, h = (int(v) for v in size)
-    if not 0 <= int(quality) <= 11:
-        raise ValueError(f"POV-Ray: quality must be 0..11, got {quality}")
+    if isinstance(quality, bool) or not isinstance(quality, (int, np.integer)) or not 0 <= quality <= 11:
+        raise ValueError(f"POV-Ray: quality must be a whole number 0..11 (9 = full quality), got {quality!r}")
+    if antialias is None or (not isinstance(antialias, bool) and antialias == 0):
+        antialias = False
+    if not isinstance(antialias, bool):
+        try:
+            threshold = float(antialias)
+        except (TypeError, ValueError):
+            threshold = float("nan")
+        if not 0 < threshold <= 3:  # POV-Ray's +A threshold: colour difference that triggers supersampling
+            raise ValueError(
+                f"POV-Ray: antialias must be True, False or a threshold in (0, 3] (True means 0.3), got {antialias!r}"
+            )
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1):
+        raise ValueError(f"POV-Ray: threads must be a whole number >= 1 or None (all cores), got {threads!r}")
     if find_povray() is None:
         raise POVRayError("POV-Ray: the povray program was not found on PATH; install it with `apt-get install povray`")
     depth_map = None

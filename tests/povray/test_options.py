@@ -1,0 +1,39 @@
+"""``om.render(engine="povray")`` checks its options before writing SDL or starting POV-Ray."""
+
+from __future__ import annotations
+
+import pytest
+
+import omnirender as om
+
+
+def scene() -> om.Node:
+    return om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5)), om.Sphere()])
+
+
+@pytest.mark.parametrize("quality", ["high", 12, -1, 9.5, True])
+def test_bad_quality_names_the_range(quality):
+    # before: quality="high" raised int()'s "invalid literal for int() with base 10"
+    with pytest.raises(ValueError, match=r"POV-Ray: quality must be a whole number 0\.\.11"):
+        om.render(scene(), engine="povray", size=(8, 8), quality=quality)
+
+
+@pytest.mark.parametrize("antialias", ["yes", -0.5, 4, float("nan")])
+def test_bad_antialias_names_the_choices(antialias):
+    # before: antialias="yes" raised float()'s "could not convert string to float"
+    with pytest.raises(ValueError, match=r"POV-Ray: antialias must be True, False or a threshold in \(0, 3\]"):
+        om.render(scene(), engine="povray", size=(8, 8), antialias=antialias)
+
+
+@pytest.mark.parametrize("threads", [0, -1, "2", 1.5])
+def test_bad_thread_counts_are_refused(threads):
+    # before: threads=-1 went to POV-Ray as +WT-1 and was ignored silently
+    with pytest.raises(ValueError, match=r"POV-Ray: threads must be a whole number >= 1"):
+        om.render(scene(), engine="povray", size=(8, 8), threads=threads)
+
+
+@pytest.mark.povray
+@pytest.mark.parametrize("antialias", [0, None, 0.5])
+def test_zero_and_none_still_mean_no_antialiasing(antialias):
+    image = om.render(scene(), engine="povray", size=(8, 8), quality=0, antialias=antialias)
+    assert image.mask[4, 4]
