@@ -21,7 +21,8 @@ at ``WorldBegin``; renderers reject it inside the world block), so it cannot be
 scoped to a subgraph as ``om.ClipPlane`` is.  A ``ClipPlane`` that applies to
 the whole scene (added in the root node before any shape) is written as a
 ``ClippingPlane`` before ``WorldBegin``, in world coordinates, with the normal
-negated (omnirender keeps the side its normal points to).  Under any other
+negated (omnirender keeps the side its normal points to); removing such a
+plane by hand before more shapes is refused, as RenderMan cannot end it.  Under any other
 ``ClipPlane`` the geometry itself is clipped on export
 (:mod:`omnirender.geometry.clip`): quadrics and rectangles are simplified to
 triangles and cut, curves shortened, points outside dropped; a comment marks
@@ -195,6 +196,7 @@ class RIBEngine(NodeTrackingEngine):
         #: world plane rows of the clip planes written as ``ClippingPlane`` options
         self.global_clips: list[np.ndarray] = []
         self._shapes_written = 0
+        self._options_removed = 0  # whole-scene clip planes removed before the end of the scene
 
     # -- output -------------------------------------------------------------
     def emit(self, line: str) -> None:
@@ -242,6 +244,7 @@ class RIBEngine(NodeTrackingEngine):
         """Forget the most recent record of ``plane``."""
         for i in range(len(self._clips) - 1, -1, -1):
             if self._clips[i][0] is plane:
+                self._options_removed += self._clips[i][2]
                 del self._clips[i]
                 return
 
@@ -276,6 +279,12 @@ class RIBEngine(NodeTrackingEngine):
 
     def shape_block(self, local: np.ndarray | None = None) -> None:
         """Open a shape's attribute block: transform relative to the node (times ``local``) and appearance."""
+        if self._options_removed:
+            raise ValueError(
+                f"RIB export: a shape in node {self.node_path or '/'} follows the removal of a ClipPlane that was "
+                "written as a ClippingPlane option for the whole scene (RenderMan cannot end it); put that "
+                "ClipPlane in a node around the shapes it clips instead of removing it by hand"
+            )
         self._shapes_written += 1
         self.begin_block()
         node_world = self._stack[-1] if self._stack else np.eye(4)

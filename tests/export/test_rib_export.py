@@ -358,3 +358,14 @@ def test_triangle_sets_keep_colours_and_texture_coordinates_when_clipped():
     on_cut = np.isclose(p[:, 1], 0.0)
     np.testing.assert_allclose(cs[on_cut], [[0.5, 0, 0.5]] * 3)  # half way from red to blue
     np.testing.assert_allclose(st[on_cut, 1], 0.5)  # t flipped for RenderMan: 1 - 0.5
+
+
+def test_removing_a_whole_scene_plane_before_more_shapes_is_refused():
+    clip = om.ClipPlane((0, 1, 0), 0.0)
+    engine = rib.RIBEngine()
+    engine.on_enter(om.Node("scene"))  # inside the root node, before any shape: a whole-scene plane
+    engine.add(clip)
+    assert len(engine.global_clips) == 1
+    engine.remove(clip)
+    with pytest.raises(ValueError, match="ClipPlane in a node around the shapes"):
+        engine.eval(om.Sphere())
