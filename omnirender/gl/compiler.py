@@ -298,7 +298,13 @@ class DrawListCompiler:
         if texture is not None:
             checked = self._checked_textures.get(id(texture))
             if checked is None or checked[0]() is not texture or checked[1] != texture._version:
-                h, w = texture.image_array().shape[:2]
+                try:
+                    h, w = texture.image_array().shape[:2]
+                except (OSError, ValueError) as exc:  # a missing or unreadable image file: say where it is used
+                    where = f" in node {self.node_path}" if self.node_path else ""
+                    raise type(exc)(
+                        f"GLEngine: {exc}{where}; fix the path or pass an array (om.Texture(numpy_array))"
+                    ) from None
                 self.check_texture_size(f"Texture (image {w}x{h})", (w, h), self.max_texture_size)
                 if len(self._checked_textures) > 4096:
                     self._checked_textures.clear()

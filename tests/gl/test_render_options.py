@@ -49,3 +49,13 @@ def test_bad_backgrounds_name_the_fix(background):
 def test_a_background_argument_sets_the_clear_colour():
     image = om.render(scene_with(), engine="gl", size=(8, 8), background=(1, 0, 0))
     assert image.pixel(0, 0) == (255, 0, 0, 255)
+
+
+def test_a_missing_texture_file_names_the_node(tmp_path):
+    scene = scene_with(om.Texture(str(tmp_path / "missing.png")), om.Sphere())
+    with pytest.raises(FileNotFoundError, match=r"missing\.png.*does not exist in node /scene/obj; fix the path"):
+        om.render(scene, engine="gl", size=(8, 8))
+    (tmp_path / "garbage.png").write_bytes(b"not a png")
+    scene = scene_with(om.Texture(str(tmp_path / "garbage.png")), om.Sphere())
+    with pytest.raises(ValueError, match=r"cannot read image file .*garbage\.png.* in node /scene/obj"):
+        om.render(scene, engine="gl", size=(8, 8))
