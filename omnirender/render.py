@@ -111,9 +111,24 @@ def render(
 ) -> Any:
     """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
 
-    ``mask`` is a group-mask expression (``"!debug & (left | shared)"``);
-    other options go to the engine (``samples`` for GL, ``quality`` and
-    ``antialias`` for POV-Ray, ``spp`` for Mitsuba, ...).
+    ``scene`` is an ``om.Node`` (or a list of components); its first camera
+    is used.  ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"`` or any name
+    given to :func:`register_engine`; ``om.engines()`` tells which work here
+    and why not the others.  ``size`` is ``(width, height)`` in pixels.
+    ``mask`` is a group-mask expression (``"!debug & (left | shared)"``):
+    nodes whose groups do not match it are skipped.  Other options go to the
+    engine, which refuses the ones it does not know (see ``help()`` of
+    ``om.gl.render``, ``om.povray.render``, ``om.mitsuba.render``):
+
+    - gl: ``samples`` (MSAA, 0/1/2/4/8/16), ``background``, ``read_depth``;
+    - povray: ``quality`` (0..11), ``antialias``, ``timeout``, ``threads``, ``keep``, ``depth``;
+    - mitsuba: ``spp`` (samples per pixel), ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
+      ``depth``, ``headlight``, ``global_ambient``;
+    - every engine: ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes no handler can draw).
+
+    The returned image has ``.array`` (H, W, 4) uint8 sRGB, ``.depth``
+    (eye-space distance, inf on the background, or None), ``.mask``,
+    ``.pixel(x, y)`` and ``.save(path)``.
     """
     entry = _engines.get(engine)
     if entry is None:

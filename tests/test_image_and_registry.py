@@ -129,3 +129,17 @@ def test_node_displays_itself_in_a_notebook():
     png = scene._repr_png_()
     image = PILImage.open(io.BytesIO(png))
     assert image.size == om.Node.repr_size
+
+
+def test_render_docstring_lists_options_the_engines_really_take():
+    import inspect
+    import re
+
+    import omnirender.mitsuba.rendering
+    import omnirender.povray
+
+    doc = inspect.getdoc(om.render)
+    for engine, fn in [("povray", omnirender.povray.render), ("mitsuba", omnirender.mitsuba.rendering.render)]:
+        line = re.search(rf"- {engine}: (.*?);\n\s*- ", doc, re.S).group(1)
+        named = set(re.findall(r"``(\w+)``", line))
+        assert named and named <= set(inspect.signature(fn).parameters), (engine, named)
