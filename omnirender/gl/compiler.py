@@ -45,6 +45,9 @@ def linear_rgb(rgb: Any) -> tuple[float, float, float]:
     return (_lin(float(r)), _lin(float(g)), _lin(float(b)))
 
 
+_DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, points get its default size
+
+
 class _NodeEntry:
     """A node occurrence's compiled items, valid while its version and its own components are unchanged."""
 
@@ -311,7 +314,8 @@ class DrawListCompiler:
                 self._checked_textures[id(texture)] = (weakref.ref(texture), texture._version)
         switch = top(LightSwitch)
         self._fill = style.mode if style is not None else "filled"
-        self._point_size = float(style.point_size) if style is not None else 4.0
+        # without a DrawStyle: DrawStyle's default (1 px), as in POV-Ray and Mitsuba
+        self._point_size = float(style.point_size) if style is not None else _DEFAULT_POINT_SIZE
         cull_mode = cull.mode if cull is not None else (style.cull if style is not None else "none")
         blend_key = (blend.src, blend.dst, blend.equation) if blend is not None and blend.enabled else None
         self._blend_on = blend_key is not None

@@ -59,3 +59,14 @@ def test_a_missing_texture_file_names_the_node(tmp_path):
     scene = scene_with(om.Texture(str(tmp_path / "garbage.png")), om.Sphere())
     with pytest.raises(ValueError, match=r"cannot read image file .*garbage\.png.* in node /scene/obj"):
         om.render(scene, engine="gl", size=(8, 8))
+
+
+def test_points_without_a_draw_style_use_its_default_size():
+    # before: GL drew them 4 px wide without a DrawStyle but 1 px with DrawStyle(), POV-Ray and Mitsuba 1 px
+    import numpy as np
+
+    points = om.PointSet(np.random.default_rng(0).uniform(-1, 1, (40, 3)))
+    bare = om.render(scene_with(points), engine="gl", size=(64, 64), samples=0)
+    styled = om.render(scene_with(om.DrawStyle(), points), engine="gl", size=(64, 64), samples=0)
+    big = om.render(scene_with(om.DrawStyle(point_size=4), points), engine="gl", size=(64, 64), samples=0)
+    assert 0 < bare.mask.sum() == styled.mask.sum() < big.mask.sum()
