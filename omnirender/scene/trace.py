@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Iterable
 from typing import Any
 
 from ..core.component import Attribute, RenderingComponent, Shape
@@ -60,6 +61,10 @@ def trace(scene: Node | Any, mask: str | None = None) -> list[tuple[str, Any]]:
 
     ``op`` is one of push, pop, add, remove, install, deinstall, eval.
     """
+    if not isinstance(scene, (Node, RenderingComponent, Iterable)) or isinstance(scene, (str, bytes)):
+        raise TypeError(
+            f"trace: scene must be an om.Node or a list of components, got {type(scene).__name__} {scene!r:.60}"
+        )
     engine = TraceEngine(mask=mask)
     if isinstance(scene, Node):
         scene.evaluate(engine)
@@ -109,6 +114,11 @@ def register_statistic(fn: Any) -> Any:
 
 def statistics(scene: Node) -> Statistics:
     """Totals of ``scene`` (shared subgraphs counted once per occurrence)."""
+    if not isinstance(scene, Node):
+        raise TypeError(
+            f"statistics: scene must be an om.Node, got {type(scene).__name__} {scene!r:.60}; "
+            "wrap components in one: om.statistics(om.Node('scene', [...]))"
+        )
     counter = _Counter()
     scene.inspect(counter)
     stats = Statistics(
