@@ -199,6 +199,11 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         context therefore only makes it current.  A wrapped context (a window's)
         is assumed to be current already.
         """
+        if getattr(self, "_released", False):
+            raise RuntimeError(
+                "GLEngine: this engine was released (engine.release()) and its GPU resources are gone; "
+                "create a new GLEngine to render again"
+            )
         if self._own_context:
             self.ctx.mglo.__enter__()
         yield self.ctx
@@ -381,11 +386,14 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         return n
 
     def release(self) -> None:
-        """Free every GPU resource (and the context when the engine created it)."""
+        """Free every GPU resource (and the context when the engine created it); calling it again does nothing."""
+        if getattr(self, "_released", False):
+            return
         with self.current():
             self._release()
         if self._own_context:
             self.ctx.release()
+        self._released = True
 
     def _release(self) -> None:
         for batch in self._batches.values():

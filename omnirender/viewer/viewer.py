@@ -115,7 +115,12 @@ class Viewer:
 
     @background.setter
     def background(self, color: Sequence[float]) -> None:
-        values = [float(c) for c in color]
+        try:
+            values = [float(c) for c in color]
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"Viewer.background: need 3 or 4 numbers in [0, 1] (RGB or RGBA), got {color!r:.60}"
+            ) from None
         if len(values) == 3:
             values.append(1.0)
         if len(values) != 4 or not all(0.0 <= c <= 1.0 for c in values):
@@ -357,11 +362,17 @@ class Viewer:
         return len(self._lights)
 
     def get_light(self, index: int) -> Any:
-        return self._lights[index][0]
+        return self._light_entry(index)[0]
 
     def get_light_space(self, index: int) -> str:
         """``"camera"`` (moves with the eye) or ``"world"``."""
-        return self._lights[index][1]
+        return self._light_entry(index)[1]
+
+    def _light_entry(self, index: int) -> Any:
+        if not -len(self._lights) <= index < len(self._lights):
+            have = f"indices 0..{len(self._lights) - 1}" if self._lights else "it has none yet (add_light())"
+            raise IndexError(f"Viewer: no light {index}; {have} (num_lights() = {len(self._lights)})")
+        return self._lights[index]
 
     def get_index_of_light(self, light: Any) -> int:
         """Index of ``light`` or -1."""

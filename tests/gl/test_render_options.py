@@ -70,3 +70,15 @@ def test_points_without_a_draw_style_use_its_default_size():
     styled = om.render(scene_with(om.DrawStyle(), points), engine="gl", size=(64, 64), samples=0)
     big = om.render(scene_with(om.DrawStyle(point_size=4), points), engine="gl", size=(64, 64), samples=0)
     assert 0 < bare.mask.sum() == styled.mask.sum() < big.mask.sum()
+
+
+def test_a_released_gl_engine_says_so():
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5)), om.Sphere()])
+    engine = GLEngine(size=(8, 8))
+    assert engine.render(scene).mask.any()
+    engine.release()
+    engine.release()  # a second release does nothing (it used to fail inside moderngl)
+    with pytest.raises(RuntimeError, match="GLEngine: this engine was released.*create a new GLEngine"):
+        engine.render(scene)
