@@ -182,6 +182,7 @@ def render(
         folder = Path(tmp)
         _write_files(folder, text, "scene.pov", engine.resources)
         if keep is not None:  # the scene file and its textures, so the kept scene renders on its own
+            Path(keep).mkdir(parents=True, exist_ok=True)  # a debugging folder: create it rather than fail
             _write_files(Path(keep), text, "scene.pov", engine.resources)
         args = [
             "+Iscene.pov",

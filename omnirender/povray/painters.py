@@ -207,7 +207,11 @@ def _pixel_radius(engine: POVRayEngine, points: np.ndarray, pixels: float) -> fl
 
 def _cylinders(vertices: np.ndarray, segments: np.ndarray, radius: float) -> str:
     a, b = vertices[segments[:, 0]], vertices[segments[:, 1]]
-    keep = np.any(a != b, axis=1)
+    # POV-Ray refuses a cylinder whose ends are equal *as written* (%.7g), a fatal "Degenerate cylinder":
+    # drop segments shorter than 1e-5 of their coordinates' magnitude (they round to one point; invisible anyway)
+    scale = np.maximum(np.abs(a).max(axis=1, initial=0.0), np.abs(b).max(axis=1, initial=0.0))
+    keep = np.linalg.norm(a - b, axis=1) > 1e-5 * scale
+    keep &= np.any(a != b, axis=1)
     a, b = a[keep], b[keep]
     if len(a) == 0:
         return ""

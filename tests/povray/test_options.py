@@ -37,3 +37,29 @@ def test_bad_thread_counts_are_refused(threads):
 def test_zero_and_none_still_mean_no_antialiasing(antialias):
     image = om.render(scene(), engine="povray", size=(8, 8), quality=0, antialias=antialias)
     assert image.mask[4, 4]
+
+
+def _near_duplicate_segments() -> om.Node:
+    # the second segment's ends differ by 1e-9: equal once written with 7 significant digits
+    vertices = [(0, -1, -1), (1, -1, -1), (0, -1, -1), (0, -1 - 1e-9, -1), (0, 0, -1), (0, 1, -1)]
+    return om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5)), om.Node("lines", [om.LineSet(vertices)])])
+
+
+def test_segments_that_round_to_one_point_are_not_written(tmp_path):
+    # before: they became "cylinder { <0,-1,-1>, <0,-1,-1>, r }", a fatal "Degenerate cylinder" parse error
+    import re
+
+    sdl = om.export(_near_duplicate_segments(), tmp_path / "lines.pov").read_text()
+    ends = re.findall(r"cylinder \{ (<[^>]*>), (<[^>]*>),", sdl)
+    assert len(ends) == 2 and all(a != b for a, b in ends)
+
+
+@pytest.mark.povray
+def test_near_duplicate_segments_render():
+    assert om.render(_near_duplicate_segments(), engine="povray", size=(32, 32), quality=0).mask.any()
+
+
+@pytest.mark.povray
+def test_keep_creates_its_folder(tmp_path):
+    om.render(scene(), engine="povray", size=(8, 8), quality=0, keep=tmp_path / "debug" / "run1")
+    assert (tmp_path / "debug" / "run1" / "scene.pov").is_file()
