@@ -57,9 +57,16 @@ def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
         kind, extent = "orthographic", float(camera.height)
     else:
         kind, extent = "perspective", 2.0 * math.tan(math.radians(camera.fov) / 2.0)
+
+    # the axes at full precision: POV-Ray warns "Camera vectors are not perpendicular" when a dot product of
+    # the parsed vectors exceeds 1e-10, which 9 significant digits do not guarantee
+    def exact(v: np.ndarray) -> str:
+        sdl.vector(v)  # finite check
+        return "<" + ",".join("0" if x == 0.0 else f"{float(x):.17g}" for x in v) + ">"
+
     return (
-        f"camera {{\n  {kind}\n  location {sdl.vector(location)}\n  direction {sdl.vector(forward)}\n"
-        f"  right {sdl.vector(right * extent * aspect)}\n  up {sdl.vector(up * extent)}\n}}\n"
+        f"camera {{\n  {kind}\n  location {sdl.vector(location)}\n  direction {exact(forward)}\n"
+        f"  right {exact(right * extent * aspect)}\n  up {exact(up * extent)}\n}}\n"
     )
 
 
