@@ -36,7 +36,12 @@ class Image:
     ) -> None:
         array = np.asarray(array)
         if array.ndim != 3 or array.shape[2] not in (3, 4) or array.dtype != np.uint8:
-            raise ValueError(f"Image: array must be (H, W, 3|4) uint8, got {array.shape} {array.dtype}")
+            hint = ""
+            if array.dtype.kind == "f" and array.ndim == 3:
+                hint = "; convert floats in [0, 1] with (np.clip(a, 0, 1) * 255 + 0.5).astype(np.uint8)"
+            raise ValueError(f"Image: array must be (H, W, 3|4) uint8, got {array.shape} {array.dtype}{hint}")
+        if array.shape[0] == 0 or array.shape[1] == 0:
+            raise ValueError(f"Image: array must be at least 1x1 pixels, got {array.shape[1]}x{array.shape[0]}")
         if array.shape[2] == 3:
             alpha = np.full(array.shape[:2] + (1,), 255, np.uint8)
             array = np.concatenate([array, alpha], axis=2)
@@ -44,6 +49,13 @@ class Image:
             depth = np.asarray(depth, dtype=np.float32)
             if depth.shape != array.shape[:2]:
                 raise ValueError(f"Image: depth must be {array.shape[:2]}, got {depth.shape}")
+        if hdr is not None:
+            hdr = np.asarray(hdr)
+            if hdr.shape[:2] != array.shape[:2] or hdr.ndim != 3 or hdr.shape[2] not in (3, 4) or hdr.dtype.kind != "f":
+                raise ValueError(
+                    f"Image: hdr must be ({array.shape[0]}, {array.shape[1]}, 3|4) floats (linear radiance), "
+                    f"got {hdr.shape} {hdr.dtype}"
+                )
         self.array = array
         self.depth = depth
         self.hdr = hdr

@@ -143,3 +143,15 @@ def test_render_docstring_lists_options_the_engines_really_take():
         line = re.search(rf"- {engine}: (.*?);\n\s*- ", doc, re.S).group(1)
         named = set(re.findall(r"``(\w+)``", line))
         assert named and named <= set(inspect.signature(fn).parameters), (engine, named)
+
+
+def test_image_checks_hdr_and_empty_arrays_and_hints_at_float_conversion():
+    rgba = np.zeros((4, 6, 4), np.uint8)
+    assert om.Image(rgba, hdr=np.zeros((4, 6, 3), np.float32)).hdr.shape == (4, 6, 3)
+    for hdr in [np.zeros((4, 6)), np.zeros((4, 5, 3)), np.zeros((4, 6, 3), np.uint8)]:
+        with pytest.raises(ValueError, match=r"Image: hdr must be \(4, 6, 3\|4\) floats"):
+            om.Image(rgba, hdr=hdr)
+    with pytest.raises(ValueError, match="at least 1x1 pixels"):
+        om.Image(np.zeros((0, 0, 4), np.uint8))
+    with pytest.raises(ValueError, match=r"float32; convert floats in \[0, 1\] with"):
+        om.Image(np.zeros((4, 6, 4), np.float32))
