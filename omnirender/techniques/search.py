@@ -41,6 +41,20 @@ class AttributeSearch:
     def __contains__(self, category: type) -> bool:
         return category in self.mono or category in self.poly
 
+    def __str__(self) -> str:
+        """One line per category, named by class, so ``print(om.attribute_search(...))`` is readable."""
+        lines = [f"attributes at {self.path}:"]
+        for category, value in self.mono.items():
+            if isinstance(value, np.ndarray):  # the Transform category: the accumulated model matrix
+                text = np.array2string(value, precision=4, suppress_small=True, separator=", ")
+                text = text.replace("\n", "\n" + " " * (len(category.__name__) + 4))
+            else:
+                text = repr(value)
+            lines.append(f"  {category.__name__}: {text}")
+        for category, values in self.poly.items():
+            lines.append(f"  {category.__name__} ({len(values)}): " + ", ".join(repr(v) for v in values))
+        return "\n".join(lines)
+
 
 class AttributeSearchEngine(AnalysisEngine):
     """Captures the context at the end of the contents of the node at ``path`` (its first-parent occurrence).
