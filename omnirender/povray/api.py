@@ -45,7 +45,7 @@ def scene_sdl(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: 
     if unknown:
         raise TypeError(
             f"POV-Ray: unknown option(s) {sorted(unknown)}; render() takes size, quality, antialias, timeout, "
-            f"progress, threads, keep and the engine options {sorted(_ENGINE_OPTIONS)}"
+            f"progress, threads, keep, depth and the engine options {sorted(_ENGINE_OPTIONS)}"
         )
     if not hasattr(scene, "preevaluate"):  # a list of components
         from ..scene import Node

@@ -82,3 +82,15 @@ def test_camera_axes_are_perpendicular_as_written():
     }
     for a, b in [("direction", "right"), ("direction", "up"), ("right", "up")]:
         assert abs(axes[a] @ axes[b]) < 1e-12, (a, b)
+
+
+def test_unknown_options_list_every_render_parameter():
+    import inspect
+
+    import omnirender.povray
+
+    with pytest.raises(TypeError) as info:
+        om.render(scene(), engine="povray", size=(8, 8), spp=4)
+    named = str(info.value).split("takes ", 1)[1]
+    params = set(inspect.signature(omnirender.povray.render).parameters) - {"scene", "engine_options"}
+    assert all(p in named for p in params), (params, named)
