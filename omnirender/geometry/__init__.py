@@ -1,8 +1,8 @@
 """Shared geometric algorithms: tessellation, normals, triangulation, isosurfaces, matrices.
 
-Imports nothing but numpy (scikit-image only inside :func:`isosurface`).
-Intersection, BVH and bounds live in the submodules ``intersect``, ``bvh`` and
-``bounds`` (import them explicitly).
+Imports nothing but numpy and the core's matrix helper (scikit-image only inside
+:func:`isosurface`).  Intersection, BVH, bounds and clipping live in the
+submodules ``intersect``, ``bvh``, ``bounds`` and ``clip`` (import them explicitly).
 """
 
 from . import tessellate
