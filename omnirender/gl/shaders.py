@@ -219,8 +219,11 @@ vec3 pbr_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 albedo, vec3 F0, f
 void main() {
     vec3 P = v_pos;
     vec4 base = v_color;
+    vec3 texel = vec3(1.0);
 #ifdef TEXTURE
-    base *= texture(u_texture, v_uv);  // an sRGB texture: filtered and returned linear by the GPU
+    vec4 tex = texture(u_texture, v_uv);  // an sRGB texture: filtered and returned linear by the GPU
+    base *= tex;
+    texel = tex.rgb;
 #endif
     vec3 N;
 #ifdef POINTS
@@ -266,7 +269,8 @@ void main() {
 #endif
     } else {
         vec3 kd = base.rgb;
-        color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb) * u_ambient;
+        // the texture modulates the ambient term too (GL_MODULATE, POV-Ray's pigment, Mitsuba's albedo)
+        color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient;
 #ifdef PHONG_LIGHTS
         PHONG_LIGHTS
 #else

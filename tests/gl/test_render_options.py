@@ -82,3 +82,23 @@ def test_a_released_gl_engine_says_so():
     engine.release()  # a second release does nothing (it used to fail inside moderngl)
     with pytest.raises(RuntimeError, match="GLEngine: this engine was released.*create a new GLEngine"):
         engine.render(scene)
+
+
+def test_a_texture_modulates_the_ambient_term():
+    # before: ambient light ignored the texture (grey 139,139,139 where POV-Ray and Mitsuba show red 139,0,0)
+    import numpy as np
+
+    red = np.zeros((4, 4, 3), np.uint8)
+    red[..., 0] = 255
+    scene = om.Node(
+        "s",
+        [
+            om.Camera.look_at(eye=(0, 0, 4)),
+            om.AmbientLight(intensity=1),
+            om.Material(diffuse=(1, 1, 1), ambient=(0.5, 0.5, 0.5)),
+            om.Texture(red),
+            om.Sphere(),
+        ],
+    )
+    r, g, b, _ = om.render(scene, engine="gl", size=(32, 32)).pixel(16, 16)
+    assert abs(r - 139) <= 2 and g == 0 and b == 0  # ambient 0.5 x intensity 1 x red, in sRGB: 139, as POV-Ray
