@@ -50,8 +50,9 @@ def surface(engine: Any) -> tuple[np.ndarray, float, list[str]]:
             items.append(f"metallic {sdl.number(metallic)}")
             items.append(f"reflection {{ {sdl.number(metallic * (1.0 - rough))} metallic }}")
         emission = srgb_to_linear(pbr.emission)
+        base = _lift(base, emission)
     elif mat is not None:
-        base = srgb_to_linear(mat.diffuse)
+        base = _lift(srgb_to_linear(mat.diffuse), srgb_to_linear(mat.ambient), srgb_to_linear(mat.emission))
         transmit = 1.0 - float(mat.opacity)
         items.append(f"ambient rgb {sdl.vector(_over(srgb_to_linear(mat.ambient), base))} diffuse 1")
         spec = float(np.mean(srgb_to_linear(mat.specular)))
@@ -70,9 +71,23 @@ def surface(engine: Any) -> tuple[np.ndarray, float, list[str]]:
     return base, transmit, items
 
 
+_MIN_PIGMENT = 1e-4  # linear; 0.3/255 in sRGB: invisible under any light, yet it carries ambient and emission
+
+
+def _lift(base: np.ndarray, *needs: np.ndarray) -> np.ndarray:
+    """``base`` with black channels raised to a tiny value where ambient or emission needs them.
+
+    POV-Ray multiplies ambient and emission by the pigment, so a channel that is
+    black in the diffuse colour would also blacken them (a purely emissive
+    ``Material(diffuse=(0, 0, 0), emission=...)`` rendered black); GL adds them.
+    """
+    needed = np.maximum.reduce([np.asarray(n, np.float64) for n in needs]) > 0.0
+    return np.where(needed & (base < _MIN_PIGMENT), _MIN_PIGMENT, base)
+
+
 def _over(value: np.ndarray, base: np.ndarray) -> np.ndarray:
     """``value / base`` per channel (POV-Ray multiplies ambient and emission by the pigment)."""
-    return np.where(base > 1e-4, value / np.maximum(base, 1e-4), value)
+    return np.where(base > 0.0, value / np.maximum(base, _MIN_PIGMENT), value)
 
 
 def _finish_text(engine: Any, items: list[str]) -> str:
