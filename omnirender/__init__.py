@@ -31,7 +31,6 @@ _LAZY_MODULES = {
     "gl",
     "povray",
     "mitsuba",
-    "compositing",
     "viewer",
     "techniques",
     "geometry",
@@ -91,4 +90,8 @@ def __getattr__(name: str) -> Any:
         value = getattr(importlib.import_module(f".{_LAZY_NAMES[name]}", __name__), name)
         globals()[name] = value
         return value
-    raise AttributeError(f"module 'omnirender' has no attribute {name!r}")
+    import difflib
+
+    close = difflib.get_close_matches(name, [*__all__, *_LAZY_MODULES, *_LAZY_NAMES], n=1)
+    hint = f"; did you mean om.{close[0]}?" if close else ""
+    raise AttributeError(f"module 'omnirender' has no attribute {name!r}{hint}")

@@ -36,7 +36,12 @@ class RenderingComponent:
     def __setattr__(self, name: str, value: Any) -> None:
         object.__setattr__(self, name, value)
         if name[0] != "_":
-            self.touch()
+            try:
+                self.touch()
+            except AttributeError:
+                raise TypeError(
+                    f"{type(self).__name__}.__init__ must call super().__init__() before setting {name!r}"
+                ) from None
 
     @property
     def version(self) -> int:

@@ -72,6 +72,7 @@ class Engine:
         # node shared under two transforms shines from both places.
         self._placements: list[tuple[Light, np.ndarray]] = []
         self._running = 0
+        self._simplify_depth = 0
         #: (camera, world matrix) found by pre-evaluation, or None.
         self.camera: tuple[Camera, np.ndarray] | None = None
         self.mask = mask
@@ -608,10 +609,24 @@ def _skip(shape: Any, engine: Engine) -> None:
     return None
 
 
+_MAX_SIMPLIFY_DEPTH = 64
+
+
 def _simplifying(simplifier: Any) -> Callable[[Any, Engine], None]:
     def simplify(shape: Any, engine: Engine) -> None:
         result = simplifier.exec(shape, engine)
-        if result is not None:
+        if result is None:
+            return
+        depth = engine._simplify_depth
+        if depth >= _MAX_SIMPLIFY_DEPTH:
+            raise EvaluationError(
+                f"{type(simplifier).__name__}{engine._where()}: simplification of {type(shape).__name__} nested "
+                f"{depth} levels deep; a simplifier probably returns a shape it simplifies again (itself?)"
+            )
+        engine._simplify_depth = depth + 1
+        try:
             engine.evaluate(result)
+        finally:
+            engine._simplify_depth = depth
 
     return simplify

@@ -129,6 +129,11 @@ class HandlerRegistry:
         key = (handler.service, handler.target)
         if not key[0]:
             raise ValueError(f"{type(handler).__name__}: a handler needs a non-empty 'service'")
+        if key[1] in (RenderingComponent, Shape, Attribute):
+            raise ValueError(
+                f"{type(handler).__name__}: set 'target' to the component class it handles "
+                f"(it is the generic {key[1].__name__})"
+            )
         with self._lock:
             for engine_cls in engine_classes:
                 table = self._entries.setdefault(engine_cls, {})
@@ -201,6 +206,11 @@ def default_for(*engine_classes: type, override: bool = False):
     """
     if not engine_classes:
         raise TypeError("default_for needs at least one engine class")
+    from .engine import Engine
+
+    for cls in engine_classes:
+        if not (isinstance(cls, type) and issubclass(cls, Engine)):
+            raise TypeError(f"default_for needs engine classes (subclasses of om.Engine), got {cls!r}")
 
     def decorate(handler_cls: type) -> type:
         registry.register(handler_cls(), engine_classes, override=override)

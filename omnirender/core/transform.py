@@ -213,7 +213,7 @@ class Scaling(Transform):
     def factors(self, value: Sequence[float]) -> None:
         v = finite_vector("Scaling", "factors", value, 3)
         if np.any(v == 0.0):
-            raise ValueError(f"Scaling: factors must be non-zero, got {tuple(v)}")
+            raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
         self._set_matrix(np.diag([v[0], v[1], v[2], 1.0]))
 

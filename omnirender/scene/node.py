@@ -42,7 +42,15 @@ class Visitor:
 
 
 class Node:
-    """A named scene-graph node holding components and child nodes in order."""
+    """A named scene-graph node holding components and child nodes in order.
+
+    ``Node(name, items=(), groups=())``: ``items`` is a list of components
+    (shapes, attributes, handlers, techniques) and child nodes, evaluated in
+    order; ``groups`` is a set of group names that mask expressions test (a
+    single string is one group).  ``add``/``insert``/``remove`` edit the list;
+    ``node["/scene/body"]`` finds a node by path; ``evaluate(engine)`` emits the
+    micro program.  A node may be shared by several parents.
+    """
 
     __slots__ = (
         "_name",
@@ -65,6 +73,11 @@ class Node:
         self._program: list[tuple[int, Any]] | None = None
         self._program_version = -1
         self._pre: tuple[int, Any, Any] | None = None
+        if isinstance(items, (RenderingComponent, Node)) or not hasattr(items, "__iter__"):
+            raise TypeError(
+                f"Node {self._name!r}: items must be a list of components and nodes, got {type(items).__name__}; "
+                f"write Node({self._name!r}, [item])"
+            )
         for item in items:
             self.add(item)
 
@@ -144,6 +157,8 @@ class Node:
             item._parents.append(self)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
+        elif isinstance(item, type):
+            raise TypeError(f"Node {self.path}: cannot add the class {item.__name__}; did you mean {item.__name__}()?")
         else:
             raise TypeError(
                 f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "

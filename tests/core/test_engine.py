@@ -621,3 +621,41 @@ def test_wrong_types_raise_type_errors():
         engine.install("painter")
     with pytest.raises(ValueError, match="passes"):
         om.Technique(passes="2")
+
+
+def test_misuse_messages():
+    with pytest.raises(TypeError, match="items must be a list"):
+        om.Node("n", om.Translation(1, 0, 0))
+    with pytest.raises(TypeError, match=r"did you mean Translation\(\)"):
+        om.Node("n").add(om.Translation)
+    with pytest.raises(ValueError, match=r"got \(0.0, 1.0, 1.0\)"):
+        om.Scaling(0, 1, 1)
+
+    class Forgot(om.Shape):
+        __slots__ = ("size",)
+
+        def __init__(self):
+            self.size = 1
+
+    with pytest.raises(TypeError, match=r"must call super\(\).__init__\(\)"):
+        Forgot()
+    with pytest.raises(TypeError, match="engine classes"):
+        om.default_for(int)
+    with pytest.raises(ValueError, match="set 'target'"):
+        om.registry.register(OtherPainter.__new__(type("NoTarget", (om.ShapePainter,), {"service": "x"})), [Recorder])
+    with pytest.raises(AttributeError, match="did you mean om.Sphere"):
+        om.Spere  # noqa: B018
+
+
+def test_a_simplifier_returning_its_own_shape_is_stopped():
+    class Loop(om.ShapeSimplifier):
+        __slots__ = ()
+        target = Composite
+
+        def exec(self, shape, engine):
+            return [shape]
+
+    engine = recorder()
+    engine.install(Loop())
+    with pytest.raises(om.EvaluationError, match=r"Loop in node /n: simplification of Composite nested 64"):
+        om.Node("n", [Composite()]).evaluate(engine)
