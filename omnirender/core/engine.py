@@ -59,6 +59,7 @@ class Engine:
         if on_missing not in _POLICIES:
             raise ValueError(f"{type(self).__name__}: on_missing must be one of {_POLICIES}, got {on_missing!r}")
         self.context = RenderingContext()
+        self._mono = self.context._mono  # the mono stacks, one attribute lookup less per push/pop
         self.on_missing = on_missing
         self._caches: dict[str, tuple[dict[type, Any], dict[type, Any]]] = {}
         self._registry_generation = registry.generation
@@ -244,7 +245,7 @@ class Engine:
         """Make ``attribute`` the active one of its category."""
         h = self._attr_handlers.get(attribute.__class__, _MISSING)
         if h is None:
-            self.context._mono[attribute.category].append(attribute)
+            self._mono[attribute.category].append(attribute)
             return
         if h is _MISSING:
             if not isinstance(attribute, MonoAttribute):
@@ -254,25 +255,25 @@ class Engine:
                 )
             h = self._handler_for(attribute)
             if h is None:
-                self.context._mono[attribute.category].append(attribute)
+                self._mono[attribute.category].append(attribute)
                 return
         if h.service == SIMPLIFY:
             record = self._record(h, attribute)
-            self._frames.append([attribute, h, len(self.context._mono[attribute.category]), record])
+            self._frames.append([attribute, h, len(self._mono[attribute.category]), record])
             return
-        self.context._mono[attribute.category].append(attribute)
+        self._mono[attribute.category].append(attribute)
         h.exec(attribute, self)
 
     def pop(self, category: type) -> Attribute:
         """Remove the active attribute of ``category`` and return it."""
         if self._frames:
             frame = self._frames[-1]
-            if frame[0].category is category and len(self.context._mono[category]) == frame[2]:
+            if frame[0].category is category and len(self._mono[category]) == frame[2]:
                 self._frames.pop()
                 attribute, h, _, record = frame
                 h.unexec(attribute, self, record)
                 return attribute
-        stack = self.context._mono.get(category)
+        stack = self._mono.get(category)
         if not stack:
             name = getattr(category, "__name__", repr(category))
             raise EvaluationError(
@@ -293,7 +294,7 @@ class Engine:
         # it is what comes off (a handler that pushed without popping would
         # otherwise make attributes leak to siblings).  Inlines the common case.
         if not self._frames:
-            stack = self.context._mono.get(attribute.category)
+            stack = self._mono.get(attribute.category)
             if stack and stack[-1] is attribute:
                 stack.pop()
                 h = self._attr_handlers.get(attribute.__class__, _MISSING)
