@@ -28,6 +28,12 @@ def available() -> tuple[bool, str]:
 
 def render(scene: Any, size: tuple[int, int] = (640, 480), spp: int = 64, **options: Any) -> Any:
     """Render ``scene`` with Mitsuba 3; see :func:`omnirender.mitsuba.rendering.render` for the options."""
+    import inspect
+
     from .rendering import render as _render
 
+    accepted = [p for p in inspect.signature(_render).parameters if p not in ("scene", "size", "spp")]
+    unknown = sorted(set(options) - set(accepted))
+    if unknown:
+        raise TypeError(f"mitsuba.render: unknown option(s) {unknown}; accepted: spp, {', '.join(accepted)}")
     return _render(scene, size, spp, **options)

@@ -47,9 +47,16 @@ def render(
     scenes without lights) light the scene like the GL engine.  The image has tone-mapped (clamped)
     sRGB with straight alpha in ``.array``, linear radiance RGBA in ``.hdr``.
     """
+    if isinstance(spp, bool) or not isinstance(spp, (int, float)) or spp != int(spp) or spp < 1:
+        raise ValueError(f"mitsuba.render: spp must be a whole number >= 1, got {spp!r}")
     spp = int(spp)
-    if spp < 1:
-        raise ValueError(f"mitsuba.render: spp must be >= 1, got {spp}")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f"mitsuba.render: seed must be an integer >= 0, got {seed!r}")
+    if integrator is not None and not (isinstance(integrator, dict) and isinstance(integrator.get("type"), str)):
+        raise ValueError(
+            f"mitsuba.render: integrator must be a Mitsuba plugin dict such as {{'type': 'path', 'max_depth': 8}}, "
+            f"got {integrator!r}"
+        )
     if not isinstance(scene, Node):
         scene = Node("scene", scene)
     t0 = time.perf_counter()

@@ -1,0 +1,28 @@
+"""Mitsuba render options are checked before anything reaches Mitsuba."""
+
+from __future__ import annotations
+
+import pytest
+
+import omnirender as om
+
+
+@pytest.mark.mitsuba
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"spp": "x"}, "spp must be a whole number"),
+        ({"spp": 0}, "spp must be a whole number"),
+        ({"seed": "a"}, "seed must be an integer"),
+        ({"integrator": "magic"}, "integrator must be a Mitsuba plugin dict"),
+    ],
+)
+def test_bad_values_are_explained(options, message):
+    with pytest.raises(ValueError, match=message):
+        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", size=(8, 6), **options)
+
+
+@pytest.mark.mitsuba
+def test_unknown_options_list_the_accepted_ones():
+    with pytest.raises(TypeError, match=r"unknown option\(s\) \['quality'\]; accepted: spp, integrator, depth"):
+        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", size=(8, 6), quality=3)
