@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import sys
 import time
 from typing import Any
@@ -47,10 +48,10 @@ def render(
     scenes without lights) light the scene like the GL engine.  The image has tone-mapped (clamped)
     sRGB with straight alpha in ``.array``, linear radiance RGBA in ``.hdr``.
     """
-    if isinstance(spp, bool) or not isinstance(spp, (int, float)) or spp != int(spp) or spp < 1:
+    if isinstance(spp, bool) or not isinstance(spp, numbers.Real) or spp != int(spp) or spp < 1:
         raise ValueError(f"mitsuba.render: spp must be a whole number >= 1, got {spp!r}")
     spp = int(spp)
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
         raise ValueError(f"mitsuba.render: seed must be an integer >= 0, got {seed!r}")
     if integrator is not None and not (isinstance(integrator, dict) and isinstance(integrator.get("type"), str)):
         raise ValueError(
