@@ -13,6 +13,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 from PIL import Image, ImageDraw
 
 import omnirender as om
@@ -72,6 +73,31 @@ def gl_gallery(columns: int = 9, scale: int = 2) -> None:
     print("wrote", HERE / "gl_gallery.png")
 
 
+def agreement_images() -> None:
+    """The agreement test's scene in every engine, objects on white (engines_side_by_side.png)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from test_engines_agree import SIZE, make_scene
+
+    names = {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3"}
+    tiles = []
+    for name, (ok, _) in om.engines().items():
+        if not ok or name not in names:
+            continue
+        options = {"povray": {"antialias": True}, "mitsuba": {"spp": 256}}.get(name, {})
+        img = om.render(make_scene(), engine=name, size=SIZE, **options)
+        rgb = np.where(img.mask[:, :, None], img.rgb, 255).astype(np.uint8)
+        tile = Image.fromarray(rgb, "RGB")
+        tile.save(HERE / f"engines_{name}.png")
+        tiles.append((name, tile))
+    sheet = Image.new("RGB", (SIZE[0] * len(tiles), SIZE[1] + 24), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for i, (name, tile) in enumerate(tiles):
+        sheet.paste(tile, (i * SIZE[0], 24))
+        draw.text((i * SIZE[0] + 8, 6), names[name], fill=(0, 0, 0))
+    sheet.save(HERE / "engines_side_by_side.png")
+    print("wrote", HERE / "engines_side_by_side.png")
+
+
 def example_images() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for script in sorted((ROOT / "examples").glob("0*.py")):
@@ -86,5 +112,6 @@ def example_images() -> None:
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)
     demo_images()
+    agreement_images()
     gl_gallery()
     example_images()

@@ -8,8 +8,7 @@ through the pixel centres built from the core camera matrices, intersected
 exactly with the sphere and box, by sphere tracing with the torus and with
 the mesh's triangles.  This checks cameras, transforms and tessellations.
 
-``OMNIRENDER_WRITE_IMAGES=1`` also writes the images and a side-by-side
-composite to ``docs/images/`` for the README.
+``docs/make_images.py`` renders this scene for the README's side-by-side figure.
 """
 
 from __future__ import annotations
@@ -18,7 +17,6 @@ import functools
 import itertools
 import math
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,7 +26,6 @@ import omnirender as om
 SIZE = (320, 240)
 ENGINES = ("gl", "povray", "mitsuba")
 THRESHOLD = 0.98
-IMAGES = Path(__file__).resolve().parent.parent / "docs" / "images"
 
 TORUS_MATRIX = om.Translation(1.0, 0.45, -0.7).matrix @ om.Rotation(60, (1, 0, 0)).matrix
 MESH_MATRIX = om.Translation(0.9, 0.0, 1.3).matrix @ om.Scaling(0.55).matrix
@@ -190,32 +187,3 @@ def test_engines_agree_pairwise(a, b):
     _require(b)
     score = agreement(rendered(a).mask, rendered(b).mask)
     assert score >= THRESHOLD, f"{a} and {b} masks agree on only {score:.2%} of pixels"
-
-
-@pytest.mark.skipif(os.environ.get("OMNIRENDER_WRITE_IMAGES") != "1", reason="set OMNIRENDER_WRITE_IMAGES=1")
-def test_write_side_by_side_images():
-    """Writes docs/images/engines_<name>.png and engines_side_by_side.png (README figure)."""
-    from PIL import Image as PILImage
-    from PIL import ImageDraw
-
-    IMAGES.mkdir(parents=True, exist_ok=True)
-    tiles = []
-    for name in ENGINES:
-        if not om.engines().get(name, (False, ""))[0]:
-            continue
-        # the figure uses more samples and anti-aliasing than the mask test
-        options = {"povray": {"antialias": True}, "mitsuba": {"spp": 256}}.get(name, {})
-        img = om.render(make_scene(), engine=name, size=SIZE, **options)
-        rgb = np.where(img.mask[:, :, None], img.rgb, 255).astype(np.uint8)  # objects on white
-        flat = PILImage.fromarray(rgb, "RGB")
-        flat.save(IMAGES / f"engines_{name}.png")
-        tiles.append((name, flat))
-    assert tiles
-    sheet = PILImage.new("RGB", (SIZE[0] * len(tiles), SIZE[1] + 24), (255, 255, 255))
-    draw = ImageDraw.Draw(sheet)
-    for i, (name, tile) in enumerate(tiles):
-        sheet.paste(tile, (i * SIZE[0], 24))
-        draw.text(
-            (i * SIZE[0] + 8, 6), {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3"}[name], fill=(0, 0, 0)
-        )
-    sheet.save(IMAGES / "engines_side_by_side.png")
