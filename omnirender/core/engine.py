@@ -413,6 +413,24 @@ class Engine:
             fn = self._resolve_shape(shape.__class__)
         fn(shape, self)
 
+    def simplify(self, shape: Shape) -> None:
+        """Evaluate ``shape`` through its simplifier, bypassing painters.
+
+        For painters that cannot draw a particular case natively (a clipped
+        quadric, a non-uniformly scaled sphere) and fall back to triangles.
+        """
+        for klass in type(shape).__mro__:
+            if klass is object:
+                break
+            h = self.find_handler(SIMPLIFY, klass)
+            if h is not None:
+                _simplifying(h)(shape, self)
+                return
+        raise EvaluationError(
+            f"{type(self).__name__}: {type(shape).__name__}{self._where()} cannot be drawn natively here and "
+            f"has no simplifier; register an om.ShapeSimplifier for it"
+        )
+
     def undo(self, record: Iterable[tuple[str, Any]]) -> None:
         """Undo recorded (op, object) calls in reverse order."""
         for op, obj in reversed(list(record)):

@@ -51,8 +51,7 @@ from ..attributes import (
     PointLight,
     SpotLight,
 )
-from ..core import SIMPLIFY, AttributePainter, Camera, MonoAttribute, ShapePainter, default_for
-from ..core.errors import EvaluationError
+from ..core import AttributePainter, Camera, MonoAttribute, ShapePainter, default_for
 from ..fileio import atomic_write
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..scene import Node
@@ -262,20 +261,6 @@ class RIBEngine(NodeTrackingEngine):
             values = np.where(np.abs(values) < 1e-12, 0.0, values)
             out.append("ClippingPlane " + " ".join(f"{v:.7g}" for v in values))
         return out
-
-    def simplify(self, shape: Any) -> None:
-        """Evaluate ``shape`` through its simplifier (to clip what RenderMan draws as a quadric)."""
-        for klass in type(shape).__mro__:
-            h = self.find_handler(SIMPLIFY, klass)
-            if h is not None:
-                result = h.exec(shape, self)
-                if result is not None:
-                    self.evaluate(result)
-                return
-        raise EvaluationError(
-            f"RIB export: {type(shape).__name__} in node {self.node_path or '/'} must be clipped by a ClipPlane but "
-            "has no simplifier into triangles; register an om.ShapeSimplifier for it"
-        )
 
     def shape_block(self, local: np.ndarray | None = None) -> None:
         """Open a shape's attribute block: transform relative to the node (times ``local``) and appearance."""

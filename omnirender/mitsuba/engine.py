@@ -19,8 +19,7 @@ import numpy as np
 
 from ..attributes import Material, PBRMaterial, Texture
 from ..attributes.surface import resolve_surface
-from ..core import SIMPLIFY, Camera, Engine, Technique
-from ..core.errors import EvaluationError
+from ..core import Camera, Engine, Technique
 from . import convert
 from ._mi import mitsuba, transform
 from .attributes import BSDF, Emitter
@@ -158,21 +157,6 @@ class MitsubaEngine(Engine):
         self.shapes[key] = plugin
         return key
 
-    def simplify(self, shape: Any) -> None:
-        """Evaluate ``shape`` through its simplifier (for painters that cannot draw a case natively)."""
-        for klass in type(shape).__mro__:
-            h = self.find_handler(SIMPLIFY, klass)
-            if h is not None:
-                result = h.exec(shape, self)
-                if result is not None:
-                    self.evaluate(result)
-                return
-        raise EvaluationError(
-            f"MitsubaEngine: {type(shape).__name__} in node {self.node_path or '/'} cannot be drawn natively "
-            f"here and has no simplifier; register an om.ShapeSimplifier for it"
-        )
-
-    # -- appearance ---------------------------------------------------------
     def surface(self) -> tuple[Any, Any]:
         """(material, colour) as the GL engine resolves them (see :func:`resolve_surface`): a
         Color active after the material replaces its diffuse/base colour and scales its opacity."""

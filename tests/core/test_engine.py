@@ -659,3 +659,21 @@ def test_a_simplifier_returning_its_own_shape_is_stopped():
     engine.install(Loop())
     with pytest.raises(om.EvaluationError, match=r"Loop in node /n: simplification of Composite nested 64"):
         om.Node("n", [Composite()]).evaluate(engine)
+
+
+def test_engine_simplify_bypasses_painters():
+    class Painter(om.ShapePainter):
+        __slots__ = ()
+        service = "record"
+        target = Composite
+
+        def exec(self, shape, engine):
+            engine.seen.append(("painted", None))
+
+    engine = recorder()
+    engine.install(Painter())
+    engine.install(SimplifyComposite())
+    engine.simplify(Composite())
+    assert engine.seen == [("first", None), ("second", "green")]
+    with pytest.raises(om.EvaluationError, match="has no simplifier"):
+        engine.simplify(S())
