@@ -123,6 +123,7 @@ class Background(Parameterised, MonoAttribute):
     """
 
     __slots__ = ("_color",)
+    declared = "first"  # the first Background met is the scene's (declarative pre-evaluation)
     color = Param(check_rgba, "background colour (RGB or RGBA)")
 
     def __init__(self, color: Sequence[float] = (0.0, 0.0, 0.0)) -> None:

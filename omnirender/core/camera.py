@@ -60,6 +60,7 @@ class Camera(MonoAttribute):
     """Where the scene is seen from and how it is projected."""
 
     __slots__ = ("eye", "center", "up", "fov", "height", "near", "far", "mask")
+    declared = "first"  # the first camera met is the scene's (declarative pre-evaluation)
 
     def __init__(
         self,

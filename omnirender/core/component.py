@@ -28,6 +28,9 @@ class RenderingComponent:
 
     #: Render hints for viewers and techniques (``"transparent"``, ``"2d"``).
     hints: frozenset[str] = frozenset()
+    #: Declarative pre-evaluation (see :mod:`.declarations`): ``"all"`` placements are collected
+    #: (lights), only the ``"first"`` (camera, background), or None: the component is not declarative.
+    declared: str | None = None
 
     def __init__(self) -> None:
         object.__setattr__(self, "_version", 0)

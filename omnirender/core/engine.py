@@ -3,8 +3,17 @@
 An engine owns a :class:`RenderingContext` and an active :class:`Technique`.
 Its interface is the paper's micro program: ``push``/``pop`` mono attributes,
 ``add``/``remove`` poly attributes, ``install``/``deinstall`` handlers and
-``eval`` shapes.  Handlers are resolved per class once and cached; the cache is
-dropped by install/deinstall and when new defaults are registered.
+``eval`` shapes.  Handlers are resolved per class once and cached; install and
+deinstall patch only the cached classes they affect (see :mod:`.dispatch`),
+and new registered defaults clear the caches.
+
+The engine is also the one interpreter of compiled micro programs
+(:mod:`.program`).  Engines that mirror the graph hook into it through named,
+public methods: :meth:`Engine.on_enter` / :meth:`Engine.on_leave` (a node's
+contents begin / end), :meth:`Engine.eval_node` (a child node kept as one op:
+group masks, per-node caches) and :meth:`Engine.run_technique` (a technique's
+scope).  Technique runs keep their pass state in the engine's frame stack
+(:attr:`Engine.technique_frame`).
 """
 
 from __future__ import annotations
@@ -19,11 +28,27 @@ import numpy as np
 from .camera import Camera
 from .component import Attribute, MonoAttribute, PolyAttribute, Shape
 from .context import RenderingContext
+from .declarations import Declarations
+from .dispatch import NOTHING, SERVICE, SIMPLIFIER, HandlerCaches
 from .errors import EvaluationError, NoHandlerError
 from .handler import SIMPLIFY, Handler, registry
 from .light import Light, LightSwitch
-from .program import compile_components
-from .technique import Technique
+from .program import (
+    ADD,
+    DEINSTALL,
+    ENTER,
+    EVAL,
+    INSTALL,
+    LEAVE,
+    NODE,
+    OPCODE_NAMES,
+    POP,
+    PUSH,
+    REMOVE,
+    TECHNIQUE,
+    compile_components,
+)
+from .technique import Technique, TechniqueFrame
 
 __all__ = ["Engine"]
 
@@ -61,7 +86,8 @@ class Engine:
         self.context = RenderingContext()
         self._mono = self.context._mono  # the mono stacks, one attribute lookup less per push/pop
         self.on_missing = on_missing
-        self._caches: dict[str, tuple[dict[type, Any], dict[type, Any]]] = {}
+        self._handlers = self.context._handlers  # the handler stacks
+        self._caches = HandlerCaches(SIMPLIFY, _simplifying, self._handlers, self.deinstall)
         self._registry_generation = registry.generation
         self._node_stack: list[Any] = []
         self._frames: list[list[Any]] = []
@@ -74,27 +100,31 @@ class Engine:
         self._placements: list[tuple[Light, np.ndarray]] = []
         self._running = 0
         self._simplify_depth = 0
+        self._technique_frames: list[TechniqueFrame] = []
         #: (camera, world matrix) found by pre-evaluation, or None.
         self.camera: tuple[Camera, np.ndarray] | None = None
+        #: What the last pre-evaluation found (lights, camera, first Background...), or None.
+        self.declared: Declarations | None = None
         self.mask = mask
         self._saved_mask_fn = self._mask_fn
-        self._ops = [
-            self.push,
-            self._pop_op if type(self).pop is Engine.pop else self._pop_expected,
-            self.add,
-            self.remove,
-            self.install,
-            self.deinstall,
-            self.eval,
-            self._node_stack.append,
-            self._node_stack.pop,
-            self._eval_node,
-            self._run_technique,
-        ]
         cls = type(self)
-        if cls.on_enter is not Engine.on_enter or cls.on_leave is not Engine.on_leave:
-            self._ops[7] = self._enter_hooked
-            self._ops[8] = self._leave_hooked
+        hooked = cls.on_enter is not Engine.on_enter or cls.on_leave is not Engine.on_leave
+        ops: dict[int, Callable[[Any], Any]] = {
+            PUSH: self.push,
+            POP: self._pop_op if cls.pop is Engine.pop else self._pop_expected,
+            ADD: self.add,
+            REMOVE: self.remove,
+            # the compiler checked these are Handlers: the caches push/pop the stacks and patch themselves
+            INSTALL: self._caches.install if cls.install is Engine.install else self.install,
+            DEINSTALL: self._caches.deinstall if cls.deinstall is Engine.deinstall else self.deinstall,
+            EVAL: self.eval,
+            ENTER: self._enter_hooked if hooked else self._node_stack.append,
+            LEAVE: self._leave_hooked if hooked else self._node_stack.pop,
+            NODE: self.eval_node,
+            TECHNIQUE: self._technique_op,
+        }
+        #: The dispatch table of compiled programs, indexed by opcode (built by name, see OPCODE_NAMES).
+        self._ops: list[Callable[[Any], Any]] = [ops[code] for code in range(len(OPCODE_NAMES))]
         self._technique: Technique = technique if technique is not None else Technique()
         self._select_caches()
 
@@ -115,6 +145,81 @@ class Engine:
 
     def _leave_hooked(self, _arg: Any) -> None:
         self.on_leave(self._node_stack.pop())
+
+    def eval_node(self, node: Any) -> None:
+        """Evaluate a child node kept as one op (a node with groups, or any child of a local program).
+
+        Skips the node when the engine's group mask rejects its groups.
+        Engines with per-node caches override this (and call ``run_program``
+        on ``node.program()`` or ``node.local_program()`` on a miss).
+        """
+        groups = node.groups
+        if groups and self._mask_fn is not None and not self._mask_fn(groups):
+            return
+        self.run_program(node.program())
+
+    def run_technique(self, technique: Technique, program: list[tuple[int, Any]]) -> None:
+        """Evaluate ``program`` (the rest of a node after ``technique``) with ``technique``.
+
+        A technique this engine cannot run (``technique.supported(engine)`` is
+        False) is ignored: the program is evaluated once with the enclosing
+        technique.  Engines that run passes at another time (the GL engine
+        draws them every frame) override this.
+        """
+        if not technique.supported(self):
+            self.run_program(program)
+            return
+        previous = self._technique
+        self.technique = technique
+        try:
+            technique.run(program, self)
+        finally:
+            self.technique = previous
+
+    def _technique_op(self, arg: tuple[Technique, list[tuple[int, Any]]]) -> None:
+        self.run_technique(arg[0], arg[1])
+
+    # -- technique frames (pass state) --------------------------------------
+    def enter_technique(self, technique: Technique) -> TechniqueFrame:
+        """Push a frame for a run of ``technique`` (its pass index and data); returns it."""
+        frame = TechniqueFrame(technique)
+        self._technique_frames.append(frame)
+        return frame
+
+    def leave_technique(self, technique: Technique) -> TechniqueFrame:
+        """Pop the frame of ``technique``'s run."""
+        frames = self._technique_frames
+        if not frames or frames[-1].technique is not technique:
+            raise EvaluationError(
+                f"{type(self).__name__}: leave_technique({type(technique).__name__}) does not match the innermost "
+                f"technique run ({frames[-1] if frames else 'none'}); enter and leave techniques in nested order"
+            )
+        return frames.pop()
+
+    @property
+    def technique_frame(self) -> TechniqueFrame:
+        """The frame of the innermost technique run (RuntimeError outside any run)."""
+        if not self._technique_frames:
+            raise RuntimeError(
+                f"{type(self).__name__}: no technique is running; technique_frame and current_pass exist only "
+                f"inside a technique's start/needs_pass/prepare_pass/finish_pass/next_pass/stop"
+            )
+        return self._technique_frames[-1]
+
+    @property
+    def technique_frames(self) -> tuple[TechniqueFrame, ...]:
+        """Frames of the running techniques, outermost first."""
+        return tuple(self._technique_frames)
+
+    @property
+    def current_pass(self) -> int:
+        """The pass (0-based) of the innermost running technique."""
+        return self.technique_frame.index
+
+    @property
+    def running(self) -> bool:
+        """Whether a traversal (``run``) is under way."""
+        return self._running > 0
 
     # -- technique ----------------------------------------------------------
     @property
@@ -146,20 +251,17 @@ class Engine:
 
     def _select_caches(self) -> None:
         service = self._technique.service or self.service
-        caches = self._caches.get(service)
-        if caches is None:
-            caches = self._caches[service] = ({}, {})
+        cache = self._service_cache = self._caches.service(service)
         tcls = type(self._technique)
         self._attr_via_technique = tcls.handle_attribute is not Technique.handle_attribute
         # When the technique decides per attribute, push/pop see an empty cache and ask it.
-        self._shape_fns, self._attr_handlers = caches[0], ({} if self._attr_via_technique else caches[1])
+        self._shape_fns = cache.shapes
+        self._attr_handlers = {} if self._attr_via_technique else cache.attributes
         direct = type(self).eval is Engine.eval and tcls.handle_shape is Technique.handle_shape
-        self._ops[6] = self._eval_direct if direct else self.eval
+        self._ops[EVAL] = self._eval_direct if direct else self.eval
 
     def _invalidate(self) -> None:
-        for shapes, attrs in self._caches.values():
-            shapes.clear()
-            attrs.clear()
+        self._caches.clear()
 
     # -- handler resolution ----------------------------------------------
     def find_handler(self, service: str, target: type) -> Any:
@@ -174,44 +276,65 @@ class Engine:
             self._registry_generation = registry.generation
             self._invalidate()
 
+    def shape_handler(self, cls: type) -> Callable[[Any, Engine], Any]:
+        """The function evaluating shapes of ``cls`` for the active service (painter, simplifier or policy)."""
+        fn = self._shape_fns.get(cls)
+        if fn is None:
+            fn = self._resolve_shape(cls)
+        return fn
+
     def _resolve_shape(self, cls: type) -> Callable[[Any, Engine], Any]:
         self._check_registry()
-        service = self.active_service
-        fn = None
-        for klass in cls.__mro__:
-            if klass is object:
-                break
-            h = self.find_handler(service, klass)
-            if h is not None:
-                fn = h.exec
-                break
-            s = self.find_handler(SIMPLIFY, klass)
-            if s is not None:
-                fn = _simplifying(s)
-                break
-        if fn is None:
-            fn = self._missing(service, cls)
-        self._shape_fns[cls] = fn
-        return fn
+        resolved = self._walk(cls, True)
+        if resolved[0] is None:
+            resolved = (self._missing(self.active_service, cls), resolved[1], resolved[2])
+        self._caches.store(self._service_cache, True, cls, resolved, lambda hs: self._rewalk(cls, True, hs))
+        return resolved[0]
 
     def attribute_handler(self, cls: type) -> Any:
         """The painter or simplifier that applies attributes of ``cls``, or None."""
         self._check_registry()
-        service = self.active_service
-        cache = self._caches[service][1]
+        cache = self._service_cache
         try:
-            return cache[cls]
+            return cache.attributes[cls]
         except KeyError:
             pass
-        found = None
-        for klass in cls.__mro__:
+        resolved = self._walk(cls, False)
+        self._caches.store(cache, False, cls, resolved, lambda hs: self._rewalk(cls, False, hs))
+        return resolved[0]
+
+    def _walk(self, cls: type, shapes: bool) -> tuple[Any, int, int]:
+        """(value, MRO index, kind): the handler look-up of DESIGN.md for ``cls``, nothing cached.
+
+        ``value`` is the function evaluating shapes (``shapes=True``, None if
+        nothing was found) or the attribute handler (None: passive).
+        """
+        service = self._service_cache.service
+        mro = cls.__mro__
+        for i, klass in enumerate(mro):
             if klass is object:
                 break
-            found = self.find_handler(service, klass) or self.find_handler(SIMPLIFY, klass)
-            if found is not None:
-                break
-        cache[cls] = found
-        return found
+            h = self.find_handler(service, klass)
+            if h is not None:
+                return (h.exec if shapes else h), i, SERVICE
+            h = self.find_handler(SIMPLIFY, klass)
+            if h is not None:
+                return (_simplifying(h) if shapes else h), i, SIMPLIFIER
+        return None, len(mro), NOTHING
+
+    def _rewalk(self, cls: type, shapes: bool, handlers: list[Handler]) -> tuple[Any, int, int]:
+        """:meth:`_walk` as if ``handlers`` (each on top of its stack, innermost first) were not installed."""
+        stacks = [self.context.handler_stack(h.service, h.target) for h in handlers]
+        for stack in stacks:
+            stack.pop()
+        try:
+            resolved = self._walk(cls, shapes)
+        finally:
+            for stack, h in zip(reversed(stacks), reversed(handlers), strict=True):
+                stack.append(h)
+        if shapes and resolved[0] is None:
+            resolved = (self._missing(self.active_service, cls), resolved[1], resolved[2])
+        return resolved
 
     def _missing(self, service: str, cls: type) -> Callable[[Any, Engine], Any]:
         policy = self.on_missing
@@ -386,28 +509,29 @@ class Engine:
         """Put ``handler`` on top of its (service, target) stack."""
         if not isinstance(handler, Handler):
             raise TypeError(f"install() needs a Handler, got {type(handler).__name__}{self._where()}")
-        self.context.handler_stack(handler.service, handler.target).append(handler)
-        self._invalidate()
+        if self._registry_generation != registry.generation:
+            self._check_registry()
+        self._caches.install(handler)
 
     def deinstall(self, handler: Handler) -> None:
         """Remove ``handler`` from its (service, target) stack."""
         if not isinstance(handler, Handler):
             raise TypeError(f"deinstall() needs a Handler, got {type(handler).__name__}{self._where()}")
-        stack = self.context.handler_stack(handler.service, handler.target)
+        stack = self._handlers.get((handler.service, handler.target)) or []
         for i in range(len(stack) - 1, -1, -1):
             if stack[i] is handler:
                 del stack[i]
                 break
         else:
             raise EvaluationError(f"deinstall({handler!r}){self._where()}: the handler is not installed")
-        self._invalidate()
+        self._caches.deinstalled(handler)
 
     def eval(self, shape: Shape) -> None:
         """Evaluate ``shape`` with the active technique."""
         self._technique.handle_shape(shape, self)
 
     def _eval_direct(self, shape: Shape) -> None:
-        # eval() for techniques that do not override handle_shape: one call less.
+        # eval() for techniques that do not override handle_shape: two calls less.
         fn = self._shape_fns.get(shape.__class__)
         if fn is None:
             fn = self._resolve_shape(shape.__class__)
@@ -462,7 +586,7 @@ class Engine:
         pre-evaluation and evaluate in the current state.
         """
         if self._running:
-            self._eval_node(root)
+            self.eval_node(root)
             return
         if mask is not None:
             self.mask = mask
@@ -470,7 +594,7 @@ class Engine:
         snapshot = self._snapshot()
         try:
             self.begin(root)
-            self._eval_node(root)
+            self.eval_node(root)
         except BaseException as exc:
             path = self.node_path
             self._reset(snapshot)
@@ -482,19 +606,34 @@ class Engine:
         finally:
             self._running -= 1
 
-    def _snapshot(self) -> tuple[dict, dict, dict]:
+    def _snapshot(self) -> tuple[dict, dict, dict, int]:
         ctx = self.context
         return (
             {c: len(s) for c, s in ctx._mono.items()},
             {c: len(s) for c, s in ctx._poly.items()},
             {k: len(s) for k, s in ctx._handlers.items()},
+            len(self._technique_frames),
         )
+
+    def preevaluate(self, root: Any) -> Declarations:
+        """The declarative pre-evaluation of ``root`` under this engine's mask (cached by the graph).
+
+        Nodes answer with their incremental, per-node cached
+        ``declarations(mask_fn)``; other roots (a viewer frame) may offer
+        ``preevaluate(mask_fn) -> (lights, camera)`` instead.
+        """
+        declare = getattr(root, "declarations", None)
+        if declare is not None:
+            return declare(self._mask_fn)
+        lights, camera = root.preevaluate(self._mask_fn)
+        return Declarations.of(lights, camera)
 
     def begin(self, root: Any) -> None:
         """Declarative pre-evaluation: activate every light and find the camera."""
         self._check_registry()
         del self.context._matrices[1:]
-        lights, camera = root.preevaluate(self._mask_fn)
+        declared = self.declared = self.preevaluate(root)
+        lights, camera = declared.lights, declared.camera
         lights_set = self.context.poly_set(Light)
         for light, matrix in lights:
             self._placements.append((light, matrix))
@@ -523,10 +662,11 @@ class Engine:
         self._placements.clear()
         self._mask_fn = self._saved_mask_fn
 
-    def _reset(self, snapshot: tuple[dict, dict, dict] | None = None) -> None:
+    def _reset(self, snapshot: tuple[dict, dict, dict, int] | None = None) -> None:
         """Roll the state back to ``snapshot`` (or empty) after an error so the engine stays usable."""
         ctx = self.context
-        mono, poly, handlers = snapshot if snapshot is not None else ({}, {}, {})
+        mono, poly, handlers, frames = snapshot if snapshot is not None else ({}, {}, {}, 0)
+        del self._technique_frames[frames:]
         for c, stack in ctx._mono.items():
             del stack[mono.get(c, 0) :]
         for c, items in ctx._poly.items():
@@ -542,21 +682,6 @@ class Engine:
         self._placements.clear()
         self._light_matrices.clear()
         self._mask_fn = self._saved_mask_fn
-
-    def _eval_node(self, node: Any) -> None:
-        groups = node.groups
-        if groups and self._mask_fn is not None and not self._mask_fn(groups):
-            return
-        self.run_program(node.program())
-
-    def _run_technique(self, arg: tuple[Technique, list[tuple[int, Any]]]) -> None:
-        technique, program = arg
-        previous = self._technique
-        self.technique = technique
-        try:
-            technique.run(program, self)
-        finally:
-            self.technique = previous
 
     # -- mask ------------------------------------------------------------
     @property

@@ -21,6 +21,7 @@ class Light(PolyAttribute):
 
     __slots__ = ()
     shares_category = True
+    declared = "all"  # every light shines wherever it sits (declarative pre-evaluation)
 
 
 class LightSwitch(MonoAttribute):

@@ -6,6 +6,17 @@ along the MRO), and controls how often the sequence is evaluated: ``start``,
 then for as long as ``needs_pass`` says so ``prepare_pass``, the evaluation,
 ``finish_pass`` and ``next_pass``; finally ``stop``.  A technique met inside a
 node takes over the rest of that node's list, so nested techniques nest passes.
+
+Pass state lives in the engine, not in the technique: every run of a technique
+gets a :class:`TechniqueFrame` on the engine's frame stack
+(``engine.technique_frame``, ``engine.current_pass``), so one technique
+instance shared by two nesting levels of a DAG runs its passes at each level
+independently (3 x 3 = 9 passes, not 3).
+
+A technique an engine cannot run (``supported(engine)`` is False) is ignored:
+its scoped components are evaluated once with the enclosing technique (the
+generalized scene graph's rule).  That is how POV-Ray and Mitsuba ignore GL
+techniques.
 """
 
 from __future__ import annotations
@@ -17,7 +28,26 @@ from .component import RenderingComponent
 if TYPE_CHECKING:
     from .engine import Engine
 
-__all__ = ["Technique"]
+__all__ = ["Technique", "TechniqueFrame"]
+
+
+class TechniqueFrame:
+    """One run of a technique on an engine: the technique, its pass index and scratch data.
+
+    ``index`` is the pass being evaluated (0-based); ``data`` is a dict the
+    technique may use for state that belongs to this run (a target made in
+    ``start`` and released in ``stop``), never to the technique instance.
+    """
+
+    __slots__ = ("technique", "index", "data")
+
+    def __init__(self, technique: Technique) -> None:
+        self.technique = technique
+        self.index = 0
+        self.data: dict[str, Any] = {}
+
+    def __repr__(self) -> str:
+        return f"TechniqueFrame({type(self.technique).__name__}, pass {self.index})"
 
 
 class Technique(RenderingComponent):
@@ -26,9 +56,10 @@ class Technique(RenderingComponent):
     ``service`` None means "the engine's service".  Subclasses override the
     pass-control methods for multi-pass effects, or ``handle_shape`` to
     intercept shapes (a transparency pass collects them instead of drawing).
+    The pass being evaluated is ``engine.current_pass``.
     """
 
-    __slots__ = ("service", "passes", "_pass")
+    __slots__ = ("service", "passes")
 
     def __init__(self, service: str | None = None, passes: int = 1) -> None:
         super().__init__()
@@ -38,21 +69,19 @@ class Technique(RenderingComponent):
             raise ValueError(f"{type(self).__name__}: passes must be >= 1, got {passes}")
         object.__setattr__(self, "service", service)
         object.__setattr__(self, "passes", int(passes))
-        object.__setattr__(self, "_pass", 0)
+
+    # -- validation -------------------------------------------------------
+    def supported(self, engine: Engine) -> bool:
+        """Whether ``engine`` can run this technique (else its scope is evaluated once without it)."""
+        return True
 
     # -- pass control -----------------------------------------------------
-    @property
-    def current_pass(self) -> int:
-        """Index of the pass being evaluated (0-based)."""
-        return self._pass
-
     def start(self, engine: Engine) -> None:
-        """Called once before the first pass."""
-        object.__setattr__(self, "_pass", 0)
+        """Called once before the first pass (``engine.technique_frame`` is this run's frame)."""
 
     def needs_pass(self, engine: Engine) -> bool:
         """Whether another pass is needed."""
-        return self._pass < self.passes
+        return engine.current_pass < self.passes
 
     def prepare_pass(self, engine: Engine) -> None:
         """Called before each pass (set state, bind targets)."""
@@ -62,30 +91,31 @@ class Technique(RenderingComponent):
 
     def next_pass(self, engine: Engine) -> None:
         """Advance to the next pass."""
-        object.__setattr__(self, "_pass", self._pass + 1)
+        engine.technique_frame.index += 1
 
     def stop(self, engine: Engine) -> None:
         """Called once after the last pass."""
 
     def run(self, program: list[tuple[int, Any]], engine: Engine) -> None:
-        """Evaluate a compiled component sequence once per pass."""
-        self.start(engine)
+        """Evaluate a compiled component sequence once per pass, with this run's frame on the engine."""
+        engine.enter_technique(self)
         try:
-            while self.needs_pass(engine):
-                self.prepare_pass(engine)
-                engine.run_program(program)
-                self.finish_pass(engine)
-                self.next_pass(engine)
+            self.start(engine)
+            try:
+                while self.needs_pass(engine):
+                    self.prepare_pass(engine)
+                    engine.run_program(program)
+                    self.finish_pass(engine)
+                    self.next_pass(engine)
+            finally:
+                self.stop(engine)
         finally:
-            self.stop(engine)
+            engine.leave_technique(self)
 
     # -- handler look-up --------------------------------------------------
     def handle_shape(self, shape: Any, engine: Engine) -> None:
         """Evaluate ``shape`` with its handler (painter, simplifier, or parent class's)."""
-        fn = engine._shape_fns.get(shape.__class__)
-        if fn is None:
-            fn = engine._resolve_shape(shape.__class__)
-        fn(shape, engine)
+        engine.shape_handler(shape.__class__)(shape, engine)
 
     def handle_attribute(self, attribute: Any, engine: Engine) -> Any:
         """The handler that applies ``attribute`` (painter or simplifier), or None for passive.

@@ -170,7 +170,7 @@ class DrawListCompiler:
             elif isinstance(item, Technique):
                 # a technique takes over the rest of the list, once per pass (core machinery, no caching inside)
                 rest = compile_components(members[index + 1 :], [], f" in node {self.node_path}")
-                self._run_technique((item, rest))
+                self.run_technique(item, rest)
                 break
             elif isinstance(item, Handler):
                 self.install(item)

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..core.component import RenderingComponent
+from ..core.declarations import Declarations
 from ..core.engine import Engine
 from ..core.light import Light
 from ..core.program import ENTER, LEAVE, NODE, compile_components
@@ -60,7 +61,10 @@ class Node:
         "_groups",
         "_program",
         "_program_version",
+        "_local",
+        "_local_version",
         "_pre",
+        "_declared",
         "__weakref__",
     )
 
@@ -72,7 +76,10 @@ class Node:
         self._groups = _group_set(groups)
         self._program: list[tuple[int, Any]] | None = None
         self._program_version = -1
+        self._local: list[tuple[int, Any]] | None = None
+        self._local_version = -1
         self._pre: tuple[int, Any, Any] | None = None
+        self._declared: _Local | None = None
         if isinstance(items, (RenderingComponent, Node)) or not hasattr(items, "__iter__"):
             raise TypeError(
                 f"Node {self._name!r}: items must be a list of components and nodes, got {type(items).__name__}; "
@@ -325,28 +332,51 @@ class Node:
         self._program = program
         self._program_version = self._version
 
+    def local_program(self) -> list[tuple[int, Any]]:
+        """This node's program with every child node kept as one ``NODE`` op (not inlined).
+
+        For engines that cache per node occurrence (the GL compiler): they
+        evaluate each child through :meth:`~omnirender.core.engine.Engine.eval_node`.
+        Cached per version.
+        """
+        if self._local_version != self._version or self._local is None:
+            program: list[tuple[int, Any]] = [(ENTER, self)]
+            compile_components(self._items, program, _Where(self), inline=False)
+            program.append((LEAVE, -1))
+            self._local = program
+            self._local_version = self._version
+        return self._local
+
     def _compile_node(self, program: list[tuple[int, Any]]) -> None:
         if self._groups:
             program.append((NODE, self))
         else:
             program.extend(self.program())
 
-    def preevaluate(
-        self, mask_fn: Any = None
-    ) -> tuple[list[tuple[Light, np.ndarray]], tuple[Camera, np.ndarray] | None]:
-        """Every light with its world matrix and the first camera, in traversal order.
+    def declarations(self, mask_fn: Any = None) -> Declarations:
+        """What the graph below declares: every light and the first camera and background, with world matrices.
 
-        The result is cached while the node's version and the mask stay the same.
+        The declarative pre-evaluation every engine runs before its traversal
+        (see :mod:`omnirender.core.declarations`).  Each node caches its
+        placements in its own coordinates per version and mask, so after a
+        change only the nodes on the changed path are walked again.
         """
         cached = self._pre
         if cached is not None and cached[0] == self._version and cached[1] is mask_fn:
             return cached[2]
-        lights: list[tuple[Light, np.ndarray]] = []
-        camera: list[tuple[Camera, np.ndarray]] = []
-        _collect(self, np.eye(4), mask_fn, lights, camera)
-        result = (lights, camera[0] if camera else None)
+        if self._groups and mask_fn is not None and not mask_fn(self._groups):
+            result = Declarations([])
+        else:
+            result = Declarations(_placements(self, mask_fn))
         self._pre = (self._version, mask_fn, result)
         return result
+
+    def preevaluate(
+        self, mask_fn: Any = None
+    ) -> tuple[list[tuple[Light, np.ndarray]], tuple[Camera, np.ndarray] | None]:
+        """Every light with its world matrix and the first camera, in traversal order (see :meth:`declarations`)."""
+        found = self.declarations(mask_fn)
+        return found.lights, found.camera
 
     def inspect(self, visitor: Visitor) -> None:
         """Walk components and structure in evaluation order, without an engine."""
@@ -433,33 +463,68 @@ def _touch_ancestors(start: list[Node]) -> None:
         stack.extend(node._parents)
 
 
-def _collect(root: Node, matrix: np.ndarray, mask_fn: Any, lights: list, camera: list, _unused: Any = None) -> None:
-    """Walk ``root`` accumulating static transforms; collect lights and the first camera."""
-    if root._groups and mask_fn is not None and not mask_fn(root._groups):
-        return
-    active: set[int] = {id(root)}  # nodes on the current path (guards against cycles)
-    stack: list[list[Any]] = [[root, iter(root._items), matrix]]
+class _Local:
+    """A node's declared placements in its own coordinates, valid for one version and mask."""
+
+    __slots__ = ("version", "mask_fn", "placements")
+
+    def __init__(self, version: int, mask_fn: Any, placements: list[tuple[Any, np.ndarray | None]]) -> None:
+        self.version = version
+        self.mask_fn = mask_fn
+        self.placements = placements  # matrix None: the node's own coordinates (identity)
+
+
+def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
+    """Declared placements below ``root`` in world (root) coordinates, re-using per-node local results.
+
+    Post-order with an explicit stack, so graphs of any depth need no deep
+    recursion; a child whose local result is valid for its version and the
+    mask is not walked again.
+    """
+    local = _local_placements(root, mask_fn)
+    eye = np.eye(4)
+    return [(c, eye if m is None else m) for c, m in local]
+
+
+def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | None]]:
+    def valid(node: Node) -> _Local | None:
+        entry = node._declared
+        if entry is not None and entry.version == node._version and entry.mask_fn is mask_fn:
+            return entry
+        return None
+
+    stack: list[tuple[Node, bool]] = [(root, False)]
     while stack:
-        frame = stack[-1]
-        node, items = frame[0], frame[1]
-        for item in items:
+        node, expanded = stack.pop()
+        if not expanded:
+            if valid(node) is not None:
+                continue
+            stack.append((node, True))
+            for item in node._items:
+                if isinstance(item, Node) and not (item._groups and mask_fn is not None and not mask_fn(item._groups)):
+                    if valid(item) is None:
+                        stack.append((item, False))
+            continue
+        out: list[tuple[Any, np.ndarray | None]] = []
+        m: np.ndarray | None = None
+        for item in node._items:
             if isinstance(item, Node):
-                if id(item) in active or (item._groups and mask_fn is not None and not mask_fn(item._groups)):
+                if item._groups and mask_fn is not None and not mask_fn(item._groups):
                     continue
-                active.add(id(item))
-                stack.append([item, iter(item._items), frame[2]])
-                break
-            if isinstance(item, Transform):
-                m = getattr(item, "matrix", None)
-                if m is not None:
-                    frame[2] = frame[2] @ m
-            elif isinstance(item, Light):
-                lights.append((item, frame[2]))
-            elif isinstance(item, Camera) and not camera:
-                camera.append((item, frame[2]))
-        else:
-            stack.pop()
-            active.discard(id(node))
+                entry = item._declared
+                if entry.placements:
+                    if m is None:
+                        out.extend(entry.placements)
+                    else:
+                        out.extend((c, m if cm is None else m @ cm) for c, cm in entry.placements)
+            elif isinstance(item, Transform):
+                matrix = getattr(item, "matrix", None)  # engine-dependent transforms (Billboard) have none
+                if matrix is not None:
+                    m = matrix if m is None else m @ matrix
+            elif item.declared is not None:
+                out.append((item, m))
+        node._declared = _Local(node._version, mask_fn, out)
+    return root._declared.placements  # type: ignore[union-attr]
 
 
 def _check_name(name: str) -> str:

@@ -263,7 +263,7 @@ class CountingTechnique(om.Technique):
         object.__setattr__(self, "log", log)
 
     def prepare_pass(self, engine):
-        self.log.append((self.passes, self.current_pass))
+        self.log.append((self.passes, engine.current_pass))
 
 
 def test_nested_techniques_nest_passes():
