@@ -43,6 +43,34 @@ OPCODE_NAMES = ("push", "pop", "add", "remove", "install", "deinstall", "eval", 
 Program = list[tuple[int, Any]]
 
 
+_SHAPE, _MONO, _POLY, _TECHNIQUE, _HANDLER, _NODE, _ATTRIBUTE, _OTHER = range(8)
+_KINDS: dict[type, int] = {}
+
+
+def _kind(cls: type) -> int:
+    """What a class of item compiles to (cached per class: compiling is a dict look-up per item)."""
+    kind = _KINDS.get(cls)
+    if kind is None:
+        if issubclass(cls, Shape):
+            kind = _SHAPE
+        elif issubclass(cls, MonoAttribute):
+            kind = _MONO
+        elif issubclass(cls, PolyAttribute):
+            kind = _POLY
+        elif issubclass(cls, Technique):
+            kind = _TECHNIQUE
+        elif issubclass(cls, Handler):
+            kind = _HANDLER
+        elif hasattr(cls, "_compile_node"):
+            kind = _NODE
+        elif issubclass(cls, Attribute):
+            kind = _ATTRIBUTE
+        else:
+            kind = _OTHER
+        _KINDS[cls] = kind
+    return kind
+
+
 def compile_components(items: Iterable[Any], program: Program, where: Any = "", inline: bool = True) -> Program:
     """Append the ops that evaluate ``items`` in order and then undo them.
 
@@ -56,29 +84,33 @@ def compile_components(items: Iterable[Any], program: Program, where: Any = "", 
     items = list(items)
     undo: list[tuple[int, Any]] = []
     append = program.append
+    kinds = _KINDS
     for i, item in enumerate(items):
-        if isinstance(item, Shape):
-            append((EVAL, item))
-        elif isinstance(item, MonoAttribute):
-            append((PUSH, item))
-            undo.append((POP, item))
-        elif isinstance(item, PolyAttribute):
-            append((ADD, item))
-            undo.append((REMOVE, item))
-        elif isinstance(item, Technique):
-            rest: Program = []
-            compile_components(items[i + 1 :], rest, where, inline)
-            append((TECHNIQUE, (item, rest)))
-            break
-        elif isinstance(item, Handler):
-            append((INSTALL, item))
-            undo.append((DEINSTALL, item))
-        elif hasattr(item, "_compile_node"):
+        kind = kinds.get(item.__class__)
+        if kind is None:
+            kind = _kind(item.__class__)
+        if kind == _NODE:
             if inline:
                 item._compile_node(program)
             else:
                 append((NODE, item))
-        elif isinstance(item, Attribute):
+        elif kind == _SHAPE:
+            append((EVAL, item))
+        elif kind == _MONO:
+            append((PUSH, item))
+            undo.append((POP, item))
+        elif kind == _POLY:
+            append((ADD, item))
+            undo.append((REMOVE, item))
+        elif kind == _TECHNIQUE:
+            rest: Program = []
+            compile_components(items[i + 1 :], rest, where, inline)
+            append((TECHNIQUE, (item, rest)))
+            break
+        elif kind == _HANDLER:
+            append((INSTALL, item))
+            undo.append((DEINSTALL, item))
+        elif kind == _ATTRIBUTE:
             raise TypeError(
                 f"{type(item).__name__}{where}: an attribute must derive from MonoAttribute or PolyAttribute"
             )

@@ -3,8 +3,11 @@
 ``om.gl.render(scene, size)`` renders once; ``om.gl.GLEngine(size)`` renders
 frame after frame with ``engine.render(scene)``.  GL-specific attributes
 (``DepthTest``, ``DepthMask``, ``Blend``, ``CullFace``, ``PolygonOffset``,
-``ColorMask``, ``StencilTest``, ``StencilOp``) live here; other engines
-ignore them.  moderngl is imported only when an engine is created.
+``ColorMask``, ``StencilTest``, ``StencilOp``, ``ScissorTest``,
+``AlphaTest``) and GL techniques (``GLTechnique`` and the default
+``Forward``, described pass by pass with ``Pass``, ``Target``, ``Clear``,
+``Shader``, ``FullScreen`` and ``PingPong``) live here; other engines ignore
+them.  moderngl is imported only when an engine is created.
 """
 
 from __future__ import annotations
@@ -12,13 +15,37 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, StencilOp, StencilTest
+from .attributes import (
+    AlphaTest,
+    Blend,
+    ColorMask,
+    CullFace,
+    DepthMask,
+    DepthTest,
+    GLState,
+    PolygonOffset,
+    ScissorTest,
+    StencilOp,
+    StencilTest,
+)
+from .imagespace import PingPong
+from .passes import Clear, FullScreen, Pass, Shader, Target
 
 __all__ = [
     "render",
     "available",
     "GLEngine",
     "GLTechnique",
+    "Forward",
+    "Pass",
+    "Target",
+    "Clear",
+    "Shader",
+    "FullScreen",
+    "PingPong",
+    "GLState",
+    "ScissorTest",
+    "AlphaTest",
     "FramebufferStack",
     "DepthSprite",
     "DepthTest",
@@ -31,7 +58,13 @@ __all__ = [
     "StencilOp",
 ]
 
-_LAZY = {"GLEngine": "engine", "GLTechnique": "engine", "FramebufferStack": "framebuffer", "DepthSprite": "framebuffer"}
+_LAZY = {
+    "GLEngine": "engine",
+    "GLTechnique": "techniques",
+    "Forward": "techniques",
+    "FramebufferStack": "framebuffer",
+    "DepthSprite": "framebuffer",
+}
 _loaded = False
 
 

@@ -128,18 +128,26 @@ class RawGL:
                 fn.argtypes = args
                 setattr(self, name, fn)
 
-    def stencil(self, ctx: Any, state: tuple | None) -> None:
-        """Apply ``(func, ref, mask, fail, zfail, zpass, write_mask)`` or disable the stencil test (None)."""
-        if state is None:
-            ctx.disable_direct(GL_STENCIL_TEST)
-            return
+    def _require(self) -> None:
         if not self.available:
             raise GLError("GLEngine: StencilTest needs libOpenGL/libGL to set stencil state, which was not found")
-        func, ref, mask, fail, zfail, zpass, write = state
+
+    def stencil_test(self, ctx: Any, test: tuple | None) -> None:
+        """Enable the stencil test with ``(func, ref, mask)``, or disable it (None)."""
+        if test is None:
+            ctx.disable_direct(GL_STENCIL_TEST)
+            return
+        self._require()
+        func, ref, mask = test
         ctx.enable_direct(GL_STENCIL_TEST)
         self._func(_STENCIL_FUNCS[func], int(ref), int(mask) & 0xFFFFFFFF)
+
+    def stencil_op(self, fail: str, zfail: str, zpass: str, write_mask: int) -> None:
+        """glStencilOp and glStencilMask (the write mask)."""
+        if not self.available:
+            return  # without libGL there is no stencil test either; the default op changes nothing
         self._op(_STENCIL_OPS[fail], _STENCIL_OPS[zfail], _STENCIL_OPS[zpass])
-        self._mask(int(write) & 0xFFFFFFFF)
+        self._mask(int(write_mask) & 0xFFFFFFFF)
 
 
 GL_FRAMEBUFFER = 0x8D40

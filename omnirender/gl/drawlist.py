@@ -1,11 +1,14 @@
-"""The compiled form of a scene: draw items, interned draw states and instanced batches.
+"""The compiled form of a scene: draw items in technique scopes, interned draw states, instanced batches.
 
 Painters do not issue GL calls: they append :class:`DrawItem` objects (a
-geometry, a per-instance row of 40 floats = model matrix + material, and an
-interned :class:`DrawState`).  Items with the same geometry and state form one
-:class:`Batch`, drawn with a single instanced call; when only some items
-changed, their rows are rewritten in place and only that region of the
-instance buffer is uploaded.
+geometry, a per-instance row in the named layout :data:`~.layout.ROW`, and an
+interned :class:`DrawState`).  Items are collected into :class:`Scope`
+objects: the root scope holds the scene, and every technique met in a node
+opens a nested scope holding what it scopes, so the technique's passes can be
+run at draw time on exactly those items.  Opaque items of a scope with the
+same geometry and state form one :class:`Batch`, drawn with a single
+instanced call; when only some items changed, their rows are rewritten in
+place and only that region of the instance buffer is uploaded.
 """
 
 from __future__ import annotations
@@ -14,63 +17,108 @@ from typing import Any
 
 import numpy as np
 
-from .shaders import ROW
+from .layout import ROW
 
-__all__ = ["DrawItem", "DrawState", "Batch", "plan_batches", "uniform_material"]
+__all__ = ["DrawItem", "DrawState", "Batch", "Scope", "Segment", "plan_batches", "uniform_material"]
+
+_MATERIAL = np.concatenate(
+    [
+        np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
+        for f in ROW.fields
+        if f.name not in ("model", "color")
+    ]
+)
 
 
 class DrawState:
-    """Everything but the geometry and the per-instance row that a draw needs (interned, compared by identity)."""
+    """Everything but the geometry and the instance row that a draw needs (interned, compared by identity).
+
+    ``raster`` holds one captured value per registered GL state kind
+    (:mod:`.state`); ``features`` the program ``#define``s; ``uniforms`` the
+    uniform values the state kinds need (e.g. the alpha-test reference);
+    ``code`` the state kinds whose GLSL the program includes.
+    """
 
     __slots__ = (
         "kind",
         "features",
-        "depth_func",
-        "depth_mask",
-        "blend",
-        "cull",
-        "polygon_offset",
-        "color_mask",
-        "stencil",
-        "wireframe",
-        "line_width",
+        "raster",
+        "uniforms",
+        "code",
         "texture",
         "clip",
         "fog",
         "switch",
-        "special",
         "extra",
         "overlay",
+        "special",
     )
 
-    def __init__(self, **values: Any) -> None:
-        for name in self.__slots__:
-            setattr(self, name, values.get(name))
-        self.special = bool(
-            self.stencil is not None
-            or self.color_mask != (True, True, True, True)
-            or self.depth_func != "less"
-            or not self.depth_mask
-        )
+    def __init__(
+        self,
+        kind: str,
+        features: tuple,
+        raster: tuple,
+        uniforms: tuple = (),
+        code: tuple = (),
+        texture: Any = None,
+        clip: tuple = (),
+        fog: Any = None,
+        switch: Any = None,
+        extra: Any = None,
+        overlay: bool = False,
+        special: bool = False,
+    ) -> None:
+        self.kind = kind
+        self.features = features
+        self.raster = raster
+        self.uniforms = uniforms
+        self.code = code
+        self.texture = texture
+        self.clip = clip
+        self.fog = fog
+        self.switch = switch
+        self.extra = extra
+        self.overlay = overlay
+        #: drawing order matters (a state kind says so): batches never merge across this item
+        self.special = special
 
-    def key(self) -> tuple:
-        return tuple(getattr(self, name) for name in self.__slots__)
+    def value(self, kind: Any) -> Any:
+        """The captured value of a state kind (a GL attribute class, e.g. ``om.gl.DepthTest``)."""
+        return self.raster[kind.index]
 
     def __repr__(self) -> str:
         return f"DrawState({self.kind}, {dict(self.features)})"
 
 
 class DrawItem:
-    """One shape occurrence: geometry, state, instance row, transparency and the node it was evaluated in."""
+    """One shape occurrence: geometry, state, instance row, transparency, node and group tags on its path."""
 
-    __slots__ = ("geometry", "state", "row", "transparent", "node")
+    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups")
 
-    def __init__(self, geometry: Any, state: DrawState, row: np.ndarray, transparent: bool, node: Any = None) -> None:
+    def __init__(
+        self,
+        geometry: Any,
+        state: DrawState,
+        row: np.ndarray,
+        transparent: bool,
+        node: Any = None,
+        groups: tuple[frozenset[str], ...] = (),
+    ) -> None:
         self.geometry = geometry
         self.state = state
         self.row = row
         self.transparent = transparent
         self.node = node
+        #: the group sets of the tagged nodes on the item's path (outermost first), for pass masks
+        self.groups = groups
+
+    @property
+    def item_class(self) -> str:
+        """``"opaque"``, ``"transparent"`` or ``"overlay"``: which pass of the forward technique draws it."""
+        if self.state.overlay:
+            return "overlay"
+        return "transparent" if self.transparent else "opaque"
 
     @property
     def path(self) -> str:
@@ -83,7 +131,12 @@ class DrawItem:
 
 
 class Batch:
-    """Items sharing geometry and state, drawn with one instanced call."""
+    """Opaque items sharing geometry and state, drawn with one instanced call.
+
+    ``rows`` are the items' full rows; the GPU buffer holds only the fields
+    of ``layout`` (what the batch's program variants read), re-packed when a
+    variant needs more.
+    """
 
     __slots__ = (
         "geometry",
@@ -91,12 +144,11 @@ class Batch:
         "items",
         "rows",
         "buffer",
-        "vao",
-        "program",
+        "layout",
+        "vaos",
         "capacity",
         "dirty",
         "uniform",
-        "stride",
         "sorted_for",
     )
 
@@ -104,17 +156,16 @@ class Batch:
         self.geometry = geometry
         self.state = state
         self.items: list[DrawItem] = []
-        self.rows = np.empty((0, ROW), np.float32)
+        self.rows = np.empty((0, ROW.stride), np.float32)
         self.buffer: Any = None
-        self.vao: Any = None
-        self.program: Any = None
+        self.layout: Any = None
+        #: vertex arrays per program
+        self.vaos: dict[int, Any] = {}
         self.capacity = 0
         self.dirty: tuple[int, int] | None = None
-        #: True when every instance has the same material apart from its colour (uniforms instead of attributes).
+        #: True when every instance has the same material apart from its colour (uniforms instead of attributes)
         self.uniform = False
-        #: floats per instance in the GPU buffer (20 = matrix + colour when the material is uniform).
-        self.stride = 0
-        #: the view (bytes of the view matrix) the instances were last sorted front to back for, or None.
+        #: the view (bytes of the view matrix) the instances were last sorted front to back for, or None
         self.sorted_for: bytes | None = None
 
     def mark(self, index: int) -> None:
@@ -122,51 +173,130 @@ class Batch:
         self.dirty = (index, index + 1) if d is None else (min(d[0], index), max(d[1], index + 1))
 
     def release(self) -> None:
-        if self.vao is not None:
-            self.vao.release()
-            self.vao = None
+        for vao in self.vaos.values():
+            vao.release()
+        self.vaos.clear()
         if self.buffer is not None:
             self.buffer.release()
             self.buffer = None
         self.capacity = 0
+        self.layout = None
 
 
 def uniform_material(rows: np.ndarray) -> bool:
-    """Whether all rows share the material columns (specular, emission, ambient, highlight, extra)."""
-    tail = rows[:, 20:40]
-    return bool(len(rows) == 1 or (tail == tail[0]).all())
+    """Whether all rows share every field but the model matrix and the colour."""
+    if len(rows) == 1:
+        return True
+    tail = rows[:, _MATERIAL]
+    return bool((tail == tail[0]).all())
 
 
-def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], list[tuple | None], list[DrawItem]]:
-    """Group opaque items by (geometry, state); returns groups, per-item (key, index) slots, other items.
+def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], list[tuple | None]]:
+    """Group opaque items by (geometry, state); returns the groups and per-item (key, index) slots.
 
-    Items with special raster state (stencil, colour mask, depth function or
-    depth mask) are grouped only with consecutive items of the same state, so
-    two stencil-writing or masking items are never merged across each other
-    and their relative order is kept.  Plain items are merged freely within a
-    stretch between special items (a batch draws at the position of its first
-    item), never across a special item, so what is drawn after a special item
-    stays after it.
+    Items with special raster state (a state kind whose value makes order
+    matter: stencil, colour mask, depth function or mask) are grouped only with
+    consecutive items of the same state, so two stencil-writing or masking
+    items are never merged across each other and their relative order is
+    kept.  Plain items are merged freely within a stretch between special
+    items (a batch draws at the position of its first item), never across a
+    special item.  Transparent and overlay items get the slot None.
     """
     groups: dict[tuple, list[DrawItem]] = {}
     slots: list[tuple | None] = []
-    others: list[DrawItem] = []
     segment = 0
     previous: DrawState | None = None
     for item in items:
         state = item.state
         if item.transparent or state.overlay:
             slots.append(None)
-            others.append(item)
             continue
         if state is not previous and (state.special or (previous is not None and previous.special)):
             segment += 1
         previous = state
-        # plain items are keyed by the segment too: a plain shape after a special-state one stays after it
         key = (item.geometry, state, segment)
         group = groups.get(key)
         if group is None:
             group = groups[key] = []
         slots.append((key, len(group)))
         group.append(item)
-    return groups, slots, others
+    return groups, slots
+
+
+class Segment:
+    """A run of a scope's items between nested scopes: its opaque batches and its other items."""
+
+    __slots__ = ("items", "batches", "slots", "others")
+
+    def __init__(self, items: list[DrawItem]) -> None:
+        self.items = items
+        self.batches: list[Batch] = []
+        #: per item of ``items``: (batch, index in batch) or None (transparent, overlay)
+        self.slots: list[tuple[Batch, int] | None] = []
+        self.others: list[DrawItem] = [it for it in items if it.transparent or it.state.overlay]
+
+
+class Scope:
+    """The draw items a technique scopes (the root scope: the whole scene), in compile order.
+
+    ``entries`` interleaves items and nested scopes as the traversal met them.
+    ``plan()`` splits them into :class:`Segment` objects and nested scopes.
+    ``technique`` is None for the root (the engine's technique draws it).
+    """
+
+    __slots__ = ("technique", "entries", "parts", "positions", "filtered", "__weakref__")
+
+    def __init__(self, technique: Any = None) -> None:
+        self.technique = technique
+        self.entries: list[DrawItem | Scope] = []
+        #: Segment or Scope objects in order (made by plan)
+        self.parts: list[Segment | Scope] | None = None
+        #: entry index -> (segment, position) of the items (made on the first in-place update)
+        self.positions: dict[int, tuple[Segment, int]] | None = None
+        #: batches of filtered selections (a pass mask or predicate), by filter key
+        self.filtered: dict[Any, Any] = {}
+
+    def items(self) -> list[DrawItem]:
+        """This scope's own items, in order."""
+        return [e for e in self.entries if isinstance(e, DrawItem)]
+
+    def scopes(self) -> list[Scope]:
+        """The nested scopes, in order."""
+        return [e for e in self.entries if isinstance(e, Scope)]
+
+    def walk(self) -> list[Scope]:
+        """This scope and every scope below it, depth first."""
+        out, stack = [], [self]
+        while stack:
+            scope = stack.pop()
+            out.append(scope)
+            stack.extend(reversed(scope.scopes()))
+        return out
+
+    def all_items(self) -> list[DrawItem]:
+        """Every item of this scope and the scopes below it, in compile order."""
+        out: list[DrawItem] = []
+        stack: list[Any] = [iter(self.entries)]
+        while stack:
+            for entry in stack[-1]:
+                if isinstance(entry, Scope):
+                    stack.append(iter(entry.entries))
+                    break
+                out.append(entry)
+            else:
+                stack.pop()
+        return out
+
+    def shape(self) -> tuple:
+        """The structure (technique identities and per-item geometry, state, transparency) for in-place updates."""
+        out: list[Any] = [id(self.technique)]
+        for e in self.entries:
+            if isinstance(e, Scope):
+                out.append(e.shape())
+            else:
+                out.append((id(e.geometry), id(e.state), e.transparent))
+        return tuple(out)
+
+    def __repr__(self) -> str:
+        name = "root" if self.technique is None else type(self.technique).__name__
+        return f"Scope({name}, {len(self.items())} items, {len(self.scopes())} scopes)"

@@ -1,22 +1,24 @@
 """The OpenGL engine: context, framebuffers, and the frame loop (compile, then draw).
 
 Rendering is COMPILE then DRAW (DESIGN.md, performance model).  Compiling
-runs the GL technique's traversal: painters append draw items to a flat list
-instead of issuing GL calls.  The list is cached per node and version, so a
-frame whose scene did not change replays the GPU batches without any
-traversal, and a frame where one subtree changed recompiles only that
-subtree and rewrites only the changed instance rows.  Drawing is the
-technique's two passes: opaque batches (one instanced call per geometry and
-state), then transparent items sorted back to front with blending on and
-depth writes off, then 2D overlays (text) without depth test.  The two halves
-live in :mod:`.compiler` and :mod:`.renderer`; this module owns the context,
-the targets, cameras and resources.
+runs the core interpreter over the scene once: painters append draw items to
+scopes instead of issuing GL calls, and every technique met in a node opens a
+nested scope (:mod:`.compiler`).  The items are cached per node and version,
+so a frame whose scene did not change replays the GPU batches without any
+traversal, and a frame where one subtree changed recompiles only that subtree
+and rewrites only the changed instance rows.  Drawing runs the techniques'
+passes at draw time, every frame (:mod:`.frame`): the default technique
+``Forward`` draws opaque batches, transparent items sorted back to front and
+2D overlays; nested techniques run their own passes over what they scope
+(:mod:`.renderer` draws the items of one pass).  This module owns the
+context, the targets, cameras and resources.
 """
 
 from __future__ import annotations
 
 import contextlib
 import math
+import weakref
 from collections.abc import Iterator
 from typing import Any
 
@@ -35,11 +37,16 @@ from .context import (
     create_context,
     depth_stencil_framebuffer,
 )
-from .drawlist import Batch, DrawItem, DrawState
+from .drawlist import Batch, DrawItem, DrawState, Scope
+from .frame import FrameRunner
 from .geometry import Geometry, GeometryCache, unit_mesh
+from .imagespace import FullScreenPrograms
+from .layout import ROW
 from .renderer import BatchRenderer
 from .resources import gpu_call
-from .shaders import ROW, ProgramCache
+from .shaders import ProgramCache
+from .state import defaults, kinds
+from .techniques import Forward, GLTechnique
 
 __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
 
@@ -47,30 +54,15 @@ __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
 DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
-class GLTechnique(Technique):
-    """The default GL technique: compile the graph into draw items, then draw in two passes.
-
-    Pass 1 draws opaque items, pass 2 the transparent items found while
-    compiling, sorted back to front; 2D overlays come last.  The traversal
-    itself is one pass that only collects (painters append draw items), so it
-    can be cached and replayed.
-    """
-
-    __slots__ = ()
-
-    def __init__(self) -> None:
-        super().__init__(service="gl.paint", passes=1)
-
-    def parameters(self) -> dict:
-        return {}  # fixed service and passes: nothing to save in scene files
-
-
-class GLEngine(DrawListCompiler, BatchRenderer, Engine):
+class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
 
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
     renders frame after frame, keeping GPU resources between frames.
-    ``samples=0`` turns multisampling off.
+    ``samples=0`` turns multisampling off.  ``technique`` replaces the default
+    :class:`~.techniques.Forward` technique (the passes every frame and every
+    nested technique pass draws items with); ``timing=True`` measures each
+    pass's GPU time with timer queries (``engine.stats["passes"]``).
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -105,11 +97,16 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         technique: Technique | None = None,
         on_missing: str = "raise",
         mask: Any = None,
+        timing: bool = False,
     ) -> None:
         from . import _load
 
         _load()  # painters register on first use
-        super().__init__(technique=technique or GLTechnique(), on_missing=on_missing, mask=mask)
+        if technique is not None and not isinstance(technique, Technique):
+            raise TypeError(f"GLEngine: technique must be an om.Technique (e.g. om.gl.Forward()), got {technique!r}")
+        super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
+        #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
+        self.timing = bool(timing)
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
         self._size = check_size(size, self.ctx)
@@ -128,36 +125,52 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self._preevaluated = False
         self._make_targets()
         # compile state
-        self._items: list[DrawItem] = []
-        self._immediate: list[DrawItem] = []
+        self._immediate = Scope()  # what painters submit outside a compile (the viewer's frames)
+        self._scope: Scope = self._immediate
+        self._root: Scope | None = None
+        self._compile_frames: list[list[Any]] = []
+        self._group_path: list[tuple[frozenset[str], ...]] = [()]
         self._node_cache: dict[Any, Any] = {}
-        self._pre_cache: dict[int, tuple[Any, int, Any]] = {}
+        self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any] | None = None  # (scene ref, version, mask key)
-        self._list: list[DrawItem] = []
-        self._slots: list[Any] = []
-        self._batches: dict[tuple, Batch] = {}
-        self._batch_order: list[Batch] = []
-        self._others: list[DrawItem] = []
-        self._scene_lights: list[tuple[Any, np.ndarray]] = []
-        self._scene_background: Any = None
+        self._full_key: Any = None
         self._surface: list[Any] = []
         self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
         self._state_dirty = True
         self._surface_dirty = True
         self._state_base: tuple = ()
         self._states: dict[tuple, DrawState] = {}
-        self._surface_row = np.zeros(ROW - 16, np.float32)
+        self._surface_row = np.zeros(ROW.stride, np.float32)
         self._surface_memo: dict[tuple, tuple[Any, np.ndarray]] = {}
         self._point_size = 1.0
         self._blend_on = False
+        self._auto_cull = True
         self._fill = "filled"
+        self._kinds_seen = len(kinds())
+        # draw state
+        self._batch_pool: dict[tuple, Batch] = {}
         self._transient: dict[Any, tuple[Any, ...]] = {}
-        self._gl_state: dict[str, Any] = {}
+        self._textures: dict[int, tuple[Any, int, Any]] = {}
+        self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
+        self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
         self._drawers: dict[str, Any] = GLEngine._default_drawers
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
+        self._defaults = defaults()
+        self._requests: list[Any] = []
+        self._target_cache: dict[Any, Any] = {}
+        self._frame_targets: dict[str, Any] = {}
+        self._fullscreen_programs = FullScreenPrograms(self.ctx)
+        self._query_pool: list[Any] = []
+        self._records: list[Any] = []
+        self._record_stack: list[Any] = []
+        self._applier: Any = None
+        self._nclip = 0
+        self._target_size = tuple(self._size)
+        self._linear_output = False
         self.stats: dict[str, Any] = {}
         self._view = np.eye(4)
         self._proj = np.eye(4)
+        self._ortho = False
         self._camera_used: Camera | None = None
         with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
@@ -297,18 +310,35 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
                 self.compile(scene, mask=mask)
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
-                self._install_list(self._immediate)
-                self._immediate = []
-                self._items = self._immediate
+                self._install(self._immediate)
+                self._immediate = Scope()
+                self._scope = self._immediate
                 self._compiled = None
                 if not self._preevaluated:
                     # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
                     self.camera = None
-                    self._scene_lights = []
-                    self._scene_background = None
+                    self.declared = None
             self._preevaluated = False
             self.draw(background=background)
             return self.read(read_depth=read_depth)
+
+    @property
+    def draw_items(self) -> list[DrawItem]:
+        """Every compiled draw item of the installed frame, in compile order (nested scopes included)."""
+        return [] if self._root is None else self._root.all_items()
+
+    @property
+    def batches(self) -> list[Batch]:
+        """The instanced batches of opaque items of every installed scope."""
+        from .drawlist import Segment
+
+        return [b for scope in self.scopes for part in (scope.parts or []) if isinstance(part, Segment)
+                for b in part.batches]  # fmt: skip
+
+    @property
+    def scopes(self) -> list[Scope]:
+        """The installed root scope and every technique scope below it, depth first."""
+        return [] if self._root is None else self._root.walk()
 
     def scene_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World-space (min, max) of the compiled draw list, or None when it is empty."""
@@ -316,13 +346,13 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
             return self._bounds
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
-        for item in self._list:
+        for item in self.draw_items:
             if item.state.overlay:
                 continue
             g = item.geometry
             b0, b1 = g.bounds
             corners = np.array([[x, y, z, 1.0] for x in (b0[0], b1[0]) for y in (b0[1], b1[1]) for z in (b0[2], b1[2])])
-            m = item.row[:16].reshape(4, 4).T.astype(np.float64)
+            m = item.row[ROW.slice("model")].reshape(4, 4).T.astype(np.float64)
             w = corners @ m.T
             lo = np.minimum(lo, w[:, :3].min(axis=0))
             hi = np.maximum(hi, w[:, :3].max(axis=0))
@@ -368,8 +398,8 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
     def clear_color(self, background: Any = None) -> tuple[float, float, float, float]:
         """The sRGB clear colour: ``background`` argument, scene Background, engine default."""
         bg = background if background is not None else self.background
-        if bg is None and self._scene_background is not None:
-            bg = self._scene_background
+        if bg is None and self.scene_background is not None:
+            bg = self.scene_background
         if bg is None:
             return DEFAULT_BACKGROUND
         color = _background_color(getattr(bg, "color", bg))
@@ -380,9 +410,11 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
 
     def live_buffers(self) -> int:
         """GPU buffers this engine holds now (geometry, instance data, transient), for leak checks."""
-        n = sum(len(g.buffers) for g in self._uploaded() if g.buffers is not None)
-        n += sum(1 for b in self._batches.values() if b.buffer is not None)
-        n += sum(1 for k, v in self._transient.items())
+        n = sum(len(g.buffers) for g in self._uploaded_set if g.buffers is not None)
+        n += sum(1 for b in self._batch_pool.values() if b.buffer is not None)
+        n += sum(1 for s in self.scopes for group in s.filtered.values() for bs in group.values() for b in bs
+                 if b.buffer is not None)  # fmt: skip
+        n += len(self._transient)
         return n
 
     def release(self) -> None:
@@ -396,18 +428,30 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
         self._released = True
 
     def _release(self) -> None:
-        for batch in self._batches.values():
+        for batch in self._batch_pool.values():
             batch.release()
-        self._batches.clear()
-        self._batch_order = []
+        self._batch_pool.clear()
+        for scope in self.scopes:
+            for group in scope.filtered.values():
+                for batches in group.values():
+                    for batch in batches:
+                        batch.release()
         for buf, vao, *_ in self._transient.values():
             vao.release()
             buf.release()
         self._transient.clear()
-        for g in self._uploaded():
+        for g in list(self._uploaded_set):
             g.release()
-        for entry in self.__dict__.get("_textures", {}).values():
+        for entry in self._textures.values():
             entry[2].release()
+        self._textures.clear()
+        for target in self._target_cache.values():
+            target.release()
+        self._target_cache.clear()
+        self._fullscreen_programs.release()
+        for query in self._query_pool:
+            query.mglo.release() if hasattr(query.mglo, "release") else None
+        self._query_pool.clear()
         self.programs.release()
         seen = set()
         for obj in self._targets.values():
@@ -415,7 +459,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, Engine):
                 seen.add(id(obj))
                 obj.release()
         self._targets.clear()
-        self._list = []
+        self._root = None
         self._node_cache.clear()
         self._compiled = None
 

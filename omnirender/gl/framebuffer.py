@@ -135,7 +135,7 @@ class DepthSprite:
         e = self.engine
         ctx = e.ctx
         with e.current():
-            if "sprite" not in e.programs._custom:
+            if not e.programs.registered("sprite"):
                 e.programs.register("sprite", _VS, _FS)
             prog = e.programs.get("sprite")
             quad = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], np.float32).tobytes())

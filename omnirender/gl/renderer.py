@@ -1,11 +1,12 @@
-"""Drawing a compiled draw list: instanced batches, the two passes, GL state, read-back.
+"""Drawing the items of a scope in one (composed) pass: instanced batches, sorted transparency, overlays, read-back.
 
-Opaque items are grouped into batches (one instanced call per geometry and
-state; only changed instance rows are uploaded), transparent items are sorted
-back to front each frame and drawn with blending and without depth writes,
-overlays (text) come last.  Program variants are chosen per draw from the
-state's features, the frame's light types and whether a batch shares one
-material (then uniforms replace per-instance attributes).
+Opaque items are grouped into batches per scope segment (one instanced call
+per geometry and state; only changed instance rows are uploaded, and only the
+fields the batch's program variants read).  Transparent items are sorted back
+to front each time they are drawn, with blending on and depth writes off;
+closed transparent shapes draw back faces, then front faces.  Overlays (text)
+come last.  What a pass changes (state overrides, shader features, camera) is
+applied per draw from the :class:`~.passes.Composed` pass.
 """
 
 from __future__ import annotations
@@ -15,204 +16,389 @@ from typing import Any
 
 import numpy as np
 
+from ..core.mask import compile_mask
 from ..image import Image
-from .context import GLError, clear_stencil, set_masks
-from .drawlist import Batch, DrawItem, DrawState, plan_batches, uniform_material
+from .attributes import Blend, CullFace, DepthMask
+from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, plan_batches, uniform_material
 from .geometry import Geometry
+from .layout import ROW
 from .lighting import LightUniforms
+from .passes import Composed
 from .resources import gpu_call
-from .shaders import INSTANCE_ATTRIBUTES, INSTANCE_FORMAT, ROW
+from .shaders import instance_fields
+from .state import LineWidth
 
-__all__ = ["BatchRenderer"]
+__all__ = ["BatchRenderer", "SORT_MIN"]
 
-_DEPTH_FUNCS = {
-    "never": "0",
-    "less": "<",
-    "equal": "==",
-    "lequal": "<=",
-    "greater": ">",
-    "notequal": "!=",
-    "gequal": ">=",
-    "always": "1",
-}
 _GL_CLIP_DISTANCE0 = 0x3000
-_GL_SRGB8_ALPHA8 = 0x8C43
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
+_TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
+_MODEL = ROW.slice("model")
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
+_OVER = ("src_alpha", "one_minus_src_alpha", "add")
+_MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
+                      ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
 
 
 class BatchRenderer:
-    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: batches, passes, GL state and read-back."""
+    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: install the compiled scopes, draw them, read back."""
 
-    def _install_list(self, items: list[DrawItem]) -> None:
-        """Make ``items`` the draw list: update batches in place when possible, else rebuild them."""
-        old = self._list
+    # -- installing a compiled root scope ------------------------------------------------
+    def _install(self, root: Scope) -> None:
+        """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
+        old = self._root
         self._bounds = None
-        if len(items) == len(old) and old:
-            changed = [i for i, (a, b) in enumerate(zip(items, old, strict=False)) if a is not b]
-            slots = self._slots
-            ok = True
-            for i in changed:
-                a, b = items[i], old[i]
-                if a.geometry is not b.geometry or a.state is not b.state or a.transparent != b.transparent:
-                    ok = False
-                    break
-            if ok:
-                others = self._others
-                need_others = False
-                for i in changed:
-                    slot = slots[i]
-                    if slot is None:
-                        need_others = True
-                        continue
-                    batch, index = slot
-                    batch.items[index] = items[i]
-                    row = items[i].row
-                    batch.rows[index] = row
-                    batch.mark(index)
-                    if batch.uniform and not (row[20:40] == batch.rows[0, 20:40]).all():
-                        batch.uniform = False
-                if need_others:
-                    self._others = [it for it in items if it.transparent or it.state.overlay]
-                else:
-                    self._others = others
-                self._list = items
-                self.stats["incremental"] = len(changed)
-                return
+        if old is not None and old is not root and old.entries and _same_shape(old, root):
+            self.stats["incremental"] = self._update_in_place(old, root)
+            return
         self.stats["incremental"] = None
-        groups, plan, others = plan_batches(items)
+        pool = self._batch_pool
+        self._batch_pool = {}
+        self._plan(root, (), pool)
+        for batch in pool.values():
+            batch.release()
+        if old is not None and old is not root:
+            for scope in old.walk():
+                _release_filtered(scope)
+        self._root = root
+        self._item_count = len(root.all_items())
+        self._sweep(root)
+
+    def _plan(self, scope: Scope, where: tuple, pool: dict[tuple, Batch]) -> None:
+        parts: list[Segment | Scope] = []
+        run: list[DrawItem] = []
+
+        def flush() -> None:
+            if run:
+                parts.append(self._segment(list(run), (*where, len(parts)), pool))
+                run.clear()
+
+        for entry in scope.entries:
+            if isinstance(entry, Scope):
+                flush()
+                self._plan(entry, (*where, len(parts)), pool)
+                parts.append(entry)
+            else:
+                run.append(entry)
+        flush()
+        scope.parts = parts
+        scope.positions = None
+        scope.filtered = {}
+
+    def _segment(self, items: list[DrawItem], where: tuple, pool: dict[tuple, Batch]) -> Segment:
+        segment = Segment(items)
+        groups, slots = plan_batches(items)
         batches: dict[tuple, Batch] = {}
         for key, group in groups.items():
-            batch = self._batches.pop(key, None)
+            pool_key = (where, *key)
+            batch = pool.pop(pool_key, None)
             if batch is None:
                 batch = Batch(key[0], key[1])
             batch.items = group
             batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].row[None, :].copy()
             batch.dirty = (0, len(group))
             batch.uniform = uniform_material(batch.rows)
+            batch.sorted_for = None
             batches[key] = batch
-        for batch in self._batches.values():
-            batch.release()
-        self._batches = batches
-        self._batch_order = list(batches.values())
-        self._slots = [None if s is None else (batches[s[0]], s[1]) for s in plan]
-        self._others = others
-        self._list = items
+            self._batch_pool[pool_key] = batch
+        segment.batches = list(batches.values())
+        segment.slots = [None if s is None else (batches[s[0]], s[1]) for s in slots]
+        return segment
+
+    def _update_in_place(self, old: Scope, new: Scope) -> int:
+        """Copy the rows of ``new``'s items into ``old``'s structure (checked to be the same); returns the count."""
+        changed = 0
+        stack = [(old, new)]
+        while stack:
+            a, b = stack.pop()
+            differ = [i for i, (x, y) in enumerate(zip(a.entries, b.entries, strict=True)) if x is not y]
+            if not differ:
+                continue
+            where = a.positions
+            if where is None:
+                where = a.positions = _positions(a)
+            touched = False
+            for i in differ:
+                x, y = a.entries[i], b.entries[i]
+                if isinstance(x, Scope):
+                    stack.append((x, y))  # type: ignore[arg-type]
+                    continue
+                a.entries[i] = y
+                segment, position = where[i]
+                segment.items[position] = y
+                slot = segment.slots[position]
+                if slot is None:
+                    segment.others = [it for it in segment.items if it.transparent or it.state.overlay]
+                else:
+                    batch, index = slot
+                    batch.items[index] = y
+                    batch.rows[index] = y.row
+                    batch.mark(index)
+                    if batch.uniform and not uniform_material(batch.rows[[0, index]]):
+                        batch.uniform = False
+                changed += 1
+                touched = True
+            if touched:
+                _release_filtered(a)
+        return changed
+
+    def _sweep(self, root: Scope) -> None:
+        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures)."""
+        items = root.all_items()
         used = {id(it.geometry) for it in items}
-        # instance buffers of transparent draws whose (geometry, state) the new list no longer has (e.g. a clip
-        # plane or texture that changes every frame gives a new state each frame); entries hold their geometry
-        # and state, so these ids cannot be reused while an entry exists
         drawn = {(id(it.geometry), id(it.state)) for it in items if it.transparent}
-        for transient in list(self._transient):
-            if transient[:2] not in drawn:
-                buf, vao, *_ = self._transient.pop(transient)
+        for key in list(self._transient):
+            if key[:2] not in drawn:
+                buf, vao, *_ = self._transient.pop(key)
                 vao.release()
                 buf.release()
         self.geometry_cache.sweep(used)
-        for geom in list(self._uploaded()):
+        for geom in list(self._uploaded_set):
             if id(geom) not in used and not geom.persistent:
                 geom.release()
-        textures = self.__dict__.get("_textures")
-        if textures:
-            # textures of attributes the list no longer uses (e.g. re-simplified mesh files) are freed
+        if self._textures:
             live = {id(it.state.texture) for it in items if it.state.texture is not None}
-            for key in [k for k in textures if k not in live]:
-                textures.pop(key)[2].release()
+            for key in [k for k in self._textures if k not in live]:
+                self._textures.pop(key)[2].release()
 
-    def _uploaded(self) -> list[Geometry]:
-        return [g for g in self.__dict__.setdefault("_uploaded_set", weakref.WeakSet())]
-
-    def _ensure_uploaded(self, geometry: Geometry) -> None:
+    def upload(self, geometry: Geometry) -> None:
+        """Make sure ``geometry`` has its GPU buffers (drawers call it)."""
         if geometry.buffers is None:
             geometry.upload(self.ctx)
-            self.__dict__.setdefault("_uploaded_set", weakref.WeakSet()).add(geometry)
+            self._uploaded_set.add(geometry)
 
-    def draw(self, background: Any = None, clear: bool = True) -> None:
-        """Draw the installed draw list into the framebuffer (opaque, transparent sorted, overlays).
+    # -- drawing a scope's items in a pass -----------------------------------------------
+    def _draw_items(self, scope: Scope, composed: Composed, nested: Any) -> int:
+        """Draw the items of ``scope`` that ``composed`` selects; ``nested(scope)`` runs a nested technique scope.
 
-        ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        Order: opaque batches and nested scopes as they were met, then
+        transparent items back to front, then overlays.
         """
-        with self.current():
-            self._draw(background, clear)
-
-    def _draw(self, background: Any, clear: bool) -> None:
-        ctx = self.ctx
-        fbo = self.framebuffer
-        _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
-        fbo.use()
-        ctx.viewport = (0, 0, *self._size)
-        self._gl_state.clear()
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        if clear:
-            fbo.clear(*self.clear_color(background), depth=1.0)
-            if self.has_stencil and not self._target_stack:
-                clear_stencil(self.raw, 0)
-        ctx.enable(ctx.PROGRAM_POINT_SIZE)
-        camera, view, proj = self._camera_matrices()
-        self._camera_used = camera
-        self._view = view
-        self._view_key = view.tobytes()
-        self._proj = proj
-        self._frame_uniforms = {
-            "u_view": view.T.astype(np.float32).tobytes(),
-            "u_proj": proj.T.astype(np.float32).tobytes(),
-        }
-        self._light_cache: dict[int, LightUniforms] = {}
+        classes = composed.classes
         calls = 0
-        for batch in self._batch_order:
-            calls += self._draw_batch(batch)
-        others = self._others
-        if others:
-            calls += self._draw_others(others)
-        self._restore_defaults()
-        self.stats["draw_calls"] = calls
-        self.stats["batches"] = len(self._batch_order)
-        self.stats["items"] = len(self._list)
-        err = ctx.error
-        if err != "GL_NO_ERROR":
-            if "OUT_OF_MEMORY" in err:
-                raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
-            raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
+        parts = scope.parts or []
+        filtered = self._filter(scope, composed) if (composed.masks or composed.selects) else None
+        if "opaque" in classes or composed.scopes:
+            for index, part in enumerate(parts):
+                if isinstance(part, Scope):
+                    if composed.scopes:
+                        calls += nested(part)
+                    continue
+                if "opaque" in classes:
+                    batches = part.batches if filtered is None else filtered[index]
+                    for batch in batches:
+                        calls += self._draw_batch(batch, composed)
+        others: list[DrawItem] | None = None
+        if "transparent" in classes or "overlay" in classes:
+            others = [it for part in parts if isinstance(part, Segment) for it in part.others]
+            if filtered is not None:
+                keep = self._accepts(composed)
+                others = [it for it in others if keep(it)]
+        if "transparent" in classes and others:
+            calls += self._draw_transparent([it for it in others if it.transparent and not it.state.overlay], composed)
+        if "overlay" in classes and others:
+            for it in others:
+                if it.state.overlay:
+                    drawer = self._drawers.get(it.state.kind)
+                    if drawer is not None:
+                        made = drawer(self, [it], it.state)
+                        self._applier.forget()
+                        self.count(made, 1)
+                        calls += made
+        return calls
+
+    def _accepts(self, composed: Composed) -> Any:
+        masks = [compile_mask(m) for m in composed.masks]
+        selects = composed.selects
+
+        def keep(item: DrawItem) -> bool:
+            for mask in masks:
+                for groups in item.groups:
+                    if not mask(groups):
+                        return False
+            return all(select(item) for select in selects)
+
+        return keep
+
+    def _filter(self, scope: Scope, composed: Composed) -> dict[int, list[Batch]]:
+        """Batches of the opaque items a mask/predicate keeps, per segment index (cached until the scope changes)."""
+        key = (composed.masks, composed.selects)
+        cached = scope.filtered.get(key)
+        if cached is not None:
+            return cached
+        keep = self._accepts(composed)
+        out: dict[int, list[Batch]] = {}
+        for index, part in enumerate(scope.parts or []):
+            if isinstance(part, Segment):
+                kept = [it for it in part.items if keep(it)]
+                out[index] = self._segment(kept, ("filtered", id(scope), key, index), {}).batches if kept else []
+        scope.filtered[key] = out
+        return out
+
+    # -- batches -----------------------------------------------------------------------
+    def _features(self, state: DrawState, uniform: bool, highlight: bool, composed: Composed, single: bool) -> tuple:
+        """Program features of a draw: the state's, the lights, the material sharing, the pass's shading."""
+        features = state.features
+        shading = composed.shading()
+        if state.kind in ("mesh", "points"):
+            lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
+            if lit:
+                features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+            if self._ortho:
+                features = features + (("ORTHO", True),)
+            if not uniform:
+                features = features + (("INSTANCE_MATERIAL", True),)
+            elif single:
+                features = features + (("SINGLE", True),)
+        if highlight:
+            features = features + (("HIGHLIGHT", True),)
+        if self._linear_output:
+            features = features + (("LINEAR_OUTPUT", True),)
+        return features + shading
+
+    def _draw_batch(self, batch: Batch, composed: Composed) -> int:
+        state = batch.state
+        drawer = self._drawers.get(state.kind)
+        if drawer is not None:
+            calls = drawer(self, batch.items, state)
+            self._applier.forget()
+            self.count(calls, len(batch.items))
+            return calls
+        n = len(batch.items)
+        highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        single = n == 1 and batch.uniform and state.kind == "mesh"
+        features = self._features(state, batch.uniform, highlight, composed, single)
+        prog = self.programs.get(state.kind, features, state.code)
+        fields = instance_fields(state.kind, dict(features))
+        if fields and batch.buffer is not None and batch.layout is not None and batch.layout.names() != fields:
+            batch.release()  # a variant reads other fields: re-pack
+        if fields and (batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None):
+            batch.release()
+            batch.layout = ROW.subset(fields)
+            batch.buffer = gpu_call(
+                self.ctx.buffer, reserve=max(n, 1) * batch.layout.stride * 4, dynamic=True, what="instance data"
+            )
+            batch.capacity = max(n, 1)
+            batch.dirty = (0, n)
+        vao = batch.vaos.get(id(prog))
+        if vao is None:
+            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout)
+        if fields:
+            columns = self._columns(batch.layout)
+            if n >= SORT_MIN and not state.special:
+                # opaque instances front to back: early depth tests then skip hidden fragments
+                if batch.dirty is not None or batch.sorted_for != self._view_key:
+                    z = batch.rows[:, _TRANSLATION] @ self._view[2, :3]
+                    order = np.argsort(-z, kind="stable")
+                    batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.sorted_for = self._view_key
+                    batch.dirty = None
+            elif batch.dirty is not None:
+                lo, hi = batch.dirty
+                data = np.ascontiguousarray(batch.rows[lo:hi][:, columns])
+                batch.buffer.write(data.tobytes(), offset=lo * batch.layout.stride * 4)
+                batch.dirty = None
+        else:
+            row = batch.rows[0]
+            prog["i_model"].write(row[_MODEL].tobytes())
+            u = prog.get("i_color", None)
+            if u is not None:
+                u.write(row[ROW.slice("color")].tobytes())
+        self._apply_raster(composed.raster(state.raster, self._defaults), state)
+        self._set_uniforms(prog, state, composed)
+        if batch.uniform:
+            self._set_material(prog, batch.rows[0])
+        vao.render(self._mode(batch.geometry, state.kind), instances=n)
+        self.count(1, n)
+        return 1
+
+    def _columns(self, layout: Any) -> np.ndarray:
+        key = layout.names()
+        cols = self._column_cache.get(key)
+        if cols is None:
+            cols = self._column_cache[key] = layout.columns(ROW)
+        return cols
+
+    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any) -> Any:
+        self.upload(geometry)
+        content = geometry.content(program)
+        if buffer is not None and layout is not None:
+            fmt, names = layout.vertex_format()
+            content.append((buffer, fmt, *names))
+        index = geometry.buffers.get("index") if kind != "points" else None
+        return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
+
+    def _mode(self, geometry: Geometry, kind: str) -> int:
+        ctx = self.ctx
+        if kind == "points" or geometry.mode == "points":
+            return ctx.POINTS
+        if geometry.mode == "lines":
+            return ctx.LINES
+        return ctx.TRIANGLES
+
+    def _set_material(self, prog: Any, row: np.ndarray) -> None:
+        for name, field in _MATERIAL_UNIFORMS:
+            u = prog.get(name, None)
+            if u is not None:
+                u.write(row[ROW.slice(field)].tobytes())
 
     def _lights_for(self, switch: Any) -> LightUniforms:
         key = id(switch)
         lu = self._light_cache.get(key)
         if lu is None:
-            lights = self._scene_lights
+            lights = self.scene_lights
             if switch is not None:
                 lights = [(light, m) for light, m in lights if switch.allows(light)]
-            lu = LightUniforms(lights, self._view, headlight=not self._scene_lights)
+            lu = LightUniforms(lights, self._view, headlight=not self.scene_lights)
             self._light_cache[key] = lu
         return lu
 
-    def _set_uniforms(self, prog: Any, state: DrawState) -> None:
+    def _set_uniforms(self, prog: Any, state: DrawState, composed: Composed) -> None:
         for name, data in self._frame_uniforms.items():
             u = prog.get(name, None)
             if u is not None:
                 u.write(data)
         self._lights_for(state.switch).apply(prog)
-        u = prog.get("u_ortho", None)
-        if u is not None:
-            u.value = 1 if self._camera_used is not None and self._camera_used.is_orthographic else 0
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
             color, start, end, density, mode = state.fog
-            prog["u_fog"].value = (start, end, density, mode)
-            prog["u_fog_color"].value = color
+            u = prog.get("u_fog", None)
+            if u is not None:
+                u.value = (start, end, density, mode)
+                prog["u_fog_color"].value = color
         if state.kind == "lines":
-            prog["u_viewport"].value = (self._size[0] / 2.0, self._size[1] / 2.0)
-            prog["u_line_width"].value = float(state.line_width)
+            prog["u_viewport"].value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
+            prog["u_line_width"].value = float(state.value(LineWidth))
         if state.texture is not None:
             self._texture(state.texture).use(0)
             u = prog.get("u_texture", None)
             if u is not None:
                 u.value = 0
+        for name, value in state.uniforms:
+            u = prog.get(name, None)
+            if u is not None:
+                u.value = value
+        for name, value in composed.uniforms().items():
+            u = prog.get(name, None)
+            if u is not None:
+                u.value = value
+
+    def _apply_raster(self, raster: tuple, state: DrawState) -> None:
+        self._applier.apply(raster)
+        nclip = len(state.clip)
+        if self._nclip != nclip:
+            for i in range(6):
+                if i < nclip:
+                    self.ctx.enable_direct(_GL_CLIP_DISTANCE0 + i)
+                else:
+                    self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
+            self._nclip = nclip
 
     def _texture(self, attr: Any) -> Any:
-        cache = self.__dict__.setdefault("_textures", {})
-        entry = cache.get(id(attr))
-        if entry is not None and entry[0]() is attr and entry[1] == attr._version:
+        entry = self._textures.get(id(attr))
+        if entry is not None and entry[0]() is attr and entry[1] == attr.version:
             return entry[2]
         if entry is not None:
             entry[2].release()
@@ -237,265 +423,90 @@ class BatchRenderer:
             tex.use(0)
             for pname in (0x2802, 0x2803):  # GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
                 self.raw.glTexParameteri(0x0DE1, pname, 0x8370)
-        cache[id(attr)] = (weakref.ref(attr), attr._version, tex)
+        self._textures[id(attr)] = (weakref.ref(attr), attr.version, tex)
         return tex
 
-    def _apply_state(self, state: DrawState, *, blend_override: Any = None, depth_mask: Any = None) -> None:
-        ctx = self.ctx
-        cur = self._gl_state
-        depth = state.depth_func
-        if cur.get("depth") != depth:
-            if depth is None:
-                ctx.disable(ctx.DEPTH_TEST)
+    # -- transparent items -------------------------------------------------------------
+    def _draw_transparent(self, items: list[DrawItem], composed: Composed) -> int:
+        """Back to front (blending on where nothing else is set, depth writes off); closed shapes back faces first."""
+        if not items:
+            return 0
+        rows = np.stack([it.row for it in items])
+        centers = np.array([(it.geometry.bounds[0] + it.geometry.bounds[1]) / 2.0 for it in items])
+        mats = rows[:, _MODEL].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
+        world = np.einsum("nij,nj->ni", mats[:, :3, :3], centers) + mats[:, :3, 3]
+        z = world @ self._view[2, :3] + self._view[2, 3]
+        order = np.argsort(z, kind="stable")  # most negative z (farthest) first
+        runs: list[tuple[Any, DrawState, list[int]]] = []
+        for i in order:
+            it = items[i]
+            if (
+                runs
+                and runs[-1][0] is it.geometry
+                and runs[-1][1] is it.state
+                and not _two_faced(it.geometry, it.state)
+            ):
+                # instances of a two-faced run would draw all back faces, then all front faces: a nearer
+                # instance's back faces would then land under a farther one's front faces, so those runs
+                # hold one instance each
+                runs[-1][2].append(int(i))
             else:
-                ctx.enable(ctx.DEPTH_TEST)
-                ctx.depth_func = _DEPTH_FUNCS[depth]
-            cur["depth"] = depth
-        dmask = state.depth_mask if depth_mask is None else (depth_mask and state.depth_mask)
-        if cur.get("dmask") != dmask:
-            set_masks(ctx, self.raw, self.framebuffer, depth=dmask)
-            cur["dmask"] = dmask
-        blend = state.blend if blend_override is None else blend_override
-        if cur.get("blend") != blend:
-            if blend is None:
-                ctx.disable(ctx.BLEND)
-            else:
-                ctx.enable(ctx.BLEND)
-                src, dst, eq = blend
-                if src == "src_alpha" and dst == "one_minus_src_alpha":
-                    # "over": the alpha channel accumulates coverage (a + (1 - a) dst), so a transparent
-                    # background keeps the right opacity
-                    ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
-                else:
-                    ctx.blend_func = (_factor(ctx, src), _factor(ctx, dst))
-                ctx.blend_equation = _equation(ctx, eq)
-            cur["blend"] = blend
-        cull = cur.get("cull_override") or state.cull
-        if cur.get("cull") != cull:
-            if cull == "none":
-                ctx.disable(ctx.CULL_FACE)
-            else:
-                ctx.enable(ctx.CULL_FACE)
-                ctx.cull_face = cull
-            cur["cull"] = cull
-        if cur.get("offset") != state.polygon_offset:
-            ctx.polygon_offset = state.polygon_offset or (0.0, 0.0)
-            cur["offset"] = state.polygon_offset
-        if cur.get("cmask") != state.color_mask:
-            set_masks(ctx, self.raw, self.framebuffer, color=state.color_mask)
-            cur["cmask"] = state.color_mask
-        if cur.get("stencil", None) != state.stencil:
-            self.raw.stencil(ctx, state.stencil)
-            cur["stencil"] = state.stencil
-        if cur.get("wire") != state.wireframe:
-            ctx.wireframe = bool(state.wireframe)
-            cur["wire"] = state.wireframe
-        if state.wireframe and cur.get("width") != state.line_width:
-            ctx.line_width = float(state.line_width)
-            cur["width"] = state.line_width
-        nclip = len(state.clip) if state.clip else 0
-        if cur.get("nclip", 0) != nclip:
-            for i in range(6):
-                if i < nclip:
-                    ctx.enable_direct(_GL_CLIP_DISTANCE0 + i)
-                else:
-                    ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
-            cur["nclip"] = nclip
-
-    def _restore_defaults(self) -> None:
-        """State preservation: leave the context as a plain moderngl user expects it."""
-        ctx = self.ctx
-        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
-        ctx.wireframe = False
-        ctx.polygon_offset = (0.0, 0.0)
-        set_masks(ctx, self.raw, self.framebuffer, color=(True, True, True, True), depth=True)
-        if self._gl_state.get("stencil") is not None:
-            self.raw.stencil(ctx, None)
-        for i in range(self._gl_state.get("nclip", 0)):
-            ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
-        self._gl_state.clear()
-
-    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, compact: bool = False) -> Any:
-        self._ensure_uploaded(geometry)
-        content = geometry.content(program)
-        if buffer is None:
-            pass
-        elif compact:
-            content.append((buffer, "16f 4f/i", "i_model", "i_color"))
-        else:
-            content.append((buffer, INSTANCE_FORMAT, *INSTANCE_ATTRIBUTES))
-        index = geometry.buffers.get("index") if kind != "points" else None
-        return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
-
-    def _mode(self, geometry: Geometry, kind: str) -> int:
-        ctx = self.ctx
-        if kind == "points" or geometry.mode == "points":
-            return ctx.POINTS
-        if geometry.mode == "lines":
-            return ctx.LINES
-        return ctx.TRIANGLES
-
-    def _features(self, state: DrawState, rows: np.ndarray, uniform: bool) -> tuple:
-        """Program features of a draw: the state's plus light count and, when shared, the material model."""
-        features = state.features
-        if state.kind in ("mesh", "points"):
-            features = features + (("LIGHTS", self._lights_for(state.switch).types),)
-            if self._camera_used is not None and self._camera_used.is_orthographic:
-                features = features + (("ORTHO", True),)
-            if uniform:
-                features = features + (("MODEL", int(round(float(rows[0, 27])))), ("UNIFORM_MATERIAL", True))
-                if rows[0, 35] > 0.0:
-                    features = features + (("HIGHLIGHT", True),)
-        return features
-
-    def _set_material(self, prog: Any, row: np.ndarray) -> None:
-        for name, lo in (("u_spec", 20), ("u_emis", 24), ("u_amb", 28), ("u_hl", 32), ("u_extra", 36)):
-            u = prog.get(name, None)
-            if u is not None:
-                u.write(row[lo : lo + 4].tobytes())
-
-    def _draw_batch(self, batch: Batch) -> int:
-        state = batch.state
-        drawer = self._drawers.get(state.kind)
-        if drawer is not None:
-            return drawer(self, batch.items, state)
-        n = len(batch.items)
-        features = self._features(state, batch.rows, batch.uniform)
-        single = n == 1 and batch.uniform and state.kind == "mesh"
-        if single:
-            # one instance: model matrix and colour as uniforms, like a hand-written draw call
-            features = features + (("SINGLE", True),)
-        prog = self.programs.get(state.kind, features)
-        stride = 0 if single else 20 if batch.uniform else ROW
-        if batch.geometry.buffers is None or batch.stride != stride or (stride and batch.capacity < n):
-            if batch.vao is not None:
-                batch.vao.release()
-                batch.vao = None
-            if batch.buffer is not None:
-                batch.buffer.release()
-                batch.buffer = None
-            capacity = max(n, 1)
-            if stride:
-                batch.buffer = gpu_call(
-                    self.ctx.buffer, reserve=capacity * stride * 4, dynamic=True, what="instance data"
-                )
-            batch.capacity = capacity
-            batch.stride = stride
-            batch.dirty = (0, n)
-        if batch.vao is None or batch.program is not prog:
-            if batch.vao is not None:
-                batch.vao.release()
-            batch.program = prog
-            batch.vao = self._vao(batch.geometry, prog, batch.buffer, state.kind, compact=stride == 20)
-        if stride and n >= SORT_MIN and not state.special:
-            # opaque instances front to back: early depth tests then skip hidden fragments
-            if batch.dirty is not None or batch.sorted_for != self._view_key:
-                view = self._view
-                z = batch.rows[:, 12:15] @ view[2, :3]
-                order = np.argsort(-z, kind="stable")
-                data = batch.rows[order] if stride == ROW else batch.rows[order, :20]
-                batch.buffer.write(np.ascontiguousarray(data).tobytes())
-                batch.sorted_for = self._view_key
-                batch.dirty = None
-        elif batch.dirty is not None:
-            if stride:
-                lo, hi = batch.dirty
-                data = batch.rows[lo:hi] if stride == ROW else np.ascontiguousarray(batch.rows[lo:hi, :20])
-                batch.buffer.write(data.tobytes(), offset=lo * stride * 4)
-            batch.dirty = None
-        if single:
-            row = batch.rows[0]
-            prog["i_model"].write(row[:16].tobytes())
-            u = prog.get("i_color", None)
-            if u is not None:
-                u.write(row[16:20].tobytes())
-        self._apply_state(state)
-        self._set_uniforms(prog, state)
-        if batch.uniform:
-            self._set_material(prog, batch.rows[0])
-        batch.vao.render(self._mode(batch.geometry, state.kind), instances=n)
-        return 1
-
-    def _draw_others(self, items: list[DrawItem]) -> int:
-        """Transparent items back to front (blending on, depth writes off), then overlays."""
-        transparent = [it for it in items if it.transparent and not it.state.overlay]
-        overlays = [it for it in items if it.state.overlay]
+                runs.append((it.geometry, it.state, [int(i)]))
         calls = 0
-        if transparent:
-            rows = np.stack([it.row for it in transparent])
-            centers = np.array([(it.geometry.bounds[0] + it.geometry.bounds[1]) / 2.0 for it in transparent])
-            mats = rows[:, :16].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
-            world = np.einsum("nij,nj->ni", mats[:, :3, :3], centers) + mats[:, :3, 3]
-            z = world @ self._view[2, :3] + self._view[2, 3]
-            order = np.argsort(z, kind="stable")  # most negative z (farthest) first
-            runs: list[tuple[Any, DrawState, list[int]]] = []
-            for i in order:
-                it = transparent[i]
-                if (
-                    runs
-                    and runs[-1][0] is it.geometry
-                    and runs[-1][1] is it.state
-                    and not _two_faced(it.geometry, it.state)
-                ):
-                    # instances of a two-faced run would draw all back faces, then all front faces: a nearer
-                    # instance's back faces would then land under a farther one's front faces, so those runs
-                    # hold one instance each
-                    runs[-1][2].append(i)
-                else:
-                    runs.append((it.geometry, it.state, [i]))
-            default_blend = ("src_alpha", "one_minus_src_alpha", "add")
-            for geometry, state, indices in runs:
-                drawer = self._drawers.get(state.kind)
-                if drawer is not None:
-                    calls += drawer(self, [transparent[i] for i in indices], state)
-                    continue
-                data = rows[indices]
-                uniform = uniform_material(data)
-                buf, vao, prog = self._transient_vao(
-                    geometry, state, len(indices), self._features(state, data, uniform)
-                )
-                buf.write(data.tobytes())
-                if uniform:
-                    self._set_material(prog, data[0])
-                self._apply_state(state, blend_override=state.blend or default_blend, depth_mask=False)
-                self._set_uniforms(prog, state)
-                mode = self._mode(geometry, state.kind)
-                if _two_faced(geometry, state):
-                    # back faces first, then front faces: closed transparent shapes blend correctly
-                    for face in ("front", "back"):
-                        self._gl_state["cull_override"] = face
-                        self._apply_state(state, blend_override=state.blend or default_blend, depth_mask=False)
-                        vao.render(mode, instances=len(indices))
-                        calls += 1
-                    self._gl_state["cull_override"] = None
-                else:
-                    vao.render(mode, instances=len(indices))
-                    calls += 1
-        for it in overlays:
-            drawer = self._drawers.get(it.state.kind)
+        for geometry, state, indices in runs:
+            drawer = self._drawers.get(state.kind)
             if drawer is not None:
-                calls += drawer(self, [it], it.state)
+                made = drawer(self, [items[i] for i in indices], state)
+                self._applier.forget()
+                self.count(made, len(indices))
+                calls += made
+                continue
+            data = rows[indices]
+            uniform = uniform_material(data)
+            highlight = bool((data[:, _HIGHLIGHT_ON] > 0.0).any())
+            features = self._features(state, uniform, highlight, composed, False)
+            prog = self.programs.get(state.kind, features, state.code)
+            layout = ROW.subset(instance_fields(state.kind, dict(features)))
+            buf, vao = self._transient_vao(geometry, state, prog, layout, len(indices))
+            buf.write(np.ascontiguousarray(data[:, self._columns(layout)]).tobytes())
+            if uniform:
+                self._set_material(prog, data[0])
+            raster = list(composed.raster(state.raster, self._defaults))
+            if raster[Blend.index] is None:
+                raster[Blend.index] = _OVER
+            raster[DepthMask.index] = False
+            self._set_uniforms(prog, state, composed)
+            mode = self._mode(geometry, state.kind)
+            if _two_faced(geometry, state):
+                # back faces first, then front faces: closed transparent shapes blend correctly
+                for face in ("front", "back"):
+                    raster[CullFace.index] = face
+                    self._apply_raster(tuple(raster), state)
+                    vao.render(mode, instances=len(indices))
+                    self.count(1, len(indices))
+                    calls += 1
+            else:
+                self._apply_raster(tuple(raster), state)
+                vao.render(mode, instances=len(indices))
+                self.count(1, len(indices))
+                calls += 1
         return calls
 
-    def _transient_vao(self, geometry: Geometry, state: DrawState, n: int, features: tuple) -> tuple[Any, Any, Any]:
-        prog = self.programs.get(state.kind, features)
+    def _transient_vao(self, geometry: Geometry, state: DrawState, prog: Any, layout: Any, n: int) -> tuple[Any, Any]:
         key = (id(geometry), id(state), id(prog))
         entry = self._transient.get(key)
         if entry is not None and entry[2] >= n and geometry.buffers is not None:
-            return entry[0], entry[1], prog
+            return entry[0], entry[1]
         if entry is not None:
             entry[1].release()
             entry[0].release()
         capacity = max(n, 4)
-        buf = gpu_call(self.ctx.buffer, reserve=capacity * ROW * 4, dynamic=True, what="instance data")
-        vao = self._vao(geometry, prog, buf, state.kind)
+        buf = gpu_call(self.ctx.buffer, reserve=capacity * layout.stride * 4, dynamic=True, what="instance data")
+        vao = self._vao(geometry, prog, buf, state.kind, layout)
         self._transient[key] = (buf, vao, capacity, geometry, state)
-        return buf, vao, prog
+        return buf, vao
 
     # -- read back -------------------------------------------------------------
-
     def read(self, read_depth: bool = True) -> Image:
         """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
         with self.current():
@@ -538,23 +549,62 @@ class BatchRenderer:
         out[raw >= 1.0] = np.inf
         return out
 
-    # -- resources ---------------------------------------------------------------
+
+def _same_shape(old: Scope, new: Scope) -> bool:
+    """Whether ``new`` has ``old``'s structure: same techniques, and per item the same geometry, state, class."""
+    stack = [(old, new)]
+    while stack:
+        a, b = stack.pop()
+        if a.technique is not b.technique or len(a.entries) != len(b.entries):
+            return False
+        for x, y in zip(a.entries, b.entries, strict=True):
+            if x is y:
+                continue
+            if isinstance(x, Scope):
+                if not isinstance(y, Scope):
+                    return False
+                stack.append((x, y))
+            elif (
+                isinstance(y, Scope)
+                or x.geometry is not y.geometry
+                or x.state is not y.state
+                or x.transparent != y.transparent
+            ):
+                return False
+    return True
+
+
+def _positions(scope: Scope) -> dict[int, tuple[Segment, int]]:
+    """Entry index -> (segment, position in it) for the items of a planned scope."""
+    out: dict[int, tuple[Segment, int]] = {}
+    parts = iter(scope.parts or [])
+    segment: Segment | None = None
+    position = 0
+    for i, entry in enumerate(scope.entries):
+        if isinstance(entry, Scope):
+            segment = None
+            continue
+        if segment is None or position == len(segment.items):
+            part = next(parts)
+            while isinstance(part, Scope):
+                part = next(parts)
+            segment, position = part, 0
+        out[i] = (segment, position)
+        position += 1
+    return out
+
+
+def _release_filtered(scope: Scope) -> None:
+    for batches in scope.filtered.values():
+        for group in batches.values():
+            for batch in group:
+                batch.release()
+    scope.filtered = {}
 
 
 def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
-    return state.cull == "none" and geometry.mode == "triangles" and state.kind == "mesh"
+    return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
 
 
-def _factor(ctx: Any, name: str) -> int:
-    return getattr(ctx, name.upper())
-
-
-def _equation(ctx: Any, name: str) -> int:
-    return {
-        "add": ctx.FUNC_ADD,
-        "subtract": ctx.FUNC_SUBTRACT,
-        "reverse_subtract": ctx.FUNC_REVERSE_SUBTRACT,
-        "min": ctx.MIN,
-        "max": ctx.MAX,
-    }[name]
+_GL_SRGB8_ALPHA8 = 0x8C43

@@ -1,23 +1,35 @@
-"""GLSL sources of the GL technique and the cache of compiled program variants.
+"""GLSL sources of the GL engine and the cache of compiled program variants.
 
 One uber-shader per primitive kind (``mesh``, ``points``, ``lines``) is
-specialised with ``#define``s (vertex colours, texture, flat shading, number
-of clip planes, fog), so a variant pays only for the features it uses.
-Lighting is linear; the fragment shader writes sRGB.
+specialised with ``#define``s, so a variant pays only for what its batch uses:
+
+* geometry and state: vertex colours, texture, flat shading, clip planes, fog,
+  point sizes, GL state kinds that live in the shader (``AlphaTest``);
+* material: the shading model (``MODEL`` 0 Phong, 1 PBR, 2 unlit), whether
+  the batch shares one material (``UNIFORM_MATERIAL``: material uniforms,
+  only model matrix and colour per instance) or carries it per instance (then
+  only the fields its model reads), highlight only when something is
+  highlighted;
+* lights: the light loop unrolled for the frame's light types;
+* the pass: depth only, flat colour, unlit, user snippets around the vertex
+  (``pass_vertex``) and the colour (``pass_fragment``), linear output for
+  float targets.
+
+Lighting is linear; the fragment shader writes sRGB unless the target is a
+float target.  Every term is guarded against the degenerate set-ups of the
+material test matrix (light at the eye, grazing light, roughness 0 and 1,
+metallic 0 and 1, shininess 0): no NaN, no negative bases in ``pow``.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MAX_LIGHTS", "ProgramCache", "INSTANCE_FORMAT", "INSTANCE_ATTRIBUTES", "ROW"]
+from .layout import PBR, PHONG
+
+__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
 
 MAX_LIGHTS = 32
-
-#: Per-instance attributes: model matrix + six vec4 (colour, specular, emission, ambient, highlight, extra).
-INSTANCE_FORMAT = "16f 4f 4f 4f 4f 4f 4f/i"
-INSTANCE_ATTRIBUTES = ("i_model", "i_color", "i_spec", "i_emis", "i_amb", "i_hl", "i_extra")
-ROW = 40
 
 _COMMON = """
 vec3 to_srgb(vec3 c) {
@@ -26,6 +38,13 @@ vec3 to_srgb(vec3 c) {
 }
 vec3 to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+vec3 encode_output(vec3 c) {
+#ifdef LINEAR_OUTPUT
+    return max(c, vec3(0.0));
+#else
+    return to_srgb(c);
+#endif
 }
 #ifdef FOG
 uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
@@ -61,16 +80,30 @@ uniform vec4 i_color;
 in mat4 i_model;
 in vec4 i_color;
 #endif
-in vec4 i_spec;
+#ifdef INSTANCE_MATERIAL
 in vec4 i_emis;
+#if MODEL == 0
+in vec4 i_spec;
 in vec4 i_amb;
+flat out vec4 v_spec;
+flat out vec4 v_amb;
+#elif MODEL == 1
+in vec4 i_pbr;
+flat out vec4 v_pbr;
+#endif
+flat out vec4 v_emis;
+#ifdef HIGHLIGHT
 in vec4 i_hl;
-in vec4 i_extra;
+flat out vec4 v_hl;
+#endif
+#if defined(POINTS) && !defined(VSIZE)
+in vec4 i_point;
+#endif
+#elif defined(POINTS) && !defined(VSIZE)
+uniform vec4 u_point;
+#endif
 uniform mat4 u_view;
 uniform mat4 u_proj;
-#if defined(UNIFORM_MATERIAL) && defined(POINTS)
-uniform vec4 u_extra;
-#endif
 #if NCLIP > 0
 uniform vec4 u_clip[NCLIP];
 out float gl_ClipDistance[NCLIP];
@@ -81,31 +114,32 @@ out vec4 v_color;
 #ifdef TEXTURE
 out vec2 v_uv;
 #endif
-#ifndef UNIFORM_MATERIAL
-flat out vec4 v_spec;
-flat out vec4 v_emis;
-flat out vec4 v_amb;
-flat out vec4 v_hl;
-flat out vec4 v_extra;
-#endif
+PASS_VERTEX_CODE
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
-    vec4 eye = u_view * world;
 #ifdef POINTS
-    v_normal = vec3(0.0, 0.0, 1.0);
-#ifdef VSIZE
-    gl_PointSize = in_size;
-#elif defined(UNIFORM_MATERIAL)
-    gl_PointSize = u_extra.y;
-#else
-    gl_PointSize = i_extra.y;
-#endif
+    vec3 normal = vec3(0.0, 0.0, 1.0);
 #else
     mat3 m = mat3(i_model);
     mat3 cof = mat3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
-    vec3 n = cof * in_normal;
-    if (dot(m[0], cof[0]) < 0.0) n = -n;
-    v_normal = mat3(u_view) * n;
+    vec3 normal = cof * in_normal;
+    if (dot(m[0], cof[0]) < 0.0) normal = -normal;
+    float nn = dot(normal, normal);
+    normal = nn > 0.0 ? normal * inversesqrt(nn) : vec3(0.0, 0.0, 1.0);
+#endif
+    PASS_VERTEX_CALLS
+    vec4 eye = u_view * world;
+#ifdef POINTS
+    v_normal = normal;
+#ifdef VSIZE
+    gl_PointSize = in_size;
+#elif defined(INSTANCE_MATERIAL)
+    gl_PointSize = i_point.x;
+#else
+    gl_PointSize = u_point.x;
+#endif
+#else
+    v_normal = mat3(u_view) * normal;
 #endif
     v_pos = eye.xyz;
 #ifdef VCOLOR
@@ -116,8 +150,16 @@ void main() {
 #ifdef TEXTURE
     v_uv = in_texcoord;
 #endif
-#ifndef UNIFORM_MATERIAL
-    v_spec = i_spec; v_emis = i_emis; v_amb = i_amb; v_hl = i_hl; v_extra = i_extra;
+#ifdef INSTANCE_MATERIAL
+    v_emis = i_emis;
+#if MODEL == 0
+    v_spec = i_spec; v_amb = i_amb;
+#elif MODEL == 1
+    v_pbr = i_pbr;
+#endif
+#ifdef HIGHLIGHT
+    v_hl = i_hl;
+#endif
 #endif
 #if NCLIP > 0
     for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
@@ -133,28 +175,33 @@ in vec4 v_color;
 #ifdef TEXTURE
 in vec2 v_uv;
 #endif
-#ifdef UNIFORM_MATERIAL
+#ifdef INSTANCE_MATERIAL
+flat in vec4 v_emis;
+#define M_EMIS v_emis
+#if MODEL == 0
+flat in vec4 v_spec;
+flat in vec4 v_amb;
+#define M_SPEC v_spec
+#define M_AMB v_amb
+#elif MODEL == 1
+flat in vec4 v_pbr;
+#define M_PBR v_pbr
+#endif
+#ifdef HIGHLIGHT
+flat in vec4 v_hl;
+#define M_HL v_hl
+#endif
+#else
 uniform vec4 u_spec;
 uniform vec4 u_emis;
 uniform vec4 u_amb;
+uniform vec4 u_pbr;
 uniform vec4 u_hl;
-uniform vec4 u_extra;
 #define M_SPEC u_spec
 #define M_EMIS u_emis
 #define M_AMB u_amb
+#define M_PBR u_pbr
 #define M_HL u_hl
-#define M_EXTRA u_extra
-#else
-flat in vec4 v_spec;
-flat in vec4 v_emis;
-flat in vec4 v_amb;
-flat in vec4 v_hl;
-flat in vec4 v_extra;
-#define M_SPEC v_spec
-#define M_EMIS v_emis
-#define M_AMB v_amb
-#define M_HL v_hl
-#define M_EXTRA v_extra
 #endif
 #ifndef NLIGHTS
 #define NLIGHTS u_nlights
@@ -167,12 +214,16 @@ uniform vec3 u_latt[MAX_LIGHTS];    // constant, linear, quadratic
 uniform vec4 u_lspot[MAX_LIGHTS];   // spot axis (view space), cos(cutoff); w < -1.5: no spot
 uniform float u_lexp[MAX_LIGHTS];
 uniform vec3 u_ambient;
-uniform int u_ortho;
 #ifdef TEXTURE
 uniform sampler2D u_texture;
 #endif
+#ifdef FLAT_COLOR
+uniform vec4 u_flat_color;          // linear
+#endif
 out vec4 f_color;
 const float PI = 3.14159265;
+STATE_CODE
+PASS_FRAGMENT_CODE
 
 float dir_light(int i, out vec3 L) {
     L = u_lpos[i].xyz;
@@ -181,8 +232,8 @@ float dir_light(int i, out vec3 L) {
 float point_light(int i, vec3 P, out vec3 L) {
     vec3 d = u_lpos[i].xyz - P;
     float dist = length(d);
-    L = d / max(dist, 1e-20);
-    return 1.0 / (u_latt[i].x + u_latt[i].y * dist + u_latt[i].z * dist * dist);
+    L = dist > 1e-20 ? d / dist : vec3(0.0, 0.0, 1.0);
+    return 1.0 / max(u_latt[i].x + u_latt[i].y * dist + u_latt[i].z * dist * dist, 1e-20);
 }
 float spot_light(int i, vec3 P, out vec3 L) {
     float att = point_light(i, P, L);
@@ -194,27 +245,36 @@ float any_light(int i, vec3 P, out vec3 L) {
     if (u_lspot[i].w > -1.5) return spot_light(i, P, L);
     return point_light(i, P, L);
 }
+vec3 half_vector(vec3 L, vec3 V, vec3 N) {
+    vec3 h = L + V;
+    float hh = dot(h, h);
+    return hh > 1e-12 ? h * inversesqrt(hh) : N;  // light exactly opposite the eye: no highlight direction
+}
+#if MODEL == 0
 vec3 phong_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 kd) {
     float NdL = dot(N, L);
     if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
-    vec3 H = normalize(L + V);
-    float s = pow(max(dot(N, H), 0.0), M_SPEC.w);
+    vec3 H = half_vector(L, V, N);
+    float s = pow(clamp(dot(N, H), 0.0, 1.0), max(M_SPEC.w, 1.0));  // shininess 0 acts as 1, as in POV-Ray
     return att * (kd * NdL * u_ldiff[i] + M_SPEC.rgb * s * u_lspec[i]);
 }
+#elif MODEL == 1
 vec3 pbr_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 albedo, vec3 F0, float metallic, float a2, float k) {
     float NdL = dot(N, L);
     if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
     float NdV = max(dot(N, V), 1e-4);
-    vec3 H = normalize(L + V);
-    float NdH = max(dot(N, H), 0.0);
+    vec3 H = half_vector(L, V, N);
+    float NdH = clamp(dot(N, H), 0.0, 1.0);
     float dd = NdH * NdH * (a2 - 1.0) + 1.0;
-    float D = a2 / (PI * dd * dd);
+    float D = a2 / (PI * max(dd * dd, 1e-12));
     float G = (NdV / (NdV * (1.0 - k) + k)) * (NdL / (NdL * (1.0 - k) + k));
-    vec3 F = F0 + (1.0 - F0) * pow(1.0 - max(dot(H, V), 0.0), 5.0);
+    float fresnel = pow(clamp(1.0 - dot(H, V), 0.0, 1.0), 5.0);  // rounding can push dot(H, V) above 1
+    vec3 F = F0 + (1.0 - F0) * fresnel;
     vec3 spec = D * G * F / (4.0 * NdV * NdL);
     vec3 kd = (1.0 - F) * (1.0 - metallic);
     return (kd * albedo + PI * spec) * u_ldiff[i] * NdL * att;
 }
+#endif
 
 void main() {
     vec3 P = v_pos;
@@ -232,65 +292,72 @@ void main() {
     if (r2 > 1.0) discard;
     N = vec3(c.x, -c.y, sqrt(1.0 - r2));
 #elif defined(FLAT)
-    N = normalize(cross(dFdx(P), dFdy(P)));
+    N = cross(dFdx(P), dFdy(P));
+    N = dot(N, N) > 0.0 ? normalize(N) : vec3(0.0, 0.0, 1.0);
 #else
-    N = normalize(v_normal);
+    N = dot(v_normal, v_normal) > 0.0 ? normalize(v_normal) : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) N = -N;
 #endif
+    STATE_MAIN
+#ifdef DEPTH_ONLY
+    f_color = vec4(0.0);
+#else
 #ifdef ORTHO
     vec3 V = vec3(0.0, 0.0, 1.0);
 #else
-    vec3 V = normalize(-P);
-#endif
-#ifdef MODEL
-    const float model = float(MODEL);
-#else
-    float model = M_EMIS.w;
+    float pp = dot(P, P);
+    vec3 V = pp > 0.0 ? -P * inversesqrt(pp) : vec3(0.0, 0.0, 1.0);
 #endif
     vec3 color;
-    if (model > 1.5) {
-        color = base.rgb;
-    } else if (model > 0.5) {
-        float metallic = M_EXTRA.x;
-        float rough = max(M_AMB.w, 0.04);
-        float a2 = rough * rough * rough * rough;
-        vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
-        float k = (rough + 1.0) * (rough + 1.0) / 8.0;
-        vec3 albedo = base.rgb;
-        color = M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
+#if defined(FLAT_COLOR)
+    color = u_flat_color.rgb;
+    base.a = u_flat_color.a;
+#elif defined(UNLIT) || MODEL == 2
+    color = base.rgb;
+#elif MODEL == 1
+    float metallic = clamp(M_PBR.y, 0.0, 1.0);
+    float rough = clamp(M_PBR.x, 0.04, 1.0);
+    float a2 = rough * rough * rough * rough;
+    vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
+    float k = (rough + 1.0) * (rough + 1.0) / 8.0;
+    vec3 albedo = base.rgb;
+    color = M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
 #ifdef PBR_LIGHTS
-        PBR_LIGHTS
+    PBR_LIGHTS
 #else
-        for (int i = 0; i < NLIGHTS; ++i) {
-            vec3 L;
-            float att = any_light(i, P, L);
-            color += pbr_light(i, att, L, N, V, albedo, F0, metallic, a2, k);
-        }
-#endif
-    } else {
-        vec3 kd = base.rgb;
-        // the texture modulates the ambient term too (GL_MODULATE, POV-Ray's pigment, Mitsuba's albedo)
-        color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient;
-#ifdef PHONG_LIGHTS
-        PHONG_LIGHTS
-#else
-        for (int i = 0; i < NLIGHTS; ++i) {
-            vec3 L;
-            float att = any_light(i, P, L);
-            color += phong_light(i, att, L, N, V, kd);
-        }
-#endif
+    for (int i = 0; i < NLIGHTS; ++i) {
+        vec3 L;
+        float att = any_light(i, P, L);
+        color += pbr_light(i, att, L, N, V, albedo, F0, metallic, a2, k);
     }
-#if defined(HIGHLIGHT) || !defined(UNIFORM_MATERIAL)
+#endif
+#else
+    vec3 kd = base.rgb;
+    // the texture modulates the ambient term too (GL_MODULATE, POV-Ray's pigment, Mitsuba's albedo)
+    color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient;
+#ifdef PHONG_LIGHTS
+    PHONG_LIGHTS
+#else
+    for (int i = 0; i < NLIGHTS; ++i) {
+        vec3 L;
+        float att = any_light(i, P, L);
+        color += phong_light(i, att, L, N, V, kd);
+    }
+#endif
+#endif
+#if defined(HIGHLIGHT) && !defined(FLAT_COLOR)
     if (M_HL.w > 0.0) {
         float rim = 1.0 - abs(dot(N, V));
         color = mix(color, M_HL.rgb, 0.35) + M_HL.rgb * rim * rim;
     }
 #endif
-#ifdef FOG
+#if defined(FOG) && !defined(FLAT_COLOR)
     color = apply_fog(color, length(P));
 #endif
-    f_color = vec4(to_srgb(color), base.a);
+    vec4 result = vec4(color, base.a);
+    PASS_FRAGMENT_CALLS
+    f_color = vec4(encode_output(result.rgb), result.a);
+#endif
 }
 """
 
@@ -301,11 +368,9 @@ in vec4 in_color;
 #endif
 in mat4 i_model;
 in vec4 i_color;
-in vec4 i_spec;
-in vec4 i_emis;
-in vec4 i_amb;
+#ifdef HIGHLIGHT
 in vec4 i_hl;
-in vec4 i_extra;
+#endif
 uniform mat4 u_view;
 uniform mat4 u_proj;
 out vec3 g_pos;
@@ -321,7 +386,9 @@ void main() {
 #else
     g_color = i_color;
 #endif
+#ifdef HIGHLIGHT
     if (i_hl.w > 0.0) g_color.rgb = mix(g_color.rgb, i_hl.rgb, 0.6);
+#endif
     gl_Position = u_proj * eye;
 }
 """
@@ -385,15 +452,54 @@ void main() {
 LINE_FRAGMENT = """
 in vec3 v_pos;
 in vec4 v_color;
+#ifdef FLAT_COLOR
+uniform vec4 u_flat_color;
+#endif
 out vec4 f_color;
+PASS_FRAGMENT_CODE
 void main() {
+#ifdef DEPTH_ONLY
+    f_color = vec4(0.0);
+#else
+#ifdef FLAT_COLOR
+    vec3 color = u_flat_color.rgb;
+    float alpha = u_flat_color.a;
+#else
     vec3 color = v_color.rgb;
-#ifdef FOG
+    float alpha = v_color.a;
+#endif
+#if defined(FOG) && !defined(FLAT_COLOR)
     color = apply_fog(color, length(v_pos));
 #endif
-    f_color = vec4(to_srgb(color), v_color.a);
+    vec4 result = vec4(color, alpha);
+    vec3 P = v_pos;
+    vec3 N = vec3(0.0, 0.0, 1.0);
+    PASS_FRAGMENT_CALLS
+    f_color = vec4(encode_output(result.rgb), result.a);
+#endif
 }
 """
+
+
+def instance_fields(kind: str, features: dict[str, Any]) -> tuple[str, ...]:
+    """The row fields a program variant reads per instance (the batch buffer's layout)."""
+    if "SINGLE" in features:
+        return ()
+    if kind == "lines":
+        return ("model", "color", "highlight") if "HIGHLIGHT" in features else ("model", "color")
+    if "INSTANCE_MATERIAL" not in features:
+        return ("model", "color")
+    fields = ["model", "color", "emission"]
+    model = features.get("MODEL", PHONG)
+    if model == PHONG:
+        fields += ["specular", "ambient"]
+    elif model == PBR:
+        fields.append("pbr")
+    if "HIGHLIGHT" in features:
+        fields.append("highlight")
+    if kind == "points" and "VSIZE" not in features:
+        fields.append("point")
+    return tuple(fields)
 
 
 def _light_code(types: str) -> list[str]:
@@ -413,21 +519,48 @@ def _light_code(types: str) -> list[str]:
     ]
 
 
+_SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT")
+
+
 def _header(defines: dict[str, Any]) -> str:
     lines = ["#version 330"]
     types = defines.pop("LIGHTS", None)
     if types is not None:
         lines += _light_code(types)
+    for name in _SNIPPETS:
+        defines.pop(name, None)
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
     if "NCLIP" not in defines:
         lines.append("#define NCLIP 0")
+    if "MODEL" not in defines:
+        lines.append(f"#define MODEL {PHONG}")
     return "\n".join(lines) + "\n"
 
 
+def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> str:
+    """Insert the pass snippets (renamed per occurrence) and the state kinds' GLSL at their hooks."""
+    vertex = features.get("PASS_VERTEX", ())
+    fragment = features.get("PASS_FRAGMENT", ())
+    v_code = "\n".join(s.replace("pass_vertex", f"pass_vertex_{i}") for i, s in enumerate(vertex))
+    v_calls = " ".join(f"pass_vertex_{i}(world.xyz, normal);" for i in range(len(vertex)))
+    f_code = "\n".join(s.replace("pass_fragment", f"pass_fragment_{i}") for i, s in enumerate(fragment))
+    f_calls = " ".join(f"pass_fragment_{i}(result, P, N);" for i in range(len(fragment)))
+    state_code = "\n".join(kind.fragment_code for kind in code)
+    state_main = "\n    ".join(kind.fragment_main for kind in code if kind.fragment_main)
+    return (
+        source.replace("PASS_VERTEX_CODE", v_code)
+        .replace("PASS_VERTEX_CALLS", v_calls)
+        .replace("PASS_FRAGMENT_CODE", f_code)
+        .replace("PASS_FRAGMENT_CALLS", f_calls)
+        .replace("STATE_CODE", state_code)
+        .replace("STATE_MAIN", state_main)
+    )
+
+
 class ProgramCache:
-    """Compiled programs by (kind, features); compiled on first use, kept for the engine's life."""
+    """Compiled programs by (kind, features, state code); compiled on first use, kept for the engine's life."""
 
     def __init__(self, ctx: Any) -> None:
         self.ctx = ctx
@@ -435,11 +568,18 @@ class ProgramCache:
         self._custom: dict[str, tuple[str, str | None, str]] = {}
 
     def register(self, kind: str, vertex: str, fragment: str, geometry: str | None = None) -> None:
-        """Add a program kind (used by the text and volume painters)."""
+        """Add a program kind (text, volume and full-screen passes use it)."""
         self._custom[kind] = (vertex, geometry, fragment)
 
-    def get(self, kind: str, features: tuple[tuple[str, Any], ...] = ()) -> Any:
-        key = (kind, features)
+    def registered(self, kind: str) -> bool:
+        """Whether a custom program kind was registered."""
+        return kind in self._custom
+
+    def __len__(self) -> int:
+        return len(self._programs)
+
+    def get(self, kind: str, features: tuple[tuple[str, Any], ...] = (), code: tuple[Any, ...] = ()) -> Any:
+        key = (kind, features, code)
         prog = self._programs.get(key)
         if prog is not None:
             return prog
@@ -453,11 +593,17 @@ class ProgramCache:
             vs, gs, fs = LINE_VERTEX, LINE_GEOMETRY, LINE_FRAGMENT
         else:
             vs, gs, fs = self._custom[kind]
-        prog = self.ctx.program(
-            vertex_shader=head + vs,
-            geometry_shader=None if gs is None else head + gs,
-            fragment_shader=head + _COMMON + fs,
-        )
+        vs, fs = _snippets(vs, defines, code), _snippets(fs, defines, code)
+        try:
+            prog = self.ctx.program(
+                vertex_shader=head + vs,
+                geometry_shader=None if gs is None else head + gs,
+                fragment_shader=head + _COMMON + fs,
+            )
+        except Exception as exc:
+            snippets = any(name in defines for name in _SNIPPETS) or kind not in ("mesh", "points", "lines")
+            hint = "; check the GLSL snippet of the pass or effect" if snippets else ""
+            raise ValueError(f"GLEngine: a {kind} shader failed to compile{hint}: {exc}") from None
         self._programs[key] = prog
         return prog
 

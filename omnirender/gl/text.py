@@ -17,6 +17,7 @@ from ..core.handler import ShapePainter, default_for
 from ..shapes import Text
 from .engine import GLEngine
 from .geometry import Geometry
+from .layout import ROW
 
 __all__ = ["TextPainter", "GlyphAtlas"]
 
@@ -141,22 +142,22 @@ class TextPainter(ShapePainter):
 def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     """The drawer for ``"text"`` items: project anchors, build glyph quads, draw without depth test."""
     ctx = engine.ctx
-    if "text" not in engine.programs._custom:
+    if not engine.programs.registered("text"):
         engine.programs.register("text", _VS, _FS)
     prog = engine.programs.get("text")
     atlases = engine.__dict__.setdefault("_atlases", {})
-    w, h = engine.size
+    w, h = engine.target_size
     calls = 0
     ctx.disable(ctx.DEPTH_TEST)
     ctx.enable(ctx.BLEND)
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-    engine._gl_state.clear()
-    clip = engine._proj @ engine._view
+    engine.forget_gl_state()
+    clip = engine.frame_projection @ engine.frame_view
     for item in items:
         string, size = item.state.extra
         if not string:
             continue
-        m = item.row[:16].reshape(4, 4).T.astype(np.float64)
+        m = item.row[ROW.slice("model")].reshape(4, 4).T.astype(np.float64)
         p = clip @ m @ np.append(item.geometry.positions[0].astype(np.float64), 1.0)
         if p[3] <= 0:
             continue
@@ -182,7 +183,7 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
         vao = ctx.vertex_array(prog, [(vbo, "2f 2f", "in_pos", "in_uv")])
         atlas.texture.use(0)
         prog["u_atlas"].value = 0
-        prog["u_color"].value = tuple(float(x) for x in item.row[16:20])
+        prog["u_color"].value = tuple(float(x) for x in item.row[ROW.slice("color")])
         vao.render(ctx.TRIANGLES)
         vao.release()
         vbo.release()

@@ -22,6 +22,7 @@ from ..shapes import Volume
 from .context import set_masks
 from .engine import GLEngine
 from .geometry import Geometry, unit_mesh
+from .layout import ROW
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
 
@@ -154,10 +155,10 @@ class VolumePainter(ShapePainter):
 def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     """The drawer for ``"volume"`` items."""
     ctx = engine.ctx
-    if "volume" not in engine.programs._custom:
+    if not engine.programs.registered("volume"):
         engine.programs.register("volume", _VS, _FS)
     prog = engine.programs.get("volume")
-    engine._gl_state.clear()
+    engine.forget_gl_state()
     ctx.enable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
     ctx.depth_func = "<"
     # back faces: they exist also when the camera is inside the box (front faces are then behind the near
@@ -166,11 +167,11 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     ctx.enable_direct(_GL_DEPTH_CLAMP)
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
     set_masks(ctx, engine.raw, engine.framebuffer, depth=True)
-    view, proj = engine._view, engine._proj
+    view, proj = engine.frame_view, engine.frame_projection
     calls = 0
     for item in items:
         geom: VolumeGeometry = item.geometry
-        engine._ensure_uploaded(geom)
+        engine.upload(geom)
         if geom.textures is None:
             d, h, w = geom.data.shape
             vol = ctx.texture3d((w, h, d), 1, np.ascontiguousarray(geom.data, np.float32).tobytes(), dtype="f4")
@@ -179,10 +180,9 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
             tf.repeat_x = tf.repeat_y = False
             geom.textures = (vol, tf)
         vol, tf = geom.textures
-        model = item.row[:16].reshape(4, 4).T.astype(np.float64)
+        model = item.row[ROW.slice("model")].reshape(4, 4).T.astype(np.float64)
         inv = np.linalg.inv(view @ model)
-        camera = engine._camera_used
-        if camera is not None and camera.is_orthographic:
+        if engine.frame_orthographic:
             eye = inv @ np.array([0.0, 0.0, -1.0, 0.0])
             eye[3] = 0.0
         else:

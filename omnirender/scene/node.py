@@ -58,6 +58,8 @@ class Node:
         "_items",
         "_parents",
         "_version",
+        "_structure",
+        "_own",
         "_groups",
         "_program",
         "_program_version",
@@ -73,6 +75,8 @@ class Node:
         self._items: list[Any] = []
         self._parents: list[Node] = []
         self._version = 0
+        self._structure = 0  # bumped when this node's list or a descendant's list changes (programs)
+        self._own = 0  # bumped when this node's own list or groups change (its local program)
         self._groups = _group_set(groups)
         self._program: list[tuple[int, Any]] | None = None
         self._program_version = -1
@@ -87,6 +91,23 @@ class Node:
             )
         for item in items:
             self.add(item)
+
+    @classmethod
+    def transient(cls, items: Iterable[Any], name: str = "components") -> Node:
+        """A root node over ``items`` that does not own them, for evaluating a plain component list once.
+
+        The components are not attached (they keep no reference to this node,
+        so rendering a list many times leaks nothing), which also means the
+        node does not see later changes of them: make a new one per use.
+        """
+        node = cls(name)
+        for item in items:
+            if not (isinstance(item, (RenderingComponent, Node))):
+                raise TypeError(
+                    f"cannot evaluate {type(item).__name__}: expected a shape, attribute, handler, technique or Node"
+                )
+            node._items.append(item)
+        return node
 
     # -- identity ---------------------------------------------------------
     @property
@@ -106,6 +127,7 @@ class Node:
     @groups.setter
     def groups(self, value: Iterable[str]) -> None:
         self._groups = _group_set(value)
+        self._restructure()
         self.touch()
 
     @property
@@ -151,6 +173,27 @@ class Node:
             return
         _touch_ancestors(parents)
 
+    def _restructure(self) -> None:
+        """This node's list changed: its programs, and the flat programs of every ancestor, recompile.
+
+        A component changing a parameter does not restructure: programs hold
+        the components themselves, so they stay valid (only ``version`` moves).
+        """
+        self._own += 1
+        self._structure += 1
+        parents = self._parents
+        if not parents:
+            return
+        seen: set[int] = set()
+        stack = list(parents)
+        while stack:
+            node = stack.pop()
+            if id(node) in seen:
+                continue
+            seen.add(id(node))
+            node._structure += 1
+            stack.extend(node._parents)
+
     # -- contents ---------------------------------------------------------
     def add(self, item: Any) -> Any:
         """Append a component or child node; returns it."""
@@ -172,6 +215,7 @@ class Node:
                 f"handler, technique or Node"
             )
         self._items.insert(index, item)
+        self._restructure()
         self.touch()
         return item
 
@@ -187,6 +231,7 @@ class Node:
                             break
                 else:
                     item._detach(self)
+                self._restructure()
                 self.touch()
                 return item
         raise ValueError(f"Node {self.path}: {item!r} is not in this node")
@@ -301,10 +346,11 @@ class Node:
     def program(self) -> list[tuple[int, Any]]:
         """The compiled micro program of this node (enter, contents, undo, leave).
 
-        Cached per version.  Stale descendants are compiled first, bottom-up
-        with an explicit stack, so deep graphs need no deep recursion.
+        Cached while no list below changed (a parameter change keeps it).
+        Stale descendants are compiled first, bottom-up with an explicit stack,
+        so deep graphs need no deep recursion.
         """
-        if self._program_version == self._version and self._program is not None:
+        if self._program_version == self._structure and self._program is not None:
             return self._program
         order: list[Node] = []
         seen: set[int] = set()
@@ -314,7 +360,7 @@ class Node:
             if expanded:
                 order.append(node)
                 continue
-            if id(node) in seen or (node._program_version == node._version and node._program is not None):
+            if id(node) in seen or (node._program_version == node._structure and node._program is not None):
                 continue
             seen.add(id(node))
             stack.append((node, True))
@@ -330,21 +376,21 @@ class Node:
         compile_components(self._items, program, _Where(self))
         program.append((LEAVE, -1))
         self._program = program
-        self._program_version = self._version
+        self._program_version = self._structure
 
     def local_program(self) -> list[tuple[int, Any]]:
         """This node's program with every child node kept as one ``NODE`` op (not inlined).
 
         For engines that cache per node occurrence (the GL compiler): they
         evaluate each child through :meth:`~omnirender.core.engine.Engine.eval_node`.
-        Cached per version.
+        Cached while this node's own list is unchanged.
         """
-        if self._local_version != self._version or self._local is None:
+        if self._local_version != self._own or self._local is None:
             program: list[tuple[int, Any]] = [(ENTER, self)]
             compile_components(self._items, program, _Where(self), inline=False)
             program.append((LEAVE, -1))
             self._local = program
-            self._local_version = self._version
+            self._local_version = self._own
         return self._local
 
     def _compile_node(self, program: list[tuple[int, Any]]) -> None:
@@ -487,36 +533,35 @@ def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
 
 
 def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | None]]:
-    def valid(node: Node) -> _Local | None:
-        entry = node._declared
-        if entry is not None and entry.version == node._version and entry.mask_fn is mask_fn:
-            return entry
-        return None
-
     stack: list[tuple[Node, bool]] = [(root, False)]
     while stack:
         node, expanded = stack.pop()
         if not expanded:
-            if valid(node) is not None:
+            entry = node._declared
+            if entry is not None and entry.version == node._version and entry.mask_fn is mask_fn:
                 continue
             stack.append((node, True))
             for item in node._items:
-                if isinstance(item, Node) and not (item._groups and mask_fn is not None and not mask_fn(item._groups)):
-                    if valid(item) is None:
+                if item.__class__ is Node or isinstance(item, Node):
+                    e = item._declared
+                    if (e is None or e.version != item._version or e.mask_fn is not mask_fn) and not (
+                        item._groups and mask_fn is not None and not mask_fn(item._groups)
+                    ):
                         stack.append((item, False))
             continue
         out: list[tuple[Any, np.ndarray | None]] = []
         m: np.ndarray | None = None
         for item in node._items:
-            if isinstance(item, Node):
+            if item.__class__ is Node or isinstance(item, Node):
                 if item._groups and mask_fn is not None and not mask_fn(item._groups):
                     continue
-                entry = item._declared
-                if entry.placements:
-                    if m is None:
-                        out.extend(entry.placements)
-                    else:
-                        out.extend((c, m if cm is None else m @ cm) for c, cm in entry.placements)
+                found = item._declared.placements  # type: ignore[union-attr]
+                if not found:
+                    continue
+                if m is None:
+                    out.extend(found)
+                else:
+                    out.extend((c, m if cm is None else m @ cm) for c, cm in found)
             elif isinstance(item, Transform):
                 matrix = getattr(item, "matrix", None)  # engine-dependent transforms (Billboard) have none
                 if matrix is not None:

@@ -110,9 +110,15 @@ def test_opcodes_are_named_and_local_programs_keep_children_as_node_ops():
     assert local[2][1] is child
     technique, rest = local[3][1]
     assert technique is t and [code for code, _ in rest] == [NODE]
-    assert root.local_program() is local  # cached per version
+    assert root.local_program() is local  # cached
     child.add(S("e"))
-    assert root.local_program() is not local
+    assert root.local_program() is local  # a child's list is not the root's: the local program stays
+    flat = root.program()
+    root.add(S("f"))
+    assert root.local_program() is not local and root.program() is not flat
+    flat = root.program()
+    child.items[-1].label = "changed"  # a parameter: programs hold components, so they stay valid
+    assert root.program() is flat
 
 
 def test_eval_node_and_run_technique_are_the_hooks_engines_override():

@@ -125,11 +125,14 @@ def test_popping_restores_state(engine):
     s.add(om.Torus())
     s.add(om.Box())
     engine.compile(s)
-    special, plain, box = engine._list
-    assert special.state.depth_func is None and special.state.blend is not None and special.state.cull == "front"
-    assert plain.state.depth_func == "less" and plain.state.blend is None and plain.state.cull == "none"
+    special, plain, box = engine.draw_items
+    value = lambda item, kind: item.state.value(kind)  # noqa: E731
+    assert value(special, om.gl.DepthTest) is None and value(special, om.gl.Blend) is not None
+    assert value(special, om.gl.CullFace) == "front"
+    assert value(plain, om.gl.DepthTest) == "less" and value(plain, om.gl.Blend) is None
+    assert value(plain, om.gl.CullFace) == "none"
     assert special.transparent and not plain.transparent
-    assert box.state.cull == "back"  # closed opaque native shapes cull their back faces automatically
+    assert value(box, om.gl.CullFace) == "back"  # closed opaque native shapes cull their back faces automatically
 
 
 def test_gl_attributes_are_ignored_by_other_engines():

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
+from omnirender.gl.layout import ROW
 
 pytestmark = pytest.mark.gl
 
@@ -56,8 +57,9 @@ def test_shared_node_under_two_transforms(engine):
         n.add(om.Translation(x, 0, 0))
         n.add(shared)
     img = engine.render(s)
-    assert len(engine._list) == 2
-    centres = sorted(float(it.row[12]) for it in engine._list)
+    assert len(engine.draw_items) == 2
+    x = ROW.at("model", 0) + 12  # the translation's x in the column-major model matrix
+    centres = sorted(float(it.row[x]) for it in engine.draw_items)
     assert centres == [-1.0, 1.0]
     assert img.mask[24, 16] and img.mask[24, 48]
 
@@ -106,7 +108,11 @@ def test_technique_in_a_node_takes_over_the_rest(engine):
     n.add(om.Sphere(radius=0.5))
     s.add(om.Box(size=0.2, center=(1, 1, 0)))
     engine.render(s)
-    kinds = [it.geometry.label for it in engine._list]
-    assert kinds == ["unit sphere", "unit sphere", "unit box"]
-    assert float(engine._list[0].row[16]) == 1.0  # the colour before the technique applies inside it
-    assert float(engine._list[2].row[16]) != 1.0 or float(engine._list[2].row[17]) != 0.0  # and not after the node
+    items = engine.draw_items
+    kinds = [it.geometry.label for it in items]
+    assert kinds == ["unit sphere", "unit box"]  # compiled once: the technique's passes run at draw time
+    red = ROW.at("color", "r")
+    assert float(items[0].row[red]) == 1.0  # the colour before the technique applies inside it
+    assert float(items[1].row[red]) != 1.0 or float(items[1].row[red + 1]) != 0.0  # and not after the node
+    passes = [(p["name"], p["draw_calls"]) for p in engine.stats["passes"] if p["draw_calls"]]
+    assert passes == [("opaque", 1), ("opaque/Twice[0]/opaque", 1), ("opaque/Twice[1]/opaque", 1)]

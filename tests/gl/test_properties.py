@@ -264,16 +264,16 @@ def test_native_shapes_instance_and_follow_tessellation(engine):
     coarse.add(om.Tessellation(0))
     coarse.add(om.Sphere(center=(0, 2, 0), radius=0.5))
     engine.render(s)
-    labels = sorted((b.geometry.label, len(b.items)) for b in engine._batch_order)
+    labels = sorted((b.geometry.label, len(b.items)) for b in engine.batches)
     assert labels == [("unit cone", 20), ("unit sphere", 1)]
-    sphere = [b for b in engine._batch_order if b.geometry.label == "unit sphere"][0]
+    sphere = [b for b in engine.batches if b.geometry.label == "unit sphere"][0]
     assert sphere.geometry.count < engine.unit_geometry("sphere").count  # level 0 is coarser than the default
 
 
 def test_draw_items_know_their_node_and_clip_planes_are_limited(engine):
     scene = red_sphere_blue_box()
     engine.compile(scene)
-    assert sorted(item.path for item in engine._list) == ["/scene/box", "/scene/sphere"]
+    assert sorted(item.path for item in engine.draw_items) == ["/scene/box", "/scene/sphere"]
     s = om.Node("scene")
     deep = s.add(om.Node("deep"))
     for i in range(7):

@@ -1,0 +1,394 @@
+"""The GL frame: techniques run their passes at draw time, every frame, over the compiled scopes.
+
+Drawing a frame runs the engine's technique (``om.gl.Forward`` by default:
+opaque, transparent, overlay) over the root scope.  A technique met in a node
+compiled into a nested scope; whenever a pass draws items, the nested scopes
+among them run *their* technique: ``start``, then for as long as
+``needs_pass``: ``prepare_pass`` (which describes the pass with
+``engine.set_pass(Pass(...))``), the pass, ``finish_pass``, ``next_pass``;
+finally ``stop``.  Each pass of a nested technique draws its items through the
+engine's technique again, so a nested technique's passes see opaque,
+transparent and overlay items drawn the usual way.  Pass state is kept in the
+engine's technique frames, so shared technique instances nest correctly, and
+all of this happens on replayed frames too: the compiled scopes are cached,
+the passes are not.
+
+Every executed pass is recorded in ``engine.stats["passes"]``: its path of
+names, technique, nesting depth, draw calls, instances and (with
+``GLEngine(timing=True)``) GPU time from timer queries.  Offscreen targets
+are made from their :class:`~.passes.Target` descriptions, kept while later
+frames describe the same targets and released when no pass uses them any more.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .context import GLError, clear_stencil, set_masks
+from .drawlist import Scope
+from .imagespace import FullScreenPrograms, RenderTarget
+from .passes import Composed, FullScreen, Pass, Target
+from .state import GLCalls, RasterApplier
+
+__all__ = ["FrameRunner", "PassRecord"]
+
+
+class PassRecord(dict):
+    """One executed pass of a frame: ``name`` (the path of pass names), ``technique``, ``depth``,
+    ``draw_calls``, ``items`` (instances drawn), ``target`` and ``gpu_ms`` (None without timing)."""
+
+    def __repr__(self) -> str:
+        gpu = "" if self["gpu_ms"] is None else f", {self['gpu_ms']:.3f} ms"
+        return f"PassRecord({self['name']!r}, {self['draw_calls']} calls, {self['items']} items{gpu})"
+
+
+class FrameRunner:
+    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: technique passes at draw time, targets, the frame report."""
+
+    # -- what techniques call ----------------------------------------------------------
+    def set_pass(self, description: Pass) -> None:
+        """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""
+        if not isinstance(description, Pass):
+            raise TypeError(f"GLEngine.set_pass needs an om.gl.Pass, got {type(description).__name__}")
+        if not self._requests:
+            raise RuntimeError(
+                "GLEngine.set_pass: no pass is being prepared; call it from a technique's prepare_pass while the "
+                "engine draws a frame"
+            )
+        self._requests[-1] = description
+
+    def target(self, name: str) -> RenderTarget:
+        """The offscreen target ``name`` of the current frame (its ``texture(attachment)``, ``depth``, arrays)."""
+        found = self._frame_targets.get(name)
+        if found is None:
+            known = sorted(self._frame_targets)
+            raise KeyError(
+                f"GLEngine: no offscreen target {name!r} in this frame (targets: {known}); a pass makes one with "
+                f"Pass(target=om.gl.Target({name!r}))"
+            )
+        return found
+
+    @property
+    def frame_view(self) -> np.ndarray:
+        """World-to-eye matrix of the pass being drawn (drawers use it)."""
+        return self._view
+
+    @property
+    def frame_projection(self) -> np.ndarray:
+        """Projection matrix of the pass being drawn."""
+        return self._proj
+
+    @property
+    def frame_orthographic(self) -> bool:
+        """Whether the pass being drawn uses an orthographic projection."""
+        return self._ortho
+
+    @property
+    def target_size(self) -> tuple[int, int]:
+        """Size of the framebuffer being drawn into."""
+        return self._target_size
+
+    def forget_gl_state(self) -> None:
+        """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
+        self._applier.forget()
+
+    # -- the frame ---------------------------------------------------------------------
+    def draw(self, background: Any = None, clear: bool = True) -> None:
+        """Draw the installed scopes into the framebuffer: the engine technique's passes and every nested one.
+
+        ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        """
+        with self.current():
+            self._draw_frame(background, clear)
+
+    def _draw_frame(self, background: Any, clear: bool) -> None:
+        ctx = self.ctx
+        fbo = self.framebuffer
+        _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
+        fbo.use()
+        ctx.viewport = (0, 0, *self._size)
+        self._target_size = tuple(self._size)
+        self._linear_output = False
+        self._applier = RasterApplier(GLCalls(ctx, self.raw, fbo, self._target_size))
+        self._nclip = 0
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        if clear:
+            fbo.clear(*self.clear_color(background), depth=1.0)
+            if self.has_stencil and not self._target_stack:
+                clear_stencil(self.raw, 0)
+        ctx.enable(ctx.PROGRAM_POINT_SIZE)
+        camera, view, proj = self._camera_matrices()
+        self._camera_used = camera
+        self._set_camera(view, proj, camera.is_orthographic)
+        self._records: list[PassRecord] = []
+        self._record_stack: list[PassRecord] = []
+        self._open_query = None
+        self._queries_used = 0
+        self._targets_used: set[Target] = set()
+        self._frame_targets = {}
+        root = self._root if self._root is not None else Scope()
+        try:
+            calls = self._run(self.technique, root, Composed(), item_level=True)
+        finally:
+            self._close_query()
+            self._restore_defaults()
+        self._release_unused_targets()
+        if self.timing:
+            for record in self._records:
+                queries = record.pop("_queries", [])
+                record["gpu_ms"] = sum(q.elapsed for q in queries) / 1e6 if queries else 0.0
+        else:
+            for record in self._records:
+                record.pop("_queries", None)
+        self.stats["draw_calls"] = calls
+        self.stats["passes"] = list(self._records)
+        self.stats["batches"] = sum(len(p.batches) for s in (self._root.walk() if self._root else [])
+                                    for p in (s.parts or []) if not isinstance(p, Scope))  # fmt: skip
+        self.stats["items"] = self._item_count if self._root is not None else 0
+        err = ctx.error
+        if err != "GL_NO_ERROR":
+            if "OUT_OF_MEMORY" in err:
+                raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
+            raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
+
+    def _set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
+        self._view = view
+        self._proj = proj
+        self._ortho = ortho
+        self._view_key = view.tobytes()
+        self._frame_uniforms = {
+            "u_view": view.T.astype(np.float32).tobytes(),
+            "u_proj": proj.T.astype(np.float32).tobytes(),
+        }
+        self._light_cache = {}
+
+    def _run(self, technique: Any, scope: Scope, outer: Composed, item_level: bool) -> int:
+        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included)."""
+        self.enter_technique(technique)
+        calls = 0
+        try:
+            technique.start(self)
+            try:
+                while technique.needs_pass(self):
+                    index = self.current_pass
+                    self._requests.append(None)
+                    try:
+                        technique.prepare_pass(self)
+                    finally:
+                        description = self._requests.pop()
+                    if description is None:
+                        description = Pass(f"{type(technique).__name__}[{index}]")
+                    calls += self._execute(technique, description, scope, outer, item_level)
+                    technique.finish_pass(self)
+                    technique.next_pass(self)
+            finally:
+                technique.stop(self)
+        finally:
+            self.leave_technique(technique)
+        return calls
+
+    def _execute(self, technique: Any, description: Pass, scope: Scope, outer: Composed, item_level: bool) -> int:
+        composed = outer.then(description)
+        record = PassRecord(
+            name="/".join(composed.names),
+            technique=type(technique).__name__,
+            depth=len(self.technique_frames),
+            draw_calls=0,
+            items=0,
+            target=description.target.name if description.target is not None else None,
+            gpu_ms=None,
+        )
+        self._records.append(record)
+        saved_target = self._bind_target(description.target) if description.target is not None else None
+        saved_camera = None
+        if description.camera is not None:
+            saved_camera = (self._view, self._proj, self._ortho)
+            view, proj = description.camera
+            if not isinstance(proj, np.ndarray):  # an om.Camera: its projection for this target's aspect
+                proj = proj.projection_matrix(self._target_size[0] / self._target_size[1])
+                ortho = description.camera[1].is_orthographic
+            else:
+                ortho = bool(abs(proj[3, 3] - 1.0) < 1e-9)
+            self._set_camera(view, proj, ortho)
+        self._enter_record(record)
+        try:
+            if description.clear is not None:
+                self._clear(description.clear)
+            if description.fullscreen is not None:
+                calls = self._fullscreen(description.fullscreen)
+            elif item_level:
+                calls = self._draw_items(scope, composed, lambda child: self._nested(child, composed))
+            else:
+                calls = self._run(self.technique, scope, composed, item_level=True)
+        finally:
+            self._leave_record()
+            if saved_camera is not None:
+                self._set_camera(*saved_camera)
+            if saved_target is not None:
+                self._unbind_target(saved_target)
+        return calls
+
+    def _nested(self, scope: Scope, composed: Composed) -> int:
+        self._suspend_query()
+        try:
+            return self._run(scope.technique, scope, composed, item_level=False)
+        finally:
+            self._resume_query()
+
+    # -- the report and timer queries ----------------------------------------------------------
+    def count(self, calls: int, instances: int) -> None:
+        """Add draw calls and instances to the pass being drawn (drawers of custom kinds may call it)."""
+        if self._record_stack:
+            record = self._record_stack[-1]
+            record["draw_calls"] += calls
+            record["items"] += instances
+
+    def _enter_record(self, record: PassRecord) -> None:
+        self._suspend_query()
+        self._record_stack.append(record)
+        self._resume_query()
+
+    def _leave_record(self) -> None:
+        self._suspend_query()
+        self._record_stack.pop()
+        self._resume_query()
+
+    def _suspend_query(self) -> None:
+        if self._open_query is not None:
+            self._open_query.__exit__(None, None, None)
+            self._open_query = None
+
+    def _resume_query(self) -> None:
+        if not self.timing or not self._record_stack:
+            return
+        pool = self._query_pool
+        if self._queries_used == len(pool):
+            pool.append(self.ctx.query(time=True))
+        query = pool[self._queries_used]
+        self._queries_used += 1
+        query.__enter__()
+        self._open_query = query
+        self._record_stack[-1].setdefault("_queries", []).append(query)
+
+    def _close_query(self) -> None:
+        self._suspend_query()
+
+    # -- targets ------------------------------------------------------------------------
+    def _bind_target(self, description: Target) -> tuple:
+        key = (description, self._size)
+        target = self._target_cache.get(key)
+        if target is None:
+            size = (max(1, round(self._size[0] * description.scale)), max(1, round(self._size[1] * description.scale)))
+            target = self._target_cache[key] = RenderTarget(self.ctx, description, size)
+        self._targets_used.add(key)
+        self._frame_targets[description.name] = target
+        saved = (self._applier.gl.framebuffer, self._target_size, self._linear_output)
+        self._applier.forget()
+        target.fbo.use()
+        self.ctx.viewport = (0, 0, *target.size)
+        self._applier.gl.framebuffer = target.fbo
+        self._applier.gl.size = target.size
+        self._target_size = target.size
+        self._linear_output = description.dtype != "f1"
+        return saved
+
+    def _unbind_target(self, saved: tuple) -> None:
+        fbo, size, linear = saved
+        self._applier.forget()
+        fbo.use()
+        self.ctx.viewport = (0, 0, *size)
+        self._applier.gl.framebuffer = fbo
+        self._applier.gl.size = size
+        self._target_size = size
+        self._linear_output = linear
+
+    def _release_unused_targets(self) -> None:
+        for key in [k for k in self._target_cache if k not in self._targets_used]:
+            self._target_cache.pop(key).release()
+
+    def _clear(self, clear: Any) -> None:
+        ctx = self.ctx
+        fbo = self._applier.gl.framebuffer
+        self._applier.forget()
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        ctx.scissor = None
+        if clear.color is not None or clear.depth is not None:
+            color = clear.color
+            if color is not None and self._linear_output:
+                from ..attributes.colorspace import linear_rgb
+
+                color = (*linear_rgb(color), color[3])
+            if color is None:
+                set_masks(ctx, self.raw, fbo, color=(False, False, False, False))
+                color = (0.0, 0.0, 0.0, 0.0)
+            if clear.depth is None:
+                set_masks(ctx, self.raw, fbo, depth=False)
+            fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        if clear.stencil is not None:
+            clear_stencil(self.raw, int(clear.stencil))
+
+    # -- image-space passes --------------------------------------------------------------
+    def _fullscreen(self, effect: FullScreen) -> int:
+        """Draw one full-screen triangle shaded by ``effect`` into the current target."""
+        ctx = self.ctx
+        programs: FullScreenPrograms = self._fullscreen_programs
+        prog, vao = programs.get(effect, self._linear_output)
+        unit = 0
+        for uniform, name, attachment in effect.inputs:
+            target = self.target(name)
+            texture = target.depth if attachment == "depth" else target.texture(attachment)
+            if texture is None:
+                raise ValueError(
+                    f"FullScreen: target {name!r} has no depth texture; make it with Target(..., depth=True)"
+                )
+            texture.use(unit)
+            u = prog.get(uniform, None)
+            if u is not None:
+                u.value = unit
+            unit += 1
+        for name, value in effect.uniforms:
+            u = prog.get(name, None)
+            if u is not None:
+                u.value = value
+        u = prog.get("u_resolution", None)
+        if u is not None:
+            u.value = tuple(float(v) for v in self._target_size)
+        self._applier.forget()
+        ctx.disable(ctx.CULL_FACE)
+        if effect.depth:
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.depth_func = "1"
+            set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=True)
+        else:
+            ctx.disable(ctx.DEPTH_TEST)
+            set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=False)
+        if effect.blend:
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
+        else:
+            ctx.disable(ctx.BLEND)
+        vao.render(ctx.TRIANGLES, vertices=3)
+        self._applier.forget()
+        self.count(1, 0)
+        return 1
+
+    def _restore_defaults(self) -> None:
+        """State preservation: leave the context as a plain moderngl user expects it."""
+        ctx = self.ctx
+        self._applier.apply(self._defaults)
+        self._applier.forget()
+        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.wireframe = False
+        ctx.polygon_offset = (0.0, 0.0)
+        ctx.scissor = None
+        set_masks(ctx, self.raw, self.framebuffer, color=(True, True, True, True), depth=True)
+        for i in range(self._nclip):
+            ctx.disable_direct(0x3000 + i)
+        self._nclip = 0
+        self.framebuffer.use()
+        ctx.viewport = (0, 0, *self._size)

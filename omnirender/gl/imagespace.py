@@ -1,0 +1,176 @@
+"""Image-space building blocks: offscreen targets, the one full-screen triangle, ping-pong chains.
+
+* :class:`RenderTarget`: the GPU side of a :class:`~.passes.Target`
+  description: one texture per named colour attachment (8-bit or float), an
+  optional depth texture that later passes sample, and their framebuffer.
+* :class:`FullScreenPrograms`: programs of :class:`~.passes.FullScreen`
+  passes, all drawing the same single triangle that covers the viewport
+  (three vertices, no quad seam), compiled once per snippet.
+* :class:`PingPong`: two targets used alternately, so a chain of effects
+  reads the previous result and writes the next (the idea of three.js's
+  ``EffectComposer``).  It holds names only: which target a step writes is a
+  function of the step, so one instance serves any number of technique runs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .passes import FullScreen, Target
+from .resources import gpu_call
+
+__all__ = ["RenderTarget", "FullScreenPrograms", "PingPong"]
+
+_TRIANGLE = np.array([-1.0, -1.0, 3.0, -1.0, -1.0, 3.0], np.float32)
+
+_VERTEX = """#version 330
+in vec2 in_pos;
+out vec2 v_uv;
+void main() {
+    v_uv = in_pos * 0.5 + 0.5;
+    gl_Position = vec4(in_pos, 0.0, 1.0);
+}
+"""
+
+_FRAGMENT_HEAD = """#version 330
+in vec2 v_uv;
+uniform vec2 u_resolution;   // the target's size in pixels
+layout(location = 0) out vec4 f_color;
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+vec3 to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+"""
+
+
+class RenderTarget:
+    """Textures and framebuffer of one offscreen target (made from a :class:`Target` at a pixel size)."""
+
+    def __init__(self, ctx: Any, description: Target, size: tuple[int, int]) -> None:
+        self.ctx = ctx
+        self.description = description
+        self.size = size
+        self.colors: dict[str, Any] = {}
+        dtype = description.dtype
+        for name in description.colors:
+            tex = gpu_call(ctx.texture, size, 4, dtype=dtype, what=f"target {description.name!r}")
+            tex.filter = (ctx.LINEAR, ctx.LINEAR)
+            tex.repeat_x = tex.repeat_y = False
+            self.colors[name] = tex
+        self.depth = None
+        if description.depth:
+            self.depth = gpu_call(ctx.depth_texture, size, what=f"depth of target {description.name!r}")
+            self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
+            self.depth.repeat_x = self.depth.repeat_y = False
+            self.depth.compare_func = ""  # sample depth values, not comparisons
+        self.fbo = ctx.framebuffer(list(self.colors.values()), self.depth)
+
+    def texture(self, name: str) -> Any:
+        """The texture of colour attachment ``name`` (``"depth"``: the depth texture)."""
+        if name == "depth":
+            return self.depth
+        try:
+            return self.colors[name]
+        except KeyError:
+            raise KeyError(
+                f"target {self.description.name!r} has no attachment {name!r}; it has {list(self.colors)}"
+                + (" and depth" if self.depth is not None else "")
+            ) from None
+
+    def color_array(self, name: str | None = None) -> np.ndarray:
+        """(H, W, 4) array of a colour attachment, top row first (uint8 or float32 by the target's dtype)."""
+        name = name or next(iter(self.colors))
+        dtype = self.description.dtype
+        w, h = self.size
+        data = self.texture(name).read(alignment=1)
+        np_dtype = {"f1": np.uint8, "f2": np.float16, "f4": np.float32}[dtype]
+        return np.frombuffer(data, np_dtype).reshape(h, w, 4)[::-1].astype(np.uint8 if dtype == "f1" else np.float32)
+
+    def depth_array(self) -> np.ndarray:
+        """(H, W) window depth in [0, 1], top row first."""
+        if self.depth is None:
+            raise ValueError(f"target {self.description.name!r} has no depth texture (Target(..., depth=True))")
+        w, h = self.size
+        raw = self.depth.read(alignment=1)
+        return np.frombuffer(raw, np.float32).reshape(h, w)[::-1].copy()
+
+    def release(self) -> None:
+        self.fbo.release()
+        for tex in self.colors.values():
+            tex.release()
+        if self.depth is not None:
+            self.depth.release()
+        self.colors.clear()
+        self.depth = None
+
+
+class FullScreenPrograms:
+    """The shared full-screen triangle and the programs of full-screen passes, compiled once per snippet."""
+
+    def __init__(self, ctx: Any) -> None:
+        self.ctx = ctx
+        self._triangle: Any = None
+        self._programs: dict[tuple[str, bool, bool], tuple[Any, Any]] = {}
+
+    def get(self, effect: FullScreen, linear_output: bool) -> tuple[Any, Any]:
+        """(program, vertex array) for ``effect`` writing a float (linear) or 8-bit target."""
+        key = (effect.fragment, effect.depth, linear_output)
+        found = self._programs.get(key)
+        if found is not None:
+            return found
+        if self._triangle is None:
+            self._triangle = self.ctx.buffer(_TRIANGLE.tobytes())
+        main = ["void main() {", "    f_color = effect(v_uv);"]
+        if effect.depth:
+            main.append("    gl_FragDepth = effect_depth(v_uv);")
+        main.append("}")
+        source = _FRAGMENT_HEAD + effect.fragment + "\n" + "\n".join(main) + "\n"
+        try:
+            prog = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=source)
+        except Exception as exc:
+            raise ValueError(f"FullScreen: the effect's GLSL failed to compile: {exc}") from None
+        vao = self.ctx.vertex_array(prog, [(self._triangle, "2f", "in_pos")])
+        self._programs[key] = (prog, vao)
+        return prog, vao
+
+    def __len__(self) -> int:
+        return len(self._programs)
+
+    def release(self) -> None:
+        for prog, vao in self._programs.values():
+            vao.release()
+            prog.release()
+        self._programs.clear()
+        if self._triangle is not None:
+            self._triangle.release()
+            self._triangle = None
+
+
+class PingPong:
+    """Two offscreen targets used alternately by a chain of image-space passes.
+
+    ``write(step)`` is the target step ``step`` draws into and ``read(step)``
+    the one it reads (what step ``step - 1`` wrote): step 0 renders the scene,
+    step 1 reads it and writes the other target, and so on.
+    """
+
+    def __init__(self, name: str, colors: tuple[str, ...] = ("color",), depth: bool = False, dtype: str = "f1") -> None:
+        self.name = name
+        self.targets = (
+            Target(f"{name}.0", colors=colors, depth=depth, dtype=dtype),
+            Target(f"{name}.1", colors=colors, depth=depth, dtype=dtype),
+        )
+
+    def write(self, step: int) -> Target:
+        return self.targets[step % 2]
+
+    def read(self, step: int) -> Target:
+        return self.targets[(step + 1) % 2]
+
+    def __repr__(self) -> str:
+        return f"PingPong({self.name!r})"

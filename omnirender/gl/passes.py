@@ -1,0 +1,410 @@
+"""Pass descriptions: what one pass of a GL frame draws, where, and how (data, compared each frame).
+
+A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(...))``:
+
+* **what**: ``items`` (``"all"``, ``"opaque"``, ``"transparent"``, ``"overlay"``,
+  ``"none"`` or a set of them), a group ``mask`` on the nodes the items come
+  from, ``select`` (a predicate on draw items, e.g. shadow casters), whether
+  nested technique ``scopes`` are drawn;
+* **where**: ``target`` (an offscreen :class:`Target` with named colour
+  attachments and a depth texture that later passes can sample; None: the
+  enclosing target), ``clear`` (:class:`Clear`);
+* **how**: ``state`` (GL state attributes forced on every item, e.g.
+  ``CullFace("front")``), ``fallback`` (applied where an item has the
+  default), ``camera`` (an ``om.Camera`` or ``(view, projection)`` matrices,
+  e.g. a light's), ``shader`` (:class:`Shader`: depth only, flat colour,
+  unlit, user GLSL snippets), or ``fullscreen`` (:class:`FullScreen`: an
+  image-space pass that draws one full-screen triangle instead of items).
+
+Passes nest: the pass a nested technique describes is composed with the
+enclosing one (:class:`Composed`): item classes intersect, masks and
+predicates all apply, state/camera/shader settings of the inner pass win.
+Descriptions are plain values; the engine compares them frame by frame and
+rebuilds GPU objects (targets, programs) only when the description that needs
+them changed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME"]
+
+#: The classes of draw items: drawn in this order when a pass selects several.
+ITEM_CLASSES = ("opaque", "transparent", "overlay")
+_ALL = frozenset(ITEM_CLASSES)
+_DTYPES = ("f1", "f2", "f4")
+
+
+def _classes(items: Any) -> frozenset[str]:
+    if isinstance(items, str):
+        if items == "all":
+            return _ALL
+        if items == "none":
+            return frozenset()
+        items = (items,)
+    try:
+        chosen = frozenset(items)
+    except TypeError:
+        chosen = None
+    if chosen is None or not chosen <= _ALL:
+        raise ValueError(f"Pass: items must be 'all', 'none', one of {ITEM_CLASSES} or a set of them, got {items!r}")
+    return chosen
+
+
+def _pairs(values: Mapping[str, Any] | Iterable[tuple[str, Any]] | None, owner: str) -> tuple[tuple[str, Any], ...]:
+    """Uniform values as a sorted tuple of (name, hashable value) pairs."""
+    if values is None:
+        return ()
+    items = values.items() if isinstance(values, Mapping) else values
+    out = []
+    for name, value in items:
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ValueError(f"{owner}: uniform names must be GLSL identifiers, got {name!r}")
+        if isinstance(value, (list, tuple, np.ndarray)):
+            arr = np.asarray(value, dtype=np.float64).ravel()
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{owner}: uniform {name} has non-finite values {value!r}")
+            value = tuple(float(v) for v in arr)
+        elif isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{owner}: uniform {name} must be a number or a sequence of numbers, got {value!r}")
+        elif not np.isfinite(value):
+            raise ValueError(f"{owner}: uniform {name} is not finite ({value!r})")
+        out.append((name, value))
+    return tuple(sorted(out))
+
+
+def _rgba(value: Any, owner: str, name: str) -> tuple[float, float, float, float]:
+    try:
+        c = tuple(float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: {name} must be 3 or 4 numbers in [0, 1], got {value!r}") from None
+    if len(c) == 3:
+        c = (*c, 1.0)
+    if len(c) != 4 or not all(0.0 <= v <= 1.0 for v in c):
+        raise ValueError(f"{owner}: {name} must be 3 or 4 numbers in [0, 1], got {value!r}")
+    return c  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class Target:
+    """An offscreen render target, identified by ``name`` within a frame.
+
+    ``colors`` names its colour attachments (fragment outputs 0, 1, ... in
+    that order), ``depth`` adds a depth texture, ``dtype`` is ``"f1"`` (8 bits
+    per channel, sRGB-encoded values like the screen), ``"f2"`` or ``"f4"``
+    (linear floats), ``scale`` its size relative to the frame.  Later passes
+    sample it through :class:`FullScreen` ``inputs`` or ``engine.target(name)``.
+    """
+
+    name: str
+    colors: tuple[str, ...] = ("color",)
+    depth: bool = True
+    dtype: str = "f1"
+    scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"Target: name must be a non-empty string, got {self.name!r}")
+        colors = (self.colors,) if isinstance(self.colors, str) else tuple(self.colors)
+        if not all(isinstance(c, str) and c.isidentifier() for c in colors) or len(set(colors)) != len(colors):
+            raise ValueError(f"Target {self.name!r}: colors must be distinct identifiers, got {self.colors!r}")
+        if len(colors) > 8:
+            raise ValueError(f"Target {self.name!r}: at most 8 colour attachments, got {len(colors)}")
+        if not colors and not self.depth:
+            raise ValueError(f"Target {self.name!r}: give at least one colour attachment or depth=True")
+        if self.dtype not in _DTYPES:
+            raise ValueError(f"Target {self.name!r}: dtype must be one of {_DTYPES}, got {self.dtype!r}")
+        if not (isinstance(self.scale, (int, float)) and 0.0 < self.scale <= 4.0):
+            raise ValueError(f"Target {self.name!r}: scale must be in (0, 4], got {self.scale!r}")
+        object.__setattr__(self, "colors", colors)
+        object.__setattr__(self, "scale", float(self.scale))
+
+
+@dataclass(frozen=True)
+class Clear:
+    """What a pass clears before drawing: colour (RGBA display values), depth, stencil; None keeps it."""
+
+    color: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0)
+    depth: float | None = 1.0
+    stencil: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.color is not None:
+            object.__setattr__(self, "color", _rgba(self.color, "Clear", "color"))
+        if self.depth is not None and not (isinstance(self.depth, (int, float)) and 0.0 <= self.depth <= 1.0):
+            raise ValueError(f"Clear: depth must be in [0, 1] or None, got {self.depth!r}")
+        if self.stencil is not None and (isinstance(self.stencil, bool) or not isinstance(self.stencil, int)):
+            raise ValueError(f"Clear: stencil must be a whole number or None, got {self.stencil!r}")
+
+
+@dataclass(frozen=True)
+class Shader:
+    """How items are shaded in a pass (overrides of the scene's materials).
+
+    * ``depth_only``: write depth, no colour (shadow maps, depth pre-passes);
+    * ``flat_color``: one RGBA colour (display values), no lighting;
+    * ``unlit``: each item's own colour (and texture), no lighting;
+    * ``vertex``: GLSL defining ``void pass_vertex(inout vec3 world, inout vec3 normal)``,
+      called with the world-space position and normal of every vertex;
+    * ``fragment``: GLSL defining ``void pass_fragment(inout vec4 color, vec3 P, vec3 N)``,
+      called with the final linear colour, the eye-space position and normal;
+      it may declare more outputs (``layout(location = 1) out vec4 f_normal;``)
+      for targets with several colour attachments;
+    * ``uniforms``: values of uniforms the snippets declare.
+    """
+
+    depth_only: bool = False
+    flat_color: tuple[float, float, float, float] | None = None
+    unlit: bool = False
+    vertex: str = ""
+    fragment: str = ""
+    uniforms: Any = ()
+
+    def __post_init__(self) -> None:
+        if self.flat_color is not None:
+            object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
+        for name in ("vertex", "fragment"):
+            code = getattr(self, name)
+            if not isinstance(code, str):
+                raise ValueError(f"Shader: {name} must be GLSL source text, got {type(code).__name__}")
+        if self.vertex and "pass_vertex" not in self.vertex:
+            raise ValueError(
+                "Shader: the vertex snippet must define void pass_vertex(inout vec3 world, inout vec3 normal)"
+            )
+        if self.fragment and "pass_fragment" not in self.fragment:
+            raise ValueError(
+                "Shader: the fragment snippet must define void pass_fragment(inout vec4 color, vec3 P, vec3 N)"
+            )
+        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
+
+
+@dataclass(frozen=True)
+class FullScreen:
+    """An image-space pass: one full-screen triangle shaded by ``fragment``.
+
+    ``fragment`` is GLSL defining ``vec4 effect(vec2 uv)`` (uv in [0, 1],
+    origin bottom-left), which returns the colour written (to every colour
+    attachment of the target that the snippet does not write itself).
+    ``inputs`` maps sampler uniform names to ``(target name, attachment)``:
+    an attachment name of that target, or ``"depth"`` (window depth in [0, 1]).
+    ``uniforms`` gives other uniform values.  ``blend=True`` composites the
+    result over the target ("over", premultiplied by its alpha) instead of
+    replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
+    effect_depth(vec2 uv)`` the snippet defines.
+    """
+
+    fragment: str
+    inputs: Any = ()
+    uniforms: Any = ()
+    blend: bool = False
+    depth: bool = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.fragment, str) or "effect" not in self.fragment:
+            raise ValueError("FullScreen: fragment must be GLSL defining vec4 effect(vec2 uv)")
+        if self.depth and "effect_depth" not in self.fragment:
+            raise ValueError("FullScreen: depth=True needs the snippet to define float effect_depth(vec2 uv)")
+        items = self.inputs.items() if isinstance(self.inputs, Mapping) else self.inputs
+        inputs = []
+        for uniform, source in items:
+            if not isinstance(uniform, str) or not uniform.isidentifier():
+                raise ValueError(f"FullScreen: input names must be GLSL identifiers, got {uniform!r}")
+            try:
+                target, attachment = source
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"FullScreen: input {uniform} must be (target name, attachment), got {source!r}"
+                ) from None
+            inputs.append((uniform, str(target), str(attachment)))
+        object.__setattr__(self, "inputs", tuple(sorted(inputs)))
+        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
+
+
+@dataclass(frozen=True, eq=False)
+class Pass:
+    """One pass of a GL technique (see the module docstring for every field)."""
+
+    name: str = "pass"
+    items: Any = "all"
+    mask: str | None = None
+    select: Callable[[Any], bool] | None = None
+    scopes: bool = True
+    target: Target | None = None
+    clear: Clear | None = None
+    state: tuple[Any, ...] = ()
+    fallback: tuple[Any, ...] = ()
+    camera: Any = None
+    shader: Shader | None = None
+    fullscreen: FullScreen | None = None
+    _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
+    _fallback: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"Pass: name must be a non-empty string, got {self.name!r}")
+        object.__setattr__(self, "items", _classes(self.items))
+        if self.mask is not None:
+            from ..core.mask import compile_mask
+
+            compile_mask(self.mask)  # a syntax error is reported here, with the expression
+        if self.select is not None and not callable(self.select):
+            raise ValueError(f"Pass {self.name!r}: select must be a function of a draw item, got {self.select!r}")
+        for name, kind in (("target", Target), ("clear", Clear), ("shader", Shader), ("fullscreen", FullScreen)):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, kind):
+                raise ValueError(f"Pass {self.name!r}: {name} must be an om.gl.{kind.__name__}, got {value!r}")
+        object.__setattr__(self, "_state", self._captured("state"))
+        object.__setattr__(self, "_fallback", self._captured("fallback"))
+        if self.camera is not None:
+            object.__setattr__(self, "camera", _camera(self.camera, self.name))
+
+    def _captured(self, name: str) -> tuple[tuple[int, Any], ...]:
+        from .attributes import GLState
+
+        values = getattr(self, name)
+        if isinstance(values, GLState):
+            values = (values,)
+        out = []
+        for attribute in values:
+            if not isinstance(attribute, GLState):
+                raise ValueError(
+                    f"Pass {self.name!r}: {name} takes GL state attributes (om.gl.CullFace(...), om.gl.DepthMask(...)"
+                    f", ...), got {attribute!r}"
+                )
+            out.append((type(attribute).index, attribute.capture()))
+        object.__setattr__(self, name, tuple(values))
+        return tuple(out)
+
+    def key(self) -> tuple:
+        """The description as a comparable value (what the engine compares frame by frame)."""
+        camera = None if self.camera is None else (self.camera[0].tobytes(), self.camera[1].tobytes())
+        return (
+            self.name,
+            self.items,
+            self.mask,
+            self.select,
+            self.scopes,
+            self.target,
+            self.clear,
+            self._state,
+            self._fallback,
+            camera,
+            self.shader,
+            self.fullscreen,
+        )
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Pass) and self.key() == other.key()
+
+    def __hash__(self) -> int:
+        return hash(self.key())
+
+
+def _camera(value: Any, name: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """(view, projection or None) from an om.Camera (projection made per frame aspect) or two matrices."""
+    from ..core.camera import Camera
+
+    if isinstance(value, Camera):
+        return (np.asarray(value.view_matrix(), dtype=np.float64), value)  # type: ignore[return-value]
+    try:
+        view, proj = value
+        view = np.asarray(view, dtype=np.float64)
+        proj = np.asarray(proj, dtype=np.float64)
+    except (TypeError, ValueError):
+        view = proj = None
+    if view is None or view.shape != (4, 4) or proj.shape != (4, 4):  # type: ignore[union-attr]
+        raise ValueError(f"Pass {name!r}: camera must be an om.Camera or (view, projection) 4x4 matrices")
+    if not (np.all(np.isfinite(view)) and np.all(np.isfinite(proj))):  # type: ignore[arg-type]
+        raise ValueError(f"Pass {name!r}: camera matrices must be finite")
+    return view, proj  # type: ignore[return-value]
+
+
+#: The pass a frame starts with: every item, the frame's target and camera.
+FRAME = Pass("frame")
+
+
+class Composed:
+    """A pass composed with the passes enclosing it: what the renderer actually applies to items."""
+
+    __slots__ = ("classes", "masks", "selects", "scopes", "state", "fallback", "camera", "shader", "names")
+
+    def __init__(self) -> None:
+        self.classes: frozenset[str] = _ALL
+        self.masks: tuple[str, ...] = ()
+        self.selects: tuple[Callable[[Any], bool], ...] = ()
+        self.scopes = True
+        self.state: dict[int, Any] = {}
+        self.fallback: dict[int, Any] = {}
+        self.camera: Any = None
+        self.shader: tuple[Shader, ...] = ()
+        self.names: tuple[str, ...] = ()
+
+    def then(self, inner: Pass) -> Composed:
+        """This composition narrowed by ``inner``."""
+        out = Composed()
+        out.classes = self.classes & inner.items
+        out.masks = self.masks + ((inner.mask,) if inner.mask else ())
+        out.selects = self.selects + ((inner.select,) if inner.select is not None else ())
+        out.scopes = inner.scopes
+        out.state = {**self.state, **dict(inner._state)}
+        out.fallback = {**self.fallback, **dict(inner._fallback)}
+        out.camera = inner.camera if inner.camera is not None else self.camera
+        out.shader = self.shader + ((inner.shader,) if inner.shader is not None else ())
+        out.names = (*self.names, inner.name)
+        return out
+
+    def raster(self, values: tuple[Any, ...], defaults: tuple[Any, ...]) -> tuple[Any, ...]:
+        """An item's raster values with this pass's overrides (forced) and fallbacks (where at the default)."""
+        if not self.state and not self.fallback:
+            return values
+        out = list(values)
+        for index, value in self.fallback.items():
+            if out[index] == defaults[index]:
+                out[index] = value
+        for index, value in self.state.items():
+            out[index] = value
+        return tuple(out)
+
+    def shading(self) -> tuple[tuple[str, Any], ...]:
+        """Program features of the shader overrides (innermost setting wins; snippets accumulate)."""
+        depth_only = unlit = False
+        flat = None
+        vertex: list[str] = []
+        fragment: list[str] = []
+        for s in self.shader:
+            depth_only = depth_only or s.depth_only
+            unlit = unlit or s.unlit
+            if s.flat_color is not None:
+                flat = s.flat_color
+            if s.vertex:
+                vertex.append(s.vertex)
+            if s.fragment:
+                fragment.append(s.fragment)
+        out: list[tuple[str, Any]] = []
+        if depth_only:
+            out.append(("DEPTH_ONLY", True))
+        elif flat is not None:
+            out.append(("FLAT_COLOR", True))
+        elif unlit:
+            out.append(("UNLIT", True))
+        if vertex:
+            out.append(("PASS_VERTEX", tuple(vertex)))
+        if fragment and not depth_only:
+            out.append(("PASS_FRAGMENT", tuple(fragment)))
+        return tuple(out)
+
+    def uniforms(self) -> dict[str, Any]:
+        """Uniform values of the shader overrides (the flat colour among them, linear)."""
+        values: dict[str, Any] = {}
+        for s in self.shader:
+            values.update(dict(s.uniforms))
+            if s.flat_color is not None:
+                from ..attributes.colorspace import linear_rgb
+
+                values["u_flat_color"] = (*linear_rgb(s.flat_color), s.flat_color[3])
+        return values
