@@ -2,7 +2,8 @@
 
 Material, PBRMaterial and Color go on one surface stack so the innermost of
 them decides (a Color inside a Material tints it; a Material inside a Color
-replaces it).  Raster-state attributes mark the interned draw state dirty.
+replaces it).  Raster-state attributes (every ``om.gl.GLState`` subclass,
+through the base class) mark the interned draw state dirty.
 Clip planes are captured in world coordinates where they are added (OpenGL's
 glClipPlane semantics).
 """
@@ -95,20 +96,8 @@ def _register() -> None:
     for target in (Material, PBRMaterial, Color):
         cls = type(f"SurfacePainter_{target.__name__}", (SurfacePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])
-    state_targets = (
-        DrawStyle,
-        Texture,
-        Fog,
-        LightSwitch,
-        glattr.DepthTest,
-        glattr.DepthMask,
-        glattr.Blend,
-        glattr.CullFace,
-        glattr.PolygonOffset,
-        glattr.ColorMask,
-        glattr.StencilTest,
-        glattr.StencilOp,
-    )
+    # every GL state attribute, also one defined later, through the base class (handler look-up walks the MRO)
+    state_targets = (DrawStyle, Texture, Fog, LightSwitch, glattr.GLState)
     for target in state_targets:
         cls = type(f"StatePainter_{target.__name__}", (StatePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])

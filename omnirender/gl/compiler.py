@@ -36,7 +36,7 @@ from .attributes import CullFace, GLState
 from .drawlist import DrawItem, DrawState, Scope
 from .geometry import Geometry
 from .layout import PBR, PHONG, ROW
-from .state import FillMode, LineWidth, kinds
+from .state import FillMode, LineWidth, defaults, kinds
 
 __all__ = ["DrawListCompiler", "linear_rgb"]
 
@@ -138,6 +138,9 @@ class DrawListCompiler:
             scene = Node.transient([scene] if isinstance(scene, RenderingComponent) else scene)
         mask_key = self._mask
         c = self._compiled
+        if len(kinds()) != self._kinds_seen:
+            self._new_state_kinds()
+            c = None
         if c is not None and c[0]() is scene and c[1] == scene.version and c[2] == mask_key:
             self.stats["compiled"] = False
             return self._root
@@ -167,6 +170,15 @@ class DrawListCompiler:
         self.stats["compiled"] = True
         return root
 
+    def _new_state_kinds(self) -> None:
+        """A GL state class was defined since the last compile: items must capture one more value."""
+        self._kinds_seen = len(kinds())
+        self._defaults = defaults()
+        self._states.clear()
+        self._node_cache.clear()
+        self._compiled = None
+        self._state_dirty = True
+
     def _prune_caches(self) -> None:
         """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
         if len(self._node_cache) > self._prune_limit:
@@ -188,7 +200,9 @@ class DrawListCompiler:
         native painters scale a unit mesh with it).  Painters call this; it
         issues no GL call.
         """
-        if self._state_dirty:
+        if self._state_dirty or len(self._state_base[0]) != self._kinds_seen:
+            if len(kinds()) != self._kinds_seen:
+                self._new_state_kinds()
             self._resolve_state()
         if self._surface_dirty:
             self._resolve_surface()

@@ -231,11 +231,7 @@ class FrameRunner:
         return calls
 
     def _nested(self, scope: Scope, composed: Composed) -> int:
-        self._suspend_query()
-        try:
-            return self._run(scope.technique, scope, composed, item_level=False)
-        finally:
-            self._resume_query()
+        return self._run(scope.technique, scope, composed, item_level=False)
 
     # -- the report and timer queries ----------------------------------------------------------
     def count(self, calls: int, instances: int) -> None:
@@ -261,7 +257,7 @@ class FrameRunner:
             self._open_query = None
 
     def _resume_query(self) -> None:
-        if not self.timing or not self._record_stack:
+        if not self.timing or not self._record_stack or self._open_query is not None:
             return
         pool = self._query_pool
         if self._queries_used == len(pool):

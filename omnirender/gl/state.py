@@ -124,7 +124,7 @@ class RasterApplier:
         all_kinds = _KINDS
         if current is None:
             self.current = list(raster)
-            for kind, value in zip(all_kinds, raster, strict=True):
+            for kind, value in zip(all_kinds, raster, strict=False):  # kinds defined after a compile: left as they are
                 kind.apply(self.gl, value)
             return
         for i, value in enumerate(raster):

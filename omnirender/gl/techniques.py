@@ -42,7 +42,11 @@ class GLTechnique(Technique):
         return callable(getattr(engine, "set_pass", None))
 
     def parameters(self) -> dict:
-        return {}  # subclasses with parameters override this (scene files)
+        """The subclass's own public parameters (its pass count and service are fixed by the class)."""
+        params = super().parameters()
+        params.pop("service", None)
+        params.pop("passes", None)
+        return params
 
 
 class Forward(GLTechnique):

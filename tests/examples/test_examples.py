@@ -126,3 +126,17 @@ def test_demo_scene_renders_without_the_debug_sphere():
     scene.remove(scene["/demo/debug"])
     without = om.render(scene, engine="gl", size=(96, 72), samples=0).array
     assert np.abs(shown.astype(int) - without.astype(int)).max() <= 1
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_06_outline_technique(tmp_path):
+    out = run_example("06_outline_technique.py", tmp_path)
+    both = check_image(tmp_path / "06-outline-technique.png")
+    assert "06-outline-technique.png" in out
+    half = (both.shape[1] - 4) // 2
+    gl, pov = both[:, :half], both[:, half + 4 :]
+    ring = (slice(80, 115), slice(90, 230))  # the top of the ring, away from the floor and its shadows
+    dark = lambda img: (img[ring].max(axis=2) < 40).sum()  # noqa: E731
+    assert dark(gl) > 150 and dark(pov) < dark(gl) / 5  # the outline is GL's; POV-Ray renders the scene without it

@@ -169,3 +169,83 @@ def test_sixteen_point_lights(engine):
     assert r[24, 32] > 100
     # symmetric lights give a symmetric image
     assert abs(int(r[24, 20]) - int(r[24, 43])) <= 4  # pixel centres mirror around x = 31.5
+
+
+# --- declarative GL state: ScissorTest, AlphaTest, and a state defined in one class ---------------------
+
+
+def test_scissor_test_limits_drawing_to_a_rectangle_from_the_top_left(engine):
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5)), om.Color(1, 1, 1)])
+    cut = s.add(om.Node("cut", [om.gl.ScissorTest((10, 5, 20, 30)), om.Box(size=(4, 4, 0.1))]))
+    s.add(om.Node("after", [om.Color(0, 0, 1), om.Sphere(center=(0, -1.5, 1), radius=0.3)]))
+    img = engine.render(s, background=(0, 0, 0))
+    white = img.array[..., 0] > 200
+    ys, xs = np.nonzero(white)
+    assert (xs.min(), xs.max(), ys.min(), ys.max()) == (10, 29, 5, 34)  # exactly the box (x, y, w, h)
+    assert img.array[..., 2].max() > 150  # the scissor was popped with its node: the sphere after it is whole
+    cut.items[0].enabled = False
+    assert (engine.render(s, background=(0, 0, 0)).array[..., 0] > 200).sum() > white.sum()
+    with pytest.raises(ValueError, match="width must be >= 1"):
+        om.gl.ScissorTest((0, 0, 0, 5))
+    assert om.trace(s)  # other engines push it passively
+
+
+def test_alpha_test_cuts_out_texels_and_keeps_depth(engine):
+    checker = np.zeros((8, 8, 4), np.uint8)
+    checker[..., :3] = 255
+    checker[..., 3] = np.where((np.indices((8, 8)).sum(axis=0) % 2) == 0, 255, 0)
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 5, 0.001), fov=40)])
+    leaf = s.add(om.Node("leaf", [om.Texture(checker, filter="nearest", mipmap=False), om.Color(1, 1, 1)]))
+    leaf.add(om.gl.AlphaTest("greater", 0.5))
+    leaf.add(om.Rectangle(size=(2, 2)))
+    img = engine.render(s, background=(0, 0, 0))
+    leaf.items[2].enabled = False
+    solid = engine.render(s, background=(0, 0, 0))
+    ys, xs = np.nonzero(solid.array[..., 0] > 200)  # the whole rectangle, drawn without the test
+    inside = (slice(ys.min() + 1, ys.max()), slice(xs.min() + 1, xs.max()))
+    assert (solid.array[inside][..., 0] > 200).all()
+    holes = img.array[inside][..., 0] < 30
+    assert 0.35 < holes.mean() < 0.65  # half the texels are cut out
+    depth = img.depth[inside]
+    assert np.isinf(depth[holes]).all() and np.isfinite(depth[~holes]).all()  # cut-outs write no depth
+    with pytest.raises(ValueError, match="ref must be in"):
+        om.gl.AlphaTest(ref=2)
+
+
+def test_a_gl_state_defined_in_one_class_reaches_capture_apply_and_shader(engine):
+    applied: list = []
+
+    class Tint(om.gl.GLState):
+        """Scales the surface colour in the shader and records its GL calls: nothing else is edited."""
+
+        __slots__ = ("factor",)
+        default = None
+        fragment_code = "uniform float u_tint;\n"
+        fragment_main = "base.rgb *= u_tint;"
+
+        def __init__(self, factor: float = 0.5) -> None:
+            super().__init__()
+            self.factor = float(factor)
+
+        def capture(self):
+            return self.factor
+
+        @classmethod
+        def apply(cls, gl, value):
+            applied.append(value)
+
+        @classmethod
+        def features(cls, value):
+            return () if value is None else (("TINT", True),)
+
+        @classmethod
+        def uniforms(cls, value):
+            return () if value is None else (("u_tint", value),)
+
+    s = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 5)), om.AmbientLight(intensity=1.0)])
+    s.add(om.Node("a", [Tint(0.25), om.Color(0.6, 0.6, 0.6), om.Sphere(center=(-1, 0, 0))]))
+    s.add(om.Node("b", [om.Color(0.6, 0.6, 0.6), om.Sphere(center=(1, 0, 0))]))
+    img = engine.render(s, background=(0, 0, 0))
+    tinted, plain = img.pixel(21, 24)[0], img.pixel(43, 24)[0]
+    assert 0 < tinted < plain * 0.75
+    assert 0.25 in applied and None in applied  # applied for the tinted sphere, restored for the other
