@@ -6,7 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.transform import Matrix, Transform
+from ..core.transform import Matrix
+from ..techniques.base import AnalysisEngine
 from .frame import ViewCamera
 from .renderable import TRANSPARENT, NodeRenderable
 
@@ -47,34 +48,34 @@ def _with_root(hit: Any, root: Any) -> Any:
     return hit
 
 
+class _PlacementProbe(AnalysisEngine):
+    """Records the model matrix where one shape is evaluated in the node occurrence at one path."""
+
+    def __init__(self, path: str, shape: Any) -> None:
+        super().__init__(on_missing="skip")
+        self.path = path
+        self.shape = shape
+        self.matrix: np.ndarray | None = None
+
+    def eval(self, shape: Any) -> None:
+        if self.matrix is None and shape is self.shape and self.node_path == self.path:
+            self.matrix = np.array(self.model_matrix())
+
+
 def shape_world_matrix(root: Any, path: str, shape: Any) -> np.ndarray:
     """Model matrix of ``shape`` in the node at ``path`` under ``root``, following that very path.
 
-    Transforms met before each child on the way (and before the shape in its
-    node) compose, as during evaluation; a node shared by several parents is
-    placed where ``path`` says, not where its first parent puts it.
+    The root is evaluated through an analysis engine (the one interpreter of
+    node semantics), so every transform before the shape on the way applies,
+    including a ``Billboard`` facing the root's camera, and a node shared by
+    several parents is placed where ``path`` says, not where its first
+    parent puts it.
     """
-    names = [p for p in path.split("/") if p]
-    if names and names[0] == root.name:
-        names = names[1:]
-    m = np.eye(4)
-    node = root
-    for name in [*names, None]:
-        target = None
-        for item in node:
-            if name is None and item is shape:
-                return m
-            if name is not None and hasattr(item, "_items") and item.name == name:
-                target = item
-                break
-            if isinstance(item, Transform):
-                m = m @ item.matrix
-        if name is None:
-            return m
-        if target is None:
-            raise KeyError(f"no node {name!r} under {node.path} on the path {path!r}")
-        node = target
-    return m
+    probe = _PlacementProbe(path if path.startswith("/") else "/" + path, shape)
+    probe.run(root)
+    if probe.matrix is None:
+        raise KeyError(f"no occurrence of {type(shape).__name__} at {path!r} under {root.path}")
+    return probe.matrix
 
 
 class PickHighlight:

@@ -17,6 +17,9 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..core.engine import Engine
+from ..core.program import ADD, DEINSTALL, ENTER, EVAL, INSTALL, LEAVE, NODE, POP, PUSH, REMOVE, TECHNIQUE
+
 __all__ = [
     "IsRenderable",
     "TRANSPARENT",
@@ -196,7 +199,7 @@ class _Snapshot:
 
 def _draw(renderer: Any, snapshot: _Snapshot | None, node: Any) -> None:
     """Run ``snapshot`` inside the renderer's traversal (a viewer frame); outside one, evaluate ``node``."""
-    if snapshot is None or not getattr(renderer, "_running", 0):
+    if snapshot is None or not getattr(renderer, "running", False):
         if node is not None:
             renderer.evaluate(node)  # not prerendered, or drawn on its own: the live node with its lights
         elif snapshot is not None:
@@ -217,73 +220,109 @@ def _snapshot_transform(attribute: Any, memo: dict[int, Any]) -> Any:
     return frozen
 
 
+class _Splitter(Engine):
+    """Runs a compiled program through the core interpreter and files its ops by render hints.
+
+    Attributes are only recorded and kept on the context's stacks (never
+    applied: a ``Billboard`` must stay live for the engine that draws the
+    snapshot), so translucency is known where each shape is met.  Every op
+    goes to all four programs except a shape's, which goes to its kind.
+    """
+
+    service = "viewer.split"
+
+    def __init__(self) -> None:
+        super().__init__(on_missing="skip")
+        self._outputs: list[dict[int, list[tuple[int, Any]]]] = [{k: [] for k in range(4)}]
+        self.used: set[int] = set()
+        self._memo: dict[int, Any] = {}
+
+    def _all(self, op: tuple[int, Any]) -> None:
+        for program in self._outputs[-1].values():
+            program.append(op)
+
+    def _nested(self, program: list[tuple[int, Any]]) -> dict[int, list[tuple[int, Any]]]:
+        self._outputs.append({k: [] for k in range(4)})
+        try:
+            self.run_program(program)
+        finally:
+            nested = self._outputs.pop()
+        return nested
+
+    # -- the ops, recorded --------------------------------------------------------------
+    def on_enter(self, node: Any) -> None:
+        self._all((ENTER, node))
+
+    def on_leave(self, node: Any) -> None:
+        self._all((LEAVE, -1))
+
+    def push(self, attribute: Any) -> None:
+        self.context.mono_stack(attribute.category).append(attribute)
+        self._all((PUSH, _snapshot_transform(attribute, self._memo)))
+
+    def pop(self, category: type) -> Any:
+        attribute = self.context.mono_stack(category).pop()
+        self._all((POP, _snapshot_transform(attribute, self._memo)))
+        return attribute
+
+    def add(self, attribute: Any) -> None:
+        self.context.poly_set(attribute.category).append(attribute)
+        self._all((ADD, attribute))
+
+    def remove(self, attribute: Any) -> None:
+        items = self.context.poly_set(attribute.category)
+        for i in range(len(items) - 1, -1, -1):
+            if items[i] is attribute:
+                del items[i]
+                break
+        self._all((REMOVE, attribute))
+
+    def install(self, handler: Any) -> None:
+        self._all((INSTALL, handler))
+
+    def deinstall(self, handler: Any) -> None:
+        self._all((DEINSTALL, handler))
+
+    def eval(self, shape: Any) -> None:
+        tags = getattr(shape, "hints", ()) or ()
+        kind = TWO_DIMENSIONAL if "2d" in tags else 0
+        if "transparent" in tags or self._translucent_state():
+            kind |= TRANSPARENT
+        self.used.add(kind)
+        self._outputs[-1][kind].append((EVAL, shape))
+
+    def _translucent_state(self) -> bool:
+        ctx = self.context
+        for category in ctx.categories():
+            stack = ctx.mono_stack(category)  # the attributes themselves (ctx.mono gives a matrix for transforms)
+            if (stack and _translucent(stack[-1])) or any(_translucent(p) for p in ctx.poly(category)):
+                return True
+        return False
+
+    def eval_node(self, node: Any) -> None:
+        nested = self._nested(node.program())
+        for k, program in self._outputs[-1].items():
+            program.append((NODE, _Snapshot(node.groups, nested[k])))
+
+    def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
+        nested = self._nested(program)
+        for k, out in self._outputs[-1].items():
+            out.append((TECHNIQUE, (technique, nested[k])))
+
+
 def split_program(program: list[tuple[int, Any]]) -> tuple[dict[int, list[tuple[int, Any]]], set[int]]:
     """Split a compiled node program by the render hints of its shapes.
 
     Returns ``({hints: program} for hints 0..3, hints present)``, hints being 0,
     TRANSPARENT, TWO_DIMENSIONAL or both: every program keeps all the attribute,
     handler and node ops (with core transforms frozen into matrices) and only
-    the shapes of its kind.
+    the shapes of its kind.  The program runs through the core interpreter
+    (:class:`_Splitter`), so scoping, nodes and techniques mean what they mean
+    for every engine.
     """
-    from ..core.program import ADD, EVAL, NODE, POP, PUSH, REMOVE, TECHNIQUE
-
-    stacks: dict[Any, list[Any]] = {}
-    polys: list[Any] = []
-    memo: dict[int, Any] = {}
-
-    def kind_of(shape: Any) -> int:
-        tags = getattr(shape, "hints", ()) or ()
-        kind = TWO_DIMENSIONAL if "2d" in tags else 0
-        if (
-            "transparent" in tags
-            or any(stack and _translucent(stack[-1]) for stack in stacks.values())
-            or any(_translucent(p) for p in polys)
-        ):
-            kind |= TRANSPARENT
-        return kind
-
-    def split(ops: list[tuple[int, Any]]) -> tuple[dict[int, list[tuple[int, Any]]], set[int]]:
-        out: dict[int, list[tuple[int, Any]]] = {k: [] for k in range(4)}
-        used: set[int] = set()
-        for code, arg in ops:
-            if code == EVAL:
-                kind = kind_of(arg)
-                used.add(kind)
-                out[kind].append((code, arg))
-                continue
-            if code == NODE:
-                subs, sub_used = split(arg.program())
-                used |= sub_used
-                for k in range(4):
-                    out[k].append((NODE, _Snapshot(arg.groups, subs[k])))
-                continue
-            if code == TECHNIQUE:
-                technique, rest = arg
-                subs, sub_used = split(rest)
-                used |= sub_used
-                for k in range(4):
-                    out[k].append((TECHNIQUE, (technique, subs[k])))
-                continue
-            if code == PUSH:
-                stacks.setdefault(arg.category, []).append(arg)
-                arg = _snapshot_transform(arg, memo)
-            elif code == POP:
-                stack = stacks.get(arg.category)
-                if stack:
-                    stack.pop()
-                arg = _snapshot_transform(arg, memo)
-            elif code == ADD:
-                polys.append(arg)
-            elif code == REMOVE:
-                for i in range(len(polys) - 1, -1, -1):
-                    if polys[i] is arg:
-                        del polys[i]
-                        break
-            for k in range(4):
-                out[k].append((code, arg))
-        return out, used
-
-    return split(program)
+    splitter = _Splitter()
+    splitter.run_program(program)
+    return splitter._outputs[0], splitter.used
 
 
 def as_renderable(obj: Any) -> Any:
