@@ -61,6 +61,7 @@ class FrameReport:
     written: list[int] = field(default_factory=list)
     skipped: list[int] = field(default_factory=list)
     failed: list[FrameFailure] = field(default_factory=list)
+    retried: list[int] = field(default_factory=list)
     seconds: float = 0.0
     render_seconds: dict[int, float] = field(default_factory=dict)
     workers: str = ""
@@ -73,6 +74,8 @@ class FrameReport:
 
     def summary(self) -> str:
         parts = [f"{len(self.written)} written", f"{len(self.skipped)} already there"]
+        if self.retried:
+            parts.append(f"{len(self.retried)} after a retry")
         if self.failed:
             parts.append(f"{len(self.failed)} FAILED")
         return f"{', '.join(parts)} in {self.seconds:.1f} s on {self.workers}"
@@ -189,6 +192,8 @@ def render_frames(
                 report.render_seconds[result.frame] = result.seconds
                 if result.error is None:
                     report.written.append(result.frame)
+                    if result.attempts > 1:
+                        report.retried.append(result.frame)
                 else:
                     report.failed.append(FrameFailure(result.frame, result.time, result.error, result.attempts))
                     bar.set_postfix_str(f"{len(report.failed)} failed", refresh=False)
@@ -198,6 +203,7 @@ def render_frames(
     else:
         report.workers = "nothing to do"
     report.written.sort()
+    report.retried.sort()
     report.failed.sort(key=lambda f: f.frame)
     report.seconds = time.perf_counter() - start
     if report.failed:

@@ -69,6 +69,8 @@ def dump_job(job: Job) -> bytes:
 # -- per-process and per-thread state ---------------------------------------------
 _payloads: dict[str, bytes] = {}
 _local = threading.local()
+#: Scene copies unpickled in this process (one per job and thread; tests check that jobs travel once).
+unpickled = 0
 
 
 def install_job(key: str, payload: bytes) -> None:
@@ -113,6 +115,7 @@ class _State:
 
 
 def _state(key: str, payload: bytes | None) -> _State:
+    global unpickled
     states: dict[str, _State] = getattr(_local, "states", None) or {}
     _local.states = states
     state = states.get(key)
@@ -121,6 +124,7 @@ def _state(key: str, payload: bytes | None) -> _State:
         if data is None:
             raise RuntimeError(f"render_frames: job {key} was not installed in this worker")
         state = states[key] = _State(pickle.loads(data))
+        unpickled += 1
     return state
 
 
