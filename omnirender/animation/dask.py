@@ -26,6 +26,8 @@ from .worker import FrameResult, run_frame
 __all__ = ["dask_backend", "slurm_cluster", "local_cluster"]
 
 _INSTALL = "pip install 'omnirender[distributed]'"
+#: How long connecting to a scheduler address may take.
+CONNECT_TIMEOUT = "20s"
 
 
 def _distributed() -> Any:
@@ -43,7 +45,7 @@ def dask_backend(workers: Any) -> tuple[Any, str]:
         client, owned = workers, False
     elif isinstance(workers, str):
         try:
-            client, owned = distributed.Client(workers, timeout="20s"), True
+            client, owned = distributed.Client(workers, timeout=CONNECT_TIMEOUT), True
         except OSError as exc:
             raise RuntimeError(
                 f"render_frames: cannot reach the Dask scheduler at {workers!r}: {exc}; start one with "
@@ -114,7 +116,7 @@ def slurm_cluster(
         from dask_jobqueue import SLURMCluster
     except ImportError:
         raise RuntimeError(f"Slurm clusters need dask-jobqueue: {_INSTALL}") from None
-    options.setdefault("scheduler_options", {"dashboard_address": None})
+    options.setdefault("scheduler_options", {"dashboard": False, "dashboard_address": ":0"})
     return SLURMCluster(
         queue=queue,
         account=account,
