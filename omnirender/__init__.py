@@ -43,6 +43,7 @@ _LAZY_MODULES = {
 _LAZY_NAMES = {
     "Viewer": "viewer",
     "view": "viewer",
+    "show": "viewer",
     "RenderList": "viewer",
     "AxisAlignedRotation": "viewer",
     "IsRenderable": "viewer",
