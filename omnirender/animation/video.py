@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import glob
 import os
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -29,10 +30,9 @@ def _frame_list(frames: Any) -> list[Any]:
         return list(frames.files)
     if isinstance(frames, (str, os.PathLike)):
         text = os.fspath(frames)
-        if "%" in text or "{" in text:
-            pattern = text.replace("{frame", "%").split("}")[0] if "{" in text else text
-            text = glob.escape(os.path.dirname(pattern)) + "/" + _wildcard(os.path.basename(text))
-        found = sorted(glob.glob(text))
+        if "%" in text or "{frame" in text:  # a render_frames pattern: its frame field becomes a wildcard
+            text = os.path.join(glob.escape(os.path.dirname(text)), _wildcard(os.path.basename(text)))
+        found = sorted(glob.glob(text), key=_natural)
         if not found:
             raise FileNotFoundError(f"om.video: no frame files match {os.fspath(frames)!r}")
         return found
@@ -43,9 +43,12 @@ def _frame_list(frames: Any) -> list[Any]:
 
 def _wildcard(name: str) -> str:
     """``%05d.png`` / ``{frame:05d}.png`` -> ``*.png`` (the frame field as a glob wildcard)."""
-    import re
-
     return re.sub(r"%0?\d*d|\{frame[^}]*\}", "*", name)
+
+
+def _natural(name: str) -> list[Any]:
+    """Sort key putting ``2.png`` before ``10.png``."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", name)]
 
 
 def _array(frame: Any, index: int) -> np.ndarray:
