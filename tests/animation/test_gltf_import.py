@@ -78,8 +78,10 @@ def _write(path, *, weights: bool = False, sparse: bool = False, bad_index: bool
         meshes=[G.Mesh(name="tetra", primitives=[primitive])],
         materials=[G.Material(pbrMetallicRoughness=G.PbrMetallicRoughness(baseColorFactor=[0.2, 0.5, 1.0, 1.0]))],
         cameras=[G.Camera(type="perspective", perspective=G.Perspective(yfov=0.7, znear=0.1, zfar=100))],
-        animations=[G.Animation(name="move", samplers=samplers, channels=channels),
-                    G.Animation(name="still", samplers=[samplers[0]], channels=[channels[0]])],  # fmt: skip
+        animations=[
+            G.Animation(name="move", samplers=samplers, channels=channels),
+            G.Animation(name="still", samplers=[samplers[0]], channels=[channels[0]]),
+        ],  # fmt: skip
         accessors=accessors,
         bufferViews=views,
         buffers=[G.Buffer(byteLength=sum(len(b) for b in blobs))],

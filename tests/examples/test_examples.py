@@ -12,9 +12,9 @@ import pytest
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
-def run_example(name: str, out: Path) -> str:
+def run_example(name: str, out: Path, *args: str) -> str:
     result = subprocess.run(
-        [sys.executable, str(EXAMPLES / name), str(out)],
+        [sys.executable, str(EXAMPLES / name), str(out), *args],
         capture_output=True,
         text=True,
         timeout=300,
@@ -126,3 +126,22 @@ def test_demo_scene_renders_without_the_debug_sphere():
     scene.remove(scene["/demo/debug"])
     without = om.render(scene, engine="gl", size=(96, 72), samples=0).array
     assert np.abs(shown.astype(int) - without.astype(int)).max() <= 1
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_07_turntable(tmp_path):
+    out = run_example("07_turntable.py", tmp_path, "--seconds", "1", "--fps", "3", "--size", "96x72")
+    assert "GL preview: 3 written" in out and "POV-Ray final: 3 written" in out
+    from PIL import Image
+
+    for name in ("07-turntable-gl.mp4", "07-turntable-povray.mp4"):
+        assert (tmp_path / name).stat().st_size > 1000
+    with Image.open(tmp_path / "07-turntable.gif") as gif:
+        assert gif.n_frames == 3 and gif.size == (96, 72)
+    first = check_image(tmp_path / "07-frames-povray" / "0000.png", min_colors=20)
+    second = check_image(tmp_path / "07-frames-povray" / "0001.png", min_colors=20)
+    assert np.abs(first - second).mean() > 5  # the scene turned
+    again = run_example("07_turntable.py", tmp_path, "--seconds", "1", "--fps", "3", "--size", "96x72")
+    assert "POV-Ray final: 0 written, 3 already there" in again  # a second run resumes: nothing left to do
