@@ -247,13 +247,16 @@ def _pool(n: int) -> Backend:
         context = multiprocessing.get_context("spawn")
         queue = list(todo)
         crashes: dict[int, int] = {}
+        alone: set[int] = set()  # frames that were running when a worker died: retried one at a time
         while queue:
             with ProcessPoolExecutor(n, mp_context=context, initializer=install_job, initargs=(key, payload)) as pool:
-                # At most one frame per worker in flight, so a crash can be blamed on the frames that were running.
                 running: dict[Any, tuple[int, float, str]] = {}
                 broken = False
                 while (queue or running) and not broken:
-                    while queue and len(running) < n:
+                    # at most one frame per worker in flight, so a crash is blamed on the frames that were running
+                    while queue and len(running) < n and not (alone & {spec[0] for spec in running.values()}):
+                        if queue[0][0] in alone and running:
+                            break
                         spec = queue.pop(0)
                         running[pool.submit(run_frame, key, None, *spec, retries)] = spec
                     done, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -266,14 +269,17 @@ def _pool(n: int) -> Backend:
                             running[future] = spec
                 if not broken:
                     return
-            # A worker process died: the frames that were running are retried in a new pool, up to `retries` times.
+            # A worker process died.  Alone, a frame is to blame: retried up to `retries` times, then reported.
+            # With others, every frame that was running is retried alone to find out which one it was.
             suspects = list(running.values())
-            for spec in suspects:
+            if len(suspects) == 1:
+                spec = suspects[0]
                 crashes[spec[0]] = crashes.get(spec[0], 0) + 1
                 if crashes[spec[0]] > retries:
                     yield FrameResult(spec[0], spec[1], spec[2], 0.0, crashes[spec[0]], "the worker process died")
-                else:
-                    queue.insert(0, spec)
+                    suspects = []
+            alone.update(spec[0] for spec in suspects)
+            queue[:0] = suspects
 
     return run
 
