@@ -17,7 +17,6 @@ user's untouched; :func:`set_time` sets the user's graph itself to time ``t``
 from __future__ import annotations
 
 import copy
-import math
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -84,9 +83,7 @@ class Animation(PolyAttribute):
     @duration.setter
     def duration(self, value: float | None) -> None:
         if value is not None:
-            value = check_time("Animation duration", value)
-            if value < 0:
-                raise ValueError(f"Animation: duration must be >= 0, got {value}")
+            value = check_time("Animation", value, "duration", nonnegative=True)
         object.__setattr__(self, "_duration", value)
 
     @property
@@ -145,13 +142,7 @@ def _where(animation: Animation) -> str:
 
 
 def _check_fps(owner: str, value: Any) -> float:
-    try:
-        fps = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}: fps must be a positive number of frames per second, got {value!r}") from None
-    if not (fps > 0 and math.isfinite(fps)):
-        raise ValueError(f"{owner}: fps must be a positive number of frames per second, got {value!r}")
-    return fps
+    return check_time(owner, value, "fps (frames per second)", positive=True)
 
 
 def animations(scene: Any) -> list[Animation]:

@@ -77,16 +77,9 @@ class Orbit(Track):
         super().__init__()
         target = _check_target("Orbit", target)
         params = _orbit_parameters(target)
-        seconds = check_time("Orbit seconds", seconds)
-        if seconds <= 0:
-            raise ValueError(f"Orbit: seconds must be > 0, got {seconds}")
-        start = check_time("Orbit start", start)
-        try:
-            turns = float(turns)
-        except (TypeError, ValueError):
-            raise ValueError(f"Orbit: turns must be a number, got {turns!r}") from None
-        if not math.isfinite(turns):
-            raise ValueError(f"Orbit: turns must be finite, got {turns}")
+        seconds = check_time("Orbit", seconds, "seconds", positive=True)
+        start = check_time("Orbit", start, "start")
+        turns = check_time("Orbit", turns, "turns")
         a = finite_vector("Orbit", "axis", axis, 3)
         if np.linalg.norm(a) == 0.0:
             raise ValueError("Orbit: axis must not be the zero vector")

@@ -17,7 +17,6 @@ axis and angle.
 
 from __future__ import annotations
 
-import math
 import numbers
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -26,6 +25,7 @@ import numpy as np
 
 from ..core.component import RenderingComponent
 from ..core.transform import Rotation
+from ..shapes._check import scalar
 from .interpolate import INTERPOLATIONS, interpolate
 
 __all__ = ["Track", "Keyframes", "SETTERS", "register_setter", "set_parameter"]
@@ -274,12 +274,6 @@ def _values(where: str, values: Any, count: int, shape: tuple[int, ...]) -> np.n
     return v
 
 
-def check_time(owner: str, t: Any) -> float:
-    """``t`` as a finite float, or ValueError naming ``owner``."""
-    try:
-        value = float(t)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}: time must be a number of seconds, got {t!r}") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{owner}: time must be finite, got {t!r}")
-    return value
+def check_time(owner: str, t: Any, name: str = "time", **limits: bool) -> float:
+    """``t`` as a finite number of seconds (``positive=True`` / ``nonnegative=True``), or ValueError naming it."""
+    return scalar(owner, name, t, **limits)

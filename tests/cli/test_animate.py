@@ -10,19 +10,16 @@ import omnirender as om
 from omnirender.cli import main
 
 
-def _scene_file(tmp_path: Path, animated: bool) -> Path:
-    scene = om.Node("scene")
-    scene.add(om.Camera.look_at(eye=(0, 1.5, 6), center=(0, 0.5, 0), fov=40))
-    scene.add(om.PointLight(position=(4, 6, 6)))
-    body = scene.add(om.Node("body"))
-    move = body.add(om.Translation(-1, 0.5, 0))
-    body.add(om.Material(diffuse=(0.9, 0.3, 0.2)))
-    body.add(om.Sphere(radius=0.6))
-    if animated:
-        scene.add(om.Animation([om.Keyframes(move, "offset", [0, 0.5], [(-1, 0.5, 0), (1, 0.5, 0)])], fps=6))
-    path = tmp_path / ("anim.yaml" if animated else "still.json")
-    om.save(scene, path)
-    return path
+def _scene_file(path: Path, animated: bool) -> Path:
+    """The scene file of conftest.py, with the red ball moving from left to right in half a second."""
+    if not animated:
+        return path
+    scene = om.load(path)
+    move = scene["/scene/body"].components[0]
+    scene.add(om.Animation([om.Keyframes(move, "offset", [0, 0.5], [(-1, 1, 0), (1, 1, 0)])], fps=6))
+    out = path.with_name("anim.yaml")
+    om.save(scene, out)
+    return out
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
@@ -32,8 +29,8 @@ def run(capsys, *argv: str) -> tuple[int, str, str]:
 
 
 @pytest.mark.gl
-def test_animate_a_scene_file_into_a_gif_and_resume(tmp_path, capsys):
-    scene = _scene_file(tmp_path, animated=True)
+def test_animate_a_scene_file_into_a_gif_and_resume(tmp_path, capsys, scene_file):
+    scene = _scene_file(scene_file, animated=True)
     out = tmp_path / "out" / "anim.gif"
     code, stdout, stderr = run(capsys, "animate", str(scene), "-o", str(out), "--size", "64x48", "--workers", "0")
     assert code == 0, stderr
@@ -50,8 +47,8 @@ def test_animate_a_scene_file_into_a_gif_and_resume(tmp_path, capsys):
 
 
 @pytest.mark.gl
-def test_turntable_frames_only(tmp_path, capsys):
-    scene = _scene_file(tmp_path, animated=False)
+def test_turntable_frames_only(tmp_path, capsys, scene_file):
+    scene = _scene_file(scene_file, animated=False)
     pattern = tmp_path / "spin" / "f%03d.png"
     code, stdout, stderr = run(
         capsys, "animate", str(scene), "--turntable", "1", "--fps", "4", "--frames", "0-3:2", "-o", str(pattern),
@@ -72,8 +69,8 @@ def test_turntable_frames_only(tmp_path, capsys):
         (["--fps", "0"], "positive number"),
     ],
 )
-def test_usage_errors(tmp_path, capsys, extra, message):
-    scene = _scene_file(tmp_path, animated=False)
+def test_usage_errors(tmp_path, capsys, extra, message, scene_file):
+    scene = _scene_file(scene_file, animated=False)
     code, _, err = run(capsys, "animate", str(scene), *extra)
     assert code == 2 and message in err
 
