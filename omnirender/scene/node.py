@@ -389,14 +389,9 @@ class Node:
         }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self._name = state["name"]
+        Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
         self._items = list(state["items"])
-        self._parents = []
         self._version = state["version"]
-        self._groups = state["groups"]
-        self._program = None
-        self._program_version = -1
-        self._pre = None
         if len(state["parent_keys"]) > 1:
             _PARENT_ORDER[self] = state["parent_keys"]
         key = state["key"]
