@@ -16,8 +16,13 @@ SCRIPTS = {
     "picking.py": [],
     "gl_objects.py": [],
     "offline_export.py": ["--repeat", "1"],
+    "render_frames.py": [],
 }
-QUICK = {"gl_objects.py": ["--quick"], "offline_export.py": ["--repeat", "1", "--triangles", "200000"]}
+QUICK = {
+    "gl_objects.py": ["--quick"],
+    "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
+    "render_frames.py": ["--frames", "8"],
+}
 
 
 def main() -> int:

@@ -107,6 +107,8 @@ def example_images() -> None:
                 continue
             shutil.copy(png, HERE / f"example_{png.stem}.png")
             print("wrote", HERE / f"example_{png.stem}.png")
+        shutil.copy(Path(tmp) / "07-turntable.gif", HERE / "example_07-turntable.gif")  # the README's animation
+        print("wrote", HERE / "example_07-turntable.gif")
 
 
 if __name__ == "__main__":

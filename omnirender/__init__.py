@@ -36,12 +36,14 @@ _LAZY_MODULES = {
     "geometry",
     "rib",
     "cli",
+    "animation",
 }
 
 # Public functions and classes that live in lazily imported modules.
 _LAZY_NAMES = {
     "Viewer": "viewer",
     "view": "viewer",
+    "show": "viewer",
     "RenderList": "viewer",
     "AxisAlignedRotation": "viewer",
     "IsRenderable": "viewer",
@@ -51,6 +53,18 @@ _LAZY_NAMES = {
     "load": "scene.files",
     "save": "scene.files",
     "register_type": "scene.files",
+    "embed_files": "scene.embed",
+    "Animation": "animation",
+    "Keyframes": "animation",
+    "Orbit": "animation",
+    "scene_at": "animation",
+    "set_time": "animation",
+    "orbit": "animation",
+    "camera_path": "animation",
+    "turntable": "animation",
+    "render_frames": "animation",
+    "video": "animation",
+    "load_gltf": "animation",
 }
 
 __all__ = [

@@ -1,6 +1,7 @@
 """The ``omnirender`` command (see ``omnirender --help``).
 
-Sub-commands: ``render`` a scene file with an engine, ``view`` it in an
+Sub-commands: ``render`` a scene file with an engine, ``animate`` it (frames
+on local processes or a Dask cluster, then a video), ``view`` it in an
 interactive window, ``export`` it to another format, print ``info`` about it,
 list the ``engines`` available here, and render the ``demo`` scene with every
 engine.  Exit codes: 0 success, 1 a rendering (or loading) error reported in
@@ -23,6 +24,8 @@ examples:
   omnirender render scene.yaml -e gl -o out.png --size 800x600
   omnirender render scene.json -e mitsuba --spp 64 -o final.png
   omnirender render scene.yaml --mask '!debug'   skip nodes in the group 'debug'
+  omnirender animate scene.yaml --frames 0-119 --fps 24 -e povray --workers 2 -o out.mp4
+  omnirender animate scene.yaml --turntable 5 --scheduler tcp://host:8786 -o spin.mp4
   omnirender view scene.yaml                     interactive window (mouse: orbit/pan/zoom, h: help)
   omnirender export scene.yaml scene.glb         also .pov and .rib
   omnirender info scene.yaml                     tree, statistics, bounds, engines
@@ -47,14 +50,25 @@ def _size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def _positive(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
-    return value
+def _number(convert: type, minimum: float, strict: bool, what: str) -> Any:
+    """An argparse type: ``convert(text)``, finite and > (``strict``) or >= ``minimum``."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = convert(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        above = value > minimum or (not strict and value == minimum)  # NaN is neither
+        if not above or value == float("inf"):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    return parse
+
+
+_positive = _number(int, 0, True, "a positive integer")
+_positive_float = _number(float, 0.0, True, "a positive number")
+_count = _number(int, 0, False, "a whole number >= 0")
 
 
 def _load(path: str, trusted: bool = False) -> Any:
@@ -91,6 +105,22 @@ def _render(args: argparse.Namespace) -> int:
         raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
     if not Path(args.scene).is_file():
         raise UsageError(f"scene file not found: {args.scene}")
+    options = _render_options(args)
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
+    if output.suffix.lower() not in IMAGE_EXTENSIONS:
+        raise UsageError(f"cannot write an image to {str(output)!r}: use one of {', '.join(IMAGE_EXTENSIONS)}")
+    ok, why = engines()[args.engine]
+    if not ok:
+        raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
+    scene = _load(args.scene, getattr(args, "trusted", False))
+    image = render(scene, engine=args.engine, size=args.size, **options)
+    image.save(output)
+    print(output)
+    return 0
+
+
+def _render_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Engine options from ``--spp`` and ``--mask`` (checked here, before anything is rendered)."""
     options: dict[str, Any] = {}
     if args.spp is not None:
         options.update(_spp_option(args.engine, args.spp))
@@ -102,16 +132,56 @@ def _render(args: argparse.Namespace) -> int:
         except Exception as exc:
             raise UsageError(f"bad --mask expression {args.mask!r}: {exc}") from None
         options["mask"] = args.mask
-    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
-    if output.suffix.lower() not in IMAGE_EXTENSIONS:
-        raise UsageError(f"cannot write an image to {str(output)!r}: use one of {', '.join(IMAGE_EXTENSIONS)}")
-    ok, why = engines()[args.engine]
-    if not ok:
-        raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene, getattr(args, "trusted", False))
-    image = render(scene, engine=args.engine, size=args.size, **options)
-    image.save(output)
-    print(output)
+    return options
+
+
+def _animate(args: argparse.Namespace) -> int:
+    from .animation import animations, render_frames, turntable, video
+    from .animation.frames import FRAME_EXTENSIONS, load_scene
+    from .animation.video import VIDEO_EXTENSIONS
+    from .render import _engines
+
+    if args.engine not in _engines:
+        raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
+    if not Path(args.scene).is_file():
+        raise UsageError(f"scene file not found: {args.scene}")
+    if args.workers is not None and args.scheduler is not None:
+        raise UsageError("give either --workers (local processes) or --scheduler (a Dask cluster), not both")
+    options = _render_options(args)
+    output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.mp4")
+    ext = output.suffix.lower()
+    if ext not in VIDEO_EXTENSIONS + FRAME_EXTENSIONS:
+        raise UsageError(
+            f"cannot write {str(output)!r}: use a video ({', '.join(VIDEO_EXTENSIONS)}) or a frame pattern "
+            "such as frames/%05d.png"
+        )
+    if ext in FRAME_EXTENSIONS:
+        pattern, make_video = str(output), False
+    else:
+        pattern, make_video = args.frames_dir or str(output.with_name(output.stem + "-frames") / "%05d.png"), True
+    try:
+        from .animation.animation import parse_frames
+
+        frames = parse_frames(args.frames) if args.frames is not None else None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    scene = load_scene(Path(args.scene), getattr(args, "trusted", False))
+    if args.turntable is not None:
+        turntable(scene, args.turntable, fps=args.fps or 24.0)
+    elif not animations(scene):
+        raise UsageError(f"{args.scene} holds no animation; add an om.Animation or use --turntable SECONDS")
+    workers: Any = args.scheduler if args.scheduler is not None else args.workers
+    report = render_frames(
+        scene, frames, engine=args.engine, size=args.size, out=pattern, workers=workers, fps=args.fps,
+        overwrite=args.overwrite, progress=False if args.quiet else None, **options,
+    )  # fmt: skip
+    print(f"frames: {report.summary()}", file=sys.stderr)
+    if make_video:
+        fps = args.fps or animations(scene)[0].fps
+        video(report, output, fps=fps)
+        print(output)
+    else:
+        print(Path(pattern).parent)
     return 0
 
 
@@ -299,6 +369,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--spp", type=_positive, help="samples per pixel (path tracers, antialiasing)")
     p.add_argument("--mask", help="group mask expression, e.g. '!debug & (left|shared)'")
     p.set_defaults(func=_render)
+
+    p = command("animate", help="render the frames of an animated scene (locally or on Dask) and make a video")
+    p.add_argument("scene", help="scene file (.json, .yaml) with an om.Animation, or an animated .glb/.gltf")
+    p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
+    p.add_argument("-o", "--output", help="video (.mp4, .gif...) or frame pattern (frames/%%05d.png)")
+    p.add_argument("--frames", help="frame numbers: 0-119, 0-119:2 or 3,5,8 (default: the whole animation)")
+    p.add_argument("--fps", type=_positive_float, help="frames per second (default: the animation's)")
+    p.add_argument("--size", type=_size, default=(640, 480), help="image size WxH (default 640x480)")
+    p.add_argument("--spp", type=_positive, help="samples per pixel (path tracers, antialiasing)")
+    p.add_argument("--mask", help="group mask expression, e.g. '!debug'")
+    p.add_argument("--workers", type=_count, help="local worker processes (0: this process; default: one per core)")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (see 'dask scheduler')")
+    p.add_argument("--turntable", type=_positive_float, metavar="SECONDS", help="add a turntable of this length")
+    p.add_argument("--frames-dir", help="frame pattern when writing a video (default OUTPUT-frames/%%05d.png)")
+    p.add_argument("--overwrite", action="store_true", help="render frames again even if their files exist")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_animate)
 
     p = command("view", help="open a scene file in an interactive window")
     p.add_argument("scene", help="scene file (.json, .yaml)")

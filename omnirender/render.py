@@ -192,3 +192,4 @@ register_engine("mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:avai
 register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
 register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
 register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")
+register_exporter(".html", "omnirender.export.html:export", "self-contained web page (three.js, works offline)")

@@ -1,7 +1,7 @@
 """Shared test configuration.
 
-Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba`` or
-``window``.  When the engine is missing they are skipped, except when
+Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba``,
+``window`` or ``chromium`` (web pages in headless Chromium).  When the engine is missing they are skipped, except when
 ``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
 can never pass by skipping.
 """
@@ -52,7 +52,18 @@ def _window() -> tuple[bool, str]:
     return ok, "Xvfb is not installed (apt-get install xvfb)"
 
 
-_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "window": _window}
+def _chromium() -> tuple[bool, str]:
+    return (chromium_program() is not None, "Chromium is not installed (apt-get install chromium)")
+
+
+def chromium_program() -> str | None:
+    """The headless browser used for the web-page tests (Debian's ``chromium``)."""
+    import shutil
+
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "window": _window, "chromium": _chromium}
 _cache: dict[str, tuple[bool, str]] = {}
 
 

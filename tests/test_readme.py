@@ -26,3 +26,18 @@ def test_ten_lines_example_runs(tmp_path, monkeypatch, capsys):
     for name in ("gl.png", "pov.png", "mitsuba.png", "scene.glb"):
         assert (tmp_path / name).stat().st_size > 1000, name
     assert "/scene/body" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_animation_example_runs(tmp_path, monkeypatch):
+    """The animation block, with 2 frames instead of 48 and small images."""
+    monkeypatch.chdir(tmp_path)
+    code = _block("## Animation: frames on one machine or a cluster").replace("range(48)", "range(2), size=(80, 60)")
+    namespace = {"__name__": "__main__"}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert sorted(p.name for p in (tmp_path / "final").iterdir()) == ["00000.png", "00001.png"]
+    assert (tmp_path / "out.mp4").stat().st_size > 500
+    later = namespace["later"]
+    assert later["/scene/torus"].components[0].offset[1] > 0.3  # the torus rose

@@ -197,6 +197,7 @@ class Texture(Parameterised, MonoAttribute):
     """
 
     __slots__ = ("_image", "_wrap", "_filter", "_mipmap", "_cache")
+    _transient = {"_cache": lambda: None}  # a file's pixels are read again where the texture is unpickled
     image = Param(_check_image, "path or image array")
     wrap = Param(check_choice("repeat", "clamp", "mirror"), "behaviour outside [0, 1]")
     filter = Param(check_choice("linear", "nearest"), "magnification filter")

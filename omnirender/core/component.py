@@ -5,10 +5,17 @@ A component holds parameters only, never an algorithm (algorithms are
 ``version`` counter that is bumped whenever a public parameter is assigned, and
 the bump is forwarded to every node that owns the component so that engines can
 recompile only what changed.
+
+Components pickle and ``copy.deepcopy`` (so scenes travel to worker processes
+and clusters): the state is every slot except the owning nodes, which the
+nodes re-attach when they are restored, and except the slots a class lists in
+``_transient`` (caches of values derived from the parameters), which come back
+empty and are recomputed on first use.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 __all__ = [
@@ -31,6 +38,10 @@ class RenderingComponent:
     #: Declarative pre-evaluation (see :mod:`.declarations`): ``"all"`` placements are collected
     #: (lights), only the ``"first"`` (camera, background), or None: the component is not declarative.
     declared: str | None = None
+
+    #: Slots left out of pickles and copies, with a factory for the value they are restored to.
+    #: Subclasses add their caches (merged along the MRO); owners are re-attached by the nodes.
+    _transient: dict[str, Callable[[], Any]] = {"_owners": lambda: None}
 
     def __init__(self) -> None:
         object.__setattr__(self, "_version", 0)
@@ -74,6 +85,29 @@ class RenderingComponent:
                     del owners[i]
                     break
 
+    # -- pickling and copying ----------------------------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        """Every slot (and ``__dict__`` entry) except the transient ones; see the module docs."""
+        transient = _transient_of(type(self))
+        state: dict[str, Any] = {}
+        for name in _slots_of(type(self)):
+            if name not in transient:
+                try:
+                    state[name] = object.__getattribute__(self, name)
+                except AttributeError:  # an unset slot stays unset
+                    pass
+        extra = getattr(self, "__dict__", None)
+        if extra:
+            state.update((k, v) for k, v in extra.items() if k not in transient)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # object.__setattr__: restoring must not run validation or bump versions through __setattr__
+        for name, make in _transient_of(type(self)).items():
+            object.__setattr__(self, name, make())
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+
     def parameters(self) -> dict[str, Any]:
         """The public parameters as a dict (used by scene files, traces and repr)."""
         out: dict[str, Any] = {}
@@ -86,6 +120,37 @@ class RenderingComponent:
     def __repr__(self) -> str:
         params = ", ".join(f"{k}={_short(v)}" for k, v in self.parameters().items())
         return f"{type(self).__name__}({params})"
+
+
+_SLOTS: dict[type, tuple[str, ...]] = {}
+_TRANSIENT: dict[type, dict[str, Callable[[], Any]]] = {}
+
+
+def _slots_of(cls: type) -> tuple[str, ...]:
+    """Every slot name declared along ``cls``'s MRO (base classes first), without ``__weakref__``."""
+    found = _SLOTS.get(cls)
+    if found is None:
+        names: list[str] = []
+        for klass in reversed(cls.__mro__):
+            slots = klass.__dict__.get("__slots__", ())
+            for name in (slots,) if isinstance(slots, str) else slots:
+                if name.startswith("__") and not name.endswith("__"):  # name-mangled private slot
+                    name = f"_{klass.__name__.lstrip('_')}{name}"
+                if name not in ("__weakref__", "__dict__") and name not in names:
+                    names.append(name)
+        found = _SLOTS[cls] = tuple(names)
+    return found
+
+
+def _transient_of(cls: type) -> dict[str, Callable[[], Any]]:
+    """The merged ``_transient`` tables along ``cls``'s MRO (subclasses win)."""
+    found = _TRANSIENT.get(cls)
+    if found is None:
+        merged: dict[str, Callable[[], Any]] = {}
+        for klass in reversed(cls.__mro__):
+            merged.update(klass.__dict__.get("_transient", {}))
+        found = _TRANSIENT[cls] = merged
+    return found
 
 
 def _short(value: Any) -> str:

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..attributes import (
     AmbientLight,
+    Background,
     DirectionalLight,
     LightSource,
     Material,
@@ -39,7 +40,7 @@ from .colors import srgb_to_linear
 from .glb import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GLBBuilder
 from .walk import NodeTrackingEngine, track_surfaces
 
-__all__ = ["export", "to_bytes", "GLTFEngine", "LIGHTS_EXTENSION"]
+__all__ = ["export", "to_bytes", "build", "GLTFEngine", "LIGHTS_EXTENSION"]
 
 LIGHTS_EXTENSION = "KHR_lights_punctual"
 _WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
@@ -86,6 +87,8 @@ class GLTFEngine(NodeTrackingEngine):
         self._lights: list[tuple[Any, np.ndarray]] = []
         self.triangle_count = 0
         self._origin: str | None = None
+        #: The scene's first ``om.Background`` (glTF has none; the HTML page uses it), or None.
+        self.background: Any = None
 
     def eval(self, shape: Any) -> None:
         """Evaluate ``shape``, remembering the class of the outermost shape for the mesh names."""
@@ -250,6 +253,9 @@ class GLTFEngine(NodeTrackingEngine):
                     entry["type"] = "point"
                     matrix = np.eye(4)
                     matrix[:3, 3] = position
+                # glTF lights fall off with the inverse square; keep omnirender's OpenGL attenuation for
+                # importers that can use it (the HTML page does)
+                entry["extras"] = {"omnirender": {"attenuation": [light.constant, light.linear, light.quadratic]}}
             else:
                 continue
             index = len(lights)
@@ -394,6 +400,30 @@ class LightExporter(AttributePainter):
         engine.add_light(light)
 
 
+@default_for(GLTFEngine)
+class BackgroundRecorder(AttributePainter):
+    """``Background`` -> remembered as ``engine.background`` (the first one met)."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = Background
+
+    def exec(self, background: Background, engine: GLTFEngine) -> None:
+        if engine.background is None:
+            engine.background = background
+
+
+def build(
+    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "raise", mask: str | None = None
+) -> tuple[bytes, GLTFEngine]:
+    """The GLB bytes of ``scene`` and the engine that wrote them (its camera, lights and background)."""
+    if not isinstance(scene, Node):
+        scene = Node("scene", scene)
+    engine = GLTFEngine(size, on_missing=on_missing, mask=mask)
+    engine.run(scene)
+    return engine.finish(scene.name), engine
+
+
 def to_bytes(
     scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "raise", mask: str | None = None
 ) -> bytes:
@@ -403,11 +433,7 @@ def to_bytes(
     default, as in every engine: an export must not silently lose geometry),
     ``"warn"`` or ``"skip"``.
     """
-    if not isinstance(scene, Node):
-        scene = Node("scene", scene)
-    engine = GLTFEngine(size, on_missing=on_missing, mask=mask)
-    engine.run(scene)
-    return engine.finish(scene.name)
+    return build(scene, size=size, on_missing=on_missing, mask=mask)[0]
 
 
 def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:

@@ -456,6 +456,11 @@ class _Writer:
             return os.fspath(value)
         if hasattr(value, "array") and callable(value.array):  # om.data sequences
             return self.array(np.asarray(value.array()), where)
+        if callable(value):
+            raise ValueError(
+                f"cannot save {where}: {getattr(value, '__qualname__', value)!r} is Python code, and scene files "
+                "hold data only; use data tracks (om.Keyframes, om.Orbit) or add the callable after loading"
+            )
         raise ValueError(f"cannot save {where}: values of type {type(value).__name__} have no scene-file form")
 
     def array(self, arr: np.ndarray, where: str) -> Any:

@@ -6,10 +6,17 @@ them in the node and its children, never siblings.  Nodes may be shared by
 several parents (a DAG); paths then name the first parent.  Every change bumps
 the node's ``version`` and its ancestors', which is how engines notice what to
 recompile.
+
+Nodes pickle and ``copy.deepcopy``: a node comes back with its items, groups
+and version, and every node restored in the same stream re-attaches itself to
+its children, in the original parent order (so paths are kept).  Parents that
+were not part of the pickled graph are not (a pickled subgraph comes back
+detached), and compiled programs and pre-evaluation caches are rebuilt on use.
 """
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Iterable, Iterator
 from typing import Any
 
@@ -445,6 +452,41 @@ class Node:
     def __repr__(self) -> str:
         return f"Node({self._name!r}, {len(self._items)} items)"
 
+    # -- pickling and copying (see the module docs) ---------------------------
+    def __getstate__(self) -> dict[str, Any]:
+        return {
+            "name": self._name,
+            "items": list(self._items),
+            "groups": self._groups,
+            "version": self._version,
+            # identities within this pickle: children restore their parents in this order
+            "key": id(self),
+            "parent_keys": [id(p) for p in self._parents],
+        }
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
+        self._items = list(state["items"])
+        self._version = state["version"]
+        if len(state["parent_keys"]) > 1:
+            _PARENT_ORDER[self] = state["parent_keys"]
+        key = state["key"]
+        # Children are restored before their parents (pickle builds the items first).
+        for item in self._items:
+            if isinstance(item, Node):
+                order = _PARENT_ORDER.get(item)
+                if order is None or key not in order:
+                    item._parents.append(self)
+                    continue
+                rank = order.index(key)
+                at = len(item._parents)
+                while at > 0 and _rank(order, item._parents[at - 1]) > rank:
+                    at -= 1
+                item._parents.insert(at, self)
+                _KEYS[self] = key
+            else:
+                item._attach(self)
+
     # -- the viewer's IsRenderable protocol (ArtiSynth style) -----------------
     def prerender(self, render_list: Any) -> None:
         """Cache what :meth:`render` needs and file this node into ``render_list``."""
@@ -480,6 +522,17 @@ class Node:
         if not engines().get("gl", (False, ""))[0]:
             return None
         return render(self, engine="gl", size=self.repr_size)._repr_png_()
+
+
+# Unpickling bookkeeping for shared nodes: a child's original parent order, and each restored parent's
+# identity in that stream.  Weak, so nothing outlives the restored nodes.
+_PARENT_ORDER: weakref.WeakKeyDictionary[Node, list[int]] = weakref.WeakKeyDictionary()
+_KEYS: weakref.WeakKeyDictionary[Node, int] = weakref.WeakKeyDictionary()
+
+
+def _rank(order: list[int], parent: Node) -> int:
+    key = _KEYS.get(parent)
+    return order.index(key) if key in order else len(order)
 
 
 class _Where:

@@ -46,6 +46,8 @@ class DeclaredShape(Shape):
 
     __slots__ = ("_cache", "_cache_version")
     _params: tuple[str, ...] = ()
+    # Derived values are recomputed after unpickling (a MeshFile is sent as its path, not its triangles).
+    _transient = {"_cache": dict, "_cache_version": lambda: -1}
 
     def __init__(self, **params: Any) -> None:
         super().__init__()

@@ -19,6 +19,7 @@ from .viewer import Viewer, default_lights
 __all__ = [
     "Viewer",
     "view",
+    "show",
     "RenderList",
     "PASSES",
     "AxisAlignedRotation",
@@ -31,6 +32,13 @@ __all__ = [
     "TWO_DIMENSIONAL",
     "HIGHLIGHT",
 ]
+
+
+def show(scene: Any, size: tuple[int, int] = (640, 480), **options: Any) -> Any:
+    """An interactive notebook view of ``scene`` (see :mod:`omnirender.viewer.notebook`)."""
+    from .notebook import show as _show
+
+    return _show(scene, size=size, **options)
 
 
 def view(scene: Any, size: tuple[int, int] = (960, 720), **options: Any) -> Any:

@@ -70,6 +70,7 @@ class Viewer:
         self._lock = threading.RLock()
         self._image: Any = None
         self._driver: Any = None
+        self._widget: Any = None
         self._engine_spec = engine
         self._samples = samples
         self.background = background
@@ -252,6 +253,30 @@ class Viewer:
     def _repr_png_(self) -> bytes:
         image = self.image()
         return image._repr_png_()
+
+    def widget(self, scene: Any = None) -> Any:
+        """The interactive notebook view of this viewer (made once; needs jupyter_rfb, see ``om.show``).
+
+        ``scene`` limits picking to one graph (default: every node the viewer draws).
+        """
+        if self._widget is None:
+            from .notebook import ViewerWidget
+
+            self._widget = ViewerWidget(self, scene)
+        return self._widget
+
+    def _repr_mimebundle_(self, include: Any = None, exclude: Any = None) -> dict[str, Any]:
+        """In a notebook kernel with jupyter_rfb: the interactive widget, with the PNG as the static fallback."""
+        import base64
+
+        data: dict[str, Any] = {"text/plain": repr(self)}
+        from .notebook import in_kernel, widget_available
+
+        if in_kernel() and widget_available()[0]:
+            found = self.widget()._repr_mimebundle_(include=include, exclude=exclude)
+            data.update(found[0] if isinstance(found, tuple) else found)
+        data["image/png"] = base64.b64encode(self._repr_png_()).decode("ascii")
+        return data
 
     # -- camera: frames ----------------------------------------------------
     @property

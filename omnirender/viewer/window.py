@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from .axial import AxisAlignedRotation
+from .interaction import LEFT, MIDDLE, RIGHT, ViewControl
 
 __all__ = ["Window", "view", "HELP"]
 
@@ -39,8 +39,6 @@ HELP = """omnirender viewer
   W                wireframe         P  perspective / orthogonal
   S                screenshot (omnirender-screenshot-N.png)
   H                this help         Q, Esc  close"""
-
-_CLICK_PIXELS = 3.0
 
 _VERTEX = """
 #version 330
@@ -135,12 +133,10 @@ class Window:
         self._program = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=_FRAGMENT)
         self._vao = self.ctx.vertex_array(self._program, [])
         self._texture: Any = None
-        self._buttons: dict[int, tuple[float, float, bool]] = {}
-        self._cursor = (0.0, 0.0)
+        self.control = ViewControl(viewer)  # mouse and keys -> camera (shared with the notebook widget)
         self._dirty = True
         self._needs_prerender = True
         self._external_generation = -1
-        self._initial: tuple | None = None
         self._closed = False
         self._update_thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -157,7 +153,7 @@ class Window:
     # -- state ---------------------------------------------------------------
     def remember_view(self) -> None:
         """Store the current camera as the one R resets to."""
-        self._initial = self.viewer.camera.state()
+        self.control.remember_view()
 
     def request_repaint(self) -> None:
         self._dirty = True
@@ -274,64 +270,43 @@ class Window:
         self._update_thread.start()
 
     # -- event handlers (glfw callbacks) --------------------------------------------
+    def _button(self, button: int) -> str | None:
+        glfw = self._glfw
+        return {glfw.MOUSE_BUTTON_LEFT: LEFT, glfw.MOUSE_BUTTON_RIGHT: RIGHT, glfw.MOUSE_BUTTON_MIDDLE: MIDDLE}.get(
+            button
+        )
+
     def on_mouse_button(self, handle: Any, button: int, action: int, mods: int) -> None:
         glfw = self._glfw
+        name = self._button(button)
+        if name is None:
+            return
         # where the button went down, not where the last motion event left the cursor
-        x, y = glfw.get_cursor_pos(self.handle) if self.handle else self._cursor
-        self._cursor = (x, y)
+        x, y = glfw.get_cursor_pos(self.handle) if self.handle else self.control.cursor
         if action == glfw.PRESS:
-            self._buttons[button] = (x, y, False)
-        elif action == glfw.RELEASE:
-            start = self._buttons.pop(button, None)
-            if start is not None and button == glfw.MOUSE_BUTTON_LEFT and not start[2]:
-                self.click(x, y)
+            self.control.press(name, x, y)
+        elif action == glfw.RELEASE and self.control.release(name, x, y):
+            self.click(x, y)
 
     def on_cursor_pos(self, handle: Any, x: float, y: float) -> None:
         glfw = self._glfw
-        px, py = self._cursor
-        self._cursor = (x, y)
-        dx, dy = x - px, y - py
-        if not self._buttons:
-            return
-        for button, (sx, sy, moved) in list(self._buttons.items()):
-            if not moved and abs(x - sx) + abs(y - sy) > _CLICK_PIXELS:
-                self._buttons[button] = (sx, sy, True)
         shift = glfw.get_key(self.handle, glfw.KEY_LEFT_SHIFT) == glfw.PRESS if self.handle else False
-        cam = self.viewer.camera
-        h = self.window_size()[1]  # cursor positions are in window coordinates
-        if glfw.MOUSE_BUTTON_LEFT in self._buttons and not shift:
-            if self._buttons[glfw.MOUSE_BUTTON_LEFT][2]:
-                cam.orbit(dx * 0.4, dy * 0.4)
-                self.request_repaint()
-        elif self._buttons.keys() & {glfw.MOUSE_BUTTON_RIGHT, glfw.MOUSE_BUTTON_MIDDLE, glfw.MOUSE_BUTTON_LEFT}:
-            cam.pan(dx / h, -dy / h)
+        # cursor positions are in window coordinates
+        if self.control.move(x, y, self.window_size()[1], shift):
             self.request_repaint()
 
     def on_scroll(self, handle: Any, dx: float, dy: float) -> None:
-        self.viewer.camera.zoom(0.9**dy)
+        self.control.wheel(dy)
         self.request_repaint()
 
     def on_key(self, handle: Any, key: int, scancode: int, action: int, mods: int) -> None:
         glfw = self._glfw
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
-        shift = bool(mods & glfw.MOD_SHIFT)
-        views = {
-            glfw.KEY_1: (AxisAlignedRotation.NX_Y if shift else AxisAlignedRotation.X_Y),
-            glfw.KEY_2: (AxisAlignedRotation.Z_Y if shift else AxisAlignedRotation.NZ_Y),
-            glfw.KEY_3: (AxisAlignedRotation.X_Z if shift else AxisAlignedRotation.X_NZ),
-        }
-        v = self.viewer
-        if key in views:
-            v.set_axial_view(views[key])
-        elif key == glfw.KEY_F:
-            v.auto_fit()
-        elif key == glfw.KEY_R:
-            self.reset_view()
-        elif key == glfw.KEY_W:
-            v.wireframe = not v.wireframe
-        elif key == glfw.KEY_P:
-            (v.auto_fit_perspective if v.is_orthogonal() else v.auto_fit_ortho)()
+        names = {glfw.KEY_1: "1", glfw.KEY_2: "2", glfw.KEY_3: "3", glfw.KEY_F: "f", glfw.KEY_R: "r"}
+        names.update({glfw.KEY_W: "w", glfw.KEY_P: "p"})
+        if key in names:
+            self.control.key(names[key], shift=bool(mods & glfw.MOD_SHIFT))
         elif key == glfw.KEY_S:
             path = self.save_screenshot()
             print(f"screenshot: {path}")
@@ -352,10 +327,7 @@ class Window:
     # -- view helpers -------------------------------------------------------------
     def reset_view(self) -> None:
         """Back to the view remembered when the scene was opened (auto-fit if none)."""
-        if self._initial is None:
-            self.viewer.auto_fit()
-        else:
-            self.viewer.camera.restore(self._initial)
+        self.control.reset_view()
 
     def window_size(self) -> tuple[int, int]:
         """The window's size in window coordinates (cursor units; framebuffer pixels differ on HiDPI screens)."""

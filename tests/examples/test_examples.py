@@ -12,9 +12,9 @@ import pytest
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
-def run_example(name: str, out: Path) -> str:
+def run_example(name: str, out: Path, *args: str) -> str:
     result = subprocess.run(
-        [sys.executable, str(EXAMPLES / name), str(out)],
+        [sys.executable, str(EXAMPLES / name), str(out), *args],
         capture_output=True,
         text=True,
         timeout=300,
@@ -140,3 +140,23 @@ def test_06_outline_technique(tmp_path):
     ring = (slice(80, 115), slice(90, 230))  # the top of the ring, away from the floor and its shadows
     dark = lambda img: (img[ring].max(axis=2) < 40).sum()  # noqa: E731
     assert dark(gl) > 150 and dark(pov) < dark(gl) / 5  # the outline is GL's; POV-Ray renders the scene without it
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_07_turntable(tmp_path):
+    args = ("--seconds", "1", "--fps", "2", "--size", "96x72")
+    out = run_example("07_turntable.py", tmp_path, *args)
+    assert "GL preview: 2 written" in out and "POV-Ray final: 2 written" in out
+    from PIL import Image
+
+    for name in ("07-turntable-gl.mp4", "07-turntable-povray.mp4"):
+        assert (tmp_path / name).stat().st_size > 1000
+    with Image.open(tmp_path / "07-turntable.gif") as gif:
+        assert gif.n_frames == 2 and gif.size == (96, 72)
+    first = check_image(tmp_path / "07-frames-povray" / "0000.png", min_colors=20)
+    second = check_image(tmp_path / "07-frames-povray" / "0001.png", min_colors=20)
+    assert np.abs(first - second).mean() > 5  # the scene turned
+    again = run_example("07_turntable.py", tmp_path, *args)
+    assert "POV-Ray final: 0 written, 2 already there" in again  # a second run resumes: nothing left to do

@@ -1,0 +1,120 @@
+"""om.export(scene, "scene.html"): a self-contained page, checked in headless Chromium against the GL render."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.export import gltf, html
+
+SIZE = (320, 240)
+BACKGROUND = (0.1, 0.12, 0.15)
+
+
+def _scene() -> om.Node:
+    from omnirender.demo import demo_scene
+
+    scene = demo_scene()  # a mesh from a file, primitives, two point lights and a camera
+    scene.add(om.Node("debug", [om.Material(diffuse=(0, 1, 0)), om.Box(size=(1, 1, 1), center=(0, 2.8, 0))], "debug"))
+    return scene
+
+
+def _settings(text: str) -> dict:
+    found = re.search(r"OmniRenderViewer\.show\(document\.getElementById\(\"omnirender\"\), (\{.*\})\);", text)
+    assert found, "the page does not start the viewer"
+    return json.loads(found.group(1))
+
+
+def test_the_page_is_self_contained_and_embeds_the_glb(tmp_path):
+    scene = _scene()
+    path = tmp_path / "scene.html"
+    assert om.export(scene, path) == path
+    text = path.read_text()
+    assert text.startswith("<!DOCTYPE html>") and "<title>scene</title>" in text
+    # offline: nothing is loaded from anywhere (no src/href attributes, no fetch of a URL)
+    assert not re.search(r"\s(src|href)\s*=", text) and "import(" not in text
+    # three.js's MIT notice travels with the bundle, and the licence file is package data
+    assert "@license" in text and "SPDX-License-Identifier: MIT" in text
+    assert "MIT License" in (html.ASSETS / "three.LICENSE").read_text()
+    settings = _settings(text)
+    glb = base64.b64decode(settings["glb"])
+    assert glb == gltf.to_bytes(scene, size=(960, 720))
+    assert settings["background"] == pytest.approx([0.12, 0.13, 0.16, 1.0])  # the demo's om.Background
+    camera = scene.components[0]
+    assert settings["distance"] == pytest.approx(np.linalg.norm(np.subtract(camera.center, camera.eye)))
+
+
+def test_the_group_mask_and_light_units_reach_the_page(tmp_path):
+    scene = _scene()
+    full = _settings(html.page(scene))
+    masked = _settings(html.page(scene, mask="!debug"))
+    names = lambda s: [n.get("name") for n in _glb_json(s["glb"])["nodes"]]  # noqa: E731
+    assert "debug" in names(full) and "debug" not in names(masked)
+    lights = _glb_json(full["glb"])["extensions"]["KHR_lights_punctual"]["lights"]
+    assert [li["extras"]["omnirender"]["attenuation"] for li in lights] == [[1.0, 0.0, 0.0]] * 2
+    assert html.DEFAULT_BACKGROUND == pytest.importorskip("omnirender.gl.engine").DEFAULT_BACKGROUND
+
+
+def test_hostile_titles_cannot_break_out_of_the_page():
+    text = html.page(om.Node("x", [om.Sphere()]), title="</title><script>alert(1)</script>")
+    assert "<title>&lt;/title&gt;&lt;script&gt;alert(1)&lt;/script&gt;</title>" in text
+    assert text.count("<script>") == 2 and text.count("</script>") == 2  # the bundle's and the start-up's
+    # the scene travels as base64 and the settings are numbers: neither can hold markup
+
+
+def _glb_json(b64: str) -> dict:
+    data = base64.b64decode(b64)
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20 : 20 + length])
+
+
+def _chromium_screenshot(page: Path, out: Path, size: tuple[int, int]) -> np.ndarray:
+    program = shutil.which("chromium") or shutil.which("chromium-browser")
+    command = [
+        program, "--headless", "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--no-sandbox",
+        "--disable-gpu", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        "--no-first-run", "--hide-scrollbars", f"--user-data-dir={out.parent / 'chromium-profile'}",
+        f"--window-size={size[0]},{size[1]}", "--virtual-time-budget=15000", f"--screenshot={out}", page.as_uri(),
+    ]  # fmt: skip
+    result = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert out.is_file(), f"Chromium wrote no screenshot: {result.stderr[-2000:]}"
+    from PIL import Image
+
+    return np.asarray(Image.open(out).convert("RGB")).astype(int)
+
+
+def _silhouette(rgb: np.ndarray, background: tuple[float, float, float]) -> np.ndarray:
+    return np.abs(rgb - np.round(np.asarray(background) * 255)).sum(axis=2) > 24
+
+
+@pytest.mark.gl
+@pytest.mark.chromium
+@pytest.mark.slow
+def test_chromium_shows_what_gl_renders(tmp_path):
+    scene = _scene()
+    scene.components[1].color = BACKGROUND  # the demo's om.Background
+    gl = om.render(scene, engine="gl", size=SIZE, mask="!debug").array[:, :, :3].astype(int)
+    page = tmp_path / "scene.html"
+    om.export(scene, page, mask="!debug")
+    shot = _chromium_screenshot(page, tmp_path / "page.png", SIZE)
+    assert shot.shape == gl.shape
+    a, b = _silhouette(gl, BACKGROUND), _silhouette(shot, BACKGROUND)
+    assert 0.3 < a.mean() < 0.9  # the picture shows the scene, not an empty page
+    agreement = float((a == b).mean())
+    print(f"silhouette agreement GL vs Chromium: {agreement:.2%}")
+    assert agreement >= 0.95, f"silhouettes agree on {agreement:.1%} of the pixels"
+    # the masked-out debug box is absent in the page too: its pixels show the background in both
+    box = om.render(scene, engine="gl", size=SIZE).array[:, :, :3].astype(int)
+    only_box = _silhouette(box, BACKGROUND) & ~a
+    assert only_box.sum() > 100 and b[only_box].mean() < 0.05
+    # shading agrees roughly too: the mean colour of the pixels both cover
+    both = a & b
+    assert np.abs(gl[both].mean(axis=0) - shot[both].mean(axis=0)).max() < 40

@@ -1,0 +1,120 @@
+// The page script of om.export(scene, "scene.html"): three.js shows the scene's glTF (embedded as base64)
+// with the scene's camera, lights and background, and orbit controls.  Bundled by ./build.sh into
+// omnirender/export/assets/three_viewer.min.js, which omnirender/export/html.py inlines into every page.
+import * as THREE from "three";
+import { GLTFLoader } from "three/examples/jsm/loaders/GLTFLoader.js";
+import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
+
+function decode(base64) {
+  const text = atob(base64);
+  const bytes = new Uint8Array(text.length);
+  for (let i = 0; i < text.length; i++) bytes[i] = text.charCodeAt(i);
+  return bytes.buffer;
+}
+
+// omnirender lights follow OpenGL: a diffuse surface lit head-on by a light of intensity I has the colour
+// I x albedo, and lights do not fall off with distance unless they have attenuation.  three.js lights are
+// physical (a Lambertian BRDF albedo / pi, point lights falling off as 1 / d^decay), so intensities are
+// multiplied by pi and point and spot lights get the decay of their attenuation (see html.py).
+function convertLight(light, units) {
+  light.intensity *= Math.PI;
+  if (light.isPointLight || light.isSpotLight) {
+    const [constant, linear, quadratic] = units.attenuation || [1, 0, 0];
+    if (quadratic > 0) {
+      light.decay = 2;
+      light.intensity /= quadratic;
+    } else if (linear > 0) {
+      light.decay = 1;
+      light.intensity /= linear;
+    } else {
+      light.decay = 0;
+      light.intensity /= constant || 1;
+    }
+    light.distance = 0;
+  }
+  if (light.isSpotLight) light.penumbra = units.penumbra || 0;
+}
+
+function fittedCamera(root, aspect) {
+  const box = new THREE.Box3().setFromObject(root);
+  const center = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
+  const camera = new THREE.PerspectiveCamera(35, aspect, radius / 100, radius * 100);
+  camera.position.copy(center).add(new THREE.Vector3(0.6, 0.45, 1).normalize().multiplyScalar(radius * 3.3));
+  camera.lookAt(center);
+  return { camera, target: center };
+}
+
+export function show(container, options) {
+  const width = () => container.clientWidth || window.innerWidth;
+  const height = () => container.clientHeight || window.innerHeight;
+  const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setSize(width(), height());
+  container.appendChild(renderer.domElement);
+  const scene = new THREE.Scene();
+  const bg = options.background || [0, 0, 0, 1];
+  scene.background = new THREE.Color().setRGB(bg[0], bg[1], bg[2], THREE.SRGBColorSpace);
+  const status = (text) => {
+    document.body.dataset.status = text;
+  };
+  new GLTFLoader().parse(
+    decode(options.glb),
+    "",
+    (gltf) => {
+      scene.add(gltf.scene);
+      gltf.scene.updateMatrixWorld(true);
+      let index = 0;
+      gltf.scene.traverse((object) => {
+        if (object.isLight) convertLight(object, (options.lights || [])[index++] || {});
+      });
+      const ambient = options.ambient || [0, 0, 0];
+      if (ambient.some((v) => v > 0)) {
+        const color = new THREE.Color().setRGB(ambient[0], ambient[1], ambient[2], THREE.SRGBColorSpace);
+        scene.add(new THREE.AmbientLight(color, Math.PI));
+      }
+      let camera;
+      let target;
+      const found = gltf.cameras[0];
+      if (found) {
+        // a camera at the root (orbit controls move it in world space), placed where the scene's camera is
+        camera = found.clone();
+        found.matrixWorld.decompose(camera.position, camera.quaternion, camera.scale);
+        camera.scale.set(1, 1, 1);
+        const forward = new THREE.Vector3(0, 0, -1).applyQuaternion(camera.quaternion);
+        target = camera.position.clone().addScaledVector(forward, options.distance || 1);
+      } else {
+        ({ camera, target } = fittedCamera(gltf.scene, width() / height()));
+      }
+      const frame = () => {
+        const w = width();
+        const h = height();
+        renderer.setSize(w, h);
+        if (camera.isOrthographicCamera) {
+          const half = (camera.top - camera.bottom) / 2;
+          camera.left = (-half * w) / h;
+          camera.right = (half * w) / h;
+        } else {
+          camera.aspect = w / h;
+        }
+        camera.updateProjectionMatrix();
+      };
+      frame();
+      const controls = new OrbitControls(camera, renderer.domElement);
+      controls.target.copy(target);
+      controls.update();
+      const draw = () => renderer.render(scene, camera);
+      controls.addEventListener("change", draw);
+      window.addEventListener("resize", () => {
+        frame();
+        draw();
+      });
+      draw();
+      status("ready");
+    },
+    (error) => {
+      status("error");
+      container.textContent = "omnirender: cannot show the scene: " + error;
+    },
+  );
+}
