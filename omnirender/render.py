@@ -191,7 +191,9 @@ def _check_size(size: Any) -> tuple[int, int]:
 register_engine("gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)")
 register_engine("povray", "omnirender.povray:render", "omnirender.povray:available", "POV-Ray 3.7 ray tracer")
 register_engine("mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:available", "Mitsuba 3 path tracer")
-register_engine("radiance", "omnirender.radiance:render", "omnirender.radiance:available", "Radiance (rpict) from pyradiance")
+register_engine(
+    "radiance", "omnirender.radiance:render", "omnirender.radiance:available", "Radiance (rpict, from pyradiance)"
+)
 register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
 register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
 register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")

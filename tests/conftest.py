@@ -1,7 +1,7 @@
 """Shared test configuration.
 
-Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba`` or
-``window``.  When the engine is missing they are skipped, except when
+Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba``,
+``radiance`` or ``window``.  When the engine is missing they are skipped, except when
 ``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
 can never pass by skipping.
 """
@@ -41,6 +41,12 @@ def _mitsuba() -> tuple[bool, str]:
         return False, f"mitsuba is not importable: {exc}"
 
 
+def _radiance() -> tuple[bool, str]:
+    from omnirender.radiance import available
+
+    return available()
+
+
 def _window() -> tuple[bool, str]:
     import shutil
 
@@ -52,7 +58,7 @@ def _window() -> tuple[bool, str]:
     return ok, "Xvfb is not installed (apt-get install xvfb)"
 
 
-_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "window": _window}
+_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "radiance": _radiance, "window": _window}
 _cache: dict[str, tuple[bool, str]] = {}
 
 

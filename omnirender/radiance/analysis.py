@@ -78,7 +78,11 @@ def _trace(
     engine_options: dict[str, Any],
 ) -> np.ndarray:
     _check_options(options)
-    if isinstance(processes, bool) or not isinstance(processes, numbers.Integral) or not 1 <= processes <= MAX_PROCESSES:
+    if (
+        isinstance(processes, bool)
+        or not isinstance(processes, numbers.Integral)
+        or not 1 <= processes <= MAX_PROCESSES
+    ):
         raise ValueError(f"Radiance analysis: processes must be a whole number 1..{MAX_PROCESSES}, got {processes!r}")
     deadline = Deadline(timeout)
     for name in ("oconv", "rtrace"):

@@ -55,7 +55,9 @@ def available() -> tuple[bool, str]:
     return True, text.splitlines()[0] + extra
 
 
-def scene_description(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: Any) -> tuple[str, RadianceEngine]:
+def scene_description(
+    scene: Any, size: tuple[int, int] = (640, 480), **engine_options: Any
+) -> tuple[str, RadianceEngine]:
     """Evaluate ``scene``; returns (the ``.rad`` text, the engine listing its meshes and pictures)."""
     engine = evaluate(scene, size, **engine_options)
     return engine.description(), engine
@@ -99,12 +101,25 @@ def _downsample(a: np.ndarray, k: int) -> np.ndarray:
 
 
 def _read_picture(folder: Path, name: str, size: tuple[int, int], deadline: Deadline) -> np.ndarray:
+    """(H, W, 3) float radiance of a picture, through ``pvalue``; channels stored as 0 read as 0."""
     run("pvalue", ["-h", "-H", "-df", "-o", name], folder, stdout="image.raw", timeout=deadline.left(), what=name)
     w, h = size
     data = np.fromfile(folder / "image.raw", dtype=np.float32)
     if data.size != w * h * 3:
         raise RadianceError(f"Radiance: rpict wrote {data.size // 3} pixels, expected {w}x{h}")
-    return data.reshape(h, w, 3)
+    return zero_floor(data.reshape(h, w, 3))
+
+
+def zero_floor(rgb: np.ndarray) -> np.ndarray:
+    """Undo RGBE decoding's half step on channels whose mantissa was 0.
+
+    Radiance decodes a mantissa ``m`` as ``(m + 0.5) * f`` with ``f`` the
+    pixel's step (``2^(e - 8)`` for its largest channel in ``[2^(e-1), 2^e)``),
+    so a pure red pixel reads with green and blue ``0.5 f`` instead of 0.
+    """
+    top = rgb.max(axis=2, keepdims=True).astype(np.float64)
+    step = np.exp2(np.floor(np.log2(np.where(top > 0.0, top, 1.0))) - 7.0)
+    return np.where(rgb.astype(np.float64) <= 0.5 * step * (1.0 + 1e-6), 0.0, rgb).astype(np.float32)
 
 
 def render(
@@ -135,7 +150,11 @@ def render(
     radiance (W/sr/m^2, premultiplied by coverage) and alpha in ``.hdr`` and
     the eye-space depth in ``.depth`` (inf on the background).
     """
-    if isinstance(oversample, bool) or not isinstance(oversample, numbers.Integral) or not 1 <= oversample <= MAX_OVERSAMPLE:
+    if (
+        isinstance(oversample, bool)
+        or not isinstance(oversample, numbers.Integral)
+        or not 1 <= oversample <= MAX_OVERSAMPLE
+    ):
         raise ValueError(f"Radiance: oversample must be a whole number 1..{MAX_OVERSAMPLE}, got {oversample!r}")
     _check_options(options)
     deadline = Deadline(timeout)

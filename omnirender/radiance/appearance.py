@@ -71,10 +71,13 @@ class Look:
         ``scale`` > 1 is used inside a glow mixture: the specular fraction is
         scaled and the colour chosen so the diffuse part is scaled too.
         """
+        if scale == 1.0:
+            return [*self.rgb, self.spec, self.rough]
+        if self.kind == "metal":  # the colour tints both parts: scaling it scales the whole reflection
+            return [*(c * scale for c in self.rgb), self.spec, self.rough]
         spec = min(self.spec * scale, 0.99)
         diffuse = np.asarray(self.rgb) * (1.0 - self.spec) * scale
-        rgb = diffuse / (1.0 - spec)
-        return [*rgb.tolist(), spec, self.rough]
+        return [*(diffuse / (1.0 - spec)).tolist(), spec, self.rough]
 
 
 def _rgb(values: Any) -> tuple[float, float, float]:
@@ -178,7 +181,10 @@ def _look_chain(engine: Any, look: Look, pattern: str, key: Any, sink: list[str]
     elif emits:
         w = EMISSION_WEIGHT
         glow = engine.declare(
-            ("glow", key), "m", lambda i: rad.primitive("void", "glow", i, (), [*(e / w for e in look.emission), 0]), sink
+            ("glow", key),
+            "m",
+            lambda i: rad.primitive("void", "glow", i, (), [*(e / w for e in look.emission), 0]),
+            sink,
         )
         body = engine.declare(
             ("body", key), "m", lambda i: rad.primitive(pattern, look.kind, i, (), look.reals(1.0 / (1.0 - w))), sink
@@ -187,7 +193,9 @@ def _look_chain(engine: Any, look: Look, pattern: str, key: Any, sink: list[str]
             ("mix", key), "m", lambda i: rad.primitive("void", "mixfunc", i, (glow, body, rad.number(w), ".")), sink
         )
     else:
-        ident = engine.declare(("body", key), "m", lambda i: rad.primitive(pattern, look.kind, i, (), look.reals()), sink)
+        ident = engine.declare(
+            ("body", key), "m", lambda i: rad.primitive(pattern, look.kind, i, (), look.reals()), sink
+        )
     if look.opacity < 1.0:
         opaque = ident
         o = rad.number(look.opacity, owner)
@@ -208,6 +216,19 @@ def _texture_image(engine: Any, texture: Texture) -> np.ndarray:
         ) from None
 
 
+#: A ``filter="nearest"`` texture is enlarged by repeating texels until its longer side has this many
+#: pixels, so Radiance's bilinear picture lookup blends only in a thin seam between texels.
+NEAREST_SIZE = 512
+
+
+def _picture(texture: Texture, channels: np.ndarray) -> np.ndarray:
+    """The texture's (H, W, 3) linear picture data, enlarged for nearest filtering."""
+    if texture.filter == "nearest":
+        k = max(1, -(-NEAREST_SIZE // max(channels.shape[:2])))
+        channels = np.repeat(np.repeat(channels, k, axis=0), k, axis=1)
+    return channels
+
+
 def _uv_expressions(texture: Texture, image: np.ndarray) -> tuple[str, str]:
     """colorpict coordinates: Radiance scales a picture so its shorter side is 1."""
     h, w = image.shape[:2]
@@ -225,7 +246,8 @@ def _texture_pattern(engine: Any, texture: Texture, sink: list[str] | None) -> s
 
     def make(ident: str) -> str:
         name = engine.add_picture(
-            (id(texture), texture.version, "rgb"), lambda: srgb_to_linear(image[:, :, :3].astype(np.float64) / 255.0)
+            (id(texture), texture.version, "rgb"),
+            lambda: _picture(texture, srgb_to_linear(image[:, :, :3].astype(np.float64) / 255.0)),
         )
         return rad.primitive("void", "colorpict", ident, ("red", "green", "blue", name, ".", u, v))
 
@@ -238,7 +260,9 @@ def _alpha_cutout(engine: Any, texture: Texture, inner: str, key: Any, sink: lis
 
     def make(ident: str) -> str:
         alpha = image[:, :, 3].astype(np.float32) / 255.0
-        name = engine.add_picture((id(texture), texture.version, "alpha"), lambda: np.repeat(alpha[:, :, None], 3, 2))
+        name = engine.add_picture(
+            (id(texture), texture.version, "alpha"), lambda: _picture(texture, np.repeat(alpha[:, :, None], 3, 2))
+        )
         return rad.primitive("void", "mixpict", ident, (inner, "void", "red", name, ".", u, v))
 
     return engine.declare(("cutout", key), "m", make, sink)

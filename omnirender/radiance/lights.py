@@ -17,8 +17,10 @@ luminous efficacy 179 lm/W turns them into cd/m^2, cd and lux):
   no falloff and shows its sphere).
 - ``DirectionalLight`` (and the headlight of scenes without lights): a
   ``source`` of angular diameter 0.1 degrees whose irradiance is ``pi * color``.
-- ``AmbientLight`` and the lights' ambient terms: Radiance's ambient value
-  ``-av`` (reflected with the diffuse colour, as Mitsuba's constant environment).
+- ``AmbientLight``, the lights' ambient terms and GL's global ambient: Radiance's
+  ambient value ``-av`` (reflected with the diffuse colour, like Mitsuba's
+  constant environment) and a ``glow`` environment of the same radiance, which
+  specular surfaces (metals) reflect as GL's ambient term makes them do.
 - ``om.radiance.Sky``: a ``glow`` source over the hemisphere (lights through ``-ab``).
 
 ``LightSwitch`` cannot be expressed: Radiance lights everything with every source.
@@ -51,7 +53,9 @@ def _solid_angle(diameter_degrees: float) -> float:
 def _source(engine: Any, towards: np.ndarray, irradiance: np.ndarray, angle: float = SOURCE_ANGLE) -> str:
     mat, ident = engine.new_id("l"), engine.new_id("s")
     radiance = np.asarray(irradiance, np.float64) / _solid_angle(angle)
-    return rad.primitive("void", "light", mat, (), radiance) + rad.primitive(mat, "source", ident, (), [*towards, angle])
+    return rad.primitive("void", "light", mat, (), radiance) + rad.primitive(
+        mat, "source", ident, (), [*towards, angle]
+    )
 
 
 def spot_pattern(axis: np.ndarray, cos_cutoff: float, exponent: float) -> str:
@@ -103,6 +107,14 @@ def lights_text(engine: Any) -> str:
             parts.append(_source(engine, towards, math.pi * np.asarray(light.diffuse, np.float64)))
         elif isinstance(light, (PointLight, SpotLight)):
             parts.append(_sphere_light(engine, light, world))
+    ambient = engine.ambient_value()
+    if np.any(ambient > 0.0):
+        mat, ident = engine.new_id("l"), engine.new_id("s")
+        parts.append(rad.comment("ambient light: a uniform environment") + "\n")
+        parts.append(
+            rad.primitive("void", "glow", mat, (), [*ambient, 0])
+            + rad.primitive(mat, "source", ident, (), [0, 1, 0, 360])
+        )
     if not lit and engine.headlight:
         towards = -headlight_direction(*engine.camera_or_default())
         parts.append(rad.comment("headlight (the scene has no light)") + "\n")

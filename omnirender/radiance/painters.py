@@ -157,7 +157,9 @@ class DiskPainter(ShapePainter):
         found = _fallback(shape, engine, True)
         if found is not None:
             m, s = found
-            engine.surface("ring", [*_point(m, (0, 0, 0)), *_direction(m, (0, 1, 0)), 0, shape.radius * s], modifier(engine))
+            engine.surface(
+                "ring", [*_point(m, (0, 0, 0)), *_direction(m, (0, 1, 0)), 0, shape.radius * s], modifier(engine)
+            )
 
 
 def _polygons(engine: RadianceEngine, m: np.ndarray, outlines: np.ndarray) -> None:
@@ -287,7 +289,9 @@ def _mesh_obj(
     texcoords = shape.texcoord_array() if textured else None
     colors = shape.color_array() if with_colors else None
     if planes:
-        vertices, faces, normals, texcoords, colors = clip_triangles(vertices, faces, planes, normals, texcoords, colors)
+        vertices, faces, normals, texcoords, colors = clip_triangles(
+            vertices, faces, planes, normals, texcoords, colors
+        )
     if not with_colors:
         return obj_text(vertices, faces, normals, texcoords, owner=engine.owner()), None
     materials: list[str] = []
@@ -412,7 +416,11 @@ def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
         if not first_only or getattr(engine, attribute) is None:
             setattr(engine, attribute, value)
 
-    cls = type(f"{target.__name__}Painter", (AttributePainter,), {"__slots__": (), "service": SERVICE, "target": target, "exec": exec})
+    cls = type(
+        f"{target.__name__}Painter",
+        (AttributePainter,),
+        {"__slots__": (), "service": SERVICE, "target": target, "exec": exec},
+    )
     return default_for(RadianceEngine)(cls)
 
 
