@@ -1,9 +1,10 @@
-"""Proof that the engines agree (issue 5): one scene, GL, POV-Ray and Mitsuba, the same pixels.
+"""Proof that the engines agree (issues 5 and 15): one scene, GL, POV-Ray, Mitsuba and Radiance, the same pixels.
 
 The test scene (camera, floor box, sphere, torus, a triangle mesh, point light)
-is rendered at 320x240 by every available engine.  The foreground masks (alpha
-or finite depth) must agree on at least 98% of the pixels between every pair
-of engines, and each engine must agree with an analytic reference mask: rays
+is rendered at 320x240 by every available engine, seen through a perspective
+and through an orthographic camera.  The foreground masks (alpha or finite
+depth) must agree on at least 98% of the pixels between every pair of
+engines, and each engine must agree with an analytic reference mask: rays
 through the pixel centres built from the core camera matrices, intersected
 exactly with the sphere and box, by sphere tracing with the torus and with
 the mesh's triangles.  This checks cameras, transforms and tessellations.
@@ -24,7 +25,8 @@ import pytest
 import omnirender as om
 
 SIZE = (320, 240)
-ENGINES = ("gl", "povray", "mitsuba")
+ENGINES = ("gl", "povray", "mitsuba", "radiance")
+VIEWS = ("perspective", "orthographic")
 THRESHOLD = 0.98
 
 TORUS_MATRIX = om.Translation(1.0, 0.45, -0.7).matrix @ om.Rotation(60, (1, 0, 0)).matrix
@@ -41,9 +43,16 @@ def octahedron() -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def make_scene() -> om.Node:
+def camera(view: str = "perspective") -> om.Camera:
+    eye, center = (3.3, 2.5, 4.9), (0.0, 0.45, 0.1)
+    if view == "orthographic":
+        return om.Camera.orthographic(eye=eye, center=center, height=4.6)
+    return om.Camera.look_at(eye=eye, center=center, fov=40)
+
+
+def make_scene(view: str = "perspective") -> om.Node:
     scene = om.Node("scene")
-    scene.add(om.Camera.look_at(eye=(3.3, 2.5, 4.9), center=(0.0, 0.45, 0.1), fov=40))
+    scene.add(camera(view))
     scene.add(om.PointLight(position=(4.0, 6.0, 3.0)))
     scene.add(om.AmbientLight(intensity=0.25))
     floor = scene.add(om.Node("floor"))
@@ -70,6 +79,11 @@ def pixel_rays(camera: om.Camera, size: tuple[int, int]) -> tuple[np.ndarray, np
     w, h = size
     inv = np.linalg.inv(camera.view_matrix())
     x, y = np.meshgrid((np.arange(w) + 0.5) / w * 2 - 1, 1 - (np.arange(h) + 0.5) / h * 2)
+    if camera.is_orthographic:  # parallel rays from the image plane through the eye
+        half = camera.height / 2
+        o = np.stack([x * half * w / h, y * half, np.zeros_like(x)], axis=-1) @ inv[:3, :3].T + inv[:3, 3]
+        d = np.broadcast_to(inv[:3, :3] @ np.array([0.0, 0.0, -1.0]), o.shape)
+        return o, d
     t = math.tan(math.radians(camera.fov) / 2)
     d = np.stack([x * t * w / h, y * t, -np.ones_like(x)], axis=-1) @ inv[:3, :3].T
     return np.broadcast_to(inv[:3, 3], d.shape), d / np.linalg.norm(d, axis=-1, keepdims=True)
@@ -129,9 +143,8 @@ def hit_triangles(o, d, vertices, faces):
     return hit
 
 
-def analytic_mask(size: tuple[int, int] = SIZE) -> np.ndarray:
-    cam = next(c for c in make_scene().components if isinstance(c, om.Camera))
-    o, d = pixel_rays(cam, size)
+def analytic_mask(size: tuple[int, int] = SIZE, view: str = "perspective") -> np.ndarray:
+    o, d = pixel_rays(camera(view), size)
     o = np.ascontiguousarray(o)
     mask = hit_box(o, d, *FLOOR) | hit_sphere(o, d, *SPHERE)
     mask |= hit_torus(*_local(o, d, TORUS_MATRIX), *TORUS)
@@ -150,14 +163,14 @@ def _require(name: str) -> None:
 
 
 @functools.cache
-def rendered(name: str) -> om.Image:
+def rendered(name: str, view: str = "perspective") -> om.Image:
     options = {"povray": {"threads": 2}, "mitsuba": {"spp": 16}}.get(name, {})
-    return om.render(make_scene(), engine=name, size=SIZE, **options)
+    return om.render(make_scene(view), engine=name, size=SIZE, **options)
 
 
 @functools.cache
-def reference() -> np.ndarray:
-    return analytic_mask()
+def reference(view: str = "perspective") -> np.ndarray:
+    return analytic_mask(view=view)
 
 
 def agreement(a: np.ndarray, b: np.ndarray) -> float:
@@ -168,22 +181,24 @@ def _marks(*names: str) -> list:
     return [getattr(pytest.mark, n) for n in names]
 
 
+@pytest.mark.parametrize("view", VIEWS)
 @pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ENGINES])
-def test_engine_matches_the_analytic_mask(name):
+def test_engine_matches_the_analytic_mask(name, view):
     _require(name)
-    img = rendered(name)
-    ref = reference()
+    img = rendered(name, view)
+    ref = reference(view)
     assert img.size == SIZE
     assert 0.25 < ref.mean() < 0.75  # the reference itself is sensible
     score = agreement(img.mask, ref)
-    assert score >= THRESHOLD, f"{name} agrees with the analytic mask on only {score:.2%} of pixels"
+    assert score >= THRESHOLD, f"{name} ({view}) agrees with the analytic mask on only {score:.2%} of pixels"
 
 
+@pytest.mark.parametrize("view", VIEWS)
 @pytest.mark.parametrize(
     "a,b", [pytest.param(a, b, marks=_marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
 )
-def test_engines_agree_pairwise(a, b):
+def test_engines_agree_pairwise(a, b, view):
     _require(a)
     _require(b)
-    score = agreement(rendered(a).mask, rendered(b).mask)
-    assert score >= THRESHOLD, f"{a} and {b} masks agree on only {score:.2%} of pixels"
+    score = agreement(rendered(a, view).mask, rendered(b, view).mask)
+    assert score >= THRESHOLD, f"{a} and {b} masks ({view}) agree on only {score:.2%} of pixels"
