@@ -177,7 +177,8 @@ class RadianceEngine(Engine):
         name = self._resources.get(key)
         if name is not None:
             return name, False
-        name = f"{self.resource_prefix}{kind}{len(self._resources)}{suffix}"
+        n = sum(1 for other in self._resources.values() if other.endswith(suffix))
+        name = f"{self.resource_prefix}{kind}{n}{suffix}"
         self._resources[key] = name
         return name, True
 
@@ -223,7 +224,10 @@ class RadianceEngine(Engine):
 
     def raw(self, text: str) -> None:
         """Trusted text at this place of the description (``om.radiance.Raw``)."""
-        self.body.append(rad.comment(self.node_path or "/") + "\n" + text.rstrip("\n") + "\n")
+        node = self.node_path or "/"
+        for name in rad.defined_names(text):
+            self.owners.setdefault(name, node)
+        self.body.append(rad.comment(node) + "\n" + text.rstrip("\n") + "\n")
 
     def appearance(self) -> tuple[Any, Any]:
         """(material, colour) as the GL engine resolves them (see :func:`resolve_surface`)."""

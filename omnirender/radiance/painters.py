@@ -73,9 +73,30 @@ def _direction(m: np.ndarray, d: Any) -> np.ndarray:
     return n / np.linalg.norm(n)
 
 
-def _fallback(shape: Any, engine: RadianceEngine, needs_similarity: bool) -> tuple[np.ndarray, float] | None:
-    """(model matrix, uniform scale) when ``shape`` can be written natively, else evaluate its simplification."""
+def _model(engine: RadianceEngine) -> np.ndarray | None:
+    """The model matrix; None when it squashes space flat (nothing is drawn, as in the POV-Ray engine).
+
+    A matrix whose numbers overflowed is refused with the node, before anything is written.
+    """
     m = engine.model_matrix()
+    if not np.all(np.isfinite(m)):
+        raise rad.RadError(
+            f"{engine.owner()}: the accumulated transform is not finite (its numbers overflow); "
+            "check the Translation/Scaling/Matrix attributes above this shape"
+        )
+    if abs(float(np.linalg.det(m[:3, :3]))) < 1e-300:
+        return None
+    return m
+
+
+def _fallback(shape: Any, engine: RadianceEngine, needs_similarity: bool) -> tuple[np.ndarray, float] | None:
+    """(model matrix, uniform scale) when ``shape`` can be written natively, else evaluate its simplification.
+
+    None also when the matrix is flattened: nothing is drawn.
+    """
+    m = _model(engine)
+    if m is None:
+        return None
     scale = similarity_scale(m) if needs_similarity else 1.0
     if engine.clip_planes() or engine.mono(Texture) is not None or scale is None or _drawn_as_lines(engine):
         engine.simplify(shape)
@@ -245,7 +266,9 @@ class TriangleSetPainter(ShapePainter):
         flat = style is not None and style.shading == "flat"
         textured = engine.mono(Texture) is not None and shape.texcoord_array() is not None
         colors = shape.color_array()
-        m = engine.model_matrix()
+        m = _model(engine)
+        if m is None:
+            return
         planes = engine.clip_planes()
         key = (id(shape), shape.version, m.tobytes(), flat, textured, tuple(r.tobytes() for r in planes))
         if colors is None:
@@ -318,7 +341,9 @@ def _spheres(engine: RadianceEngine, centres: np.ndarray, radii: np.ndarray) -> 
 
 
 def _world(engine: RadianceEngine, points: Any) -> np.ndarray:
-    m = engine.model_matrix()
+    m = _model(engine)
+    if m is None:
+        m = engine.model_matrix()  # flattened: lines and points still have a place
     return np.asarray(points, np.float64) @ m[:3, :3].T + m[:3, 3]
 
 

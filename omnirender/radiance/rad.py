@@ -31,6 +31,7 @@ __all__ = [
     "comment",
     "primitive",
     "rows_text",
+    "defined_names",
 ]
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*\Z")
@@ -127,3 +128,29 @@ def rows_text(array: np.ndarray, owner: str = "Radiance", what: str = "coordinat
         return ""
     line = "\t" + " ".join([fmt] * k) + "\n"
     return (line * n) % tuple(array.ravel().tolist())
+
+
+def defined_names(text: str) -> list[str]:
+    """The identifiers that primitives in Radiance ``text`` define (best effort: stops at anything unusual).
+
+    Used to name the node whose ``om.radiance.Raw`` text Radiance complains about.
+    """
+    words: list[str] = []
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith(("#", "!")):
+            continue
+        words += stripped.split()
+    names, i = [], 0
+    try:
+        while i + 2 < len(words):
+            names.append(words[i + 2])
+            if words[i + 1] == "alias":
+                i += 4
+                continue
+            i += 3
+            for _ in range(3):  # string, integer and real arguments, each preceded by its count
+                i += int(words[i]) + 1
+    except (ValueError, IndexError):
+        pass
+    return names

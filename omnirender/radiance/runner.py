@@ -178,9 +178,12 @@ def run(
             close()
             raise
         reader.join(5)
-    close()
     if failures:
+        close()
         raise failures[0]
+    if proc.returncode == 0 and progress is not False:
+        update(1.0)
+    close()
     output = b"".join(chunks).decode("latin-1")
     if proc.returncode != 0:
         lines = error_lines(output) or [output[-2000:].strip() or "(no message)"]
