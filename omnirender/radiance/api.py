@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes.photometry import GLOBAL_AMBIENT
+from ..attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from ..fileio import atomic_path
 from ..image import Image, develop
 from . import rad
 from .attributes import Options
-from .build import Deadline, compile_octree, evaluate, locate, write_scene
+from .build import Deadline, as_node, compile_octree, evaluate, locate, write_scene
 from .engine import RadianceEngine
 from .picture import FHUGE, read_depth
 from .runner import RadianceError, environment, program, radiance_paths, run
@@ -161,24 +161,43 @@ def render(
     for name in ("oconv", "rpict", "pvalue"):
         program(name)  # a clear error before any work when Radiance is missing
     k = int(oversample)
-    w, h = size
     started = time.perf_counter()
-    engine = evaluate(scene, (w, h), global_ambient=global_ambient, headlight=headlight, **engine_options)
+    scene = as_node(scene)
+    engine = evaluate(scene, size, global_ambient=global_ambient, headlight=headlight, **engine_options)
+    w, h = engine.size
     chosen = options if options is not None else engine.options if engine.options is not None else Options()
     big = (w * k, h * k)
-    args = [
+    view = [
         *engine.view_arguments(big),
-        "-x", str(big[0]), "-y", str(big[1]), "-pa", "0", "-ps", "1", "-pt", "0", "-pj", "0",
-        "-av", *rad.numbers(engine.ambient_value()).split(), *chosen.arguments(),
-    ]  # fmt: skip
+        "-x",
+        str(big[0]),
+        "-y",
+        str(big[1]),
+        "-pa",
+        "0",
+        "-ps",
+        "1",
+        "-pt",
+        "0",
+        "-pj",
+        "0",
+    ]
+    args = [*view, "-av", *rad.numbers(engine.ambient_value()).split(), *chosen.arguments()]
     if progress is not False:
         args += ["-t", "1"]
     timings = {"description_seconds": time.perf_counter() - started}
+    covering = None
     with tempfile.TemporaryDirectory(prefix="omnirender-radiance-") as tmp:
         folder = Path(tmp)
+        current = engine
         try:
             t0 = time.perf_counter()
             write_scene(engine, folder, "scene.rad", deadline)
+            if engine.transparent:  # how much of each pixel shows the background: a second, unlit pass
+                covering = evaluate(scene, (w, h), coverage=True, shared=engine, **engine_options)
+                current = covering
+                write_scene(covering, folder, "coverage.rad", deadline)
+                current = engine
             if keep is not None:
                 _copy_all(folder, Path(keep))
             octree = compile_octree(folder, "scene.rad", deadline)
@@ -186,24 +205,34 @@ def render(
             run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", timeout=deadline.left(),
                 progress=progress, what="rendering")  # fmt: skip
             t2 = time.perf_counter()
-            radiance = _read_picture(folder, "image.hdr", big, deadline)
+            radiance = _read_picture(folder, "image.hdr", big, deadline).astype(np.float64)
             rot = read_depth(folder / "depth.raw", big)
+            through = None
+            if covering is not None:
+                current = covering
+                octree = compile_octree(folder, "coverage.rad", deadline)
+                # no aft plane here: it would hide the environment (the main pass keeps it: rays passing
+                # through surfaces stop there, and so add nothing where the background goes)
+                unbounded = [*view, "-va", "0", "-ab", "0", octree]
+                run("rpict", unbounded, folder, stdout="coverage.hdr", timeout=deadline.left(), what="coverage pass")
+                through = np.clip(_read_picture(folder, "coverage.hdr", big, deadline).mean(axis=2), 0.0, 1.0)
         except RadianceError as exc:
-            locate(exc, engine, keep)
+            locate(exc, current, keep)
             raise
     timings.update(compile_seconds=t1 - t0, render_seconds=t2 - t1)
     hit = rot < FHUGE / 2
+    cover = hit.astype(np.float64) if through is None else np.where(hit, 1.0 - through, 0.0)
     z, distance = _view_depth(np.where(hit, rot, 0.0), engine, big)
-    radiance = np.where(hit[:, :, None], radiance, 0.0).astype(np.float64)
+    radiance = np.where(hit[:, :, None], radiance, 0.0)
     if engine.fog is not None:
-        from ..attributes.photometry import srgb_to_linear
-
         f = np.asarray(engine.fog.factor(distance), np.float64)[:, :, None]
-        radiance = np.where(hit[:, :, None], f * radiance + (1.0 - f) * srgb_to_linear(engine.fog.color), 0.0)
-    alpha = _downsample(hit.astype(np.float64), k)
+        fog = srgb_to_linear(engine.fog.color) * cover[:, :, None]
+        radiance = np.where(hit[:, :, None], f * radiance + (1.0 - f) * fog, 0.0)
+    alpha = _downsample(cover, k)
     premultiplied = _downsample(radiance, k)
+    count = _downsample(hit.astype(np.float64), k)
     depth_sum = _downsample(np.where(hit, z, 0.0), k)
-    depth = np.where(alpha >= 0.5, depth_sum / np.maximum(alpha, 1e-9), np.inf).astype(np.float32)
+    depth = np.where((alpha >= 0.5) & (count > 0), depth_sum / np.maximum(count, 1e-9), np.inf).astype(np.float32)
     hdr = np.concatenate([premultiplied, alpha[:, :, None]], axis=2).astype(np.float32)
     background = None if engine.background is None else engine.background.color
     array = develop(hdr, background)

@@ -46,6 +46,8 @@ SPECULAR_LIMIT = 0.25
 DEFAULT_RGB = (0.8, 0.8, 0.8)
 #: The foreground weight of a glow mixed with a reflecting material (both are scaled by its inverse).
 EMISSION_WEIGHT = 0.5
+#: Radiance types that let light through; the coverage pass keeps them, blackens everything else.
+TRANSMITTING = frozenset({"glass", "dielectric", "interface", "trans", "trans2", "mixfunc", "mixpict", "mixdata"})
 #: Picture lookup per Texture.wrap: an expression of the texture coordinate ``{c}`` (``Lu`` or ``Lv``) in [0, 1].
 WRAP = {
     "repeat": "frac({c})",
@@ -154,8 +156,10 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
     found = engine._declared.get(key)
     if found is not None:
         return found
-    pattern = _texture_pattern(engine, texture, sink) if texture is not None else "void"
-    if user is not None:
+    pattern = _texture_pattern(engine, texture, sink) if texture is not None and not engine.coverage else "void"
+    if user is not None and user.type in TRANSMITTING:
+        engine.transparent = True
+    if user is not None and (user.type in TRANSMITTING or not engine.coverage):
         ident = engine.declare(
             ("user", key),
             "m",
@@ -163,7 +167,10 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
             sink,
         )
     else:
-        ident = _look_chain(engine, resolve_look(material, color, vertex), pattern, key, sink)
+        look = resolve_look(material, color, vertex)
+        if engine.coverage:  # black and unlit: only what the surface lets through counts
+            look = Look("plastic", (0.0, 0.0, 0.0), 0.0, 0.0, look.opacity, (0.0, 0.0, 0.0))
+        ident = _look_chain(engine, look, pattern, key, sink)
     if texture is not None and texture.image_array()[:, :, 3].min() < 255:
         ident = _alpha_cutout(engine, texture, ident, key, sink)
     engine._declared[key] = ident
@@ -197,6 +204,7 @@ def _look_chain(engine: Any, look: Look, pattern: str, key: Any, sink: list[str]
             ("body", key), "m", lambda i: rad.primitive(pattern, look.kind, i, (), look.reals()), sink
         )
     if look.opacity < 1.0:
+        engine.transparent = True
         opaque = ident
         o = rad.number(look.opacity, owner)
         ident = engine.declare(
@@ -255,6 +263,7 @@ def _texture_pattern(engine: Any, texture: Texture, sink: list[str] | None) -> s
 
 
 def _alpha_cutout(engine: Any, texture: Texture, inner: str, key: Any, sink: list[str] | None) -> str:
+    engine.transparent = True
     image = _texture_image(engine, texture)
     u, v = _uv_expressions(texture, image)
 

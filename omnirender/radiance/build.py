@@ -21,7 +21,7 @@ from .engine import RadianceEngine
 from .picture import write_picture
 from .runner import RadianceError, run
 
-__all__ = ["evaluate", "write_scene", "compile_octree", "locate", "Deadline", "ENGINE_OPTIONS"]
+__all__ = ["as_node", "evaluate", "write_scene", "compile_octree", "locate", "Deadline", "ENGINE_OPTIONS"]
 
 #: Keyword options passed on to the engine.
 ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix"}
@@ -48,17 +48,22 @@ class Deadline:
         return max(self.end - time.monotonic(), 1e-3)
 
 
+def as_node(scene: Any) -> Any:
+    """``scene`` itself when it is a node, else a node holding the components (evaluated more than once)."""
+    if hasattr(scene, "preevaluate"):
+        return scene
+    from ..scene import Node
+
+    return Node("scene", list(scene))
+
+
 def evaluate(scene: Any, size: tuple[int, int], **options: Any) -> RadianceEngine:
     """A :class:`RadianceEngine` that has evaluated ``scene`` (a Node or a list of components)."""
-    unknown = set(options) - ENGINE_OPTIONS - {"global_ambient", "headlight"}
+    unknown = set(options) - ENGINE_OPTIONS - {"global_ambient", "headlight", "coverage", "shared"}
     if unknown:
         raise TypeError(f"Radiance: unknown option(s) {sorted(unknown)}; the engine takes {sorted(ENGINE_OPTIONS)}")
-    if not hasattr(scene, "preevaluate"):
-        from ..scene import Node
-
-        scene = Node("scene", list(scene))
     engine = RadianceEngine(size, **options)
-    engine.run(scene)
+    engine.run(as_node(scene))
     return engine
 
 
@@ -91,7 +96,7 @@ def _mesh_what(engine: RadianceEngine, job: Any) -> str:
 
 def compile_octree(folder: Path, name: str, deadline: Deadline) -> str:
     """Run ``oconv`` on the description ``name`` in ``folder``; returns the octree's file name."""
-    octree = "scene.oct"
+    octree = Path(name).stem + ".oct"
     run("oconv", ["-f", name], folder, stdout=octree, timeout=deadline.left(), what="building the octree")
     return octree
 

@@ -89,6 +89,13 @@ class RadianceEngine(Engine):
     ``global_ambient`` (GL's 0.2) is added to the lights' ambient terms and
     ``headlight`` gives scenes without lights the GL engine's headlight; the
     analysis functions turn both off to compute physical values.
+
+    ``coverage=True`` writes the coverage pass instead: every surface black
+    and unlit except for how much it lets through (opacity, texture alpha,
+    glass), in front of a white environment seen only by rays passing through
+    (a ``glow`` with negative radius), so a picture of it is the fraction of
+    each pixel that shows the background.  ``shared`` is the engine of the
+    main pass whose mesh and picture files it reuses.
     """
 
     service = "rad.paint"
@@ -104,6 +111,8 @@ class RadianceEngine(Engine):
         resource_prefix: str = "om_",
         global_ambient: float = photometry.GLOBAL_AMBIENT,
         headlight: bool = True,
+        coverage: bool = False,
+        shared: RadianceEngine | None = None,
     ) -> None:
         super().__init__(technique=technique, on_missing=on_missing, mask=mask)
         try:
@@ -119,6 +128,8 @@ class RadianceEngine(Engine):
             raise ValueError(f"RadianceEngine: global_ambient must be a finite number >= 0, got {global_ambient!r}")
         self.global_ambient = g
         self.headlight = bool(headlight)
+        self.coverage = bool(coverage)
+        self._shared_resources = shared._resources if shared is not None else None
         self.clear()
 
     # -- collected scene ------------------------------------------------
@@ -141,7 +152,9 @@ class RadianceEngine(Engine):
         self.surface_stack: list[Any] = []
         self._declared: dict[Any, str] = {}
         self._sinks: dict[int, list[str]] = {}
-        self._resources: dict[Any, str] = {}
+        #: whether some surface lets light through (then the picture needs a coverage pass)
+        self.transparent = False
+        self._resources: dict[Any, str] = {} if self._shared_resources is None else self._shared_resources
         self._counts: dict[str, int] = {}
         self._clips: list[tuple[Any, np.ndarray]] = []
         self._lights_text: str | None = None
@@ -189,12 +202,22 @@ class RadianceEngine(Engine):
             self.pictures.append((name, np.asarray(make(), dtype=np.float32)))
         return name
 
-    def add_mesh(self, key: Any, make: Callable[[], tuple[str, str | None]]) -> str:
-        """The ``.rtm`` file name for mesh ``key``; ``make()`` gives (OBJ text, material text or None) once."""
-        name, new = self.resource(("mesh", key), "mesh", ".rtm")
-        if new:
-            obj, materials = make()
-            self.meshes.append(MeshJob(name, obj, materials, self.node_path))
+    def add_mesh(self, key: Any, make: Callable[[], tuple[str, str | None] | None]) -> str | None:
+        """The ``.rtm`` file name for mesh ``key``; ``make()`` gives (OBJ text, material text or None) once.
+
+        None when ``make()`` returns None: nothing left to draw (clipped away).
+        """
+        if ("empty", key) in self._resources:
+            return None
+        name = self._resources.get(("mesh", key))
+        if name is not None:
+            return name
+        made = make()
+        if made is None:
+            self._resources[("empty", key)] = ""
+            return None
+        name, _ = self.resource(("mesh", key), "mesh", ".rtm")
+        self.meshes.append(MeshJob(name, made[0], made[1], self.node_path))
         return name
 
     def surface(self, kind: str, reals: Any, modifier: str, *, count: int | None = None) -> None:
@@ -274,6 +297,8 @@ class RadianceEngine(Engine):
     # -- the file -----------------------------------------------------------
     def ambient_value(self) -> np.ndarray:
         """Radiance's ``-av``: the global ambient plus every light's ambient term (GL's ambient light)."""
+        if self.coverage:
+            return np.zeros(3)
         return photometry.ambient_total(self.pending_lights, self.global_ambient)
 
     def lights_text(self) -> str:

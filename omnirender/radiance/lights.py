@@ -92,14 +92,18 @@ def _sky(engine: Any, sky: Sky, world: np.ndarray) -> str:
     )
 
 
+#: The coverage pass's environment: white, seen only by rays that pass through surfaces (negative radius).
+COVERAGE_ENVIRONMENT = "void glow om_bg\n0\n0\n4 1 1 1 -1\nom_bg source om_bgs\n0\n0\n4 0 1 0 360\n"
+
+
 def lights_text(engine: Any) -> str:
     """All queued lights of ``engine`` as Radiance text (plus the headlight when the scene has no light)."""
+    if engine.coverage:
+        return COVERAGE_ENVIRONMENT
     parts = []
-    lit = False
     for light, world in engine.pending_lights:
         if isinstance(light, AmbientLight):
             continue  # in the ambient value
-        lit = True
         if isinstance(light, Sky):
             parts.append(_sky(engine, light, world))
         elif isinstance(light, DirectionalLight):
@@ -115,7 +119,7 @@ def lights_text(engine: Any) -> str:
             rad.primitive("void", "glow", mat, (), [*ambient, 0])
             + rad.primitive(mat, "source", ident, (), [0, 1, 0, 360])
         )
-    if not lit and engine.headlight:
+    if not engine.pending_lights and engine.headlight:  # any light, even an ambient one, turns it off (as in GL)
         towards = -headlight_direction(*engine.camera_or_default())
         parts.append(rad.comment("headlight (the scene has no light)") + "\n")
         parts.append(_source(engine, towards, np.full(3, math.pi)))

@@ -273,12 +273,14 @@ class TriangleSetPainter(ShapePainter):
         key = (id(shape), shape.version, m.tobytes(), flat, textured, tuple(r.tobytes() for r in planes))
         if colors is None:
             name = engine.add_mesh(key, lambda: _mesh_obj(shape, engine, m, planes, flat, textured))
-            _mesh_surface(engine, name, modifier(engine, uv=textured))
+            if name is not None:
+                _mesh_surface(engine, name, modifier(engine, uv=textured))
             return
         # the colours' materials are stored in the mesh: its faces name them, selected by the void modifier
-        key += (_appearance_key(engine),)
+        key += (_appearance_key(engine), engine.coverage)
         name = engine.add_mesh(key, lambda: _mesh_obj(shape, engine, m, planes, flat, textured, with_colors=True))
-        _mesh_surface(engine, name, "void")
+        if name is not None:
+            _mesh_surface(engine, name, "void")
 
 
 def _appearance_key(engine: RadianceEngine) -> tuple:
@@ -304,8 +306,8 @@ def _mesh_obj(
     flat: bool,
     textured: bool,
     with_colors: bool = False,
-) -> tuple[str, str | None]:
-    """(OBJ text, material text or None) of the shape in world coordinates, clipped."""
+) -> tuple[str, str | None] | None:
+    """(OBJ text, material text or None) of the shape in world coordinates, clipped; None if nothing is left."""
     vertices, faces, normals = transform_mesh(
         m, shape.vertex_array(), shape.index_array(), None if flat else shape.normal_array()
     )
@@ -315,10 +317,12 @@ def _mesh_obj(
         vertices, faces, normals, texcoords, colors = clip_triangles(
             vertices, faces, planes, normals, texcoords, colors
         )
+        if len(faces) == 0:
+            return None
     if not with_colors:
         return obj_text(vertices, faces, normals, texcoords, owner=engine.owner()), None
     materials: list[str] = []
-    unique, groups = face_colors(colors, faces) if len(faces) else (np.zeros((0, 4)), np.zeros(0, int))
+    unique, groups = face_colors(colors, faces)
     names = [modifier(engine, uv=textured, vertex_rgba=c, sink=materials) for c in unique]
     return obj_text(vertices, faces, normals, texcoords, groups, names, engine.owner()), "".join(materials)
 

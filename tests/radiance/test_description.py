@@ -269,9 +269,9 @@ def test_ambient_light_and_headlight():
     assert "-av 0.5 0.5 0.5" in text.splitlines()[1]
     glows = [p for p in by_kind(text, "source") if p[4][3] == 360]
     assert len(glows) == 1  # the environment that metals reflect
-    assert "headlight" in text  # an ambient light alone does not light like a lamp (as in GL)
-    text, engine = scene_description(_scene(om.PointLight(position=(1, 1, 1)), om.Sphere()))
-    assert "headlight" not in text
+    assert "headlight" not in text  # any light turns the headlight off, as in GL
+    text, engine = scene_description(_scene(om.Sphere()))
+    assert "headlight" in text and engine.ambient_value() == pytest.approx([0.2] * 3)
 
 
 def test_view_reproduces_the_gl_projection():
