@@ -227,7 +227,7 @@ def test_a_scene_with_povray_and_radiance_attributes_renders_in_both():
 def test_export_writes_a_description_radiance_accepts(tmp_path):
     from omnirender.radiance.runner import run
 
-    tex = np.zeros((4, 4, 3), np.uint8)
+    tex = np.full((4, 4, 3), 200, np.uint8)
     s = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5)), om.PointLight(position=(1, 1, 4))])
     s.add(om.Node("torus", [om.Texture(tex), om.Torus()]))
     target = tmp_path / "my scene.rad"
