@@ -101,7 +101,7 @@ def _trace(
             octree = compile_octree(folder, "scene.rad", deadline)
             np.ascontiguousarray(np.column_stack([origins, directions]), dtype=np.float64).tofile(folder / "rays.bin")
             what = "irradiance" if irradiance_mode else "radiance"
-            run("rtrace", [*args, octree], folder, stdin="rays.bin", stdout="values.bin", timeout=deadline.left(),
+            run("rtrace", [*args, octree], folder, stdin="rays.bin", stdout="values.bin", **deadline.limits(),
                 what=f"{what} at {len(origins)} point(s)")  # fmt: skip
             values = np.fromfile(folder / "values.bin", dtype=np.float64)
         except RadianceError as exc:

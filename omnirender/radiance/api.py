@@ -102,7 +102,7 @@ def _downsample(a: np.ndarray, k: int) -> np.ndarray:
 
 def _read_picture(folder: Path, name: str, size: tuple[int, int], deadline: Deadline) -> np.ndarray:
     """(H, W, 3) float radiance of a picture, through ``pvalue``; channels stored as 0 read as 0."""
-    run("pvalue", ["-h", "-H", "-df", "-o", name], folder, stdout="image.raw", timeout=deadline.left(), what=name)
+    run("pvalue", ["-h", "-H", "-df", "-o", name], folder, stdout="image.raw", **deadline.limits(), what=name)
     w, h = size
     data = np.fromfile(folder / "image.raw", dtype=np.float32)
     if data.size != w * h * 3:
@@ -202,7 +202,7 @@ def render(
                 _copy_all(folder, Path(keep))
             octree = compile_octree(folder, "scene.rad", deadline)
             t1 = time.perf_counter()
-            run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", timeout=deadline.left(),
+            run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", **deadline.limits(),
                 progress=progress, what="rendering")  # fmt: skip
             t2 = time.perf_counter()
             radiance = _read_picture(folder, "image.hdr", big, deadline).astype(np.float64)
@@ -214,7 +214,7 @@ def render(
                 # no aft plane here: it would hide the environment (the main pass keeps it: rays passing
                 # through surfaces stop there, and so add nothing where the background goes)
                 unbounded = [*view, "-va", "0", "-ab", "0", octree]
-                run("rpict", unbounded, folder, stdout="coverage.hdr", timeout=deadline.left(), what="coverage pass")
+                run("rpict", unbounded, folder, stdout="coverage.hdr", **deadline.limits(), what="coverage pass")
                 through = np.clip(_read_picture(folder, "coverage.hdr", big, deadline).mean(axis=2), 0.0, 1.0)
         except RadianceError as exc:
             locate(exc, current, keep)

@@ -47,6 +47,10 @@ class Deadline:
             return None
         return max(self.end - time.monotonic(), 1e-3)
 
+    def limits(self) -> dict[str, float | None]:
+        """``timeout=`` (what is left) and ``total=`` (the whole timeout) for :func:`runner.run`."""
+        return {"timeout": self.left(), "total": self.timeout}
+
 
 def as_node(scene: Any) -> Any:
     """``scene`` itself when it is a node, else a node holding the components (evaluated more than once)."""
@@ -81,7 +85,7 @@ def write_scene(engine: RadianceEngine, folder: Path, name: str, deadline: Deadl
         if job.materials:
             (folder / f"{stem}.mat").write_text(job.materials, encoding="ascii")
             args += ["-a", f"{stem}.mat"]
-        run("obj2mesh", [*args, f"{stem}.obj", job.name], folder, timeout=deadline.left(), what=_mesh_what(engine, job))
+        run("obj2mesh", [*args, f"{stem}.obj", job.name], folder, **deadline.limits(), what=_mesh_what(engine, job))
         for temporary in (f"{stem}.obj", f"{stem}.mat"):
             (folder / temporary).unlink(missing_ok=True)
         written.append(folder / job.name)
@@ -97,7 +101,7 @@ def _mesh_what(engine: RadianceEngine, job: Any) -> str:
 def compile_octree(folder: Path, name: str, deadline: Deadline) -> str:
     """Run ``oconv`` on the description ``name`` in ``folder``; returns the octree's file name."""
     octree = Path(name).stem + ".oct"
-    run("oconv", ["-f", name], folder, stdout=octree, timeout=deadline.left(), what="building the octree")
+    run("oconv", ["-f", name], folder, stdout=octree, **deadline.limits(), what="building the octree")
     return octree
 
 

@@ -111,6 +111,7 @@ def run(
     stdin: str | os.PathLike[str] | None = None,
     stdout: str | os.PathLike[str] | None = None,
     timeout: float | None = 600.0,
+    total: float | None = None,
     progress: Any = False,
     what: str = "",
 ) -> str:
@@ -120,8 +121,9 @@ def run(
     writes to, so no pipe can fill up; stderr is read by a thread that reports
     progress (``progress``: False, None for a bar on a terminal, True, or a
     callable taking the finished fraction).  ``timeout`` in seconds (None: no
-    limit); on expiry the program is killed.  ``what`` says what was running
-    (for messages).
+    limit); on expiry the program is killed and the message names ``total``
+    (the whole job's timeout this program had a share of) or ``timeout``.
+    ``what`` says what was running (for messages).
     """
     exe = program(name)
     update, close = _bar(progress, name)
@@ -166,9 +168,10 @@ def run(
             proc.wait()
             reader.join(5)
             close()
+            label = f"{name} ({what})" if what else name
             raise RadianceError(
-                f"Radiance: {name}{' (' + what + ')' if what else ''} took longer than the timeout of {timeout:g} s "
-                "and was stopped; pass a larger timeout=, a smaller size or cheaper om.radiance.Options (lower ab)",
+                f"Radiance: {label} took longer than the timeout of {total or timeout:g} s and was stopped; "
+                "pass a larger timeout=, a smaller size or cheaper om.radiance.Options (lower ab)",
                 b"".join(chunks).decode("latin-1"),
             ) from None
         except BaseException:

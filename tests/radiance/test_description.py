@@ -10,8 +10,7 @@ import pytest
 
 import omnirender as om
 from omnirender.attributes.photometry import srgb_to_linear
-from omnirender.radiance import RadError, scene_description
-from omnirender.radiance import rad
+from omnirender.radiance import RadError, rad, scene_description
 from omnirender.radiance.engine import view_arguments
 from omnirender.radiance.lights import SOURCE_ANGLE
 from omnirender.radiance.picture import picture_bytes, rgbe
@@ -77,7 +76,7 @@ def test_boxes_and_rectangles_are_outward_polygons_under_any_matrix():
         text, _ = scene_description(_scene(om.Matrix(matrix), om.Box(size=(1, 2, 3), center=(0.5, 0, 0))))
         polygons = by_kind(text, "polygon")
         assert len(polygons) == 6
-        centre = (matrix[:3, :3] @ np.array([0.5, 0, 0]))
+        centre = matrix[:3, :3] @ np.array([0.5, 0, 0])
         for p in polygons:
             v = np.array(p[4]).reshape(-1, 3)
             normal = np.cross(v[1] - v[0], v[2] - v[1])
@@ -206,7 +205,9 @@ def test_textures_become_colorpict_pictures_looked_up_by_the_mesh_coordinates():
 
 def test_radiance_material_and_options_are_used_and_checked():
     user = om.radiance.Material("glass", (0.9, 0.9, 0.9))
-    text, engine = scene_description(_scene(om.Material(diffuse=(1, 0, 0)), user, om.Sphere(), om.radiance.Options(ab=2)))
+    text, engine = scene_description(
+        _scene(om.Material(diffuse=(1, 0, 0)), user, om.Sphere(), om.radiance.Options(ab=2))
+    )
     glass = material_of(text, by_kind(text, "sphere")[-1])
     assert glass[:2] == ("void", "glass") and glass[4] == [0.9, 0.9, 0.9]
     assert engine.options.arguments() == ["-ab", "2", "-dt", "0", "-dc", "1", "-dj", "0"]

@@ -174,7 +174,9 @@ def test_vertex_colours_and_texture_orientation():
 
 def test_clip_planes_cut_the_geometry_on_the_cpu():
     cam = om.Camera.orthographic(eye=(0, 0, 5), height=3)
-    s = om.Node("s", [cam, om.ClipPlane(normal=(1, 0, 0), offset=0.2), om.Sphere(), om.Box(size=0.5, center=(-1, 1, 0))])
+    s = om.Node(
+        "s", [cam, om.ClipPlane(normal=(1, 0, 0), offset=0.2), om.Sphere(), om.Box(size=0.5, center=(-1, 1, 0))]
+    )
     img = _render(s, size=(60, 60))
     o, d = pixel_rays(cam, (60, 60))
     ref = sphere_mask(o, d, (0, 0, 0), 1.0) & (o[..., 0] >= 0.2)
