@@ -18,12 +18,12 @@ import numpy as np
 from ..attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from ..fileio import atomic_path
 from ..image import Image, develop
-from . import rad
+from . import rad, runner
 from .attributes import Options
 from .build import Deadline, as_node, compile_octree, evaluate, locate, write_scene
 from .engine import RadianceEngine
 from .picture import FHUGE, read_depth
-from .runner import RadianceError, environment, program, radiance_paths, run
+from .runner import RadianceError, environment, program, run
 
 __all__ = ["render", "export", "available", "scene_description", "MAX_OVERSAMPLE"]
 
@@ -33,7 +33,7 @@ MAX_OVERSAMPLE = 8
 
 def available() -> tuple[bool, str]:
     """Whether the Radiance programs can be run here (from pyradiance), and why not."""
-    paths = radiance_paths()
+    paths = runner.radiance_paths()
     if paths is None:
         return False, "the pyradiance package is not installed (pip install 'omnirender[radiance]')"
     try:

@@ -157,13 +157,13 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
     if found is not None:
         return found
     pattern = _texture_pattern(engine, texture, sink) if texture is not None and not engine.coverage else "void"
-    if user is not None and user.type in TRANSMITTING:
+    if user is not None and user.kind in TRANSMITTING:
         engine.transparent = True
-    if user is not None and (user.type in TRANSMITTING or not engine.coverage):
+    if user is not None and (user.kind in TRANSMITTING or not engine.coverage):
         ident = engine.declare(
             ("user", key),
             "m",
-            lambda i: rad.primitive(pattern, user.type, i, user.strings, user.reals, engine.owner()),
+            lambda i: rad.primitive(pattern, user.kind, i, user.strings, user.reals, engine.owner()),
             sink,
         )
     else:

@@ -9,7 +9,8 @@ safe alphabet, numbers must be finite.
 
 - :class:`Material` (mono): any Radiance material, pattern or mixture primitive
   for the shapes that follow, instead of the one converted from ``Material`` /
-  ``PBRMaterial`` / ``Color``: ``om.radiance.Material("glass", (0.9, 0.9, 0.9))``.
+  ``PBRMaterial`` / ``Color``: ``om.radiance.Material("glass", (0.9, 0.9, 0.9))``
+  (the type, the real arguments, optionally the string arguments).
 - :class:`Options` (mono): ``rpict``/``rtrace`` parameters (``ab``, ``ad``,
   ``as_``, ``aa``, ``ar``, ``lw`` ...); the last one met applies to the render.
 - :class:`Sky` (a light): a uniform sky of known radiance over the hemisphere
@@ -99,7 +100,7 @@ def _check_strings(owner: str, name: str, value: Any) -> tuple[str, ...]:
 class Material(Parameterised, MonoAttribute):
     """Any Radiance material (or pattern, texture, mixture) primitive for the shapes that follow.
 
-    ``type`` is the Radiance type name, ``reals`` its real arguments and
+    ``kind`` is the Radiance type name, ``reals`` its real arguments and
     ``strings`` its string arguments, exactly as in a ``.rad`` file::
 
         om.radiance.Material("metal", (0.8, 0.6, 0.2, 0.9, 0.05))
@@ -111,20 +112,20 @@ class Material(Parameterised, MonoAttribute):
     checked here; Radiance checks the others and its error names the node.
     """
 
-    __slots__ = ("_type", "_reals", "_strings")
-    type = Param(_check_type, "Radiance primitive type")
+    __slots__ = ("_kind", "_reals", "_strings")
+    kind = Param(_check_type, "Radiance primitive type")
     reals = Param(_check_reals, "real arguments")
     strings = Param(_check_strings, "string arguments")
 
-    def __init__(self, type: str, reals: Sequence[float] = (), strings: Sequence[str] = ()) -> None:  # noqa: A002
+    def __init__(self, kind: str, reals: Sequence[float] = (), strings: Sequence[str] = ()) -> None:
         super().__init__()
-        self.type = type
+        self.kind = kind
         self.reals = reals
         self.strings = strings
-        counts = REAL_COUNTS.get(self._type)
+        counts = REAL_COUNTS.get(self._kind)
         if counts is not None and len(self._reals) not in counts:
             raise ValueError(
-                f"Material: a Radiance {self._type!r} takes {' or '.join(map(str, counts))} real arguments, "
+                f"Material: a Radiance {self._kind!r} takes {' or '.join(map(str, counts))} real arguments, "
                 f"got {len(self._reals)}: {self._reals}"
             )
 
