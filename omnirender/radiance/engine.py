@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import photometry
+from ..attributes.clipping import ClipRecords
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
 from . import rad
@@ -156,7 +157,7 @@ class RadianceEngine(Engine):
         self.transparent = False
         self._resources: dict[Any, str] = {} if self._shared_resources is None else self._shared_resources
         self._counts: dict[str, int] = {}
-        self._clips: list[tuple[Any, np.ndarray]] = []
+        self._clips = ClipRecords()
         self._lights_text: str | None = None
 
     def begin(self, root: Any) -> None:
@@ -259,18 +260,15 @@ class RadianceEngine(Engine):
     # -- clip planes ----------------------------------------------------
     def add_clip(self, plane: Any) -> None:
         """Record an added ``ClipPlane`` in world coordinates (the model matrix at this moment)."""
-        self._clips.append((plane, plane.world_plane(self.model_matrix())))
+        self._clips.add(plane, self.model_matrix())
 
     def remove_clip(self, plane: Any) -> None:
-        """Forget the most recent record of ``plane``."""
-        for i in range(len(self._clips) - 1, -1, -1):
-            if self._clips[i][0] is plane:
-                del self._clips[i]
-                return
+        """Forget the most recent record of ``plane`` (it was removed or its node ended)."""
+        self._clips.remove(plane)
 
     def clip_planes(self) -> list[np.ndarray]:
         """World plane rows ``(a, b, c, d)`` (kept: ``a x + b y + c z + d >= 0``) of the active clip planes."""
-        return [row for _, row in self._clips]
+        return self._clips.rows()
 
     # -- camera -----------------------------------------------------------
     def camera_or_default(self) -> tuple[Camera, np.ndarray]:
