@@ -141,8 +141,8 @@ def render(
     ``oversample`` x ``oversample`` rays averaged (anti-aliasing, soft edges in
     the alpha channel).  ``options`` (an ``om.radiance.Options``) overrides the
     scene's; ``timeout`` seconds for the whole job (None: no limit);
-    ``progress`` None (a bar on a terminal), True/False, or a callable taking
-    the finished fraction; ``keep`` a folder to copy the description, meshes
+    ``progress`` None (a bar on a terminal), True/False, or a callable
+    ``(done_pixels, total_pixels)`` (as for POV-Ray); ``keep`` a folder to copy the description, meshes
     and pictures into; ``global_ambient`` (GL's 0.2, part of Radiance's
     ambient value ``-av``) and ``headlight`` (for scenes without lights) light
     the scene like the GL engine.  The image has sRGB in ``.array`` (the
@@ -203,7 +203,7 @@ def render(
             octree = compile_octree(folder, "scene.rad", deadline)
             t1 = time.perf_counter()
             run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", **deadline.limits(),
-                progress=progress, what="rendering")  # fmt: skip
+                progress=progress, pixels=big[0] * big[1], what="rendering")  # fmt: skip
             t2 = time.perf_counter()
             radiance = _read_picture(folder, "image.hdr", big, deadline).astype(np.float64)
             rot = read_depth(folder / "depth.raw", big)

@@ -6,8 +6,9 @@ files (``rayinit.cal``) in ``lib/``.  The programs are taken from there, never
 from the user's PATH, and run with ``RAYPATH`` = the working folder, then
 pyradiance's ``lib``, then any ``RAYPATH`` the user had.  pyradiance is located
 without importing it (its import changes ``PATH`` and ``RAYPATH`` for the whole
-process).  ``rpict -t`` reports ``... 45.00% after ...`` on stderr; a reader
-thread turns it into a progress bar (tqdm on a terminal) or calls a callback.
+process).  ``rpict -t`` reports ``... 45.00% after ...`` on stderr, which
+:func:`omnirender.process.run_watched` turns into a progress bar (tqdm on a
+terminal) or calls to a ``(done, total)`` callback, as for POV-Ray.
 """
 
 from __future__ import annotations
@@ -15,14 +16,12 @@ from __future__ import annotations
 import importlib.util
 import os
 import re
-import subprocess
-import sys
-import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from ..core import OmnirenderError
+from ..process import ProgramTimeout, progress_reporter, run_watched
 
 __all__ = ["RadianceError", "radiance_paths", "program", "run", "error_lines", "INSTALL"]
 
@@ -82,27 +81,6 @@ def error_lines(output: str) -> list[str]:
     return lines[-12:]
 
 
-def _bar(progress: Any, label: str) -> tuple[Callable[[float], None], Callable[[], None]]:
-    """(update(fraction), close()) for ``progress``: None (tqdm on a terminal), bool, or a callable(fraction)."""
-    if callable(progress):
-        return progress, lambda: None
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if not progress:
-        return (lambda fraction: None), lambda: None
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover - tqdm is in the radiance extra
-        return (lambda fraction: None), lambda: None
-    bar = tqdm(total=100, unit="%", desc=label, leave=False)
-
-    def update(fraction: float) -> None:
-        bar.n = round(100.0 * fraction, 1)
-        bar.refresh()
-
-    return update, bar.close
-
-
 def run(
     name: str,
     args: Sequence[str],
@@ -113,86 +91,52 @@ def run(
     timeout: float | None = 600.0,
     total: float | None = None,
     progress: Any = False,
+    pixels: int = 0,
     what: str = "",
 ) -> str:
     """Run Radiance program ``name`` with ``args`` in ``cwd``; returns its stderr text or raises RadianceError.
 
     ``stdin``/``stdout`` are files (in ``cwd``) the program reads from and
-    writes to, so no pipe can fill up; stderr is read by a thread that reports
-    progress (``progress``: False, None for a bar on a terminal, True, or a
-    callable taking the finished fraction).  ``timeout`` in seconds (None: no
-    limit); on expiry the program is killed and the message names ``total``
+    writes to, so no pipe can fill up.  ``progress`` (False, None for a bar
+    on a terminal, True, or a callable ``(done, total)``) gets ``rpict``'s
+    percentage reports as pixels of ``pixels``.  ``timeout`` in seconds (None:
+    no limit); on expiry the program is killed and the message names ``total``
     (the whole job's timeout this program had a share of) or ``timeout``.
     ``what`` says what was running (for messages).
     """
     exe = program(name)
-    update, close = _bar(progress, name)
+    label = f"{name} ({what})" if what else name
+    update, close = progress_reporter(progress, pixels, "px", f"Radiance {name}")
+
+    def watch(tail: bytes) -> None:
+        found = _PROGRESS.findall(tail)
+        if found:
+            update(min(round(float(found[-1]) / 100.0 * pixels), pixels), pixels)
+
     folder = Path(cwd)
-    with (
-        open(folder / stdin, "rb") if stdin is not None else open(os.devnull, "rb") as fin,
-        open(folder / stdout, "wb") if stdout is not None else open(os.devnull, "wb") as fout,
-    ):
-        try:
-            proc = subprocess.Popen(
-                [str(exe), *args], cwd=folder, stdin=fin, stdout=fout, stderr=subprocess.PIPE, env=environment()
+    try:
+        with (
+            open(folder / stdin, "rb") if stdin is not None else open(os.devnull, "rb") as fin,
+            open(folder / stdout, "wb") if stdout is not None else open(os.devnull, "wb") as fout,
+        ):
+            returncode, raw = run_watched(
+                [str(exe), *args], folder, env=environment(), stdin=fin, stdout=fout, timeout=timeout, watch=watch
             )
-        except OSError as exc:
-            close()
-            raise RadianceError(f"Radiance: cannot start {exe}: {exc}; {INSTALL}") from None
-        chunks: list[bytes] = []
-        failures: list[BaseException] = []
-
-        def read() -> None:
-            assert proc.stderr is not None
-            pending = b""
-            while True:  # drain everything so the program never blocks on a full pipe
-                data = proc.stderr.read1(4096)
-                if not data:
-                    break
-                chunks.append(data)
-                pending = (pending + data)[-512:]
-                found = _PROGRESS.findall(pending)
-                if found and not failures:
-                    try:
-                        update(min(float(found[-1]) / 100.0, 1.0))
-                    except BaseException as exc:  # noqa: BLE001 - handed to the calling thread
-                        failures.append(exc)
-                        proc.kill()  # the caller's progress handler failed: stop
-
-        reader = threading.Thread(target=read, daemon=True)
-        reader.start()
-        try:
-            proc.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-            reader.join(5)
-            close()
-            label = f"{name} ({what})" if what else name
-            raise RadianceError(
-                f"Radiance: {label} took longer than the timeout of {total or timeout:g} s and was stopped; "
-                "pass a larger timeout=, a smaller size or cheaper om.radiance.Options (lower ab)",
-                b"".join(chunks).decode("latin-1"),
-            ) from None
-        except BaseException:
-            proc.kill()
-            proc.wait()
-            reader.join(5)
-            close()
-            raise
-        reader.join(5)
-    if failures:
+        if returncode == 0 and progress is not False:
+            update(pixels, pixels)
+    except OSError as exc:
+        raise RadianceError(f"Radiance: cannot start {exe}: {exc}; {INSTALL}") from None
+    except ProgramTimeout as exc:
+        raise RadianceError(
+            f"Radiance: {label} took longer than the timeout of {total or timeout:g} s and was stopped; "
+            "pass a larger timeout=, a smaller size or cheaper om.radiance.Options (lower ab)",
+            exc.output.decode("latin-1"),
+        ) from None
+    finally:
         close()
-        raise failures[0]
-    if proc.returncode == 0 and progress is not False:
-        update(1.0)
-    close()
-    output = b"".join(chunks).decode("latin-1")
-    if proc.returncode != 0:
+    output = raw.decode("latin-1")
+    if returncode != 0:
         lines = error_lines(output) or [output[-2000:].strip() or "(no message)"]
         detail = "\n  ".join(lines)
-        raise RadianceError(
-            f"Radiance: {name}{' (' + what + ')' if what else ''} failed (exit status {proc.returncode}):\n  {detail}",
-            output,
-        )
+        raise RadianceError(f"Radiance: {label} failed (exit status {returncode}):\n  {detail}", output)
     return output

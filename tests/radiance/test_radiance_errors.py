@@ -59,10 +59,10 @@ def test_progress_is_reported_and_a_failing_callback_stops_rendering(private_tmp
         om.Box(size=(10, 0.1, 10), center=(0, -1, 0)),
     )
     seen = []
-    om.render(scene, engine="radiance", size=(120, 120), progress=seen.append)
-    assert seen[-1] == 1.0 and seen == sorted(seen) and len(seen) >= 3  # start, at least one report, the end
+    om.render(scene, engine="radiance", size=(120, 120), progress=lambda done, total: seen.append((done, total)))
+    assert seen[-1] == (14400, 14400) and seen == sorted(seen) and len(seen) >= 3  # start, a report, the end
 
-    def broken(fraction):
+    def broken(done, total):
         raise ValueError("progress display broke")
 
     started = time.perf_counter()
