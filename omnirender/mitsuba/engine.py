@@ -225,13 +225,7 @@ class MitsubaEngine(Engine):
 
     def texture_image(self, tex: Texture) -> np.ndarray:
         """``tex.image_array()``; a missing or unreadable image file raises naming the node and the fix."""
-        try:
-            return tex.image_array()
-        except (FileNotFoundError, ValueError) as exc:
-            raise type(exc)(
-                f"MitsubaEngine: {exc} (Texture in node {self.node_path or '/'}); "
-                "check the path or pass an array (om.Texture(numpy_array))"
-            ) from None
+        return tex.image_in("MitsubaEngine", self.node_path)
 
     def _texture_dict(self, tex: Texture) -> dict[str, Any]:
         mi = mitsuba()

@@ -171,7 +171,7 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
         if engine.coverage:  # black and unlit: only what the surface lets through counts
             look = Look("plastic", (0.0, 0.0, 0.0), 0.0, 0.0, look.opacity, (0.0, 0.0, 0.0))
         ident = _look_chain(engine, look, pattern, key, sink)
-    if texture is not None and texture.image_array()[:, :, 3].min() < 255:
+    if texture is not None and _texture_image(engine, texture)[:, :, 3].min() < 255:
         ident = _alpha_cutout(engine, texture, ident, key, sink)
     engine._declared[key] = ident
     return ident
@@ -215,13 +215,7 @@ def _look_chain(engine: Any, look: Look, pattern: str, key: Any, sink: list[str]
 
 def _texture_image(engine: Any, texture: Texture) -> np.ndarray:
     """``texture.image_array()``; a missing or unreadable file raises naming the node and the fix."""
-    try:
-        return texture.image_array()
-    except (FileNotFoundError, ValueError) as exc:
-        raise type(exc)(
-            f"Radiance: {exc} (Texture in node {engine.node_path or '/'}); "
-            "check the path or pass an array (om.Texture(numpy_array))"
-        ) from None
+    return texture.image_in("Radiance", engine.node_path)
 
 
 #: A ``filter="nearest"`` texture is enlarged by repeating texels until its longer side has this many

@@ -23,9 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
-
-from ..attributes._params import Param, Parameterised, check_direction, check_number, check_rgb
+from ..attributes._params import Param, Parameterised, _numbers, check_direction, check_number, check_rgb
 from ..core import Light, MonoAttribute, PolyAttribute
 from . import rad
 
@@ -76,15 +74,7 @@ def _check_type(owner: str, name: str, value: Any) -> str:
 
 
 def _check_reals(owner: str, name: str, value: Any) -> tuple[float, ...]:
-    if isinstance(value, (str, bytes)):
-        raise ValueError(f"{owner}: {name} must be a sequence of numbers, got {value!r}")
-    try:
-        arr = np.asarray(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be a sequence of numbers, got {value!r}") from None
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{owner}: {name} must be finite, got {tuple(arr.tolist())}")
-    return tuple(float(v) for v in arr)
+    return tuple(float(v) for v in _numbers(owner, name, value))
 
 
 def _check_strings(owner: str, name: str, value: Any) -> tuple[str, ...]:
