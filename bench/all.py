@@ -16,8 +16,13 @@ SCRIPTS = {
     "picking.py": [],
     "gl_objects.py": [],
     "offline_export.py": ["--repeat", "1"],
+    "radiance.py": ["--repeat", "1"],
 }
-QUICK = {"gl_objects.py": ["--quick"], "offline_export.py": ["--repeat", "1", "--triangles", "200000"]}
+QUICK = {
+    "gl_objects.py": ["--quick"],
+    "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
+    "radiance.py": ["--repeat", "1", "--triangles", "200000"],
+}
 
 
 def main() -> int:
