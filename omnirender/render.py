@@ -124,8 +124,8 @@ def render(
     - povray: ``quality`` (0..11), ``antialias``, ``timeout``, ``threads``, ``keep``, ``depth``;
     - mitsuba: ``spp`` (samples per pixel), ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
       ``depth``, ``headlight``, ``global_ambient``;
-    - radiance: ``options`` (an ``om.radiance.Options``), ``oversample``, ``timeout``, ``progress``, ``keep``,
-      ``headlight``, ``global_ambient``;
+    - radiance: ``options`` (an ``om.radiance.Options``), ``oversample``, ``exposure``, ``timeout``, ``progress``,
+      ``keep``, ``headlight``, ``global_ambient``;
     - every engine: ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes no handler can draw).
 
     The returned image has ``.array`` (H, W, 4) uint8 sRGB, ``.depth``

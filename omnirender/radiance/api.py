@@ -133,6 +133,7 @@ def render(
     keep: str | os.PathLike[str] | None = None,
     global_ambient: float = GLOBAL_AMBIENT,
     headlight: bool = True,
+    exposure: float = 1.0,
     **engine_options: Any,
 ) -> Image:
     """Render ``scene`` with Radiance's ``rpict`` and return an :class:`om.Image`.
@@ -145,7 +146,9 @@ def render(
     ``(done_pixels, total_pixels)`` (as for POV-Ray); ``keep`` a folder to copy the description, meshes
     and pictures into; ``global_ambient`` (GL's 0.2, part of Radiance's
     ambient value ``-av``) and ``headlight`` (for scenes without lights) light
-    the scene like the GL engine.  The image has sRGB in ``.array`` (the
+    the scene like the GL engine.  ``exposure`` scales the radiance before
+    it is encoded as sRGB (for scenes in physical units, e.g. ``1 / L`` under
+    a sky of radiance ``L``); ``.hdr`` keeps the physical values.  The image has sRGB in ``.array`` (the
     background transparent unless an ``om.Background`` sets it), linear
     radiance (W/sr/m^2, premultiplied by coverage) and alpha in ``.hdr`` and
     the eye-space depth in ``.depth`` (inf on the background).
@@ -157,6 +160,8 @@ def render(
     ):
         raise ValueError(f"Radiance: oversample must be a whole number 1..{MAX_OVERSAMPLE}, got {oversample!r}")
     _check_options(options)
+    if isinstance(exposure, bool) or not isinstance(exposure, numbers.Real) or not (0 < exposure < math.inf):
+        raise ValueError(f"Radiance: exposure must be a positive finite number, got {exposure!r}")
     deadline = Deadline(timeout)
     for name in ("oconv", "rpict", "pvalue"):
         program(name)  # a clear error before any work when Radiance is missing
@@ -235,7 +240,8 @@ def render(
     depth = np.where((alpha >= 0.5) & (count > 0), depth_sum / np.maximum(count, 1e-9), np.inf).astype(np.float32)
     hdr = np.concatenate([premultiplied, alpha[:, :, None]], axis=2).astype(np.float32)
     background = None if engine.background is None else engine.background.color
-    array = develop(hdr, background)
+    shown = hdr if exposure == 1.0 else np.concatenate([hdr[:, :, :3] * float(exposure), hdr[:, :, 3:]], axis=2)
+    array = develop(shown, background)
     info = {
         **timings,
         "oversample": k,

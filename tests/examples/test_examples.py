@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -126,3 +127,14 @@ def test_demo_scene_renders_without_the_debug_sphere():
     scene.remove(scene["/demo/debug"])
     without = om.render(scene, engine="gl", size=(96, 72), samples=0).array
     assert np.abs(shown.astype(int) - without.astype(int)).max() <= 1
+
+
+@pytest.mark.radiance
+def test_06_lighting_analysis(tmp_path):
+    out = run_example("06_lighting_analysis.py", tmp_path)
+    img = check_image(tmp_path / "06-lighting-analysis.png")
+    low, high = (float(v.replace(",", "")) for v in re.findall(r"([\d,]+) lux", out))
+    # sky alone: 179 * pi * 10 lux = 5,623 lux on open floor; the lamp (60 pi W/sr, 2.5 m up) adds 5,400 below it
+    assert 500 < low < 5623 < high < 5623 + 5400 + 100
+    chart = img[:, img.shape[1] // 2 + 10 :]
+    assert (chart[:, :, 0] > 200).any() and (chart[:, :, 2] > 150).any()  # red under the lamp, blue in the corner
