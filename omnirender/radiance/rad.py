@@ -65,11 +65,21 @@ def numbers(values: Iterable[Any], owner: str = "Radiance") -> str:
 
 
 def token(value: Any, owner: str = "Radiance", what: str = "string argument") -> str:
-    """``value`` if it is a safe string argument (no white space, quotes, ``!`` or ``#``), else RadError."""
+    """``value`` if it is a safe string argument, else RadError.
+
+    No white space, quotes, ``!`` or ``#``; and, as string arguments may be
+    file names Radiance opens, no absolute paths and no ``..``: files are found
+    in the scene's folder and on ``RAYPATH`` only.
+    """
     if not isinstance(value, str) or not value or len(value) > MAX_TOKEN or not _TOKEN.match(value):
         raise RadError(
             f"{owner}: {what} {value!r:.80} cannot be written to a Radiance scene: use letters, digits and "
             f"_ . + - * / ^ ( ) , : ; = < > | & only (no spaces, quotes, '!' or '#'), at most {MAX_TOKEN} characters"
+        )
+    if value.startswith("/") or ".." in value:
+        raise RadError(
+            f"{owner}: {what} {value!r:.80} names a file outside the scene's folder; give a file name relative to "
+            "it (or on RAYPATH), without '/' at the start or '..'"
         )
     return value
 

@@ -313,7 +313,7 @@ def test_names_paths_and_strings_cannot_inject_anything(tmp_path):
     assert "bad" not in text and "passwd" not in text
     assert [name for name, _ in engine.pictures] == ["om_pic0.hdr"]
     primitives(text)  # still well formed
-    for bad in ("a b", "x\n!ls", 'q"', "#c", "!x", "", "a" * 600):
+    for bad in ("a b", "x\n!ls", 'q"', "#c", "!x", "", "a" * 600, "/etc/passwd", "../../secret.cal"):
         with pytest.raises(RadError):
             om.radiance.Material("plasfunc", (1, 1, 1, 0, 0), strings=(bad, "."))
     with pytest.raises(RadError):

@@ -117,6 +117,7 @@ def test_bad_options_are_refused_before_anything_runs():
         ({"timeout": -1}, "timeout must be a positive number"),
         ({"timeout": float("nan")}, "timeout"),
         ({"options": "ab=2"}, "om.radiance.Options"),
+        ({"exposure": 0}, "exposure must be a positive finite number"),
         ({"spp": 4}, r"unknown option\(s\) \['spp'\]"),
     ]:
         with pytest.raises((ValueError, TypeError), match=message):

@@ -74,6 +74,9 @@ def test_brightness_matches_the_gl_lighting_model():
     assert np.abs(np.array(img.pixel(32, 24)[:3]) - _srgb8(expected)).max() <= 1
     assert img.pixel(0, 0)[3] == 0 and img.pixel(32, 24)[3] == 255  # transparent background, opaque sphere
     assert img.engine == "radiance" and "render_seconds" in img.info
+    darker = _render(s, size=(64, 48), exposure=0.5)  # the picture is exposed, the radiance stays physical
+    assert np.abs(np.array(darker.pixel(32, 24)[:3]) - _srgb8(0.5 * expected)).max() <= 1
+    assert darker.hdr[24, 32, :3] == pytest.approx(img.hdr[24, 32, :3])
 
 
 def _wall(light, camera):
