@@ -377,3 +377,24 @@ def test_rgbe_pictures_round_trip_in_numpy():
     assert wide.startswith(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 300\n")
     line = wide[len(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 3 +X 300\n") :][: 4 + 4 * (300 + 3)]
     assert line[:4] == bytes([2, 2, 1, 44]) and line[4] == 128 and line[4 + 129] == 128 and line[4 + 258] == 44
+
+
+def test_engine_micro_program_and_reuse():
+    e = om.radiance.RadianceEngine((320, 240))
+    mat, move, sphere = om.Material(diffuse=(1, 0, 0)), om.Translation(0, 2, 0), om.Sphere(radius=0.5)
+    e.push(mat)
+    e.push(move)
+    e.eval(sphere)
+    e.pop(move.category)
+    e.pop(mat.category)
+    e.eval(om.Sphere())
+    text = e.description()
+    spheres = by_kind(text, "sphere")
+    assert [s[4] for s in spheres] == [[0, 2, 0, 0.5], [0, 0, 0, 1]]
+    assert material_of(text, spheres[0])[4][:3] == [1, 0, 0] and material_of(text, spheres[1])[1] == "plastic"
+    assert e.context.is_empty()
+    scene = _scene(om.PointLight(position=(1, 2, 3)), om.Torus())
+    e.run(scene)
+    first = e.description()
+    e.run(scene)  # the engine persists: a second traversal starts afresh and writes the same description
+    assert e.description() == first and len(e.meshes) == 1
