@@ -247,3 +247,12 @@ def test_export_writes_a_description_radiance_accepts(tmp_path):
     tube, hole = np.loadtxt(tmp_path / "values.txt")
     assert hole == pytest.approx([0.2] * 3)  # the ambient environment (GL's global ambient)
     assert tube.min() > 0.01 and not np.allclose(tube, hole)  # the textured tube
+
+
+def test_hostile_export_names_give_safe_file_names(tmp_path):
+    evil = tmp_path / 'ev il"\n!x.rad'
+    om.export(om.Node("s", [om.Torus()]), evil)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [evil.name, "ev_il___x_mesh0.rtm"]
+    assert "\n1 ev_il___x_mesh0.rtm\n" in evil.read_text()
+    om.export(om.Node("s", [om.Torus()]), tmp_path / "1.rad")  # a Radiance name must not start with a digit
+    assert (tmp_path / "om_1_mesh0.rtm").is_file()
