@@ -155,6 +155,7 @@ class RadianceEngine(Engine):
         self._sinks: dict[int, list[str]] = {}
         #: whether some surface lets light through (then the picture needs a coverage pass)
         self.transparent = False
+        self.warned_light_switch = False
         self._resources: dict[Any, str] = {} if self._shared_resources is None else self._shared_resources
         self._counts: dict[str, int] = {}
         self._clips = ClipRecords()

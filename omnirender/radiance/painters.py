@@ -16,13 +16,14 @@ them.  Everything else reaches Radiance through the shapes' simplifiers.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource, Texture
 from ..attributes.surface import track_surfaces
-from ..core import AttributePainter, ShapePainter, default_for
+from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..geometry.pixels import pixel_size
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polygon, Rectangle, Sphere, TriangleSet
@@ -456,6 +457,24 @@ def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
 BackgroundPainter = _recorder(Background, "background", first_only=True)  # the root's background
 FogPainter = _recorder(Fog, "fog")
 OptionsPainter = _recorder(Options, "options")  # the last one met applies
+
+
+@default_for(RadianceEngine)
+class LightSwitchPainter(AttributePainter):
+    """``LightSwitch`` cannot be expressed in Radiance (no light linking): a warning names the node, once."""
+
+    __slots__ = ()
+    service = SERVICE
+    target = LightSwitch
+
+    def exec(self, switch: LightSwitch, engine: RadianceEngine) -> None:
+        if not engine.warned_light_switch:
+            engine.warned_light_switch = True
+            warnings.warn(
+                f"Radiance: the LightSwitch in node {engine.node_path or '/'} is ignored: Radiance lights every "
+                "surface with every source (render with another engine for per-subgraph lights)",
+                stacklevel=2,
+            )
 
 
 @default_for(RadianceEngine)

@@ -398,3 +398,11 @@ def test_engine_micro_program_and_reuse():
     first = e.description()
     e.run(scene)  # the engine persists: a second traversal starts afresh and writes the same description
     assert e.description() == first and len(e.meshes) == 1
+
+
+def test_a_light_switch_is_ignored_with_a_warning_naming_the_node():
+    a = om.PointLight(position=(5, 0, 3))
+    s = _scene(a, om.Node("only_a", [om.LightSwitch(on=False), om.Sphere(), om.Node("deeper", [om.LightSwitch()])]))
+    with pytest.warns(UserWarning, match="LightSwitch in node /s/only_a is ignored") as caught:
+        text, _ = scene_description(s)
+    assert len(caught) == 1 and len(by_kind(text, "sphere")) == 2  # the light and the shape
