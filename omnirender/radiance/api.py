@@ -29,6 +29,8 @@ __all__ = ["render", "export", "available", "scene_description", "MAX_OVERSAMPLE
 
 #: The largest ``oversample`` factor accepted (64 rays per pixel).
 MAX_OVERSAMPLE = 8
+#: The most rays (pixels times oversample squared) one picture may take: memory stays below a few GB.
+MAX_RAYS = 1 << 25
 
 
 def available() -> tuple[bool, str]:
@@ -170,6 +172,11 @@ def render(
     scene = as_node(scene)
     engine = evaluate(scene, size, global_ambient=global_ambient, headlight=headlight, **engine_options)
     w, h = engine.size
+    if w * h * k * k > MAX_RAYS:
+        raise ValueError(
+            f"Radiance: {w}x{h} pixels with oversample={k} need {w * h * k * k:,} rays, more than {MAX_RAYS:,}; "
+            "use a smaller size or oversample"
+        )
     chosen = options if options is not None else engine.options if engine.options is not None else Options()
     big = (w * k, h * k)
     view = [

@@ -118,10 +118,12 @@ def test_bad_options_are_refused_before_anything_runs():
         ({"timeout": float("nan")}, "timeout"),
         ({"options": "ab=2"}, "om.radiance.Options"),
         ({"exposure": 0}, "exposure must be a positive finite number"),
+        ({"size": (4096, 4096), "oversample": 3}, "150,994,944 rays, more than"),
         ({"spp": 4}, r"unknown option\(s\) \['spp'\]"),
     ]:
+        kw.setdefault("size", (8, 8))
         with pytest.raises((ValueError, TypeError), match=message):
-            om.render(s, engine="radiance", size=(8, 8), **kw)
+            om.render(s, engine="radiance", **kw)
 
 
 def test_keep_writes_the_description_and_its_files(tmp_path):
