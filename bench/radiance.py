@@ -6,7 +6,10 @@
 2. The agreement test scene (``tests/test_engines_agree.py``) and the demo scene
    rendered at 320x240 with Radiance, against POV-Ray (one thread each, as rpict
    has one) on the same scenes.
-3. Irradiance at 10,000 points under a point light and a sky (one interreflection,
+3. Accuracy of the analysis: irradiance from an isotropic point light against
+   I cos(theta) / d^2 at 60 points, and the illuminance under a uniform sky against
+   179 pi L (both also checked by tests/radiance/test_radiance_analysis.py).
+4. Irradiance at 10,000 points under a point light and a sky (one interreflection,
    1024 ambient divisions) with one and two rtrace processes.
 
 Run: .venv/bin/python bench/radiance.py [--triangles N] [--repeat N]
@@ -78,6 +81,29 @@ def analysis(repeat: int) -> None:
           f"speed-up {one / two:.2f}")  # fmt: skip
 
 
+def accuracy() -> None:
+    rng = np.random.default_rng(7)
+    light_at = np.array([0.3, 2.5, -0.2])
+    scene = om.Node("ground", [om.PointLight(position=light_at, intensity=3, constant=0, quadratic=1)])
+    scene.add(om.Node("floor", [om.Color(0.5, 0.5, 0.5), om.Rectangle(size=(40, 40))]))
+    points = np.column_stack([rng.uniform(-6, 6, 60), np.full(60, 1e-3), rng.uniform(-6, 6, 60)])
+    tilt = np.radians(rng.uniform(-70, 70, 60))
+    normals = np.column_stack([np.sin(tilt), np.cos(tilt), np.zeros(60)])
+    to_light = light_at - points
+    d = np.linalg.norm(to_light, axis=1)
+    expected = 3 * np.pi * np.maximum(np.sum(to_light * normals, axis=1) / d, 0) / d**2
+    measured = om.radiance.irradiance(scene, points, normals)[:, 0]
+    lit = expected > 1e-9
+    error = np.abs(measured[lit] / expected[lit] - 1)
+    print(f"point light, {lit.sum()} lit points: irradiance error vs I cos/d^2 max {error.max():.4%}, "
+          f"mean {error.mean():.4%}")  # fmt: skip
+    sky = om.Node("open", [om.radiance.Sky(intensity=25), om.radiance.Options(ab=1)])
+    sky.add(om.Node("floor", [om.Color(0.5, 0.5, 0.5), om.Rectangle(size=(40, 40))]))
+    lux = om.radiance.illuminance(sky, points, np.tile([0.0, 1.0, 0.0], (60, 1)))
+    error = np.abs(lux / (179 * np.pi * 25) - 1)
+    print(f"uniform sky, 60 points: illuminance error vs 179 pi L max {error.max():.4%}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--triangles", type=int, default=1_000_000)
@@ -90,6 +116,7 @@ def main() -> int:
     print(why)
     mesh_export(args.triangles, args.repeat)
     pictures(args.repeat)
+    accuracy()
     analysis(args.repeat)
     return 0
 
