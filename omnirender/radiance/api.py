@@ -179,76 +179,16 @@ def render(
         )
     chosen = options if options is not None else engine.options if engine.options is not None else Options()
     big = (w * k, h * k)
-    view = [
-        *engine.view_arguments(big),
-        "-x",
-        str(big[0]),
-        "-y",
-        str(big[1]),
-        "-pa",
-        "0",
-        "-ps",
-        "1",
-        "-pt",
-        "0",
-        "-pj",
-        "0",
-    ]
+    view = [*engine.view_arguments(big), "-x", str(big[0]), "-y", str(big[1]), "-pa", "0", "-ps", "1", "-pt", "0",
+            "-pj", "0"]  # fmt: skip
     args = [*view, "-av", *rad.numbers(engine.ambient_value()).split(), *chosen.arguments()]
     if progress is not False:
         args += ["-t", "1"]
     timings = {"description_seconds": time.perf_counter() - started}
-    covering = None
-    with tempfile.TemporaryDirectory(prefix="omnirender-radiance-") as tmp:
-        folder = Path(tmp)
-        current = engine
-        try:
-            t0 = time.perf_counter()
-            write_scene(engine, folder, "scene.rad", deadline)
-            if engine.transparent:  # how much of each pixel shows the background: a second, unlit pass
-                covering = evaluate(scene, (w, h), coverage=True, shared=engine, **engine_options)
-                current = covering
-                write_scene(covering, folder, "coverage.rad", deadline)
-                current = engine
-            if keep is not None:
-                _copy_all(folder, Path(keep))
-            octree = compile_octree(folder, "scene.rad", deadline)
-            t1 = time.perf_counter()
-            run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", **deadline.limits(),
-                progress=progress, pixels=big[0] * big[1], what="rendering")  # fmt: skip
-            t2 = time.perf_counter()
-            radiance = _read_picture(folder, "image.hdr", big, deadline).astype(np.float64)
-            rot = read_depth(folder / "depth.raw", big)
-            through = None
-            if covering is not None:
-                current = covering
-                octree = compile_octree(folder, "coverage.rad", deadline)
-                # no aft plane here: it would hide the environment (the main pass keeps it: rays passing
-                # through surfaces stop there, and so add nothing where the background goes)
-                unbounded = [*view, "-va", "0", "-ab", "0", octree]
-                run("rpict", unbounded, folder, stdout="coverage.hdr", **deadline.limits(), what="coverage pass")
-                through = np.clip(_read_picture(folder, "coverage.hdr", big, deadline).mean(axis=2), 0.0, 1.0)
-        except RadianceError as exc:
-            locate(exc, current, keep)
-            raise
-    timings.update(compile_seconds=t1 - t0, render_seconds=t2 - t1)
-    hit = rot < FHUGE / 2
-    cover = hit.astype(np.float64) if through is None else np.where(hit, 1.0 - through, 0.0)
-    z, distance = _view_depth(np.where(hit, rot, 0.0), engine, big)
-    radiance = np.where(hit[:, :, None], radiance, 0.0)
-    if engine.fog is not None:
-        f = np.asarray(engine.fog.factor(distance), np.float64)[:, :, None]
-        fog = srgb_to_linear(engine.fog.color) * cover[:, :, None]
-        radiance = np.where(hit[:, :, None], f * radiance + (1.0 - f) * fog, 0.0)
-    alpha = _downsample(cover, k)
-    premultiplied = _downsample(radiance, k)
-    count = _downsample(hit.astype(np.float64), k)
-    depth_sum = _downsample(np.where(hit, z, 0.0), k)
-    depth = np.where((alpha >= 0.5) & (count > 0), depth_sum / np.maximum(count, 1e-9), np.inf).astype(np.float32)
-    hdr = np.concatenate([premultiplied, alpha[:, :, None]], axis=2).astype(np.float32)
-    background = None if engine.background is None else engine.background.color
+    radiance, rot, through = _passes(scene, engine, view, args, deadline, progress, keep, timings, engine_options)
+    hdr, depth = _film(engine, radiance, rot, through, k)
     shown = hdr if exposure == 1.0 else np.concatenate([hdr[:, :, :3] * float(exposure), hdr[:, :, 3:]], axis=2)
-    array = develop(shown, background)
+    array = develop(shown, None if engine.background is None else engine.background.color)
     info = {
         **timings,
         "oversample": k,
@@ -257,6 +197,84 @@ def render(
         "options": " ".join(chosen.arguments()),
     }
     return Image(array, depth=depth, hdr=hdr, engine="radiance", info=info)
+
+
+def _passes(
+    scene: Any,
+    engine: RadianceEngine,
+    view: list[str],
+    args: list[str],
+    deadline: Deadline,
+    progress: Any,
+    keep: Any,
+    timings: dict[str, float],
+    engine_options: dict[str, Any],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Write the files and run rpict: (radiance, ray lengths, fraction seen through or None) at ``view``'s size.
+
+    Scenes with see-through surfaces get a second, unlit coverage pass
+    (:class:`RadianceEngine` ``coverage=True``) measuring how much of each
+    pixel shows the background.  Everything happens in a temporary folder.
+    """
+    big = (int(view[view.index("-x") + 1]), int(view[view.index("-y") + 1]))
+    with tempfile.TemporaryDirectory(prefix="omnirender-radiance-") as tmp:
+        folder = Path(tmp)
+        current = engine
+        try:
+            t0 = time.perf_counter()
+            write_scene(engine, folder, "scene.rad", deadline)
+            covering = None
+            if engine.transparent:
+                covering = current = evaluate(scene, engine.size, coverage=True, shared=engine, **engine_options)
+                write_scene(covering, folder, "coverage.rad", deadline)
+                current = engine
+            if keep is not None:
+                _copy_all(folder, Path(keep))
+            octree = compile_octree(folder, "scene.rad", deadline)
+            t1 = time.perf_counter()
+            run("rpict", [*args, "-z", "depth.raw", octree], folder, stdout="image.hdr", **deadline.limits(),
+                progress=progress, pixels=big[0] * big[1], what="rendering")  # fmt: skip
+            timings.update(compile_seconds=t1 - t0, render_seconds=time.perf_counter() - t1)
+            radiance = _read_picture(folder, "image.hdr", big, deadline).astype(np.float64)
+            rot = read_depth(folder / "depth.raw", big)
+            if covering is None:
+                return radiance, rot, None
+            current = covering
+            octree = compile_octree(folder, "coverage.rad", deadline)
+            # no aft plane here: it would hide the environment (the main pass keeps it: rays passing
+            # through surfaces stop there, and so add nothing where the background goes)
+            unbounded = [*view, "-va", "0", "-ab", "0", octree]
+            run("rpict", unbounded, folder, stdout="coverage.hdr", **deadline.limits(), what="coverage pass")
+            through = np.clip(_read_picture(folder, "coverage.hdr", big, deadline).mean(axis=2), 0.0, 1.0)
+            return radiance, rot, through
+        except RadianceError as exc:
+            locate(exc, current, keep)
+            raise
+
+
+def _film(
+    engine: RadianceEngine, radiance: np.ndarray, rot: np.ndarray, through: np.ndarray | None, k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(linear RGBA premultiplied by coverage, eye-space depth) at the final size from the oversampled passes.
+
+    Coverage is 1 where a ray hit something (less what shows through); fog
+    mixes the fog colour in by GL's equation of the eye distance; k x k blocks
+    are averaged, depth over the covered rays (inf where less than half is covered).
+    """
+    hit = rot < FHUGE / 2
+    cover = hit.astype(np.float64) if through is None else np.where(hit, 1.0 - through, 0.0)
+    z, distance = _view_depth(np.where(hit, rot, 0.0), engine, (rot.shape[1], rot.shape[0]))
+    radiance = np.where(hit[:, :, None], radiance, 0.0)
+    if engine.fog is not None:
+        f = np.asarray(engine.fog.factor(distance), np.float64)[:, :, None]
+        fog = srgb_to_linear(engine.fog.color) * cover[:, :, None]
+        radiance = np.where(hit[:, :, None], f * radiance + (1.0 - f) * fog, 0.0)
+    alpha = _downsample(cover, k)
+    count = _downsample(hit.astype(np.float64), k)
+    depth_sum = _downsample(np.where(hit, z, 0.0), k)
+    depth = np.where((alpha >= 0.5) & (count > 0), depth_sum / np.maximum(count, 1e-9), np.inf).astype(np.float32)
+    hdr = np.concatenate([_downsample(radiance, k), alpha[:, :, None]], axis=2).astype(np.float32)
+    return hdr, depth
 
 
 def _copy_all(source: Path, target: Path) -> None:
