@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry.matrix import transform_normals, transform_points
 from . import rad
 
 __all__ = ["obj_text", "transform_mesh", "face_colors"]
@@ -24,16 +25,11 @@ def transform_mesh(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Vertices, faces and normals in world coordinates (faces reversed under a mirroring matrix)."""
     m = np.asarray(matrix, np.float64)
-    v = np.asarray(vertices, np.float64) @ m[:3, :3].T + m[:3, 3]
     f = np.asarray(faces, np.int64)
-    n = None
-    if normals is not None:
-        n = np.asarray(normals, np.float64) @ np.linalg.inv(m[:3, :3])
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        n = np.where(length > 0.0, n / np.where(length > 0.0, length, 1.0), 0.0)
     if np.linalg.det(m[:3, :3]) < 0.0:
         f = f[:, ::-1]
-    return v, f, n
+    n = None if normals is None else transform_normals(m, normals)
+    return transform_points(m, vertices), f, n
 
 
 def face_colors(colors: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
