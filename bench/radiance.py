@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -30,31 +29,21 @@ import omnirender as om
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from offline_export import wave_mesh  # noqa: E402
+from offline_export import best_of, grid_for, wave_mesh  # noqa: E402
 from test_engines_agree import make_scene  # noqa: E402
 
 from omnirender.demo import demo_scene  # noqa: E402
 
 
-def best(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
-
 def mesh_export(triangles: int, repeat: int) -> None:
-    nz = max(2, int(round((triangles / 4) ** 0.5)) + 1)
-    vertices, normals, faces = wave_mesh(2 * nz - 1, nz)
+    vertices, normals, faces = wave_mesh(*grid_for(triangles))
     scene = om.Node("mesh", [om.TriangleSet(vertices=vertices, indices=faces, normals=normals)])
     import trimesh
 
     mesh = trimesh.Trimesh(vertices, faces, vertex_normals=normals, process=False)
     with tempfile.TemporaryDirectory() as tmp:
-        ours = best(lambda: om.export(scene, Path(tmp) / "mesh.rad"), repeat)
-        theirs = best(lambda: mesh.export(Path(tmp) / "mesh.obj"), repeat)
+        ours = best_of(lambda: om.export(scene, Path(tmp) / "mesh.rad"), repeat)
+        theirs = best_of(lambda: mesh.export(Path(tmp) / "mesh.obj"), repeat)
     print(f"mesh of {len(faces):,} triangles: .rad + .rtm {ours:.2f} s, trimesh OBJ {theirs:.2f} s, "
           f"ratio {ours / theirs:.2f}")  # fmt: skip
 
@@ -62,8 +51,8 @@ def mesh_export(triangles: int, repeat: int) -> None:
 def pictures(repeat: int) -> None:
     for label, scene in (("agreement scene", make_scene()), ("demo scene", demo_scene())):
         om.render(scene, engine="radiance", size=(32, 24))  # warm up (mesh file import, first process)
-        rad = best(lambda s=scene: om.render(s, engine="radiance", size=(320, 240), progress=False), repeat)
-        pov = best(lambda s=scene: om.render(s, engine="povray", size=(320, 240), threads=1, progress=False), repeat)
+        rad = best_of(lambda s=scene: om.render(s, engine="radiance", size=(320, 240), progress=False), repeat)
+        pov = best_of(lambda s=scene: om.render(s, engine="povray", size=(320, 240), threads=1, progress=False), repeat)
         print(f"{label} at 320x240: Radiance {rad:.2f} s, POV-Ray {pov:.2f} s, ratio {rad / pov:.2f}")
 
 
@@ -75,8 +64,8 @@ def analysis(repeat: int) -> None:
     rng = np.random.default_rng(1)
     points = np.column_stack([rng.uniform(-9, 9, 10000), np.full(10000, 0.01), rng.uniform(-9, 9, 10000)])
     up = np.tile([0.0, 1.0, 0.0], (len(points), 1))
-    one = best(lambda: om.radiance.irradiance(room, points, up), repeat)
-    two = best(lambda: om.radiance.irradiance(room, points, up, processes=2), repeat)
+    one = best_of(lambda: om.radiance.irradiance(room, points, up), repeat)
+    two = best_of(lambda: om.radiance.irradiance(room, points, up, processes=2), repeat)
     print(f"irradiance at {len(points):,} points (ab 1, ad 1024): 1 process {one:.2f} s, 2 processes {two:.2f} s, "
           f"speed-up {one / two:.2f}")  # fmt: skip
 
