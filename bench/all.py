@@ -17,11 +17,13 @@ SCRIPTS = {
     "gl_objects.py": [],
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
+    "radiance.py": ["--repeat", "1"],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
+    "radiance.py": ["--repeat", "1", "--triangles", "200000"],
 }
 
 

@@ -1,8 +1,9 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [gallery] [examples]
 It renders the demo scene with every available engine, puts the images side by
-side with labels, and runs the examples, copying their images here.
+side with labels, and runs the examples, copying their images here.  Naming
+sections makes only those pictures (default: all).
 """
 
 from __future__ import annotations
@@ -21,7 +22,14 @@ from omnirender.demo import demo_scene
 
 HERE = Path(__file__).parent / "images"
 ROOT = Path(__file__).parent.parent
-LABELS = {"gl": "OpenGL (real time)", "povray": "POV-Ray 3.7", "mitsuba": "Mitsuba 3 (path traced)"}
+LABELS = {
+    "gl": "OpenGL (real time)",
+    "povray": "POV-Ray 3.7",
+    "mitsuba": "Mitsuba 3 (path traced)",
+    "radiance": "Radiance (rpict)",
+}
+#: Each engine's options for the README pictures (anti-aliased, enough samples).
+PICTURE_OPTIONS = {"mitsuba": {"spp": 128}, "povray": {"antialias": True}, "radiance": {"oversample": 3}}
 
 
 def side_by_side(paths: list[Path], labels: list[str], out: Path, gap: int = 6) -> None:
@@ -44,7 +52,7 @@ def demo_images(size: tuple[int, int] = (480, 360)) -> None:
         if not ok:
             print(f"{name}: skipped ({why})")
             continue
-        options = {"spp": 128} if name == "mitsuba" else {"antialias": True} if name == "povray" else {}
+        options = PICTURE_OPTIONS.get(name, {})
         path = HERE / f"demo_{name}.png"
         om.render(scene, engine=name, size=size, **options).save(path)
         paths.append(path)
@@ -78,12 +86,12 @@ def agreement_images() -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     from test_engines_agree import SIZE, make_scene
 
-    names = {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3"}
+    names = {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3", "radiance": "Radiance"}
     tiles = []
     for name, (ok, _) in om.engines().items():
         if not ok or name not in names:
             continue
-        options = {"povray": {"antialias": True}, "mitsuba": {"spp": 256}}.get(name, {})
+        options = {"povray": {"antialias": True}, "mitsuba": {"spp": 256}, "radiance": {"oversample": 3}}.get(name, {})
         img = om.render(make_scene(), engine=name, size=SIZE, **options)
         rgb = np.where(img.mask[:, :, None], img.rgb, 255).astype(np.uint8)
         tile = Image.fromarray(rgb, "RGB")
@@ -111,9 +119,12 @@ def example_images() -> None:
         print("wrote", HERE / "example_07-turntable.gif")
 
 
+SECTIONS = {"demo": demo_images, "agreement": agreement_images, "gallery": gl_gallery, "examples": example_images}
+
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)
-    demo_images()
-    agreement_images()
-    gl_gallery()
-    example_images()
+    unknown = [name for name in sys.argv[1:] if name not in SECTIONS]
+    if unknown:
+        sys.exit(f"unknown section(s) {unknown}; choose from {sorted(SECTIONS)}")
+    for name in sys.argv[1:] or SECTIONS:
+        SECTIONS[name]()

@@ -2,7 +2,7 @@
 
 ``import omnirender as om`` gives the scene graph, shapes, attributes, the
 generic engine and the convenience functions (``om.render``, ``om.pick``,
-``om.bounds``...).  Adapters (``om.gl``, ``om.povray``, ``om.mitsuba``) and
+``om.bounds``...).  Adapters (``om.gl``, ``om.povray``, ``om.mitsuba``, ``om.radiance``) and
 functions that need them are imported lazily on first use, so importing
 omnirender stays cheap and works without any graphics library.
 """
@@ -31,6 +31,7 @@ _LAZY_MODULES = {
     "gl",
     "povray",
     "mitsuba",
+    "radiance",
     "viewer",
     "techniques",
     "geometry",

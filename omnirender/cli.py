@@ -186,11 +186,14 @@ def _animate(args: argparse.Namespace) -> int:
 
 
 def _spp_option(engine: str, spp: int) -> dict[str, Any]:
-    """``--spp`` in each engine's terms: Mitsuba's samples per pixel, GL's MSAA samples, POV-Ray's antialiasing."""
+    """``--spp`` in each engine's terms: Mitsuba's samples per pixel, GL's MSAA samples, POV-Ray's antialiasing,
+    Radiance's oversampling (``k x k`` rays per pixel with ``k * k`` nearest to ``spp``, at most 8 x 8)."""
     if engine == "povray":
         return {"antialias": spp > 1}
     if engine == "gl":
         return {"samples": _msaa_samples(spp)}
+    if engine == "radiance":
+        return {"oversample": max(1, min(8, round(spp**0.5)))}
     return {"spp": spp}
 
 

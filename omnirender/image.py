@@ -11,7 +11,7 @@ import numpy as np
 
 from .fileio import atomic_path
 
-__all__ = ["Image"]
+__all__ = ["Image", "develop"]
 
 
 class Image:
@@ -127,3 +127,30 @@ class Image:
         extra = ", depth" if self.depth is not None else ""
         extra += ", hdr" if self.hdr is not None else ""
         return f"Image({self.width}x{self.height}{extra}, engine={self.engine!r})"
+
+
+def develop(data: np.ndarray, background: Any = None, *, premultiplied: bool = True) -> np.ndarray:
+    """Linear RGBA film data (physically based engines) -> (H, W, 4) uint8 sRGB with straight alpha.
+
+    ``premultiplied``: the colour is black where nothing was hit, so dividing
+    by coverage gives the straight colour; otherwise the colour already
+    contains what is seen behind the shapes and is kept.  With a
+    ``background`` RGB(A) colour (sRGB display values) a premultiplied image
+    is composited over it.
+    """
+    from .attributes.photometry import linear_to_srgb, srgb_to_linear
+
+    rgb = np.asarray(data[:, :, :3], np.float64)
+    alpha = np.clip(np.asarray(data[:, :, 3], np.float64), 0.0, 1.0)
+    if not premultiplied:
+        rgb = rgb * alpha[..., None]
+    if background is not None:
+        bg = np.asarray(background, np.float64)
+        bg_alpha = bg[3] if len(bg) > 3 else 1.0
+        rgb = rgb + srgb_to_linear(bg[:3]) * (bg_alpha * (1.0 - alpha))[..., None]
+        alpha = alpha + bg_alpha * (1.0 - alpha)
+    straight = np.where(alpha[..., None] > 1e-6, rgb / np.maximum(alpha, 1e-6)[..., None], 0.0)
+    out = np.empty(data.shape[:2] + (4,), np.uint8)
+    out[:, :, :3] = np.round(linear_to_srgb(straight) * 255.0)
+    out[:, :, 3] = np.round(alpha * 255.0)
+    return out

@@ -112,18 +112,20 @@ def render(
     """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
 
     ``scene`` is an ``om.Node`` (or a list of components); its first camera
-    is used.  ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"`` or any name
+    is used.  ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"``, ``"radiance"`` or any name
     given to :func:`register_engine`; ``om.engines()`` tells which work here
     and why not the others.  ``size`` is ``(width, height)`` in pixels.
     ``mask`` is a group-mask expression (``"!debug & (left | shared)"``):
     nodes whose groups do not match it are skipped.  Other options go to the
     engine, which refuses the ones it does not know (see ``help()`` of
-    ``om.gl.render``, ``om.povray.render``, ``om.mitsuba.render``):
+    ``om.gl.render``, ``om.povray.render``, ``om.mitsuba.render``, ``om.radiance.render``):
 
     - gl: ``samples`` (MSAA, 0/1/2/4/8/16), ``background``, ``read_depth``;
     - povray: ``quality`` (0..11), ``antialias``, ``timeout``, ``threads``, ``keep``, ``depth``;
     - mitsuba: ``spp`` (samples per pixel), ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
       ``depth``, ``headlight``, ``global_ambient``;
+    - radiance: ``options`` (an ``om.radiance.Options``), ``oversample``, ``exposure``, ``timeout``, ``progress``,
+      ``keep``, ``headlight``, ``global_ambient``;
     - every engine: ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes no handler can draw).
 
     The returned image has ``.array`` (H, W, 4) uint8 sRGB, ``.depth``
@@ -189,7 +191,11 @@ def _check_size(size: Any) -> tuple[int, int]:
 register_engine("gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)")
 register_engine("povray", "omnirender.povray:render", "omnirender.povray:available", "POV-Ray 3.7 ray tracer")
 register_engine("mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:available", "Mitsuba 3 path tracer")
+register_engine(
+    "radiance", "omnirender.radiance:render", "omnirender.radiance:available", "Radiance (rpict, from pyradiance)"
+)
 register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
 register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
 register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")
 register_exporter(".html", "omnirender.export.html:export", "self-contained web page (three.js, works offline)")
+register_exporter(".rad", "omnirender.radiance:export", "Radiance scene description (with .rtm meshes)")

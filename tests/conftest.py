@@ -1,7 +1,8 @@
 """Shared test configuration.
 
 Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba``,
-``window`` or ``chromium`` (web pages in headless Chromium).  When the engine is missing they are skipped, except when
+``radiance``, ``window`` or ``chromium`` (web pages in headless Chromium).  When
+the engine is missing they are skipped, except when
 ``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
 can never pass by skipping.
 """
@@ -41,6 +42,12 @@ def _mitsuba() -> tuple[bool, str]:
         return False, f"mitsuba is not importable: {exc}"
 
 
+def _radiance() -> tuple[bool, str]:
+    from omnirender.radiance import available
+
+    return available()
+
+
 def _window() -> tuple[bool, str]:
     import shutil
 
@@ -63,7 +70,14 @@ def chromium_program() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
-_CHECKS = {"gl": _gl, "povray": _povray, "mitsuba": _mitsuba, "window": _window, "chromium": _chromium}
+_CHECKS = {
+    "gl": _gl,
+    "povray": _povray,
+    "mitsuba": _mitsuba,
+    "radiance": _radiance,
+    "window": _window,
+    "chromium": _chromium,
+}
 _cache: dict[str, tuple[bool, str]] = {}
 
 

@@ -1,12 +1,16 @@
-"""Proof that the engines agree (issue 5): one scene, GL, POV-Ray and Mitsuba, the same pixels.
+"""Proof that the engines agree (issues 5 and 15): one scene, GL, POV-Ray, Mitsuba and Radiance, the same pixels.
 
 The test scene (camera, floor box, sphere, torus, a triangle mesh, point light)
-is rendered at 320x240 by every available engine.  The foreground masks (alpha
-or finite depth) must agree on at least 98% of the pixels between every pair
-of engines, and each engine must agree with an analytic reference mask: rays
+is rendered at 320x240 by every available engine, seen through a perspective
+and through an orthographic camera.  The foreground masks (alpha or finite
+depth) must agree on at least 98% of the pixels between every pair of
+engines, and each engine must agree with an analytic reference mask: rays
 through the pixel centres built from the core camera matrices, intersected
 exactly with the sphere and box, by sphere tracing with the torus and with
 the mesh's triangles.  This checks cameras, transforms and tessellations.
+Engines also agree on meaning: diffuse patches of several colours under a
+directional light and the ambient light have the GL engine's colours in every
+engine (CIELAB distance below 2).
 
 ``docs/make_images.py`` renders this scene for the README's side-by-side figure.
 """
@@ -24,7 +28,8 @@ import pytest
 import omnirender as om
 
 SIZE = (320, 240)
-ENGINES = ("gl", "povray", "mitsuba")
+ENGINES = ("gl", "povray", "mitsuba", "radiance")
+VIEWS = ("perspective", "orthographic")
 THRESHOLD = 0.98
 
 TORUS_MATRIX = om.Translation(1.0, 0.45, -0.7).matrix @ om.Rotation(60, (1, 0, 0)).matrix
@@ -41,9 +46,16 @@ def octahedron() -> tuple[np.ndarray, np.ndarray]:
     return v, f
 
 
-def make_scene() -> om.Node:
+def camera(view: str = "perspective") -> om.Camera:
+    eye, center = (3.3, 2.5, 4.9), (0.0, 0.45, 0.1)
+    if view == "orthographic":
+        return om.Camera.orthographic(eye=eye, center=center, height=4.6)
+    return om.Camera.look_at(eye=eye, center=center, fov=40)
+
+
+def make_scene(view: str = "perspective") -> om.Node:
     scene = om.Node("scene")
-    scene.add(om.Camera.look_at(eye=(3.3, 2.5, 4.9), center=(0.0, 0.45, 0.1), fov=40))
+    scene.add(camera(view))
     scene.add(om.PointLight(position=(4.0, 6.0, 3.0)))
     scene.add(om.AmbientLight(intensity=0.25))
     floor = scene.add(om.Node("floor"))
@@ -70,6 +82,11 @@ def pixel_rays(camera: om.Camera, size: tuple[int, int]) -> tuple[np.ndarray, np
     w, h = size
     inv = np.linalg.inv(camera.view_matrix())
     x, y = np.meshgrid((np.arange(w) + 0.5) / w * 2 - 1, 1 - (np.arange(h) + 0.5) / h * 2)
+    if camera.is_orthographic:  # parallel rays from the image plane through the eye
+        half = camera.height / 2
+        o = np.stack([x * half * w / h, y * half, np.zeros_like(x)], axis=-1) @ inv[:3, :3].T + inv[:3, 3]
+        d = np.broadcast_to(inv[:3, :3] @ np.array([0.0, 0.0, -1.0]), o.shape)
+        return o, d
     t = math.tan(math.radians(camera.fov) / 2)
     d = np.stack([x * t * w / h, y * t, -np.ones_like(x)], axis=-1) @ inv[:3, :3].T
     return np.broadcast_to(inv[:3, 3], d.shape), d / np.linalg.norm(d, axis=-1, keepdims=True)
@@ -129,9 +146,8 @@ def hit_triangles(o, d, vertices, faces):
     return hit
 
 
-def analytic_mask(size: tuple[int, int] = SIZE) -> np.ndarray:
-    cam = next(c for c in make_scene().components if isinstance(c, om.Camera))
-    o, d = pixel_rays(cam, size)
+def analytic_mask(size: tuple[int, int] = SIZE, view: str = "perspective") -> np.ndarray:
+    o, d = pixel_rays(camera(view), size)
     o = np.ascontiguousarray(o)
     mask = hit_box(o, d, *FLOOR) | hit_sphere(o, d, *SPHERE)
     mask |= hit_torus(*_local(o, d, TORUS_MATRIX), *TORUS)
@@ -150,14 +166,14 @@ def _require(name: str) -> None:
 
 
 @functools.cache
-def rendered(name: str) -> om.Image:
+def rendered(name: str, view: str = "perspective") -> om.Image:
     options = {"povray": {"threads": 2}, "mitsuba": {"spp": 16}}.get(name, {})
-    return om.render(make_scene(), engine=name, size=SIZE, **options)
+    return om.render(make_scene(view), engine=name, size=SIZE, **options)
 
 
 @functools.cache
-def reference() -> np.ndarray:
-    return analytic_mask()
+def reference(view: str = "perspective") -> np.ndarray:
+    return analytic_mask(view=view)
 
 
 def agreement(a: np.ndarray, b: np.ndarray) -> float:
@@ -168,22 +184,64 @@ def _marks(*names: str) -> list:
     return [getattr(pytest.mark, n) for n in names]
 
 
+@pytest.mark.parametrize("view", VIEWS)
 @pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ENGINES])
-def test_engine_matches_the_analytic_mask(name):
+def test_engine_matches_the_analytic_mask(name, view):
     _require(name)
-    img = rendered(name)
-    ref = reference()
+    img = rendered(name, view)
+    ref = reference(view)
     assert img.size == SIZE
     assert 0.25 < ref.mean() < 0.75  # the reference itself is sensible
     score = agreement(img.mask, ref)
-    assert score >= THRESHOLD, f"{name} agrees with the analytic mask on only {score:.2%} of pixels"
+    assert score >= THRESHOLD, f"{name} ({view}) agrees with the analytic mask on only {score:.2%} of pixels"
 
 
+@pytest.mark.parametrize("view", VIEWS)
 @pytest.mark.parametrize(
     "a,b", [pytest.param(a, b, marks=_marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
 )
-def test_engines_agree_pairwise(a, b):
+def test_engines_agree_pairwise(a, b, view):
     _require(a)
     _require(b)
-    score = agreement(rendered(a).mask, rendered(b).mask)
-    assert score >= THRESHOLD, f"{a} and {b} masks agree on only {score:.2%} of pixels"
+    score = agreement(rendered(a, view).mask, rendered(b, view).mask)
+    assert score >= THRESHOLD, f"{a} and {b} masks ({view}) agree on only {score:.2%} of pixels"
+
+
+# -- shading -------------------------------------------------------------------
+PATCH_COLORS = [(0.8, 0.2, 0.2), (0.2, 0.7, 0.3), (0.2, 0.3, 0.9), (0.9, 0.8, 0.3), (0.5, 0.5, 0.5), (0.1, 0.1, 0.1)]
+MAX_DELTA_E = 2.0
+
+
+def patches_scene() -> om.Node:
+    """Six diffuse squares facing an orthographic camera, lit by a slanted directional light (and GL's ambient)."""
+    s = om.Node("patches", [om.Camera.orthographic(eye=(0, 0, 5), height=2)])
+    s.add(om.DirectionalLight(direction=(0.3, -0.2, -1), intensity=0.8))
+    for i, c in enumerate(PATCH_COLORS):
+        patch = s.add(om.Node(f"p{i}", [om.Translation(-2.5 + i, 0, 0), om.Rotation(90, (1, 0, 0))]))
+        patch.add(om.Material(diffuse=c, ambient=c))  # ambient = diffuse: physically based engines reflect so
+        patch.add(om.Rectangle(size=(0.8, 0.8)))
+    return s
+
+
+def cielab(rgb8: np.ndarray) -> np.ndarray:
+    """sRGB (0..255) to CIELAB (D65)."""
+    c = np.asarray(rgb8, np.float64) / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    m = np.array([[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]])
+    xyz = lin @ m.T / np.array([0.9505, 1.0, 1.089])
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.stack([116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])], -1)
+
+
+def patch_colours(name: str) -> np.ndarray:
+    options = {"mitsuba": {"spp": 64}}.get(name, {})
+    img = om.render(patches_scene(), engine=name, size=(240, 80), **options)
+    return np.array([img.rgb[35:45, 40 * i + 15 : 40 * i + 25].reshape(-1, 3).mean(0) for i in range(6)])
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks("gl", n)) for n in ENGINES if n != "gl"])
+def test_lit_colours_agree_with_gl(name):
+    _require("gl")
+    _require(name)
+    delta = np.linalg.norm(cielab(patch_colours(name)) - cielab(patch_colours("gl")), axis=1)
+    assert delta.max() < MAX_DELTA_E, f"{name}: CIELAB distances to GL {np.round(delta, 2)}"

@@ -91,12 +91,12 @@ def test_image_pixel_outside_names_the_valid_range():
 def test_export_rejects_unknown_extensions(tmp_path):
     with pytest.raises(ValueError, match=r"unknown extension '\.xyz'.*\.glb.*\.pov.*\.rib"):
         om.export(om.Node("s"), tmp_path / "scene.xyz")
-    assert set(om.exporters()) >= {".glb", ".pov", ".rib"}
+    assert set(om.exporters()) >= {".glb", ".pov", ".rib", ".rad"}
 
 
 def test_engines_report_availability_with_a_reason():
     listing = om.engines()
-    assert {"gl", "povray", "mitsuba"} <= set(listing)
+    assert {"gl", "povray", "mitsuba", "radiance"} <= set(listing)
     for ok, why in listing.values():
         assert isinstance(ok, bool) and isinstance(why, str) and why
 
@@ -137,9 +137,15 @@ def test_render_docstring_lists_options_the_engines_really_take():
 
     import omnirender.mitsuba.rendering
     import omnirender.povray
+    import omnirender.radiance
 
     doc = inspect.getdoc(om.render)
-    for engine, fn in [("povray", omnirender.povray.render), ("mitsuba", omnirender.mitsuba.rendering.render)]:
+    renders = [
+        ("povray", omnirender.povray.render),
+        ("mitsuba", omnirender.mitsuba.rendering.render),
+        ("radiance", omnirender.radiance.render),
+    ]
+    for engine, fn in renders:
         line = re.search(rf"- {engine}: (.*?);\n\s*- ", doc, re.S).group(1)
         named = set(re.findall(r"``(\w+)``", line))
         assert named and named <= set(inspect.signature(fn).parameters), (engine, named)

@@ -20,10 +20,11 @@ def _block(heading: str) -> str:
 @pytest.mark.gl
 @pytest.mark.povray
 @pytest.mark.mitsuba
+@pytest.mark.radiance
 def test_ten_lines_example_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     exec(compile(_block("## Ten lines"), "README.md", "exec"), {})
-    for name in ("gl.png", "pov.png", "mitsuba.png", "scene.glb"):
+    for name in ("gl.png", "pov.png", "mitsuba.png", "radiance.png", "scene.glb"):
         assert (tmp_path / name).stat().st_size > 1000, name
     assert "/scene/body" in capsys.readouterr().out
 
@@ -41,3 +42,17 @@ def test_animation_example_runs(tmp_path, monkeypatch):
     assert (tmp_path / "out.mp4").stat().st_size > 500
     later = namespace["later"]
     assert later["/scene/torus"].components[0].offset[1] > 0.3  # the torus rose
+
+
+@pytest.mark.radiance
+def test_radiance_example_prints_what_its_comments_say(tmp_path, monkeypatch, capsys):
+    import math
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("## Radiance: pictures and lighting in physical units"), "README.md", "exec"), {})
+    printed = capsys.readouterr().out
+    lux = [float(v) for v in re.findall(r"[\d.]+", printed.split("]")[0])]
+    for value, (x, z) in zip(lux, [(0, 0), (2, 1)], strict=True):  # 179 * (10 pi cos / d^2 + 20 pi)
+        d2 = x * x + 9 + z * z
+        assert value == pytest.approx(179 * (10 * math.pi * 3 / math.sqrt(d2) / d2 + 20 * math.pi), rel=0.02)
+    assert (tmp_path / "room.rad").read_text().startswith("# omnirender scene for Radiance")

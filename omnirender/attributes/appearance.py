@@ -251,6 +251,16 @@ class Texture(Parameterised, MonoAttribute):
         object.__setattr__(self, "_cache", arr)
         return arr
 
+    def image_in(self, engine: str, node_path: str) -> np.ndarray:
+        """:meth:`image_array`, but a missing or unreadable file raises naming the engine, the node and the fix."""
+        try:
+            return self.image_array()
+        except (FileNotFoundError, ValueError) as exc:
+            raise type(exc)(
+                f"{engine}: {exc} (Texture in node {node_path or '/'}); "
+                "check the path or pass an array (om.Texture(numpy_array))"
+            ) from None
+
     def parameters(self) -> dict[str, Any]:
         return {"image": self._image, "wrap": self._wrap, "filter": self._filter, "mipmap": self._mipmap}
 

@@ -18,6 +18,17 @@ from typing import Any
 import numpy as np
 
 from ..attributes import AmbientLight, Color, DirectionalLight, Material, PBRMaterial, PointLight, SpotLight
+from ..attributes.photometry import (
+    GLOBAL_AMBIENT,
+    HEADLIGHT,
+    ambient_total,
+    headlight_direction,
+    intensity_scale,
+    linear_to_srgb,
+    phong_roughness,
+    spot_beam,
+    srgb_to_linear,
+)
 from ..core import Camera
 
 __all__ = [
@@ -44,29 +55,12 @@ __all__ = [
 GL_TO_MITSUBA_EYE = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 
-def srgb_to_linear(c: Any) -> np.ndarray:
-    """sRGB-encoded values in [0, 1] to linear values (the IEC 61966-2-1 curve)."""
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, None)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(c: Any) -> np.ndarray:
-    """Linear values to sRGB encoding (clamped to [0, 1] first)."""
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
-    return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-
-
 def rgb(value: Any, *, linearize: bool = True) -> dict[str, Any]:
     """An ``rgb`` spectrum plugin dict of 3 values (sRGB in, linear out unless ``linearize`` is False)."""
     v = np.asarray(value, dtype=np.float64).reshape(-1)[:3]
     if linearize:
         v = srgb_to_linear(v)
     return {"type": "rgb", "value": [float(x) for x in v]}
-
-
-def _shininess_to_alpha(shininess: float) -> float:
-    """Phong exponent to Beckmann roughness (Walter et al.: alpha = sqrt(2 / (n + 2)))."""
-    return float(min(1.0, max(0.01, math.sqrt(2.0 / (shininess + 2.0)))))
 
 
 def material_bsdf(material: Material, reflectance: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -81,7 +75,7 @@ def material_bsdf(material: Material, reflectance: dict[str, Any] | None = None)
     return {
         "type": "roughplastic",
         "distribution": "beckmann",
-        "alpha": _shininess_to_alpha(material.shininess),
+        "alpha": phong_roughness(material.shininess),
         "diffuse_reflectance": diffuse,
         "specular_reflectance": min(1.0, spec),
         "nonlinear": True,
@@ -149,16 +143,13 @@ def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[
         }
     if isinstance(light, (PointLight, SpotLight)):
         p = light.world_position(world)
-        dist = max(float(np.linalg.norm(np.asarray(reference) - p)), 1e-6)
-        scale = math.pi * dist * dist * float(light.attenuation(dist))
-        intensity = rgb(color * scale, linearize=False)
+        intensity = rgb(color * intensity_scale(light, p, reference), linearize=False)
         if isinstance(light, PointLight):
             return {"type": "point", "position": [float(x) for x in p], "intensity": intensity}
         axis = light.world_direction(world)
         up = np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.99 else np.array([1.0, 0.0, 0.0])
         cutoff = float(light.cutoff)
-        # GL's cos^exponent falloff: full beam where it is above one half.
-        beam = cutoff if light.exponent <= 0 else math.degrees(math.acos(0.5 ** (1.0 / light.exponent)))
+        beam = spot_beam(light)  # GL's cos^exponent falloff: full beam where it is above one half
         return {
             "type": "spot",
             "to_world": look_at(p, p + axis, up),
@@ -171,10 +162,6 @@ def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[
 
 #: Emitter plugins that are environments (Mitsuba allows one per scene).
 ENVIRONMENTS = ("constant", "envmap", "sunsky")
-#: OpenGL's global ambient light, added to the lights' ambient terms (as the GL engine does).
-GLOBAL_AMBIENT = 0.2
-#: The GL engine's headlight for scenes without lights: direction towards the light in eye space.
-HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
 
 
 def ambient_emitter(lights: list[tuple[Any, np.ndarray]], global_ambient: float = GLOBAL_AMBIENT) -> dict | None:
@@ -185,11 +172,7 @@ def ambient_emitter(lights: list[tuple[Any, np.ndarray]], global_ambient: float 
     both agree where the material's ambient colour equals its diffuse one (and
     for plain ``Color``s); Mitsuba adds the occlusion GL does not have.
     """
-    total = np.full(3, float(global_ambient))
-    for light, _ in lights:
-        amb = getattr(light, "ambient", None)
-        if amb is not None:
-            total += np.asarray(amb, dtype=np.float64)
+    total = ambient_total(lights, global_ambient)
     if not np.any(total > 0.0):
         return None
     return {"type": "constant", "radiance": rgb(total, linearize=False)}
@@ -197,9 +180,7 @@ def ambient_emitter(lights: list[tuple[Any, np.ndarray]], global_ambient: float 
 
 def headlight_emitter(camera: Camera, camera_world: np.ndarray) -> dict[str, Any]:
     """The GL engine's headlight (white, from a little above-left of the eye) as a ``directional`` emitter."""
-    eye_to_world = np.asarray(camera_world, np.float64) @ np.linalg.inv(camera.view_matrix())
-    towards = eye_to_world[:3, :3] @ HEADLIGHT
-    d = -towards / np.linalg.norm(towards)
+    d = headlight_direction(camera, camera_world)
     return {
         "type": "directional",
         "direction": [float(x) for x in d],

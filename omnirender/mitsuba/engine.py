@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Material, PBRMaterial, Texture
+from ..attributes.clipping import ClipRecords
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
 from . import convert
@@ -101,20 +102,17 @@ class MitsubaEngine(Engine):
         self.has_masks = False
         self._count = 0
         self._lights_converted = False
-        #: active clip planes as (ClipPlane, world plane row (a, b, c, d)), see :meth:`clip_planes`
-        self._clips: list[tuple[Any, np.ndarray]] = []
+        #: active clip planes with their world rows, see :meth:`clip_planes`
+        self._clips = ClipRecords()
 
     # -- clip planes ----------------------------------------------------------
     def add_clip(self, plane: Any) -> None:
         """Record an added ``ClipPlane`` in world coordinates (the model matrix at this moment)."""
-        self._clips.append((plane, plane.world_plane(self.model_matrix())))
+        self._clips.add(plane, self.model_matrix())
 
     def remove_clip(self, plane: Any) -> None:
         """Forget the most recent record of ``plane`` (it was removed or its node ended)."""
-        for i in range(len(self._clips) - 1, -1, -1):
-            if self._clips[i][0] is plane:
-                del self._clips[i]
-                return
+        self._clips.remove(plane)
 
     def clip_planes(self) -> list[np.ndarray]:
         """World plane rows ``(a, b, c, d)`` (kept: ``a x + b y + c z + d >= 0``) of the active clip planes.
@@ -122,7 +120,7 @@ class MitsubaEngine(Engine):
         Mitsuba has no clip planes: painters clip the geometry itself
         (:mod:`omnirender.geometry.clip`), native quadrics fall back to meshes.
         """
-        return [row for _, row in self._clips]
+        return self._clips.rows()
 
     def unique_name(self, kind: str) -> str:
         """A fresh key for the scene dict (``"003_sphere"``)."""
@@ -227,13 +225,7 @@ class MitsubaEngine(Engine):
 
     def texture_image(self, tex: Texture) -> np.ndarray:
         """``tex.image_array()``; a missing or unreadable image file raises naming the node and the fix."""
-        try:
-            return tex.image_array()
-        except (FileNotFoundError, ValueError) as exc:
-            raise type(exc)(
-                f"MitsubaEngine: {exc} (Texture in node {self.node_path or '/'}); "
-                "check the path or pass an array (om.Texture(numpy_array))"
-            ) from None
+        return tex.image_in("MitsubaEngine", self.node_path)
 
     def _texture_dict(self, tex: Texture) -> dict[str, Any]:
         mi = mitsuba()

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..core.camera import Camera
-from ..image import Image
+from ..image import Image, develop
 from ..scene import Node
 from . import convert, painters  # noqa: F401  (painters registers the default handlers)
 from ._mi import VARIANT, mitsuba
@@ -113,30 +113,6 @@ def _render(mi_scene: Any, spp: int, seed: int, progress: bool | None, size: tup
             total = part if total is None else total + part
             bar.update(n)
     return (total / spp).astype(np.float32)
-
-
-def develop(data: np.ndarray, background: tuple[float, ...] | None = None, *, premultiplied: bool = True) -> np.ndarray:
-    """Linear RGBA film data -> (H, W, 4) uint8 sRGB with straight alpha.
-
-    ``premultiplied``: the colour is black where nothing was hit (emitters
-    hidden), so dividing by coverage gives the straight colour; otherwise the
-    colour already contains what is seen behind the shapes and is kept.  With
-    a ``background`` RGBA colour a premultiplied image is composited over it.
-    """
-    rgb = np.asarray(data[:, :, :3], np.float64)
-    alpha = np.clip(np.asarray(data[:, :, 3], np.float64), 0.0, 1.0)
-    if not premultiplied:
-        rgb = rgb * alpha[..., None]
-    if background is not None:
-        bg = np.asarray(background, np.float64)
-        bg_alpha = bg[3] if len(bg) > 3 else 1.0
-        rgb = rgb + convert.srgb_to_linear(bg[:3]) * (bg_alpha * (1.0 - alpha))[..., None]
-        alpha = alpha + bg_alpha * (1.0 - alpha)
-    straight = np.where(alpha[..., None] > 1e-6, rgb / np.maximum(alpha, 1e-6)[..., None], 0.0)
-    out = np.empty(data.shape[:2] + (4,), np.uint8)
-    out[:, :, :3] = np.round(convert.linear_to_srgb(straight) * 255.0)
-    out[:, :, 3] = np.round(alpha * 255.0)
-    return out
 
 
 def eye_depth(ray_depth: np.ndarray, alpha: np.ndarray, camera: Camera, size: tuple[int, int]) -> np.ndarray:

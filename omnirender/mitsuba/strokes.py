@@ -10,23 +10,14 @@ Mitsuba spheres (one mesh of octahedra when there are very many).
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
+
+from ..geometry.pixels import pixel_size
 
 __all__ = ["pixel_size", "tubes", "octahedra"]
 
 _SIDES = 6
-
-
-def pixel_size(camera: Any, view: np.ndarray | None, height: int, centre: np.ndarray) -> float:
-    """World-space size of one pixel at ``centre`` (world coordinates)."""
-    if camera is None or view is None:
-        return 0.005
-    if camera.is_orthographic:
-        return camera.height / height
-    depth = max(-(view[:3, :3] @ centre + view[:3, 3])[2], camera.near)
-    return 2.0 * depth * math.tan(math.radians(camera.fov) / 2.0) / height
 
 
 def tubes(a: np.ndarray, b: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:

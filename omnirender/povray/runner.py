@@ -1,9 +1,9 @@
 """Running the ``povray`` program: no shell, a timeout, progress, POV-Ray's own error lines.
 
 POV-Ray reports progress as ``Rendered 1024 of 76800 pixels (1%)`` lines on
-stderr (separated by carriage returns); a reader thread turns them into a
-progress bar (tqdm on a terminal) and collects the rest, from which the
-``Parse Error`` / ``Fatal error`` lines are extracted when POV-Ray fails.
+stderr (separated by carriage returns); :func:`omnirender.process.run_watched`
+turns them into a progress bar (tqdm on a terminal) and collects the rest, from
+which the ``Parse Error`` / ``Fatal error`` lines are extracted when POV-Ray fails.
 """
 
 from __future__ import annotations
@@ -11,14 +11,11 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import subprocess
-import sys
-import threading
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from ..core import OmnirenderError
+from ..process import ProgramTimeout, progress_reporter, run_watched
 
 __all__ = ["POVRayError", "find_povray", "run_povray", "error_lines"]
 
@@ -63,28 +60,6 @@ def error_lines(output: str) -> list[str]:
     return out[:20]
 
 
-def _bar(progress: Any, total_hint: int) -> tuple[Callable[[int, int], None], Callable[[], None]]:
-    """(update(done, total), close()) for ``progress``: None (tqdm on a terminal), bool, or a callable."""
-    if callable(progress):
-        return progress, lambda: None
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if not progress:
-        return (lambda done, total: None), lambda: None
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover - tqdm is in the 'all' extra
-        return (lambda done, total: None), lambda: None
-    bar = tqdm(total=total_hint, unit="px", desc="POV-Ray", leave=False)
-
-    def update(done: int, total: int) -> None:
-        bar.total = total
-        bar.n = done
-        bar.refresh()
-
-    return update, bar.close
-
-
 def run_povray(
     args: list[str],
     cwd: str | os.PathLike[str],
@@ -97,73 +72,35 @@ def run_povray(
     exe = find_povray()
     if exe is None:
         raise POVRayError(f"POV-Ray: the povray program was not found on PATH; {_INSTALL}")
-    update, close = _bar(progress, total_pixels)
+    update, close = progress_reporter(progress, total_pixels, "px", "POV-Ray")
     env = dict(os.environ)
     # POV-Ray's configuration grants reading %HOME%: point it at the (temporary) working folder so a
     # scene cannot read the user's files through it (nor pick up a user povray.conf).
     env["HOME"] = str(cwd)
+
+    def watch(tail: bytes) -> None:
+        found = _PROGRESS.findall(tail.decode("latin-1"))
+        if found:
+            done, total = found[-1]
+            update(int(done), int(total))
+
     try:
-        proc = subprocess.Popen(
-            [exe, *args],
-            cwd=cwd,
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            env=env,
-        )
+        returncode, raw = run_watched([exe, *args], cwd, env=env, timeout=timeout, watch=watch)
     except OSError as exc:
-        close()
         raise POVRayError(f"POV-Ray: cannot start {exe}: {exc}; {_INSTALL}") from None
-    chunks: list[bytes] = []
-    failures: list[BaseException] = []  # an exception of the progress callback, re-raised in this thread
-
-    def read() -> None:
-        assert proc.stdout is not None
-        pending = b""
-        while True:  # drain everything, even after a failure, so POV-Ray never blocks on a full pipe
-            data = proc.stdout.read1(4096) if hasattr(proc.stdout, "read1") else proc.stdout.read(4096)
-            if not data:
-                break
-            chunks.append(data)
-            pending = (pending + data)[-256:]
-            found = _PROGRESS.findall(pending.decode("latin-1"))
-            if found and not failures:
-                done, total = found[-1]
-                try:
-                    update(int(done), int(total))
-                except BaseException as exc:  # noqa: BLE001 - handed to the main thread
-                    failures.append(exc)
-                    proc.kill()  # the caller's progress handler failed: stop rendering
-
-    reader = threading.Thread(target=read, daemon=True)
-    reader.start()
-    try:
-        proc.wait(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
-        reader.join(5)
-        close()
+    except ProgramTimeout as exc:
         raise POVRayError(
             f"POV-Ray: rendering took longer than the timeout of {timeout:g} s and was stopped; "
             "pass a larger timeout=, a smaller size or a lower quality",
-            b"".join(chunks).decode("latin-1"),
+            exc.output.decode("latin-1"),
         ) from None
-    except BaseException:
-        proc.kill()
-        proc.wait()
-        reader.join(5)
+    finally:
         close()
-        raise
-    reader.join(5)
-    close()
-    if failures:
-        raise failures[0]
-    output = b"".join(chunks).decode("latin-1")
-    if proc.returncode != 0:
+    output = raw.decode("latin-1")
+    if returncode != 0:
         lines = error_lines(output)
         detail = "\n  ".join(lines) if lines else output[-2000:]
-        raise POVRayError(f"POV-Ray failed (exit status {proc.returncode}):\n  {detail}", output)
+        raise POVRayError(f"POV-Ray failed (exit status {returncode}):\n  {detail}", output)
     return output
 
 

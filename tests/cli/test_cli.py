@@ -53,7 +53,7 @@ def test_usage_errors_exit_2(capsys, scene_file, argv, message):
 def test_engines_lists_engines_and_exporters(capsys):
     code, out, _ = run(capsys, "engines")
     assert code == 0
-    for name in ("gl", "povray", "mitsuba", ".glb", ".pov", ".rib"):
+    for name in ("gl", "povray", "mitsuba", "radiance", ".glb", ".pov", ".rib", ".rad"):
         assert name in out
 
 
@@ -233,6 +233,33 @@ def test_render_with_mitsuba_and_spp(capsys, scene_file, tmp_path):
     img = np.asarray(Image.open(target).convert("RGB")).astype(int)
     assert img.shape == (24, 32, 3) and img.std() > 5  # not blank
     assert (img[:, :, 0] > img[:, :, 1] + 40).sum() > 5  # the red sphere
+
+
+def test_engines_and_demo_explain_a_missing_radiance(capsys, tmp_path, monkeypatch):
+    import omnirender.demo
+    from omnirender.radiance import runner
+
+    monkeypatch.setattr(runner, "radiance_paths", lambda: None)  # as if pyradiance were not installed
+    code, out, _ = run(capsys, "engines")
+    line = next(ln for ln in out.splitlines() if ln.startswith("radiance"))
+    assert code == 0 and "unavailable" in line and "pip install 'omnirender[radiance]'" in line
+    only_radiance = {"radiance": om.engines()["radiance"]}
+    monkeypatch.setattr(omnirender.demo.om, "engines", lambda: only_radiance)
+    code, out, _ = run(capsys, "demo", "-o", str(tmp_path / "demo"), "--size", "16x12")
+    assert code == 0 and "radiance skipped: the pyradiance package is not installed" in out
+    assert list((tmp_path / "demo").iterdir()) == []
+
+
+@pytest.mark.radiance
+def test_render_with_radiance_and_spp(capsys, scene_file, tmp_path):
+    target = tmp_path / "rad.png"
+    code, out, err = run(capsys, "render", str(scene_file), "-e", "radiance", "--spp", "4", "-o", str(target),
+                         "--size", "32x24")  # fmt: skip
+    assert code == 0, err
+    from PIL import Image as PILImage
+
+    img = np.asarray(PILImage.open(target).convert("RGB"))
+    assert img.shape == (24, 32, 3) and img.std() > 5  # not blank (rendered 2 x 2 rays per pixel)
 
 
 @pytest.mark.slow

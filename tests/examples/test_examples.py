@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -160,3 +161,14 @@ def test_07_turntable(tmp_path):
     assert np.abs(first - second).mean() > 5  # the scene turned
     again = run_example("07_turntable.py", tmp_path, *args)
     assert "POV-Ray final: 0 written, 2 already there" in again  # a second run resumes: nothing left to do
+
+
+@pytest.mark.radiance
+def test_09_lighting_analysis(tmp_path):
+    out = run_example("09_lighting_analysis.py", tmp_path)
+    img = check_image(tmp_path / "09-lighting-analysis.png")
+    low, high = (float(v.replace(",", "")) for v in re.findall(r"([\d,]+) lux", out))
+    # sky alone: 179 * pi * 10 lux = 5,623 lux on open floor; the lamp (60 pi W/sr, 2.5 m up) adds 5,400 below it
+    assert 500 < low < 5623 < high < 5623 + 5400 + 100
+    chart = img[:, img.shape[1] // 2 + 10 :]
+    assert (chart[:, :, 0] > 200).any() and (chart[:, :, 2] > 150).any()  # red under the lamp, blue in the corner

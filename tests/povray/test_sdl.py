@@ -379,6 +379,7 @@ def test_export_is_atomic_when_the_sdl_write_fails_midway(tmp_path, monkeypatch)
 
 
 def test_povray_runs_with_home_set_to_its_temporary_folder(tmp_path, monkeypatch):
+    from omnirender import process
     from omnirender.povray import runner
 
     seen = {}
@@ -389,7 +390,7 @@ def test_povray_runs_with_home_set_to_its_temporary_folder(tmp_path, monkeypatch
 
     monkeypatch.setenv("HOME", "/root")
     monkeypatch.setattr(runner, "find_povray", lambda: "/usr/bin/povray")
-    monkeypatch.setattr(runner.subprocess, "Popen", fake_popen)
+    monkeypatch.setattr(process.subprocess, "Popen", fake_popen)
     with pytest.raises(POVRayError, match="cannot start"):
         runner.run_povray(["+Iscene.pov"], tmp_path, progress=False)
     assert seen == {"cwd": tmp_path, "home": str(tmp_path)}

@@ -18,11 +18,14 @@ SAMPLES = {
     "BSDF": lambda m: m.BSDF({"type": "roughconductor", "alpha": 0.2}),
     "Emitter": lambda m: m.Emitter({"type": "constant", "radiance": {"type": "rgb", "value": 0.5}}),
     "Integrator": lambda m: m.Integrator({"type": "path", "max_depth": 4}),
+    "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
 }
+#: Raw differs by engine: each takes its own language
+RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
 
 
 def _components():
-    for prefix in ("povray", "gl", "mitsuba"):
+    for prefix in ("povray", "gl", "mitsuba", "radiance"):
         module = getattr(om, prefix)
         for name in module.__all__:
             cls = getattr(module, name)
@@ -43,7 +46,10 @@ def _same(a, b):
 def test_engine_component_round_trips(prefix, name, fmt):
     module = getattr(om, prefix)
     make = SAMPLES.get(name)
-    component = make(module) if make else getattr(module, name)()
+    if name == "Raw":
+        component = module.Raw(RAW[prefix])
+    else:
+        component = make(module) if make else getattr(module, name)()
     scene = om.Node("scene", [component, om.Sphere()])
     text = dumps(scene, fmt)
     assert f"{prefix}." in text
