@@ -12,7 +12,9 @@ reflects ``kd * E / pi`` of an irradiance ``E``, so the same picture needs
   already falls off as ``1 / d^2`` and gets ``I = pi * c / Q`` at every distance;
 - ambient light: the global ambient (0.2) plus every light's ambient term is a uniform
   environment radiance, reflected with the diffuse colour (:func:`ambient_total`);
-- Phong shininess ``n`` becomes a microfacet slope ``sqrt(2 / (n + 2))`` (:func:`phong_roughness`).
+- Phong shininess ``n`` (the exponent of the reflected-light lobe, as in POV-Ray's
+  ``phong_size`` and the GL engine) becomes a microfacet slope ``sqrt(2 / (4 n + 2))``
+  (:func:`phong_roughness`).
 
 Mitsuba and Radiance convert with these functions, so the same scene has the
 same brightness in both and in GL.
@@ -31,6 +33,7 @@ __all__ = [
     "HEADLIGHT",
     "srgb_to_linear",
     "linear_to_srgb",
+    "linear_rgb",
     "intensity_scale",
     "ambient_total",
     "headlight_direction",
@@ -54,6 +57,16 @@ def linear_to_srgb(c: Any) -> np.ndarray:
     """Linear values to sRGB encoding (clamped to [0, 1] first)."""
     c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
     return np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def _channel(c: float) -> float:
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
+def linear_rgb(rgb: Any) -> tuple[float, float, float]:
+    """The first three values of an sRGB colour as a linear (r, g, b) tuple of Python floats (no numpy: fast)."""
+    r, g, b = rgb[:3]
+    return (_channel(float(r)), _channel(float(g)), _channel(float(b)))
 
 
 def intensity_scale(light: Any, position: np.ndarray, reference: np.ndarray) -> float:
@@ -88,8 +101,16 @@ def headlight_direction(camera: Any, camera_world: np.ndarray) -> np.ndarray:
 
 
 def phong_roughness(shininess: float) -> float:
-    """Phong exponent to a microfacet RMS slope (Walter et al.: ``sqrt(2 / (n + 2))``), in [0.01, 1]."""
-    return float(min(1.0, max(0.01, math.sqrt(2.0 / (float(shininess) + 2.0)))))
+    """Phong exponent to a microfacet RMS slope, in [0.01, 1].
+
+    ``shininess`` is the exponent of Phong's lobe (reflected light against the
+    eye), whose highlight is half as wide in angle as the Blinn-Phong lobe of
+    the same exponent: it equals Blinn-Phong ``4 n``, and Walter et al.'s
+    Beckmann slope of a Blinn-Phong exponent ``m`` is ``sqrt(2 / (m + 2))``.
+    Shininess below 1 acts as 1 in every engine.
+    """
+    n = max(float(shininess), 1.0)
+    return float(min(1.0, max(0.01, math.sqrt(2.0 / (4.0 * n + 2.0)))))
 
 
 def spot_beam(light: Any) -> float:

@@ -32,6 +32,7 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
+from ..attributes.photometry import phong_roughness
 from ..core import AttributePainter, ShapePainter, default_for
 from ..fileio import atomic_write
 from ..scene import Node
@@ -165,7 +166,7 @@ class GLTFEngine(NodeTrackingEngine):
         elif isinstance(material, Material):
             base, alpha, metallic, emission = material.diffuse, material.opacity, 0.0, material.emission
             shiny = float(np.mean(material.specular)) > 0.0
-            roughness = min(1.0, math.sqrt(2.0 / (material.shininess + 2.0))) if shiny else 1.0
+            roughness = phong_roughness(material.shininess) if shiny else 1.0
             name = "Material"
         else:
             base, alpha = (0.8, 0.8, 0.8), 1.0

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMaterial, Texture
-from ..attributes.colorspace import linear_rgb
+from ..attributes.photometry import linear_rgb
 from ..core.component import RenderingComponent
 from ..core.light import LightSwitch
 from ..scene.node import Node

@@ -313,7 +313,7 @@ class FrameRunner:
         if clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self._linear_output:
-                from ..attributes.colorspace import linear_rgb
+                from ..attributes.photometry import linear_rgb
 
                 color = (*linear_rgb(color), color[3])
             if color is None:

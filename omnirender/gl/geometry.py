@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.photometry import srgb_to_linear
+
 __all__ = ["Geometry", "GeometryCache", "unit_mesh", "validate_mesh", "CLOSED"]
 
 
@@ -70,7 +72,7 @@ class Geometry:
             # per-vertex colours are display (sRGB) values; the GPU gets them linear (alpha unchanged)
             colors = np.array(colors, dtype=np.float32)
             rgb = colors[:, :3]
-            colors[:, :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((np.maximum(rgb, 0) + 0.055) / 1.055) ** 2.4)
+            colors[:, :3] = srgb_to_linear(rgb)
         self.colors = colors
         self.texcoords = None if texcoords is None else np.ascontiguousarray(texcoords, dtype=np.float32)
         self.sizes = None if sizes is None else np.ascontiguousarray(sizes, dtype=np.float32)

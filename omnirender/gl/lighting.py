@@ -13,13 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.photometry import GLOBAL_AMBIENT, HEADLIGHT
 from .shaders import MAX_LIGHTS
 
 __all__ = ["LightUniforms", "GLOBAL_AMBIENT", "HEADLIGHT"]
-
-GLOBAL_AMBIENT = 0.2
-#: Headlight direction towards the light in eye space (a little above and left of the eye).
-HEADLIGHT = np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1.0])
 
 
 class LightUniforms:

@@ -404,7 +404,7 @@ class Composed:
         for s in self.shader:
             values.update(dict(s.uniforms))
             if s.flat_color is not None:
-                from ..attributes.colorspace import linear_rgb
+                from ..attributes.photometry import linear_rgb
 
                 values["u_flat_color"] = (*linear_rgb(s.flat_color), s.flat_color[3])
         return values

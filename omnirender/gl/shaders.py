@@ -254,8 +254,9 @@ vec3 half_vector(vec3 L, vec3 V, vec3 N) {
 vec3 phong_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 kd) {
     float NdL = dot(N, L);
     if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
-    vec3 H = half_vector(L, V, N);
-    float s = pow(clamp(dot(N, H), 0.0, 1.0), max(M_SPEC.w, 1.0));  // shininess 0 acts as 1, as in POV-Ray
+    // Phong's lobe (the reflected light against the eye), as POV-Ray's phong: shininess is a Phong exponent,
+    // and shininess 0 acts as 1 (POV-Ray's phong_size floor) instead of flooding the surface with specular
+    float s = pow(clamp(dot(reflect(-L, N), V), 0.0, 1.0), max(M_SPEC.w, 1.0));
     return att * (kd * NdL * u_ldiff[i] + M_SPEC.rgb * s * u_lspec[i]);
 }
 #elif MODEL == 1

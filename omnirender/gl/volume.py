@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.photometry import srgb_to_linear
 from ..core.handler import ShapePainter, default_for
 from ..shapes import Volume
 from .context import set_masks
@@ -118,7 +119,7 @@ class VolumeGeometry(Geometry):
         tf = volume.transfer_function
         table = tf.table(256).astype(np.float32)
         rgb = table[:, :3]  # transfer-function colours are display (sRGB) values: linear for compositing
-        table[:, :3] = np.where(rgb <= 0.04045, rgb / 12.92, ((np.maximum(rgb, 0) + 0.055) / 1.055) ** 2.4)
+        table[:, :3] = srgb_to_linear(rgb)
         self.table = table
         self.range = tf.range
         self.textures: tuple[Any, Any] | None = None

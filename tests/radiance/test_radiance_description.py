@@ -138,7 +138,7 @@ def test_appearance_mapping():
     phong = om.Material(diffuse=(0.5, 0.5, 0.5), specular=(1, 1, 1), shininess=48)
     text, _ = scene_description(_scene(phong, om.Sphere()))
     (_, kind, _, _, reals) = material_of(text, by_kind(text, "sphere")[-1])
-    rough = math.sqrt(2 / 50)
+    rough = math.sqrt(2 / (4 * 48 + 2))  # shininess is a Phong exponent: Blinn-Phong 4 n, Walter's slope
     spec = 4 * rough * rough
     assert kind == "plastic"
     assert reals[3:] == pytest.approx([spec, rough])
