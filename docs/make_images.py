@@ -115,8 +115,8 @@ def example_images() -> None:
                 continue
             shutil.copy(png, HERE / f"example_{png.stem}.png")
             print("wrote", HERE / f"example_{png.stem}.png")
-        shutil.copy(Path(tmp) / "07-turntable.gif", HERE / "example_07-turntable.gif")  # the README's animation
-        print("wrote", HERE / "example_07-turntable.gif")
+        shutil.copy(Path(tmp) / "11-turntable.gif", HERE / "example_11-turntable.gif")  # the README's animation
+        print("wrote", HERE / "example_11-turntable.gif")
 
 
 SECTIONS = {"demo": demo_images, "agreement": agreement_images, "gallery": gl_gallery, "examples": example_images}

@@ -146,20 +146,20 @@ def test_06_outline_technique(tmp_path):
 @pytest.mark.slow
 @pytest.mark.gl
 @pytest.mark.povray
-def test_07_turntable(tmp_path):
+def test_11_turntable(tmp_path):
     args = ("--seconds", "1", "--fps", "2", "--size", "96x72")
-    out = run_example("07_turntable.py", tmp_path, *args)
+    out = run_example("11_turntable.py", tmp_path, *args)
     assert "GL preview: 2 written" in out and "POV-Ray final: 2 written" in out
     from PIL import Image
 
-    for name in ("07-turntable-gl.mp4", "07-turntable-povray.mp4"):
+    for name in ("11-turntable-gl.mp4", "11-turntable-povray.mp4"):
         assert (tmp_path / name).stat().st_size > 1000
-    with Image.open(tmp_path / "07-turntable.gif") as gif:
+    with Image.open(tmp_path / "11-turntable.gif") as gif:
         assert gif.n_frames == 2 and gif.size == (96, 72)
-    first = check_image(tmp_path / "07-frames-povray" / "0000.png", min_colors=20)
-    second = check_image(tmp_path / "07-frames-povray" / "0001.png", min_colors=20)
+    first = check_image(tmp_path / "11-frames-povray" / "0000.png", min_colors=20)
+    second = check_image(tmp_path / "11-frames-povray" / "0001.png", min_colors=20)
     assert np.abs(first - second).mean() > 5  # the scene turned
-    again = run_example("07_turntable.py", tmp_path, *args)
+    again = run_example("11_turntable.py", tmp_path, *args)
     assert "POV-Ray final: 0 written, 2 already there" in again  # a second run resumes: nothing left to do
 
 

@@ -8,7 +8,7 @@ Dask cluster: pass ``--scheduler tcp://host:8786``).  Both become MP4 files,
 and the final frames also a GIF.  Frames already on disk are kept, so an
 interrupted run resumes where it stopped.
 
-    python examples/07_turntable.py [OUTPUT_FOLDER] [--seconds 3] [--fps 12] [--size 320x240]
+    python examples/11_turntable.py [OUTPUT_FOLDER] [--seconds 3] [--fps 12] [--size 320x240]
 
 Like every script that starts worker processes, its work runs under ``if __name__ == "__main__":``
 (worker processes import the script; the guard keeps them from rendering it again).
@@ -41,19 +41,19 @@ def main() -> None:
     om.turntable(scene, seconds=args.seconds, fps=args.fps)  # adds an om.Animation to the scene
 
     start = time.perf_counter()
-    preview = om.render_frames(scene, engine="gl", size=size, out=out / "07-frames-gl" / "%04d.png", workers=0)
-    om.video(preview, out / "07-turntable-gl.mp4", fps=args.fps)
-    print(f"GL preview: {preview.summary()} -> 07-turntable-gl.mp4 ({time.perf_counter() - start:.1f} s)")
+    preview = om.render_frames(scene, engine="gl", size=size, out=out / "11-frames-gl" / "%04d.png", workers=0)
+    om.video(preview, out / "11-turntable-gl.mp4", fps=args.fps)
+    print(f"GL preview: {preview.summary()} -> 11-turntable-gl.mp4 ({time.perf_counter() - start:.1f} s)")
 
     start = time.perf_counter()
     final = om.render_frames(
-        scene, engine="povray", size=size, out=out / "07-frames-povray" / "%04d.png",
+        scene, engine="povray", size=size, out=out / "11-frames-povray" / "%04d.png",
         workers=args.scheduler or args.workers, antialias=True,
     )  # fmt: skip
-    om.video(final, out / "07-turntable-povray.mp4", fps=args.fps)
-    om.video(final, out / "07-turntable.gif", fps=args.fps)
+    om.video(final, out / "11-turntable-povray.mp4", fps=args.fps)
+    om.video(final, out / "11-turntable.gif", fps=args.fps)
     seconds = time.perf_counter() - start
-    print(f"POV-Ray final: {final.summary()} -> 07-turntable-povray.mp4, 07-turntable.gif ({seconds:.1f} s)")
+    print(f"POV-Ray final: {final.summary()} -> 11-turntable-povray.mp4, 11-turntable.gif ({seconds:.1f} s)")
 
 
 if __name__ == "__main__":
