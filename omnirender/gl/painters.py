@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from ..core.handler import ShapePainter, default_for
-from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from ..geometry.topology import is_closed_outward
+from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
 
