@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from math import isfinite
 
 import numpy as np
 
@@ -58,9 +59,8 @@ class Transform(MonoAttribute):
         raise NotImplementedError(f"{type(self).__name__} does not build a matrix")
 
     def _changed(self) -> None:
-        """The parameters changed: forget the matrix and tell the owners."""
+        """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
         object.__setattr__(self, "_matrix", None)
-        self.touch()
 
     def _set_matrix(self, m: np.ndarray) -> None:
         m.setflags(write=False)
@@ -111,11 +111,12 @@ class Translation(Transform):
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
-        if type(value) is tuple and len(value) == 3 and all(type(c) is float for c in value):
-            if not (math.isfinite(value[0]) and math.isfinite(value[1]) and math.isfinite(value[2])):
-                raise ValueError(f"Translation: offset must be finite, got {value!r}")
-            offset = value  # the common case of a simulation loop: already three Python floats
-        else:
+        offset = None
+        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
+            x, y, z = value
+            if type(x) is float and type(y) is float and type(z) is float and isfinite(x + y + z):
+                offset = value
+        if offset is None:
             offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
         object.__setattr__(self, "_offset", offset)
         self._changed()

@@ -31,6 +31,7 @@ from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMateri
 from ..attributes.photometry import linear_rgb
 from ..core.component import RenderingComponent
 from ..core.light import LightSwitch
+from ..core.transform import Transform
 from ..scene.node import Node
 from .attributes import CullFace, GLState
 from .drawlist import DrawItem, DrawState, Scope
@@ -146,12 +147,21 @@ class DrawListCompiler:
             scene = Node.transient([scene] if isinstance(scene, RenderingComponent) else scene)
         mask_key = self._mask
         c = self._compiled
+        changed = self._journal.drain()
         if len(kinds()) != self._kinds_seen:
             self._new_state_kinds()
             c = None
-        if c is not None and c[0]() is scene and c[1] == scene.version and c[2] == mask_key:
-            self.stats["compiled"] = False
-            return self._root
+        if c is not None and c[0]() is scene and c[2] == mask_key:
+            if c[1] == scene.version:
+                self.stats["compiled"] = False
+                return self._root
+            if c[3] == scene.structure_version and self._moved_only(changed):
+                # only transforms moved: rewrite the rows below them, no traversal (see dynamic.py)
+                self.stats["incremental"] = self._apply_moves(changed)
+                self._refresh_declarations(scene)
+                self._compiled = (c[0], scene.version, mask_key, c[3])
+                self.stats["compiled"] = False
+                return self._root
         self.sync_registry()
         camera = scene.declarations(self.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
@@ -173,9 +183,10 @@ class DrawListCompiler:
         finally:
             self._compile_frames = []
             self._scope = self._immediate
-        self._compiled = (weakref.ref(scene), scene.version, mask_key)
+        self._compiled = (weakref.ref(scene), scene.version, mask_key, scene.structure_version)
         self._prune_caches()
         self._install(root)
+        self._dependent_index = None
         self.stats["compiled"] = True
         return root
 
@@ -235,7 +246,16 @@ class DrawListCompiler:
             # a closed opaque surface never shows its back faces: cull them (mirrored instances: the front)
             cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
         state = self._state_for(kind, geometry, extra, cull, int(row[_SHADING_MODEL]))
-        item = DrawItem(geometry, state, row, transparent, self.current_node, self._group_path[-1])
+        item = DrawItem(
+            geometry,
+            state,
+            row,
+            transparent,
+            self.current_node,
+            self._group_path[-1],
+            tuple(self.context.mono_stack(Transform)),
+            local,
+        )
         self._scope.entries.append(item)
         return item
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..attributes import Tessellation
 from ..core.camera import Camera
+from ..core.component import ChangeJournal
 from ..core.engine import Engine
 from ..core.technique import Technique
 from ..image import Image
@@ -38,6 +39,7 @@ from .context import (
     depth_stencil_framebuffer,
 )
 from .drawlist import Batch, DrawItem, DrawState, Scope
+from .dynamic import TransformUpdater
 from .frame import FrameRunner
 from .geometry import Geometry, GeometryCache, unit_mesh
 from .imagespace import FullScreenPrograms
@@ -54,7 +56,7 @@ __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
 DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
-class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
+class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
 
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
@@ -135,7 +137,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._occurrences: dict[tuple[int, int], int] = {}
         self._next_occurrence = 0
         self._prune_limit = 4096
-        self._compiled: tuple[Any, int, Any] | None = None  # (scene ref, version, mask key)
+        self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
+        self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
+        self._dependent_index: dict[int, list[Any]] | None = None
         self._full_key: Any = None
         self._surface: list[Any] = []
         self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
@@ -313,7 +317,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
                 self.compile(scene, mask=mask)
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
+                self._journal.drain()  # nothing compiled to update in place: forget what changed
                 self._install(self._immediate)
+                self._dependent_index = None
                 self._immediate = Scope()
                 self._scope = self._immediate
                 self._compiled = None

@@ -100,10 +100,14 @@ class BatchRenderer:
             batch.dirty = (0, len(group))
             batch.uniform = uniform_material(batch.rows)
             batch.sorted_for = None
+            batch.position = None
             batches[key] = batch
             self._batch_pool[pool_key] = batch
         segment.batches = list(batches.values())
         segment.slots = [None if s is None else (batches[s[0]], s[1]) for s in slots]
+        if not where or where[0] != "filtered":
+            for item, slot in zip(items, segment.slots, strict=True):
+                item.slot = slot
         return segment
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
@@ -133,6 +137,7 @@ class BatchRenderer:
                 else:
                     batch, index = slot
                     batch.items[index] = y
+                    y.slot = slot
                     batch.rows[index] = y.row
                     batch.mark(index)
                     if batch.uniform and not uniform_material(batch.rows[[0, index]]):
@@ -287,12 +292,24 @@ class BatchRenderer:
         if fields:
             columns = self._columns(batch.layout)
             if n >= SORT_MIN and not state.special:
-                # opaque instances front to back: early depth tests then skip hidden fragments
-                if batch.dirty is not None or batch.sorted_for != self._view_key:
+                # opaque instances front to back: early depth tests then skip hidden fragments; the order is
+                # made again when the view changes, and rows that changed are rewritten where they lie
+                if batch.sorted_for != self._view_key or batch.position is None or len(batch.position) != n:
                     z = batch.rows[:, _TRANSLATION] @ self._view[2, :3]
                     order = np.argsort(-z, kind="stable")
                     batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.position = np.empty(n, np.int64)
+                    batch.position[order] = np.arange(n)
                     batch.sorted_for = self._view_key
+                    batch.dirty = None
+                elif batch.dirty is not None:
+                    lo, hi = batch.dirty
+                    where = batch.position[lo:hi]
+                    first, last = int(where.min()), int(where.max()) + 1
+                    order = np.empty(n, np.int64)
+                    order[batch.position] = np.arange(n)
+                    data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
+                    batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
                     batch.dirty = None
             elif batch.dirty is not None:
                 lo, hi = batch.dirty
