@@ -328,7 +328,7 @@ class LightPainter(AttributePainter):
         color = np.asarray(light.diffuse, dtype=np.float64)
         if isinstance(light, DirectionalLight):
             d = light.world_direction(world)
-            text = f"light_source {{ {sdl.vector(-d * 1e5)} {sdl.color(color)} parallel point_at <0,0,0> }}\n"
+            text = f"light_source {{ {sdl.vector(-d * 1e5)} {sdl.color(color)} parallel point_at <0,0,0>"
         else:
             p = light.world_position(world)
             scale, fade = _fade(light)
@@ -343,7 +343,9 @@ class LightPainter(AttributePainter):
                     f" spotlight point_at {sdl.vector(p + axis)} radius {_n(radius * 0.999)}"
                     f" falloff {_n(cutoff)} tightness {_n(light.exponent)}"
                 )
-            text += " }\n"
+        if not light.casts_shadows:
+            text += " shadowless"
+        text += " }\n"
         engine.lights_sdl.append(text)
         engine.light_texts[id(light)] = text
 
