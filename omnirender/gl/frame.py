@@ -30,6 +30,7 @@ from .context import GLError, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import Composed, FullScreen, Pass, Target
+from .shadows import ShadowPlan, caster_bounds, frame_settings
 from .state import GLCalls, RasterApplier
 
 __all__ = ["FrameRunner", "PassRecord"]
@@ -129,8 +130,10 @@ class FrameRunner:
         self._targets_used: set[Target] = set()
         self._frame_targets = {}
         root = self._root if self._root is not None else Scope()
+        self._shadow_plan = None
         try:
-            calls = self._run(self.technique, root, Composed(), item_level=True)
+            calls = self._shadow_map_passes(root)
+            calls += self._run(self.technique, root, Composed(), item_level=True)
         finally:
             self._close_query()
             self._restore_defaults()
@@ -153,6 +156,32 @@ class FrameRunner:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
 
+    def _shadow_map_passes(self, root: Scope) -> int:
+        """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
+        settings = frame_settings(root if self._root is not None else None, self.shadows)
+        if settings is None:
+            return 0
+        lights = [(light, m) for light, m in self.scene_lights if getattr(light, "casts_shadows", False)]
+        if not lights:
+            return 0
+        if self._caster_bounds is None:
+            self._caster_bounds = (caster_bounds(root),)
+        bounds = self._caster_bounds[0]
+        if bounds is None:
+            return 0
+        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+        plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
+        if plan is None:
+            plan = ShadowPlan(settings, lights, bounds)
+            self._shadow_cache = (key, plan, plan.technique())
+        technique = self._shadow_cache[2]
+        if technique is None:
+            return 0
+        calls = self._run(technique, root, Composed(), item_level=True)
+        self._shadow_plan = plan
+        return calls
+
     def _set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         self._view = view
         self._proj = proj
@@ -161,6 +190,7 @@ class FrameRunner:
         self._frame_uniforms = {
             "u_view": view.T.astype(np.float32).tobytes(),
             "u_proj": proj.T.astype(np.float32).tobytes(),
+            "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
         }
         self._light_cache = {}
 
@@ -202,6 +232,7 @@ class FrameRunner:
         )
         self._records.append(record)
         saved_target = self._bind_target(description.target) if description.target is not None else None
+        saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
         saved_camera = None
         if description.camera is not None:
             saved_camera = (self._view, self._proj, self._ortho)
@@ -216,16 +247,21 @@ class FrameRunner:
         try:
             if description.clear is not None:
                 self._clear(description.clear)
+            source = self._root if description.source == "scene" and self._root is not None else scope
             if description.fullscreen is not None:
                 calls = self._fullscreen(description.fullscreen)
+            elif composed.scopes == "items":  # every item below, without running the nested techniques
+                calls = sum(self._draw_items(s, composed, None) for s in source.walk())
             elif item_level:
-                calls = self._draw_items(scope, composed, lambda child: self._nested(child, composed))
+                calls = self._draw_items(source, composed, lambda child: self._nested(child, composed))
             else:
-                calls = self._run(self.technique, scope, composed, item_level=True)
+                calls = self._run(self.technique, source, composed, item_level=True)
         finally:
             self._leave_record()
             if saved_camera is not None:
                 self._set_camera(*saved_camera)
+            if saved_viewport is not None:
+                self._restore_viewport(saved_viewport)
             if saved_target is not None:
                 self._unbind_target(saved_target)
         return calls
@@ -276,7 +312,12 @@ class FrameRunner:
         key = (description, self._size)
         target = self._target_cache.get(key)
         if target is None:
-            size = (max(1, round(self._size[0] * description.scale)), max(1, round(self._size[1] * description.scale)))
+            size = description.pixels(self._size)
+            if max(size) > self.max_texture_size:
+                raise ValueError(
+                    f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
+                    f"allows ({self.max_texture_size} per side); lower its size or resolution"
+                )
             target = self._target_cache[key] = RenderTarget(self.ctx, description, size)
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
@@ -299,6 +340,16 @@ class FrameRunner:
         self._applier.gl.size = size
         self._target_size = size
         self._linear_output = linear
+
+    def _set_viewport(self, box: tuple[int, int, int, int]) -> tuple:
+        """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound target."""
+        saved = (self.ctx.viewport, self._target_size)
+        self.ctx.viewport = box
+        self._target_size = (box[2], box[3])
+        return saved
+
+    def _restore_viewport(self, saved: tuple) -> None:
+        self.ctx.viewport, self._target_size = saved
 
     def _release_unused_targets(self) -> None:
         for key in [k for k in self._target_cache if k not in self._targets_used]:

@@ -26,11 +26,14 @@ from .lighting import LightUniforms
 from .passes import Composed
 from .resources import gpu_call
 from .shaders import instance_fields
-from .state import LineWidth
+from .shadows import ATLAS, SHADOW_UNIT
+from .state import LineWidth, ShadowingState
 
 __all__ = ["BatchRenderer", "SORT_MIN"]
 
 _GL_CLIP_DISTANCE0 = 0x3000
+#: First texture unit of a pass's Shader inputs (after the shadow atlas; units below are the materials').
+PASS_INPUT_UNIT = SHADOW_UNIT + 1
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
@@ -49,6 +52,7 @@ class BatchRenderer:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
         old = self._root
         self._bounds = None
+        self._caster_bounds = None
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             return
@@ -182,7 +186,7 @@ class BatchRenderer:
         if "opaque" in classes or composed.scopes:
             for index, part in enumerate(parts):
                 if isinstance(part, Scope):
-                    if composed.scopes:
+                    if composed.scopes is True:
                         calls += nested(part)
                     continue
                 if "opaque" in classes:
@@ -245,6 +249,10 @@ class BatchRenderer:
             lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
             if lit:
                 features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+                plan = self._shadow_plan
+                if plan is not None and state.raster[ShadowingState.index][1]:
+                    if not any(name == "SHADOWS_OFF" for name, _ in shading):
+                        features = features + (("SHADOW_MAPS", len(plan)),)
             if self._ortho:
                 features = features + (("ORTHO", True),)
             if not uniform:
@@ -359,7 +367,10 @@ class BatchRenderer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(data)
-        self._lights_for(state.switch).apply(prog)
+        lights = self._lights_for(state.switch)
+        lights.apply(prog)
+        if self._shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
+            self._shadow_plan.apply(prog, self.target(ATLAS).depth, lights.order)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -383,7 +394,19 @@ class BatchRenderer:
         for name, value in composed.uniforms().items():
             u = prog.get(name, None)
             if u is not None:
-                u.value = value
+                if isinstance(value, tuple) and len(value) > 4:  # arrays and matrices: written as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
+        inputs = composed.inputs()
+        if inputs:
+            for unit, (uniform, (name, attachment)) in enumerate(sorted(inputs.items()), start=PASS_INPUT_UNIT):
+                u = prog.get(uniform, None)
+                if u is not None:
+                    target = self.target(name)
+                    texture = target.depth if attachment == "depth" else target.texture(attachment)
+                    texture.use(unit)
+                    u.value = unit
 
     def _apply_raster(self, raster: tuple, state: DrawState) -> None:
         self._applier.apply(raster)

@@ -1,0 +1,96 @@
+"""GLSL of the shadow techniques, inserted into the lit fragment shader at ``SHADOW_CODE``.
+
+Kept apart from the material code of :mod:`.shaders`: the light loops call
+``SHADOW_ATT(i)`` after computing light ``i``'s attenuation ``att``, and scale
+the ambient and emitted terms by ``AMBIENT_ON``.  Without the features below
+both are no-ops.
+
+* ``SHADOW_MAPS`` (the number of map faces in the frame's atlas): light ``i``
+  is looked up in its face of the shadow-map atlas (``u_lshadow[i]``: first
+  face and face count, 0 for a light without shadows, 1 for directional and
+  spot lights, 6 for point lights, whose face is the major axis of the
+  direction from the light), with normal offset and depth bias measured in
+  texels of that face, and ``u_shadow_style.x`` texels of percentage-closer
+  filtering (3x3 filtered taps; 0: one tap, hard shadows).
+* ``LIGHT_SELECT``: ``u_light_on[i]`` scales light ``i`` and ``u_ambient_on``
+  the ambient and emitted light (the additive passes of shadow volumes).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["shadow_code", "MAX_SHADOW_FACES"]
+
+#: Faces a frame's atlas holds at most (4 point lights, or 24 directional/spot lights).
+MAX_SHADOW_FACES = 24
+
+_MAPS = """
+uniform sampler2DShadow u_shadow_atlas;
+uniform vec4 u_lshadow[MAX_LIGHTS];          // first face, face count (0 none, 1, 6)
+uniform mat4 u_shadow_mat[SHADOW_MAPS];      // world -> clip space of the face's light camera
+uniform vec4 u_shadow_tile[SHADOW_MAPS];     // atlas uv offset (xy) and size (zw); size 0: no map (lit)
+uniform vec2 u_shadow_texel[SHADOW_MAPS];    // world size of one texel: x + y * (distance from the light)
+uniform vec3 u_shadow_style;                 // softness, depth bias, normal offset (texels)
+float shadow_lookup(vec4 tile, vec2 uv, float z) {
+    vec2 texel = 1.0 / vec2(textureSize(u_shadow_atlas, 0));
+    vec2 lo = tile.xy + texel, hi = tile.xy + tile.zw - texel;
+    if (u_shadow_style.x <= 0.0) return texture(u_shadow_atlas, vec3(clamp(tile.xy + uv * tile.zw, lo, hi), z));
+    float lit = 0.0;
+    for (int y = -1; y <= 1; ++y)
+        for (int x = -1; x <= 1; ++x) {
+            vec2 at = tile.xy + uv * tile.zw + vec2(x, y) * u_shadow_style.x * texel;
+            lit += texture(u_shadow_atlas, vec3(clamp(at, lo, hi), z));
+        }
+    return lit / 9.0;
+}
+float light_shadow(int i, vec3 P, vec3 N, vec3 L) {
+    int count = int(u_lshadow[i].y);
+    if (count == 0) return 1.0;
+    int f = int(u_lshadow[i].x);
+    vec3 W = (u_eye_to_world * vec4(P, 1.0)).xyz;
+    mat3 rot = mat3(u_eye_to_world);
+    if (count == 6) {
+        vec3 d = W - (u_eye_to_world * vec4(u_lpos[i].xyz, 1.0)).xyz;
+        vec3 a = abs(d);
+        f += a.x >= a.y && a.x >= a.z ? (d.x > 0.0 ? 0 : 1) : (a.y >= a.z ? (d.y > 0.0 ? 2 : 3) : (d.z > 0.0 ? 4 : 5));
+    }
+    vec4 tile = u_shadow_tile[f];
+    if (tile.z <= 0.0) return 1.0;
+    vec4 clip = u_shadow_mat[f] * vec4(W, 1.0);
+    float texel = u_shadow_texel[f].x + u_shadow_texel[f].y * max(clip.w, 0.0);
+    float slope = clamp(1.0 - abs(dot(N, L)), 0.0, 1.0);
+    vec3 NW = rot * N, LW = rot * L;
+    // normal offset (grows at grazing light) and a depth bias towards the light, both in texels of the face
+    W += NW * (u_shadow_style.z * texel * slope) + LW * (u_shadow_style.y * texel);
+    clip = u_shadow_mat[f] * vec4(W, 1.0);
+    if (clip.w <= 0.0) return 1.0;
+    vec3 q = clip.xyz / clip.w * 0.5 + 0.5;
+    if (count == 1 && (q.x < 0.0 || q.x > 1.0 || q.y < 0.0 || q.y > 1.0)) return 1.0;  // no caster there
+    return shadow_lookup(tile, clamp(q.xy, 0.0, 1.0), clamp(q.z, 0.0, 1.0));
+}
+#define SHADOW_MAP_ATT(i) att *= light_shadow(i, P, N, L);
+"""
+
+_SELECT = """
+uniform float u_light_on[MAX_LIGHTS];
+uniform float u_ambient_on;
+#define AMBIENT_ON u_ambient_on
+#define LIGHT_SELECT_ATT(i) att *= u_light_on[i];
+"""
+
+
+def shadow_code(features: dict[str, Any]) -> str:
+    """The GLSL for the shadow features of a program variant (``SHADOW_ATT`` and ``AMBIENT_ON`` always)."""
+    parts = []
+    calls = []
+    if features.get("SHADOW_MAPS"):
+        parts.append(_MAPS)
+        calls.append("SHADOW_MAP_ATT(i)")
+    if features.get("LIGHT_SELECT"):
+        parts.append(_SELECT)
+        calls.append("LIGHT_SELECT_ATT(i)")
+    else:
+        parts.append("#define AMBIENT_ON 1.0")
+    parts.append("#define SHADOW_ATT(i) " + " ".join(calls))
+    return "\n".join(parts) + "\n"
