@@ -22,6 +22,7 @@ frames describe the same targets and released when no pass uses them any more.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -30,6 +31,7 @@ from .context import GLError, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import Composed, FullScreen, Pass, Target
+from .mirrors import Mirrors, mirror_items
 from .shadows import ShadowPlan, caster_bounds, frame_settings
 from .state import GLCalls, RasterApplier
 
@@ -115,6 +117,7 @@ class FrameRunner:
         self._applier = RasterApplier(GLCalls(ctx, self.raw, fbo, self._target_size))
         self._nclip = 0
         set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        self._frame_background = background
         if clear:
             fbo.clear(*self.clear_color(background), depth=1.0)
             if self.has_stencil and not self._target_stack:
@@ -134,6 +137,7 @@ class FrameRunner:
         try:
             calls = self._shadow_map_passes(root)
             calls += self._run(self.technique, root, Composed(), item_level=True)
+            calls += self._mirror_passes(root)
         finally:
             self._close_query()
             self._restore_defaults()
@@ -181,6 +185,21 @@ class FrameRunner:
         calls = self._run(technique, root, Composed(), item_level=True)
         self._shadow_plan = plan
         return calls
+
+    def _mirror_passes(self, root: Scope) -> int:
+        """The mirror stage (:mod:`.mirrors`) after the frame's technique; returns the draw calls made."""
+        if self._mirrors is None:
+            self._mirrors = mirror_items(root.all_items()) if self._root is not None else []
+        if not self._mirrors:
+            return 0
+        if not self.has_stencil or self._target_stack:
+            if not self._warned_mirrors:
+                self._warned_mirrors = True
+                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
+                              "surfaces here", stacklevel=4)  # fmt: skip
+            return 0
+        technique = Mirrors.plan(self._mirrors, self._view, self._proj, self.clear_color(self._frame_background))
+        return self._run(technique, root, Composed(), item_level=False)
 
     def _set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         self._view = view
@@ -234,6 +253,8 @@ class FrameRunner:
         saved_target = self._bind_target(description.target) if description.target is not None else None
         saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
         saved_camera = None
+        if description.front_face != "ccw":
+            self.ctx.front_face = description.front_face
         if description.camera is not None:
             saved_camera = (self._view, self._proj, self._ortho)
             view, proj = description.camera
@@ -262,6 +283,8 @@ class FrameRunner:
                 self._set_camera(*saved_camera)
             if saved_viewport is not None:
                 self._restore_viewport(saved_viewport)
+            if description.front_face != "ccw":
+                self.ctx.front_face = "ccw"
             if saved_target is not None:
                 self._unbind_target(saved_target)
         return calls

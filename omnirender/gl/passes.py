@@ -13,7 +13,7 @@ A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(..
 * **how**: ``state`` (GL state attributes forced on every item, e.g.
   ``CullFace("front")``), ``fallback`` (applied where an item has the
   default), ``camera`` (an ``om.Camera`` or ``(view, projection)`` matrices,
-  e.g. a light's), ``shader`` (:class:`Shader`: depth only, flat colour,
+  e.g. a light's), ``front_face`` (``"cw"`` for mirrored views), ``shader`` (:class:`Shader`: depth only, flat colour,
   unlit, user GLSL snippets), or ``fullscreen`` (:class:`FullScreen`: an
   image-space pass that draws one full-screen triangle instead of items).
 
@@ -288,6 +288,7 @@ class Pass:
     state: tuple[Any, ...] = ()
     fallback: tuple[Any, ...] = ()
     camera: Any = None
+    front_face: str = "ccw"
     shader: Shader | None = None
     fullscreen: FullScreen | None = None
     _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
@@ -301,6 +302,8 @@ class Pass:
             from ..core.mask import compile_mask
 
             compile_mask(self.mask)  # a syntax error is reported here, with the expression
+        if self.front_face not in ("ccw", "cw"):
+            raise ValueError(f"Pass {self.name!r}: front_face must be 'ccw' or 'cw' (mirrored views), got {self.front_face!r}")
         if self.scopes not in (True, False, "items"):
             raise ValueError(f"Pass {self.name!r}: scopes must be True, False or 'items', got {self.scopes!r}")
         if self.source not in ("scope", "scene"):
@@ -357,6 +360,7 @@ class Pass:
             self._state,
             self._fallback,
             camera,
+            self.front_face,
             self.shader,
             self.fullscreen,
         )

@@ -53,6 +53,7 @@ class BatchRenderer:
         old = self._root
         self._bounds = None
         self._caster_bounds = None
+        self._mirrors = None
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             return
