@@ -14,8 +14,10 @@ with them:
   lights; a Mirror adds ``reflection`` to the finish.
 * Mitsuba and Radiance: a path tracer's lights always cast shadows and every
   surface receives them; they warn once (naming the node) when a scene asks
-  otherwise.  A Mirror blends the surface with a perfect conductor (Mitsuba)
-  or adds a ``mirror`` material (Radiance).
+  otherwise.  Mitsuba blends a Mirror's surface with a perfect conductor
+  (``blendbsdf``; the background is composited behind the image, so a mirror
+  does not show it); Radiance draws the surface without the mirror, with a
+  warning.
 """
 
 from __future__ import annotations
@@ -85,3 +87,53 @@ class Mirror(Parameterised, MonoAttribute):
         n, offset = self._plane
         p = np.linalg.inv(np.asarray(matrix, dtype=np.float64)).T @ np.array([*n, -offset])
         return p / np.linalg.norm(p[:3])
+
+
+def warn_unsupported(engine: Any, label: str, what: str, fix: str) -> None:
+    """Warn once per engine run and kind of request that ``label`` cannot honour ``what`` (naming the node)."""
+    seen = engine.__dict__.setdefault("_shadowing_warned", set())
+    if what in seen:
+        return
+    seen.add(what)
+    import warnings
+
+    warnings.warn(f"{label}: {what} in node {engine.node_path or '/'} is ignored: {fix}", stacklevel=3)
+
+
+def check_light_shadows(engine: Any, light: Any, label: str) -> None:
+    """Warn (once) that a light with ``casts_shadows=False`` still casts shadows in a path tracer."""
+    if not getattr(light, "casts_shadows", True) and getattr(light, "ambient", None) is not None:
+        from .lights import AmbientLight
+
+        if not isinstance(light, AmbientLight):
+            warn_unsupported(engine, label, "casts_shadows=False on a light",
+                             "its shadows stay (render with GL or POV-Ray for shadowless lights)")  # fmt: skip
+
+
+def register_shadowing_warnings(engine_cls: type, label: str, mirror: bool) -> None:
+    """Default painters of ``engine_cls`` that warn about ``Shadowing`` (and ``Mirror`` unless it is supported)."""
+    from ..core import AttributePainter, default_for
+
+    class _ShadowingWarning(AttributePainter):
+        __slots__ = ()
+        service = engine_cls.service
+        target = Shadowing
+
+        def exec(self, attribute: Shadowing, engine: Any) -> None:
+            if not (attribute.cast and attribute.receive):
+                warn_unsupported(engine, label, "Shadowing(cast=False) or Shadowing(receive=False)",
+                                 "every shape casts and receives shadows here (GL and POV-Ray honour it)")  # fmt: skip
+
+    default_for(engine_cls)(type(f"{engine_cls.__name__}ShadowingWarning", (_ShadowingWarning,), {"__slots__": ()}))
+    if mirror:
+        return
+
+    class _MirrorWarning(AttributePainter):
+        __slots__ = ()
+        service = engine_cls.service
+        target = Mirror
+
+        def exec(self, attribute: Mirror, engine: Any) -> None:
+            warn_unsupported(engine, label, "Mirror", "the surface is drawn with its material only")
+
+    default_for(engine_cls)(type(f"{engine_cls.__name__}MirrorWarning", (_MirrorWarning,), {"__slots__": ()}))
