@@ -80,3 +80,14 @@ def test_shadow_maps_agree_with_povray(light):
     score = iou(gl, pov)
     print(f"shadow maps, {light} light: IoU {score:.3f} ({gl.sum()} GL / {pov.sum()} POV-Ray shadow pixels)")
     assert score >= SHADOW_MAP_IOU
+
+
+@pytest.mark.gl
+@pytest.mark.povray
+@pytest.mark.parametrize("light", sorted(LIGHTS))
+def test_shadow_volumes_agree_with_povray(light):
+    pov = povray_mask(light)
+    gl = shadow_mask("gl", light, om.gl.ShadowVolumes(), samples=0)
+    score = iou(gl, pov)
+    print(f"shadow volumes, {light} light: IoU {score:.3f} ({gl.sum()} GL / {pov.sum()} POV-Ray shadow pixels)")
+    assert score >= SHADOW_VOLUME_IOU

@@ -32,6 +32,7 @@ __all__ = [
     "StencilOp",
     "ScissorTest",
     "AlphaTest",
+    "DepthClamp",
 ]
 
 _FUNCS = ("never", "less", "equal", "lequal", "greater", "notequal", "gequal", "always")
@@ -396,3 +397,27 @@ class AlphaTest(GLState):
     @classmethod
     def uniforms(cls, value: Any) -> tuple[tuple[str, Any], ...]:
         return () if value is None else (("u_alpha_ref", float(value[1])),)
+
+
+class DepthClamp(GLState):
+    """Clamp depth to the far plane instead of clipping (GL_DEPTH_CLAMP): shadow volumes reach infinity."""
+
+    __slots__ = ("enabled",)
+    default = False
+
+    def __init__(self, enabled: bool = True) -> None:
+        super().__init__()
+        self.enabled = bool(enabled)
+
+    def capture(self) -> bool:
+        return self.enabled
+
+    @classmethod
+    def apply(cls, gl: GLCalls, value: Any) -> None:
+        if value:
+            gl.ctx.enable_direct(_GL_DEPTH_CLAMP)
+        else:
+            gl.ctx.disable_direct(_GL_DEPTH_CLAMP)
+
+
+_GL_DEPTH_CLAMP = 0x864F

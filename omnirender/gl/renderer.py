@@ -352,6 +352,10 @@ class BatchRenderer:
             if u is not None:
                 u.write(row[ROW.slice(field)].tobytes())
 
+    def light_order(self) -> list[Any]:
+        """The lights of the pass being drawn in shader order (index i is light i of the light loops)."""
+        return self._lights_for(None).order
+
     def _lights_for(self, switch: Any) -> LightUniforms:
         key = id(switch)
         lu = self._light_cache.get(key)

@@ -26,7 +26,7 @@ from __future__ import annotations
 from typing import Any
 
 from .layout import PBR, PHONG
-from .shadow_glsl import shadow_code
+from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
 __all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
 
@@ -595,7 +595,9 @@ class ProgramCache:
         if kind == "points":
             defines["POINTS"] = True
         head = _header(dict(defines))
-        if kind in ("mesh", "points"):
+        if kind == "mesh" and "SHADOW_VOLUME" in defines:
+            vs, gs, fs = VERTEX, VOLUME_GEOMETRY, VOLUME_FRAGMENT
+        elif kind in ("mesh", "points"):
             vs, gs, fs = VERTEX, None, FRAGMENT
         elif kind == "lines":
             vs, gs, fs = LINE_VERTEX, LINE_GEOMETRY, LINE_FRAGMENT

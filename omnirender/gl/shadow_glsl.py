@@ -94,3 +94,43 @@ def shadow_code(features: dict[str, Any]) -> str:
         parts.append("#define AMBIENT_ON 1.0")
     parts.append("#define SHADOW_ATT(i) " + " ".join(calls))
     return "\n".join(parts) + "\n"
+
+
+#: Geometry shader of the shadow-volume passes (``SHADOW_VOLUME``): every triangle of a closed mesh that faces
+#: the light becomes a prism reaching to infinity (near cap, far cap, three sides).  Inner sides of
+#: neighbouring triangles cancel in the stencil count, so the count is that of the silhouette's volume.
+VOLUME_GEOMETRY = """
+layout(triangles) in;
+layout(triangle_strip, max_vertices = 18) out;
+in vec3 v_pos[];
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform vec4 u_volume_light;   // world: position (w = 1) or the direction towards the light (w = 0)
+void main() {
+    vec3 p[3] = vec3[3](v_pos[0], v_pos[1], v_pos[2]);
+    vec4 l = u_view * u_volume_light;
+    vec3 n = cross(p[1] - p[0], p[2] - p[0]);
+    vec3 towards = l.w > 0.5 ? l.xyz - p[0] : l.xyz;
+    if (dot(n, towards) <= 0.0) return;
+    vec4 near[3], far[3];
+    for (int i = 0; i < 3; ++i) {
+        near[i] = u_proj * vec4(p[i], 1.0);
+        far[i] = u_proj * vec4(l.w > 0.5 ? p[i] - l.xyz : -l.xyz, 0.0);
+    }
+    gl_Position = near[0]; EmitVertex(); gl_Position = near[1]; EmitVertex(); gl_Position = near[2]; EmitVertex();
+    EndPrimitive();
+    gl_Position = far[0]; EmitVertex(); gl_Position = far[2]; EmitVertex(); gl_Position = far[1]; EmitVertex();
+    EndPrimitive();
+    for (int i = 0; i < 3; ++i) {
+        int j = (i + 1) % 3;
+        gl_Position = near[i]; EmitVertex(); gl_Position = far[i]; EmitVertex();
+        gl_Position = near[j]; EmitVertex(); gl_Position = far[j]; EmitVertex();
+        EndPrimitive();
+    }
+}
+"""
+
+VOLUME_FRAGMENT = """
+out vec4 f_color;
+void main() { f_color = vec4(0.0); }
+"""

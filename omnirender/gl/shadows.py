@@ -233,6 +233,11 @@ def frame_settings(root: Scope | None, enabled: bool) -> ShadowMaps | None:
     """The frame's shadow-map settings: the scene's first ShadowMaps, else the defaults; None when off."""
     if not enabled or root is None:
         return None
+    from .shadow_volumes import ShadowVolumes
+
+    if len(root.entries) == 1 and isinstance(root.entries[0], Scope):
+        if isinstance(root.entries[0].technique, ShadowVolumes):
+            return None  # the whole scene has exact shadow volumes: no maps needed
     for scope in root.walk():
         if isinstance(scope.technique, ShadowMaps):
             whole = len(root.entries) == 1 and root.entries[0] is scope
