@@ -115,6 +115,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._shadow_plan: Any = None
         self._shadow_cache: Any = None
         self._caster_bounds: Any = None
+        self._shadow_drawn: Any = None
         self._mirrors: Any = None
         self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()

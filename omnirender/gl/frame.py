@@ -182,8 +182,14 @@ class FrameRunner:
         technique = self._shadow_cache[2]
         if technique is None:
             return 0
-        calls = self._run(technique, root, Composed(), item_level=True)
         self._shadow_plan = plan
+        drawn = (key, self._caster_bounds, self._size)
+        last = self._shadow_drawn
+        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
+        if fresh and self._keep_target(plan.target):
+            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
+        calls = self._run(technique, root, Composed(), item_level=True)
+        self._shadow_drawn = drawn
         return calls
 
     def _mirror_passes(self, root: Scope) -> int:
@@ -373,6 +379,16 @@ class FrameRunner:
 
     def _restore_viewport(self, saved: tuple) -> None:
         self.ctx.viewport, self._target_size = saved
+
+    def _keep_target(self, description: Target) -> bool:
+        """Keep the target of ``description`` from the last frame in this one (False when it is gone)."""
+        key = (description, self._size)
+        target = self._target_cache.get(key)
+        if target is None:
+            return False
+        self._targets_used.add(key)
+        self._frame_targets[description.name] = target
+        return True
 
     def _release_unused_targets(self) -> None:
         for key in [k for k in self._target_cache if k not in self._targets_used]:

@@ -65,13 +65,9 @@ class RenderTarget:
         self.depth = None
         if description.depth:
             self.depth = gpu_call(ctx.depth_texture, size, what=f"depth of target {description.name!r}")
+            self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
             self.depth.repeat_x = self.depth.repeat_y = False
-            if description.compare:  # sampler2DShadow: filtered comparisons (2x2 percentage-closer filtering)
-                self.depth.filter = (ctx.LINEAR, ctx.LINEAR)
-                self.depth.compare_func = "<="
-            else:
-                self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
-                self.depth.compare_func = ""  # sample depth values, not comparisons
+            self.depth.compare_func = ""  # sample depth values, not comparisons
         self.fbo = ctx.framebuffer(list(self.colors.values()), self.depth)
 
     def texture(self, name: str) -> Any:

@@ -253,7 +253,7 @@ class BatchRenderer:
                 plan = self._shadow_plan
                 if plan is not None and state.raster[ShadowingState.index][1]:
                     if not any(name == "SHADOWS_OFF" for name, _ in shading):
-                        features = features + (("SHADOW_MAPS", len(plan)),)
+                        features = features + plan.features()
             if self._ortho:
                 features = features + (("ORTHO", True),)
             if not uniform:

@@ -10,8 +10,11 @@ both are no-ops.
   face and face count, 0 for a light without shadows, 1 for directional and
   spot lights, 6 for point lights, whose face is the major axis of the
   direction from the light), with normal offset and depth bias measured in
-  texels of that face, and ``u_shadow_style.x`` texels of percentage-closer
-  filtering (3x3 filtered taps; 0: one tap, hard shadows).
+  texels of that face, and percentage-closer filtering chosen at compile
+  time by ``SHADOW_PCF`` (0: one comparison, hard shadows; 1: bilinear 2x2;
+  2: four bilinear taps spread over ``u_shadow_style.x`` texels).  Software
+  rasterisers run every side of a branch, so the filter is a define, not a
+  uniform.
 * ``LIGHT_SELECT``: ``u_light_on[i]`` scales light ``i`` and ``u_ambient_on``
   the ambient and emitted light (the additive passes of shadow volumes).
 """
@@ -20,33 +23,46 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["shadow_code", "MAX_SHADOW_FACES"]
+__all__ = ["shadow_code", "pcf_mode", "MAX_SHADOW_FACES"]
 
 #: Faces a frame's atlas holds at most (4 point lights, or 24 directional/spot lights).
 MAX_SHADOW_FACES = 24
 
 _MAPS = """
-uniform sampler2DShadow u_shadow_atlas;
+uniform sampler2D u_shadow_atlas;             // window depth of the faces' casters (raw values)
 uniform vec4 u_lshadow[MAX_LIGHTS];          // first face, face count (0 none, 1, 6)
 uniform mat4 u_shadow_mat[SHADOW_MAPS];      // world -> clip space of the face's light camera
-uniform vec4 u_shadow_tile[SHADOW_MAPS];     // atlas uv offset (xy) and size (zw); size 0: no map (lit)
+uniform vec4 u_shadow_tile[SHADOW_MAPS];     // atlas texel offset (xy) and size (zw); size 0: no map (lit)
 uniform vec2 u_shadow_texel[SHADOW_MAPS];    // world size of one texel: x + y * (distance from the light)
 uniform vec3 u_shadow_style;                 // softness, depth bias, normal offset (texels)
+// texelFetch and our own comparisons: software rasterisers (llvmpipe) compare-and-filter far more slowly
+float shadow_at(vec4 tile, vec2 t, float z) {
+    ivec2 c = ivec2(clamp(t, tile.xy, tile.xy + tile.zw - 1.0));
+    return texelFetch(u_shadow_atlas, c, 0).r < z ? 0.0 : 1.0;
+}
+float shadow_bilinear(vec4 tile, vec2 t, float z) {  // 2x2 percentage-closer filter, bilinear weights
+    vec2 b = t - 0.5;
+    vec2 f = fract(b);
+    vec2 c = floor(b);
+    float s00 = shadow_at(tile, c + 0.5, z), s10 = shadow_at(tile, c + vec2(1.5, 0.5), z);
+    float s01 = shadow_at(tile, c + vec2(0.5, 1.5), z), s11 = shadow_at(tile, c + 1.5, z);
+    return mix(mix(s00, s10, f.x), mix(s01, s11, f.x), f.y);
+}
 float shadow_lookup(vec4 tile, vec2 uv, float z) {
-    vec2 texel = 1.0 / vec2(textureSize(u_shadow_atlas, 0));
-    vec2 lo = tile.xy + texel, hi = tile.xy + tile.zw - texel;
-    if (u_shadow_style.x <= 0.0) return texture(u_shadow_atlas, vec3(clamp(tile.xy + uv * tile.zw, lo, hi), z));
-    float lit = 0.0;
-    for (int y = -1; y <= 1; ++y)
-        for (int x = -1; x <= 1; ++x) {
-            vec2 at = tile.xy + uv * tile.zw + vec2(x, y) * u_shadow_style.x * texel;
-            lit += texture(u_shadow_atlas, vec3(clamp(at, lo, hi), z));
-        }
-    return lit / 9.0;
+    vec2 t = tile.xy + uv * tile.zw;   // texels of the atlas
+#if SHADOW_PCF == 0
+    return shadow_at(tile, t, z);
+#elif SHADOW_PCF == 1
+    return shadow_bilinear(tile, t, z);
+#else
+    float h = 0.5 * max(u_shadow_style.x - 1.0, 0.0);  // four filtered taps spread over the softness radius
+    return 0.25 * (shadow_bilinear(tile, t + vec2(-h, -h), z) + shadow_bilinear(tile, t + vec2(h, -h), z)
+                   + shadow_bilinear(tile, t + vec2(-h, h), z) + shadow_bilinear(tile, t + vec2(h, h), z));
+#endif
 }
 float light_shadow(int i, vec3 P, vec3 N, vec3 L) {
     int count = int(u_lshadow[i].y);
-    if (count == 0) return 1.0;
+    if (count == 0 || dot(N, L) <= 0.0) return 1.0;  // facing away: the light adds nothing anyway
     int f = int(u_lshadow[i].x);
     vec3 W = (u_eye_to_world * vec4(P, 1.0)).xyz;
     mat3 rot = mat3(u_eye_to_world);
@@ -80,11 +96,18 @@ uniform float u_ambient_on;
 """
 
 
+def pcf_mode(softness: float) -> int:
+    """The ``SHADOW_PCF`` define for a softness in texels."""
+    return 0 if softness <= 0.0 else 1 if softness <= 1.0 else 2
+
+
 def shadow_code(features: dict[str, Any]) -> str:
     """The GLSL for the shadow features of a program variant (``SHADOW_ATT`` and ``AMBIENT_ON`` always)."""
     parts = []
     calls = []
     if features.get("SHADOW_MAPS"):
+        if "SHADOW_PCF" not in features:
+            parts.append("#define SHADOW_PCF 1")
         parts.append(_MAPS)
         calls.append("SHADOW_MAP_ATT(i)")
     if features.get("LIGHT_SELECT"):

@@ -36,7 +36,7 @@ import numpy as np
 from ..core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from .drawlist import Scope
 from .passes import Clear, Pass, Shader, Target
-from .shadow_glsl import MAX_SHADOW_FACES
+from .shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from .state import casts_shadows
 from .techniques import GLTechnique
 
@@ -83,7 +83,7 @@ class ShadowMaps(GLTechnique):
     def __init__(
         self,
         enabled: bool = True,
-        resolution: int = 1024,
+        resolution: int = 512,
         softness: float = 1.0,
         bias: float = 2.0,
         normal_offset: float = 3.0,
@@ -105,7 +105,7 @@ class ShadowMaps(GLTechnique):
 
     def prepare_pass(self, engine: Any) -> None:
         if self.enabled:
-            shader = Shader(uniforms={"u_shadow_style": self.style()})
+            shader = Shader(uniforms={"u_shadow_style": self.style()}, defines={"SHADOW_PCF": pcf_mode(self.softness)})
         else:
             shader = Shader(defines={"SHADOWS_OFF": True})
         engine.set_pass(Pass("shadows" if self.enabled else "no-shadows", shader=shader))
@@ -160,7 +160,7 @@ class ShadowPlan:
         r = settings.resolution
         cols = max(1, math.ceil(math.sqrt(len(drawn))))
         rows = max(1, math.ceil(len(drawn) / cols))
-        self.target = Target(ATLAS, colors=(), depth=True, compare=True, size=(cols * r, rows * r))
+        self.target = Target(ATLAS, colors=(), depth=True, size=(cols * r, rows * r))
         for k, face in enumerate(drawn):
             face.tile = (k % cols, k // cols)
         self.cols, self.rows = cols, rows
@@ -168,6 +168,10 @@ class ShadowPlan:
 
     def __len__(self) -> int:
         return len(self.faces)
+
+    def features(self) -> tuple[tuple[str, Any], ...]:
+        """The program features of a receiver in this frame (a ShadowMaps pass may override the filter)."""
+        return (("SHADOW_MAPS", len(self.faces)), ("SHADOW_PCF", pcf_mode(self.settings.softness)))
 
     def technique(self) -> _MapPasses | None:
         """The depth passes, or None when no face needs drawing."""
@@ -203,7 +207,8 @@ class ShadowPlan:
             self.texels[k] = face.texel
             if face.tile is not None:
                 col, row = face.tile
-                self.tiles[k] = (col / self.cols, row / self.rows, 1.0 / self.cols, 1.0 / self.rows)
+                r = self.settings.resolution
+                self.tiles[k] = (col * r, row * r, r, r)
         self.style = np.asarray(self.settings.style(), np.float32)
 
     def light_array(self, order: list[Any], size: int) -> np.ndarray:
@@ -222,8 +227,8 @@ class ShadowPlan:
         for name, data in (("u_shadow_mat", self.matrices), ("u_shadow_tile", self.tiles),
                            ("u_shadow_texel", self.texels), ("u_shadow_style", self.style)):  # fmt: skip
             u = program.get(name, None)
-            if u is not None:
-                u.write(data.tobytes())
+            if u is not None:  # the compiler may trim arrays to the elements a variant reads
+                u.write(data[: u.array_length].tobytes() if data.ndim > 1 else data.tobytes())
         u = program.get("u_lshadow", None)
         if u is not None:
             u.write(self.light_array(order, u.array_length).tobytes())
