@@ -84,6 +84,16 @@ class FrameRunner:
         return self._proj
 
     @property
+    def frame_camera(self) -> Any:
+        """The ``om.Camera`` of the frame (its near and far planes, projection kind)."""
+        return self._camera_used
+
+    @property
+    def frame_eye(self) -> np.ndarray:
+        """World position of the eye of the pass being drawn."""
+        return np.linalg.inv(self._view)[:3, 3]
+
+    @property
     def frame_orthographic(self) -> bool:
         """Whether the pass being drawn uses an orthographic projection."""
         return self._ortho
@@ -446,7 +456,7 @@ class FrameRunner:
         ctx.disable(ctx.CULL_FACE)
         if effect.depth:
             ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "1"
+            ctx.depth_func = "<=" if effect.depth_test else "1"
             set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=True)
         else:
             ctx.disable(ctx.DEPTH_TEST)

@@ -249,7 +249,9 @@ class FullScreen:
     ``uniforms`` gives other uniform values.  ``blend=True`` composites the
     result over the target ("over", premultiplied by its alpha) instead of
     replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
-    effect_depth(vec2 uv)`` the snippet defines.
+    effect_depth(vec2 uv)`` the snippet defines; with ``depth_test=True``
+    that depth is tested (``<=``) against the target's, so the effect hides
+    behind nearer surfaces (image-space outlines).
     """
 
     fragment: str
@@ -257,10 +259,15 @@ class FullScreen:
     uniforms: Any = ()
     blend: bool = False
     depth: bool = False
+    depth_test: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.fragment, str) or "effect" not in self.fragment:
             raise ValueError("FullScreen: fragment must be GLSL defining vec4 effect(vec2 uv)")
+        if self.depth_test and not self.depth:
+            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
+        if self.depth_test and not self.depth:
+            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
         if self.depth and "effect_depth" not in self.fragment:
             raise ValueError("FullScreen: depth=True needs the snippet to define float effect_depth(vec2 uv)")
         object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
@@ -326,14 +333,20 @@ class Pass:
         from .attributes import GLState
 
         values = getattr(self, name)
-        if isinstance(values, GLState):
+        if isinstance(values, GLState) or (isinstance(values, tuple) and len(values) == 2 and isinstance(values[0], type)):
             values = (values,)
         out = []
         for attribute in values:
+            if isinstance(attribute, tuple) and len(attribute) == 2 and isinstance(attribute[0], type):
+                kind, value = attribute  # a derived kind's value, e.g. (FillMode, True) for wireframe
+                if getattr(kind, "index", -1) < 0:
+                    raise ValueError(f"Pass {self.name!r}: {kind!r} is not a registered GL state kind")
+                out.append((kind.index, value))
+                continue
             if not isinstance(attribute, GLState):
                 raise ValueError(
                     f"Pass {self.name!r}: {name} takes GL state attributes (om.gl.CullFace(...), om.gl.DepthMask(...)"
-                    f", ...), got {attribute!r}"
+                    f", ...) or (state kind, value) pairs, got {attribute!r}"
                 )
             out.append((type(attribute).index, attribute.capture()))
         object.__setattr__(self, name, tuple(values))
