@@ -20,6 +20,7 @@ from .picking import (
     pick,
     pixel_ray,
 )
+from . import csg_picking  # noqa: F401  (registers the CSG intersector)
 from .search import AttributeSearch, AttributeSearchEngine, attribute_search
 from .statistics import TriangleCountEngine, count_triangles
 
