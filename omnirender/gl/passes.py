@@ -178,7 +178,9 @@ class Shader:
       (``{"SHADOWS_OFF": True}``, ``{"LIGHT_SELECT": True}``; an inner pass's
       value of a name wins);
     * ``inputs``: sampler uniforms bound to offscreen targets,
-      ``{"u_shadow_atlas": ("shadow-atlas", "depth")}`` (texture units 8 and up).
+      ``{"u_shadow_atlas": ("shadow-atlas", "depth")}`` (texture units 8 and up);
+    * ``textures``: sampler uniforms bound to ``om.Texture`` images
+      (``{"u_highlight": om.Texture(pattern)}``).
     """
 
     depth_only: bool = False
@@ -189,6 +191,7 @@ class Shader:
     uniforms: Any = ()
     defines: Any = ()
     inputs: Any = ()
+    textures: Any = ()
 
     def __post_init__(self) -> None:
         if self.flat_color is not None:
@@ -208,6 +211,13 @@ class Shader:
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
         object.__setattr__(self, "defines", _defines(self.defines))
         object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
+        items = self.textures.items() if isinstance(self.textures, Mapping) else self.textures
+        textures = []
+        for uniform, texture in items:
+            if not isinstance(uniform, str) or not uniform.isidentifier() or not hasattr(texture, "image_array"):
+                raise ValueError(f"Shader: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}")
+            textures.append((uniform, texture))
+        object.__setattr__(self, "textures", tuple(sorted(textures, key=lambda p: p[0])))
 
 
 def _defines(values: Any) -> tuple[tuple[str, Any], ...]:
@@ -477,12 +487,14 @@ class Composed:
         out.extend((name, value) for name, value in sorted(defines.items()) if value is not False)
         return tuple(out)
 
-    def inputs(self) -> dict[str, tuple[str, str]]:
-        """Sampler inputs of the shader overrides: uniform -> (target name, attachment); inner ones win."""
-        out: dict[str, tuple[str, str]] = {}
+    def inputs(self) -> dict[str, Any]:
+        """Sampler inputs of the shader overrides: uniform -> (target name, attachment) or an om.Texture."""
+        out: dict[str, Any] = {}
         for s in self.shader:
             for uniform, target, attachment in s.inputs:
                 out[uniform] = (target, attachment)
+            for uniform, texture in s.textures:
+                out[uniform] = texture
         return out
 
     def uniforms(self) -> dict[str, Any]:

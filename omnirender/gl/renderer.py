@@ -405,11 +405,15 @@ class BatchRenderer:
                     u.value = value
         inputs = composed.inputs()
         if inputs:
-            for unit, (uniform, (name, attachment)) in enumerate(sorted(inputs.items()), start=PASS_INPUT_UNIT):
+            for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
                 u = prog.get(uniform, None)
                 if u is not None:
-                    target = self.target(name)
-                    texture = target.depth if attachment == "depth" else target.texture(attachment)
+                    if isinstance(source, tuple):
+                        name, attachment = source
+                        target = self.target(name)
+                        texture = target.depth if attachment == "depth" else target.texture(attachment)
+                    else:
+                        texture = self._texture(source)  # an om.Texture of the pass
                     texture.use(unit)
                     u.value = unit
 

@@ -17,6 +17,8 @@ both are no-ops.
   uniform.
 * ``LIGHT_SELECT``: ``u_light_on[i]`` scales light ``i`` and ``u_ambient_on``
   the ambient and emitted light (the additive passes of shadow volumes).
+* ``SPECULAR_OFF``: the Phong model without its specular term (the first
+  pass of ``om.gl.PhongHighlight``).
 """
 
 from __future__ import annotations
@@ -116,6 +118,8 @@ def shadow_code(features: dict[str, Any]) -> str:
     else:
         parts.append("#define AMBIENT_ON 1.0")
     parts.append("#define SHADOW_ATT(i) " + " ".join(calls))
+    if features.get("SPECULAR_OFF"):
+        parts.append("#undef M_SPEC\n#define M_SPEC vec4(0.0, 0.0, 0.0, 1.0)")
     return "\n".join(parts) + "\n"
 
 
