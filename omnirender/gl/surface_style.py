@@ -160,7 +160,7 @@ class SurfaceStyle(GLTechnique):
         else:
             eye = engine.frame_eye
             shader = self._lines()
-            pull = Shader(vertex=_PULL, uniforms={"u_style_eye": tuple(eye), "u_style_pull": 0.01})
+            pull = Shader(vertex=_PULL, uniforms={"u_style_eye": tuple(eye), "u_style_pull": 0.1})
             engine.set_pass(Pass("lines", items="opaque", shader=_merge(shader, pull), state=(
                 *wire, (LineWidth, self.width), DepthTest(True, "lequal"))))  # fmt: skip
 
