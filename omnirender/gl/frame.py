@@ -357,7 +357,7 @@ class FrameRunner:
                     f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
                     f"allows ({self.max_texture_size} per side); lower its size or resolution"
                 )
-            target = self._target_cache[key] = RenderTarget(self.ctx, description, size)
+            target = self._target_cache[key] = RenderTarget(self.ctx, description, size, self.raw)
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
         saved = (self._applier.gl.framebuffer, self._target_size, self._linear_output)

@@ -99,7 +99,9 @@ class Target:
     that order), ``depth`` adds a depth texture, ``dtype`` is ``"f1"`` (8 bits
     per channel, sRGB-encoded values like the screen), ``"f2"`` or ``"f4"``
     (linear floats), ``scale`` its size relative to the frame, or ``size``
-    its size in pixels (independent of the frame: shadow maps).  Later passes
+    its size in pixels (independent of the frame: shadow maps).  ``stencil``
+    gives the depth texture a stencil buffer (stencil techniques offscreen).
+    Later passes
     sample it through :class:`FullScreen` ``inputs``, :class:`Shader`
     ``inputs`` or ``engine.target(name)``.
     """
@@ -110,6 +112,7 @@ class Target:
     dtype: str = "f1"
     scale: float = 1.0
     size: tuple[int, int] | None = None
+    stencil: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -133,6 +136,8 @@ class Target:
             if w <= 0 or h <= 0:
                 raise ValueError(f"Target {self.name!r}: size must be (width, height) > 0 pixels, got {self.size!r}")
             object.__setattr__(self, "size", (w, h))
+        if self.stencil and not self.depth:
+            raise ValueError(f"Target {self.name!r}: stencil=True needs depth=True (they share one texture)")
         object.__setattr__(self, "colors", colors)
         object.__setattr__(self, "scale", float(self.scale))
 

@@ -3,8 +3,8 @@
 ``om.gl.ShadowVolumes()`` put into a node shades the subgraph after it
 (the receivers) with exact hard shadows from every light with
 ``casts_shadows``, cast by the closed meshes of the whole scene that cast
-shadows (``om.Shadowing``).  Passes, drawn into the frame's own framebuffer
-(it has the stencil buffer):
+shadows (``om.Shadowing``).  Passes, drawn into a float target with a stencil
+buffer (light adds up linearly there), composited over the frame at the end:
 
 1. ``ambient``: the receivers lit by the ambient light, emission and the
    lights that cast no shadows (this fills the depth buffer);
@@ -13,16 +13,15 @@ shadows (``om.Shadowing``).  Passes, drawn into the frame's own framebuffer
    facing the light to infinity, depth clamped) counted into the stencil
    buffer with the depth-fail ("z-fail") rule, which is right also when the
    camera is inside a volume; then ``lit``: the receivers lit by that light
-   alone, added where the count is 0.
+   alone, added where the count is 0;
+3. ``resolve``: the sum, encoded for display, over the frame with its depth.
 
 Limits: casters must be closed, consistently wound meshes (spheres, boxes,
-tori, closed triangle sets; open surfaces and mirrored instances cast wrong
-volumes and are left out when ``geometry.closed`` is false); the light
-contributions are added in display (sRGB) space, so where two lights overlap
-the result is somewhat brighter than with shadow maps; transparent receivers
-get the ambient pass only; ``LightSwitch`` inside the scope is not honoured;
-the technique needs the engine's stencil buffer (not inside offscreen passes).
-Cost: three passes and the volumes' fill per light.  Other engines ignore it.
+tori, closed triangle sets; open surfaces are left out when
+``geometry.closed`` is false, mirrored instances cast wrong volumes);
+transparent receivers get the ambient pass only; ``LightSwitch`` inside the
+scope is not honoured; the driver must offer depth-stencil textures.  Cost:
+three passes and the volumes' fill per light.  Other engines ignore it.
 """
 
 from __future__ import annotations
@@ -42,12 +41,16 @@ from .attributes import (
     StencilOp,
     StencilTest,
 )
-from .passes import Clear, Pass, Shader
+from .imagespace import resolve
+from .passes import Clear, Pass, Shader, Target
 from .shaders import MAX_LIGHTS
 from .state import casts_shadows
 from .techniques import GLTechnique
 
 __all__ = ["ShadowVolumes", "casts_volume"]
+
+#: The float target the technique lights its scope in (its stencil counts the volumes).
+TARGET = Target("shadow-volumes", dtype="f2", stencil=True)
 
 
 def casts_volume(item: Any) -> bool:
@@ -64,7 +67,8 @@ class ShadowVolumes(GLTechnique):
         super().__init__(passes=1)
 
     def supported(self, engine: Any) -> bool:
-        return super().supported(engine) and bool(getattr(engine, "has_stencil", False))
+        raw = getattr(engine, "raw", None)
+        return super().supported(engine) and raw is not None and raw.available
 
     def start(self, engine: Any) -> None:
         order = engine.light_order()
@@ -74,7 +78,7 @@ class ShadowVolumes(GLTechnique):
         engine.technique_frame.data["size"] = len(order)
 
     def needs_pass(self, engine: Any) -> bool:
-        return engine.current_pass < 1 + 3 * len(engine.technique_frame.data["lights"])
+        return engine.current_pass < 2 + 3 * len(engine.technique_frame.data["lights"])
 
     def prepare_pass(self, engine: Any) -> None:
         data = engine.technique_frame.data
@@ -83,7 +87,11 @@ class ShadowVolumes(GLTechnique):
         if index == 0:
             on = np.ones(MAX_LIGHTS)
             on[[i for i, _, _ in lights]] = 0.0
-            engine.set_pass(Pass("ambient", shader=_select(on, ambient=1.0)))
+            engine.set_pass(Pass("ambient", target=TARGET, clear=Clear(color=(0, 0, 0, 0), depth=1.0, stencil=0),
+                                 shader=_select(on, ambient=1.0)))  # fmt: skip
+            return
+        if index == 1 + 3 * len(lights):
+            engine.set_pass(Pass("resolve", fullscreen=resolve(TARGET.name)))
             return
         k, step = divmod(index - 1, 3)
         i, light, matrix = lights[k]
@@ -95,6 +103,7 @@ class ShadowVolumes(GLTechnique):
                     select=casts_volume,
                     scopes="items",
                     source="scene",
+                    target=TARGET,
                     clear=Clear(color=None, depth=None, stencil=0) if step == 0 else None,
                     state=(
                         CullFace("front" if step == 0 else "back"),
@@ -119,7 +128,9 @@ class ShadowVolumes(GLTechnique):
             Pass(
                 f"lit[{i}]",
                 items="opaque",
+                target=TARGET,
                 state=(
+                    ColorMask(True, True, True, False),  # light adds up; coverage stays the ambient pass's
                     StencilTest(True, "equal", 0, 0xFF),
                     StencilOp(write_mask=0),
                     Blend(True, "one", "one"),
@@ -129,13 +140,6 @@ class ShadowVolumes(GLTechnique):
                 shader=_select(on, ambient=0.0),
             )
         )
-
-    def finish_pass(self, engine: Any) -> None:
-        data = engine.technique_frame.data
-        if engine.current_pass == 3 * len(data["lights"]) and data["lights"]:
-            from .context import clear_stencil
-
-            clear_stencil(engine.raw, 0)  # stencil invariability: leave it as the frame found it
 
 
 def _select(on: np.ndarray, ambient: float) -> Shader:

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .imagespace import PingPong
+from .imagespace import PingPong, resolve
 from .passes import Clear, FullScreen, Pass, Target
 from .techniques import GLTechnique
 
@@ -26,16 +26,6 @@ _ACCUMULATE = """uniform sampler2D u_frame;
 uniform sampler2D u_sum;
 uniform float u_first;
 vec4 effect(vec2 uv) { return texture(u_frame, uv) + (u_first > 0.5 ? vec4(0.0) : texture(u_sum, uv)); }
-"""
-_RESOLVE = """uniform sampler2D u_sum;
-uniform sampler2D u_depth;
-uniform float u_count;
-vec4 effect(vec2 uv) {
-    vec4 c = texture(u_sum, uv) / u_count;     // premultiplied linear colour and coverage
-    if (c.a <= 0.0) discard;
-    return vec4(to_srgb(c.rgb / c.a), c.a);
-}
-float effect_depth(vec2 uv) { return texture(u_depth, uv).r; }
 """
 
 
@@ -66,10 +56,8 @@ class Supersample(GLTechnique):
         chain = PingPong("supersample.sum", dtype="f4")
         frame = Target("supersample.frame", dtype="f4")
         if index == 2 * self.n:
-            resolve = FullScreen(_RESOLVE, inputs={"u_sum": (chain.read(self.n).name, "color"),
-                                 "u_depth": (frame.name, "depth")}, uniforms={"u_count": float(self.n)},
-                                 blend=True, depth=True)  # fmt: skip
-            engine.set_pass(Pass("resolve", fullscreen=resolve))
+            average = resolve(chain.read(self.n).name, depth_target=frame.name, count=self.n)
+            engine.set_pass(Pass("resolve", fullscreen=average))
             return
         k, step = divmod(index, 2)
         if step == 0:
