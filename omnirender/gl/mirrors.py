@@ -10,7 +10,8 @@ then, for each mirror in turn, four passes (:class:`Mirrors`):
 3. ``reflection``: the scene mirrored about the mirror's plane (the camera
    times the reflection, front faces turned), its mirror shapes left out
    (nesting depth 1), clipped to the mirror's front side, only where the bit
-   is set: lighting and shadows are those of the real scene;
+   is set: lighting and shadow maps are those of the real scene; the shapes
+   under other techniques (line styles, shadow volumes...) are drawn plainly;
 4. ``surface``: the mirror blended over its reflection with weight
    ``1 - reflectance``, restoring its depth and clearing the bit.
 
@@ -131,7 +132,9 @@ class Mirrors(GLTechnique):
             passes.append(
                 Pass(
                     f"{name}.reflection",
+                    items=("opaque", "transparent"),  # 2D overlays belong to the screen, not the mirror world
                     select=not_mirror,
+                    scopes="items",  # nested techniques' items drawn plainly: effects stay out of reflections
                     source="scene",
                     camera=(view @ reflection_matrix(plane), proj),
                     front_face="cw",
