@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..core.handler import ShapePainter, default_for
+from ..geometry.topology import is_closed_outward
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
@@ -65,7 +66,16 @@ class TriangleSetPainter(ShapePainter):
             _check_optional(colors, "TriangleSet", "colors", path)
             uv = shape.texcoord_array()
             _check_optional(uv, "TriangleSet", "texcoords", path)
-            geom = Geometry("triangles", v, normals, colors, uv, indices=idx, label=f"TriangleSet in {path or '/'}")
+            geom = Geometry(
+                "triangles",
+                v,
+                normals,
+                colors,
+                uv,
+                indices=idx,
+                label=f"TriangleSet in {path or '/'}",
+                closed=is_closed_outward(v, idx),  # opaque closed meshes get their back faces culled
+            )
             engine.geometry_cache.put(shape, geom)
         engine.submit(geom)
 
