@@ -72,9 +72,9 @@ def build_scene(panel: str) -> om.Node:
     """The scene of Figure 16 (``panel`` a, b, c or d)."""
     if panel == "a":
         scene = stage()
-        styled = scene.add(om.Node("styled", [om.Texture(checker()),
-                                              om.gl.PhongHighlight(om.Texture(om.gl.PhongHighlight.lobe(30))),
-                                              om.gl.SurfaceStyle("silhouette", width=3, color=(0.05, 0.05, 0.1))]))  # fmt: skip
+        highlight = om.gl.PhongHighlight(om.Texture(om.gl.PhongHighlight.lobe(30)))
+        style = om.gl.SurfaceStyle("silhouette", width=3, color=(0.05, 0.05, 0.1))
+        styled = scene.add(om.Node("styled", [om.Texture(checker()), highlight, style]))  # the paper's nesting
         styled.add(ball())
         styled.add(ring())
         scene.add(floor(mirror=False))
@@ -92,7 +92,9 @@ def build_scene(panel: str) -> om.Node:
     scene.add(ball(center=(-0.5, 0.9, 0.2)))
     scene.add(ring())
     if panel == "d":
-        scene.add(om.Node("wall", [om.Material(diffuse=(0.85, 0.8, 0.7)), om.Box(size=(7, 3, 0.2), center=(0, 1.5, -1.6))]))
+        scene.add(
+            om.Node("wall", [om.Material(diffuse=(0.85, 0.8, 0.7)), om.Box(size=(7, 3, 0.2), center=(0, 1.5, -1.6))])
+        )
     return scene
 
 

@@ -27,7 +27,9 @@ def scene(sphere: bool = True, floor_only: bool = False, mirror: bool = True) ->
     floor = [om.Material(diffuse=(0.35, 0.35, 0.35))] + ([om.Mirror(0.75)] if mirror else [])
     root.add(om.Node("floor", [*floor, om.Rectangle(size=(5, 5))]))
     if sphere and not floor_only:
-        root.add(om.Node("ball", [om.Material(diffuse=(0.95, 0.1, 0.1)), om.Sphere(center=(0.3, 0.9, 0.4), radius=0.6)]))
+        root.add(
+            om.Node("ball", [om.Material(diffuse=(0.95, 0.1, 0.1)), om.Sphere(center=(0.3, 0.9, 0.4), radius=0.6)])
+        )
     return root
 
 

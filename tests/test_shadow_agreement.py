@@ -38,7 +38,9 @@ def scene(light: str, shadows: bool = True, technique=None, objects: bool = True
     body.add(om.Node("plane", [om.Material(diffuse=(0.8, 0.8, 0.8), ambient=(0, 0, 0)),
                                om.Box(size=(9, 0.1, 9), center=(0, -0.05, 0))]))  # fmt: skip
     if objects:
-        body.add(om.Node("ball", [om.Material(diffuse=(0.9, 0.3, 0.2)), om.Sphere(center=(-0.9, 0.9, 0.2), radius=0.6)]))
+        body.add(
+            om.Node("ball", [om.Material(diffuse=(0.9, 0.3, 0.2)), om.Sphere(center=(-0.9, 0.9, 0.2), radius=0.6)])
+        )
         body.add(om.Node("box", [om.Material(diffuse=(0.2, 0.4, 0.9)), om.Box(size=0.8, center=(1.0, 0.7, -0.3))]))
     return root
 

@@ -75,9 +75,7 @@ class Mirror(Parameterised, MonoAttribute):
     reflectance = Param(check_number(0.0, 1.0), "fraction of the mirrored image (0..1)")
     plane = Param(_check_plane, "(normal, offset) of the mirror plane in the shape's coordinates")
 
-    def __init__(
-        self, reflectance: float = 0.8, plane: tuple[Sequence[float], float] = ((0.0, 1.0, 0.0), 0.0)
-    ) -> None:
+    def __init__(self, reflectance: float = 0.8, plane: tuple[Sequence[float], float] = ((0.0, 1.0, 0.0), 0.0)) -> None:
         super().__init__()
         self.reflectance = reflectance
         self.plane = plane

@@ -41,7 +41,9 @@ def mesh_boolean(
     try:
         import manifold3d as m3d
     except ImportError:  # pragma: no cover - depends on the installation
-        raise BooleanError(f"{what}: mesh booleans need the manifold3d package (pip install 'omnirender[csg]')") from None
+        raise BooleanError(
+            f"{what}: mesh booleans need the manifold3d package (pip install 'omnirender[csg]')"
+        ) from None
     solids = []
     for name, (v, f) in (("a", a), ("b", b)):
         v, f = weld(v, f)

@@ -129,8 +129,17 @@ class RawGL:
                 ("glDeleteFramebuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
                 (
                     "glTexImage2D",
-                    [ctypes.c_uint, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_int,
-                     ctypes.c_uint, ctypes.c_uint, ctypes.c_void_p],
+                    [
+                        ctypes.c_uint,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_uint,
+                        ctypes.c_uint,
+                        ctypes.c_void_p,
+                    ],
                 ),
                 ("glFramebufferTexture2D", [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
             ):

@@ -30,8 +30,8 @@ import numpy as np
 from .context import GLError, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
-from .passes import Composed, FullScreen, Pass, Target
 from .mirrors import Mirrors, mirror_items
+from .passes import Composed, FullScreen, Pass, Target
 from .shadows import ShadowPlan, caster_bounds, frame_settings
 from .state import GLCalls, RasterApplier
 

@@ -28,6 +28,7 @@ def is_surface(item: Any) -> bool:
     """Pass predicate: filled surfaces (lines and points get no highlight)."""
     return item.state.kind == "mesh"
 
+
 _LOOKUP = """uniform sampler2D u_highlight;
 uniform float u_highlight_strength;
 void pass_fragment(inout vec4 color, vec3 P, vec3 N) {

@@ -22,7 +22,19 @@ __all__ = ["LightUniforms", "GLOBAL_AMBIENT", "HEADLIGHT"]
 class LightUniforms:
     """Packed light arrays for one light switch state."""
 
-    __slots__ = ("count", "types", "order", "pos", "diffuse", "specular", "attenuation", "spot", "exponent", "ambient", "_bytes")
+    __slots__ = (
+        "count",
+        "types",
+        "order",
+        "pos",
+        "diffuse",
+        "specular",
+        "attenuation",
+        "spot",
+        "exponent",
+        "ambient",
+        "_bytes",
+    )
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], view: np.ndarray, headlight: bool) -> None:
         from ..attributes import AmbientLight, DirectionalLight, SpotLight

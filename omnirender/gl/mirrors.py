@@ -45,7 +45,9 @@ void pass_fragment(inout vec4 color, vec3 P, vec3 N) {
     vec3 W = (u_eye_to_world * vec4(P, 1.0)).xyz;
     if (dot(u_mirror_plane.xyz, W) + u_mirror_plane.w < 0.0) discard;
 }"""
-_SURFACE = "uniform float u_mirror_keep; void pass_fragment(inout vec4 color, vec3 P, vec3 N) { color.a = u_mirror_keep; }"
+_SURFACE = (
+    "uniform float u_mirror_keep; void pass_fragment(inout vec4 color, vec3 P, vec3 N) { color.a = u_mirror_keep; }"
+)
 
 
 def reflection_matrix(plane: np.ndarray) -> np.ndarray:

@@ -220,7 +220,9 @@ class Shader:
         textures = []
         for uniform, texture in items:
             if not isinstance(uniform, str) or not uniform.isidentifier() or not hasattr(texture, "image_array"):
-                raise ValueError(f"Shader: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}")
+                raise ValueError(
+                    f"Shader: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}"
+                )
             textures.append((uniform, texture))
         object.__setattr__(self, "textures", tuple(sorted(textures, key=lambda p: p[0])))
 
@@ -320,7 +322,9 @@ class Pass:
 
             compile_mask(self.mask)  # a syntax error is reported here, with the expression
         if self.front_face not in ("ccw", "cw"):
-            raise ValueError(f"Pass {self.name!r}: front_face must be 'ccw' or 'cw' (mirrored views), got {self.front_face!r}")
+            raise ValueError(
+                f"Pass {self.name!r}: front_face must be 'ccw' or 'cw' (mirrored views), got {self.front_face!r}"
+            )
         if self.scopes not in (True, False, "items"):
             raise ValueError(f"Pass {self.name!r}: scopes must be True, False or 'items', got {self.scopes!r}")
         if self.source not in ("scope", "scene"):
@@ -331,7 +335,9 @@ class Pass:
             except (TypeError, ValueError):
                 box = ()
             if len(box) != 4 or box[0] < 0 or box[1] < 0 or box[2] <= 0 or box[3] <= 0:
-                raise ValueError(f"Pass {self.name!r}: viewport must be (x, y, width, height) pixels, got {self.viewport!r}")
+                raise ValueError(
+                    f"Pass {self.name!r}: viewport must be (x, y, width, height) pixels, got {self.viewport!r}"
+                )
             object.__setattr__(self, "viewport", box)
         if self.select is not None and not callable(self.select):
             raise ValueError(f"Pass {self.name!r}: select must be a function of a draw item, got {self.select!r}")
@@ -348,7 +354,9 @@ class Pass:
         from .attributes import GLState
 
         values = getattr(self, name)
-        if isinstance(values, GLState) or (isinstance(values, tuple) and len(values) == 2 and isinstance(values[0], type)):
+        if isinstance(values, GLState) or (
+            isinstance(values, tuple) and len(values) == 2 and isinstance(values[0], type)
+        ):
             values = (values,)
         out = []
         for attribute in values:

@@ -117,8 +117,11 @@ class ShadowVolumes(GLTechnique):
                         # then always fails the depth test with its far cap, and they cancel
                         PolygonOffset(0.0, 8.0),
                     ),
-                    shader=Shader(depth_only=True, defines={"SHADOW_VOLUME": True},
-                                  uniforms={"u_volume_light": _light_vector(light, matrix)}),
+                    shader=Shader(
+                        depth_only=True,
+                        defines={"SHADOW_VOLUME": True},
+                        uniforms={"u_volume_light": _light_vector(light, matrix)},
+                    ),
                 )  # fmt: skip
             )
             return

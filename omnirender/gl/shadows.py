@@ -92,7 +92,9 @@ class ShadowMaps(GLTechnique):
         if not isinstance(enabled, bool):
             raise ValueError(f"ShadowMaps: enabled must be True or False, got {enabled!r}")
         if isinstance(resolution, bool) or not isinstance(resolution, int) or not 16 <= resolution <= 8192:
-            raise ValueError(f"ShadowMaps: resolution must be a whole number of pixels in [16, 8192], got {resolution!r}")
+            raise ValueError(
+                f"ShadowMaps: resolution must be a whole number of pixels in [16, 8192], got {resolution!r}"
+            )
         self.enabled = enabled
         self.resolution = resolution
         self.softness = _positive("ShadowMaps", "softness", softness)

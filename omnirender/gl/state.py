@@ -49,6 +49,7 @@ class StateKind:
     #: GLSL run in the fragment shader's ``main`` once the surface colour ``base`` (vec4, linear, texture
     #: applied) is known and before lighting; it may ``discard``.
     fragment_main: str = ""
+
     @classmethod
     def source(cls) -> type | None:
         """A generic attribute class whose active instance the kind captures (``from_attribute`` makes the

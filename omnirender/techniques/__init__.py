@@ -7,6 +7,7 @@ fallback for everything else.  Importing this package also adds the
 ``triangles`` figure to ``om.statistics``.
 """
 
+from . import csg_picking  # noqa: F401  (registers the CSG intersector)
 from .base import AnalysisEngine, evaluate_in_place, world_matrix_of
 from .bounds import BoundsEngine, BoundsHandler, analytic_bounds, bounds
 from .collision import CollisionEngine, bodies_collide, collisions
@@ -20,7 +21,6 @@ from .picking import (
     pick,
     pixel_ray,
 )
-from . import csg_picking  # noqa: F401  (registers the CSG intersector)
 from .search import AttributeSearch, AttributeSearchEngine, attribute_search
 from .statistics import TriangleCountEngine, count_triangles
 

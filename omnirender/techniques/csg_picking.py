@@ -87,7 +87,7 @@ class CSGIntersector(RayIntersector):
                 lists.append(_intervals(engine.hits))
         finally:
             engine.hits, engine.tmax, engine.nearest = saved
-        for start, end, enter, leave in combine(shape.operation, *lists):
+        for _start, _end, enter, leave in combine(shape.operation, *lists):
             for hit in (enter, leave):
                 if hit is not None and 0.0 < hit.distance <= engine.tmax:
                     engine.hits.append(Hit(hit.distance, hit.point, hit.normal, engine.scene_shape,

@@ -89,7 +89,14 @@ def test_point_light_faces_that_see_no_caster_are_not_drawn():
 
     plan = ShadowPlan(ShadowMaps(), [(om.PointLight(position=(0, 5, 0)), np.eye(4))],
                       (np.array([-1.0, 0, -1]), np.array([1.0, 1, 1])))  # fmt: skip
-    assert len(plan.faces) == 6 and [f.tile is not None for f in plan.faces] == [False, False, False, True, False, False]
+    assert len(plan.faces) == 6 and [f.tile is not None for f in plan.faces] == [
+        False,
+        False,
+        False,
+        True,
+        False,
+        False,
+    ]
 
 
 def test_shadow_map_settings_are_validated():
