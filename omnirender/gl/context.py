@@ -274,7 +274,8 @@ def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth:
 
 
 def clear_stencil(raw: RawGL, value: int = 0) -> None:
-    """Clear the stencil buffer of the bound framebuffer."""
+    """Clear the stencil buffer of the bound framebuffer (every bit: glClear obeys the stencil write mask)."""
     if raw.available:
+        raw._mask(0xFF)
         raw.glClearStencil(int(value))
         raw.glClear(GL_STENCIL_BUFFER_BIT)

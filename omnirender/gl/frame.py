@@ -425,6 +425,7 @@ class FrameRunner:
             set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         if clear.stencil is not None:
             clear_stencil(self.raw, int(clear.stencil))
+            self._applier.forget()  # the stencil write mask was reset to clear every bit
 
     # -- image-space passes --------------------------------------------------------------
     def _fullscreen(self, effect: FullScreen) -> int:
