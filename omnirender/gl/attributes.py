@@ -137,18 +137,24 @@ class DepthTest(GLState):
         return value != "less"
 
 
-class DepthMask(GLState):
-    """Whether the shapes that follow write the depth buffer."""
+class _Switch:
+    """Mixin of GL states that are one on/off flag (the concrete class declares the ``enabled`` slot)."""
 
-    __slots__ = ("enabled",)
-    default = True
+    __slots__ = ()
 
     def __init__(self, enabled: bool = True) -> None:
-        super().__init__()
+        super().__init__()  # type: ignore[call-arg]
         self.enabled = bool(enabled)
 
     def capture(self) -> bool:
         return self.enabled
+
+
+class DepthMask(_Switch, GLState):
+    """Whether the shapes that follow write the depth buffer."""
+
+    __slots__ = ("enabled",)
+    default = True
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
@@ -399,18 +405,11 @@ class AlphaTest(GLState):
         return () if value is None else (("u_alpha_ref", float(value[1])),)
 
 
-class DepthClamp(GLState):
+class DepthClamp(_Switch, GLState):
     """Clamp depth to the far plane instead of clipping (GL_DEPTH_CLAMP): shadow volumes reach infinity."""
 
     __slots__ = ("enabled",)
     default = False
-
-    def __init__(self, enabled: bool = True) -> None:
-        super().__init__()
-        self.enabled = bool(enabled)
-
-    def capture(self) -> bool:
-        return self.enabled
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:

@@ -10,7 +10,6 @@ level).
 
 from __future__ import annotations
 
-import weakref
 from typing import Any
 
 import numpy as np
@@ -19,7 +18,7 @@ from ..core import Engine, ShapePainter, ShapeSimplifier, default_for
 from ..geometry.boolean import crease_normals, mesh_boolean
 from .csg import CSG
 from .meshes import LineSet, PointSet, Polyline, TriangleSet
-from .simplifiers import tessellation_level
+from .simplifiers import cached, tessellation_level
 
 __all__ = ["CSGSimplifier", "operand_triangles"]
 
@@ -82,9 +81,6 @@ def operand_triangles(operand: Any, level: int) -> tuple[np.ndarray, np.ndarray]
     return np.concatenate(engine.vertices), np.concatenate(engine.indices)
 
 
-_cache: weakref.WeakKeyDictionary[CSG, tuple[Any, list[Any]]] = weakref.WeakKeyDictionary()
-
-
 @default_for(Engine)
 class CSGSimplifier(ShapeSimplifier):
     """``CSG`` -> one ``TriangleSet``: the manifold3d boolean of the operands' meshes."""
@@ -94,16 +90,15 @@ class CSGSimplifier(ShapeSimplifier):
 
     def exec(self, shape: CSG, engine: Engine) -> list[Any]:
         level = tessellation_level(engine)
-        key = (shape.version, shape.operand_versions(), level)
-        found = _cache.get(shape)
-        if found is not None and found[0] == key:
-            return found[1]
         where = f"CSG in node {engine.node_path}" if getattr(engine, "node_path", "") else "CSG"
-        a, b = (operand_triangles(op, level) for op in shape.operands())
-        v, f = mesh_boolean(shape.operation, a, b, what=where)
-        result: list[Any] = []
-        if len(f):
-            v, f, n = crease_normals(v, f)
-            result = [TriangleSet(v, f, normals=n)]
-        _cache[shape] = (key, result)
-        return result
+        # node operands do not bump the CSG's version: their versions are part of the key
+        return cached(shape, (level, shape.operand_versions()), lambda: _boolean(shape, level, where))
+
+
+def _boolean(shape: CSG, level: int, where: str) -> list[Any]:
+    a, b = (operand_triangles(op, level) for op in shape.operands())
+    v, f = mesh_boolean(shape.operation, a, b, what=where)
+    if not len(f):
+        return []
+    v, f, n = crease_normals(v, f)
+    return [TriangleSet(v, f, normals=n)]
