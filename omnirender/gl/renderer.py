@@ -290,9 +290,10 @@ class BatchRenderer:
             )
             batch.capacity = max(n, 1)
             batch.dirty = (0, n)
+        volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
-            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout)
+            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume)
         if fields:
             columns = self._columns(batch.layout)
             if n >= SORT_MIN and not state.special:
@@ -318,7 +319,7 @@ class BatchRenderer:
         self._set_uniforms(prog, state, composed)
         if batch.uniform:
             self._set_material(prog, batch.rows[0])
-        vao.render(self._mode(batch.geometry, state.kind), instances=n)
+        vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
         self.count(1, n)
         return 1
 
@@ -329,13 +330,15 @@ class BatchRenderer:
             cols = self._column_cache[key] = layout.columns(ROW)
         return cols
 
-    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any) -> Any:
+    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False) -> Any:
         self.upload(geometry)
         content = geometry.content(program)
         if buffer is not None and layout is not None:
             fmt, names = layout.vertex_format()
             content.append((buffer, fmt, *names))
         index = geometry.buffers.get("index") if kind != "points" else None
+        if adjacency:
+            index = geometry.adjacency_buffer(self.ctx)
         return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
 
     def _mode(self, geometry: Geometry, kind: str) -> int:
@@ -640,3 +643,4 @@ def _two_faced(geometry: Geometry, state: DrawState) -> bool:
 
 
 _GL_SRGB8_ALPHA8 = 0x8C43
+_TRIANGLES_ADJACENCY = 0x000C

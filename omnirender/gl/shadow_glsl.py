@@ -123,37 +123,42 @@ def shadow_code(features: dict[str, Any]) -> str:
     return "\n".join(parts) + "\n"
 
 
-#: Geometry shader of the shadow-volume passes (``SHADOW_VOLUME``): every triangle of a closed mesh that faces
-#: the light becomes a prism reaching to infinity (near cap, far cap, three sides).  Inner sides of
-#: neighbouring triangles cancel in the stencil count, so the count is that of the silhouette's volume.
+#: Geometry shader of the shadow-volume passes (``SHADOW_VOLUME``), fed triangles with their neighbours
+#: (``triangles_adjacency``): every triangle of a closed mesh that faces the light gives its near cap (itself)
+#: and its far cap (projected to infinity away from the light), and each of its edges whose neighbour faces
+#: away (a silhouette edge) a side quad to infinity.  Only silhouettes get sides: the fill stays small.
 VOLUME_GEOMETRY = """
-layout(triangles) in;
+layout(triangles_adjacency) in;
 layout(triangle_strip, max_vertices = 18) out;
 in vec3 v_pos[];
 uniform mat4 u_view;
 uniform mat4 u_proj;
 uniform vec4 u_volume_light;   // world: position (w = 1) or the direction towards the light (w = 0)
+vec4 light_eye;
+bool faces_light(vec3 a, vec3 b, vec3 c) {
+    vec3 towards = light_eye.w > 0.5 ? light_eye.xyz - a : light_eye.xyz;
+    return dot(cross(b - a, c - a), towards) > 0.0;
+}
+vec4 far_point(vec3 p) { return u_proj * vec4(light_eye.w > 0.5 ? p - light_eye.xyz : -light_eye.xyz, 0.0); }
 void main() {
-    vec3 p[3] = vec3[3](v_pos[0], v_pos[1], v_pos[2]);
-    vec4 l = u_view * u_volume_light;
-    vec3 n = cross(p[1] - p[0], p[2] - p[0]);
-    vec3 towards = l.w > 0.5 ? l.xyz - p[0] : l.xyz;
-    if (dot(n, towards) <= 0.0) return;
-    vec4 near[3], far[3];
-    for (int i = 0; i < 3; ++i) {
-        near[i] = u_proj * vec4(p[i], 1.0);
-        far[i] = u_proj * vec4(l.w > 0.5 ? p[i] - l.xyz : -l.xyz, 0.0);
-    }
-    gl_Position = near[0]; EmitVertex(); gl_Position = near[1]; EmitVertex(); gl_Position = near[2]; EmitVertex();
-    EndPrimitive();
-    gl_Position = far[0]; EmitVertex(); gl_Position = far[2]; EmitVertex(); gl_Position = far[1]; EmitVertex();
-    EndPrimitive();
+    light_eye = u_view * u_volume_light;
+    vec3 a = v_pos[0], b = v_pos[2], c = v_pos[4];
+    if (!faces_light(a, b, c)) return;
+    vec3 p[3] = vec3[3](a, b, c);
+    vec3 n[3] = vec3[3](v_pos[1], v_pos[3], v_pos[5]);
     for (int i = 0; i < 3; ++i) {
         int j = (i + 1) % 3;
-        gl_Position = near[i]; EmitVertex(); gl_Position = far[i]; EmitVertex();
-        gl_Position = near[j]; EmitVertex(); gl_Position = far[j]; EmitVertex();
+        if (faces_light(p[i], n[i], p[j])) continue;   // the neighbour is lit too: an inner edge
+        gl_Position = u_proj * vec4(p[i], 1.0); EmitVertex(); gl_Position = far_point(p[i]); EmitVertex();
+        gl_Position = u_proj * vec4(p[j], 1.0); EmitVertex(); gl_Position = far_point(p[j]); EmitVertex();
         EndPrimitive();
     }
+    gl_Position = u_proj * vec4(a, 1.0); EmitVertex(); gl_Position = u_proj * vec4(b, 1.0); EmitVertex();
+    gl_Position = u_proj * vec4(c, 1.0); EmitVertex();
+    EndPrimitive();
+    gl_Position = far_point(a); EmitVertex(); gl_Position = far_point(c); EmitVertex(); gl_Position = far_point(b);
+    EmitVertex();
+    EndPrimitive();
 }
 """
 

@@ -9,8 +9,9 @@ buffer (light adds up linearly there), composited over the frame at the end:
 1. ``ambient``: the receivers lit by the ambient light, emission and the
    lights that cast no shadows (this fills the depth buffer);
 2. for each shadow-casting light: ``volume.back`` and ``volume.front``: the
-   shadow volumes of the casters (a geometry shader extrudes every triangle
-   facing the light to infinity, depth clamped) counted into the stencil
+   shadow volumes of the casters (a geometry shader fed triangles with their
+   neighbours extrudes the silhouette edges to infinity and caps the volume
+   with the light-facing triangles, depth clamped) counted into the stencil
    buffer with the depth-fail ("z-fail") rule, which is right also when the
    camera is inside a volume; then ``lit``: the receivers lit by that light
    alone, added where the count is 0;
@@ -87,7 +88,7 @@ class ShadowVolumes(GLTechnique):
         if index == 0:
             on = np.ones(MAX_LIGHTS)
             on[[i for i, _, _ in lights]] = 0.0
-            engine.set_pass(Pass("ambient", target=TARGET, clear=Clear(color=(0, 0, 0, 0), depth=1.0, stencil=0),
+            engine.set_pass(Pass("ambient", target=TARGET, clear=Clear(color=(0, 0, 0, 0), depth=1.0),
                                  shader=_select(on, ambient=1.0)))  # fmt: skip
             return
         if index == 1 + 3 * len(lights):
