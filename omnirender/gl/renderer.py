@@ -330,7 +330,9 @@ class BatchRenderer:
             cols = self._column_cache[key] = layout.columns(ROW)
         return cols
 
-    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False) -> Any:
+    def _vao(
+        self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False
+    ) -> Any:
         self.upload(geometry)
         content = geometry.content(program)
         if buffer is not None and layout is not None:
