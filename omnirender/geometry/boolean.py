@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from .topology import weld_ids
+
 __all__ = ["mesh_boolean", "weld", "crease_normals", "BooleanError"]
 
 
@@ -20,16 +22,14 @@ class BooleanError(ValueError):
     """An operand is not a closed solid, or manifold3d is missing."""
 
 
-def weld(vertices: np.ndarray, indices: np.ndarray, tolerance: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
-    """Merge vertices closer than ``tolerance`` times the mesh size; drop triangles that collapse."""
+def weld(vertices: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices at the same position (:func:`~.topology.weld_ids`); drop triangles that collapse."""
     v = np.asarray(vertices, np.float64).reshape(-1, 3)
     f = np.asarray(indices, np.int64).reshape(-1, 3)
     if not len(f):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
-    scale = float(np.ptp(v, axis=0).max()) or 1.0
-    keys = np.round(v / (scale * tolerance)).astype(np.int64)
-    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-    f = inverse.reshape(-1)[f]
+    first, ids = weld_ids(v)
+    f = ids[f]
     keep = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
     return v[first], f[keep]
 

@@ -11,7 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["is_closed_outward", "adjacency_indices"]
+__all__ = ["is_closed_outward", "adjacency_indices", "weld_ids"]
+
+
+def weld_ids(positions: np.ndarray, tolerance: float = 1e-6) -> tuple[np.ndarray, np.ndarray]:
+    """(first index of each welded position, welded id of every vertex): positions closer than ``tolerance``
+    times the mesh's size are one vertex (the seams of tessellated shapes repeat positions)."""
+    pos = np.asarray(positions, dtype=np.float64)
+    size = float(np.max(pos.max(axis=0) - pos.min(axis=0))) or 1.0
+    _, first, weld = np.unique(np.round(pos / (size * tolerance)), axis=0, return_index=True, return_inverse=True)
+    return first, weld.reshape(-1)
 
 
 def is_closed_outward(positions: np.ndarray, triangles: np.ndarray) -> bool:
@@ -27,9 +36,7 @@ def is_closed_outward(positions: np.ndarray, triangles: np.ndarray) -> bool:
     if len(tris) < 4:
         return False
     pos = np.asarray(positions, dtype=np.float64)
-    size = float(np.max(pos.max(axis=0) - pos.min(axis=0))) or 1.0
-    _, weld = np.unique(np.round(pos / (size * 1e-6)), axis=0, return_inverse=True)
-    t = weld.reshape(-1)[tris]
+    t = weld_ids(pos)[1][tris]
     keep = (t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])
     t, tris = t[keep], tris[keep]
     if len(t) < 4:
@@ -57,12 +64,9 @@ def adjacency_indices(positions: np.ndarray, triangles: np.ndarray) -> np.ndarra
     neighbour, which a shadow-volume shader treats as facing away).
     """
     tris = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    pos = np.asarray(positions, dtype=np.float64)
     if not len(tris):
         return np.zeros(0, np.uint32)
-    size = float(np.max(pos.max(axis=0) - pos.min(axis=0))) or 1.0
-    _, weld = np.unique(np.round(pos / (size * 1e-6)), axis=0, return_inverse=True)
-    t = weld.reshape(-1)[tris]
+    t = weld_ids(positions)[1][tris]
     n = int(t.max()) + 1
     corners = np.arange(3)
     starts, ends = t[:, corners], t[:, (corners + 1) % 3]
