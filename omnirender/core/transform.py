@@ -31,15 +31,36 @@ def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
 
 
 class Transform(MonoAttribute):
-    """Base of all modelling transforms; subclasses share its category."""
+    """Base of all modelling transforms; subclasses share its category.
+
+    The matrix is made when somebody asks for it (``matrix``), not when a
+    parameter is set: a simulation that moves thousands of transforms per
+    frame pays for validation and bookkeeping only, and each matrix is built
+    once, when a renderer reads it.
+    """
 
     __slots__ = ("_matrix",)
     shares_category = True
+    #: The matrix depends only on the transform's parameters (not on the camera, as a Billboard's does).
+    static = True
 
     @property
     def matrix(self) -> np.ndarray:
         """The 4x4 float64 matrix this transform multiplies onto the current one."""
-        return self._matrix
+        m = self._matrix
+        if m is None:
+            m = self._build_matrix()
+            m.setflags(write=False)
+            object.__setattr__(self, "_matrix", m)
+        return m
+
+    def _build_matrix(self) -> np.ndarray:  # pragma: no cover - every static subclass defines it
+        raise NotImplementedError(f"{type(self).__name__} does not build a matrix")
+
+    def _changed(self) -> None:
+        """The parameters changed: forget the matrix and tell the owners."""
+        object.__setattr__(self, "_matrix", None)
+        self.touch()
 
     def _set_matrix(self, m: np.ndarray) -> None:
         m.setflags(write=False)
@@ -90,11 +111,19 @@ class Translation(Transform):
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
-        v = finite_vector("Translation", "offset", value, 3)
-        object.__setattr__(self, "_offset", tuple(float(c) for c in v))
+        if type(value) is tuple and len(value) == 3 and all(type(c) is float for c in value):
+            if not (math.isfinite(value[0]) and math.isfinite(value[1]) and math.isfinite(value[2])):
+                raise ValueError(f"Translation: offset must be finite, got {value!r}")
+            offset = value  # the common case of a simulation loop: already three Python floats
+        else:
+            offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
+        object.__setattr__(self, "_offset", offset)
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
         m = np.eye(4)
-        m[:3, 3] = v
-        self._set_matrix(m)
+        m[:3, 3] = self._offset
+        return m
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}
@@ -138,7 +167,10 @@ class Rotation(Transform):
             a = a / n
         object.__setattr__(self, "_angle", angle)
         object.__setattr__(self, "_axis", tuple(float(c) for c in a))
-        self._set_matrix(axis_angle_matrix(a, math.radians(angle)))
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
+        return axis_angle_matrix(np.asarray(self._axis), math.radians(self._angle))
 
     @property
     def angle(self) -> float:
@@ -215,7 +247,10 @@ class Scaling(Transform):
         if np.any(v == 0.0):
             raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
-        self._set_matrix(np.diag([v[0], v[1], v[2], 1.0]))
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
+        return np.diag([*self._factors, 1.0])
 
     def parameters(self) -> dict:
         return {"factors": list(self.factors)}

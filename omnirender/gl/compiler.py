@@ -75,35 +75,43 @@ class DrawListCompiler:
     def on_leave(self, node: Any) -> None:
         self._group_path.pop()
 
-    def eval_node(self, node: Any) -> None:
-        """A child node: replayed from the per-occurrence cache when unchanged, else evaluated (local program)."""
+    def eval_node(self, node: Any) -> Any:
+        """A child node: replayed from the per-occurrence cache when unchanged, else its local program.
+
+        Occurrences are keyed by small integers (parent occurrence, ordinal),
+        so keys stay flat in graphs of any depth.
+        """
         frames = self._compile_frames
         if frames:
             parent = frames[-1]
             parent[1] += 1
-            key = (parent[0], parent[1])
+            pair = (parent[0], parent[1])
+            key = self._occurrences.get(pair)
+            if key is None:
+                self._next_occurrence += 1
+                key = self._occurrences[pair] = self._next_occurrence
             entry = self._node_cache.get(key)
             # an entry exists only for a node the (unchanged) mask admitted: the hit needs no mask test
             if entry is not None and not parent[2] and entry.ref() is node and entry.version == node.version:
                 self._scope.entries.extend(entry.entries)
-                return
+                return None
         groups = node.groups
         if groups and not self.admits(groups):
-            return
+            return None
         local = getattr(node, "local_program", None)
         if local is None or not frames:  # a viewer snapshot, or immediate mode: nothing to cache
-            self.run_program(node.program())
-            return
+            return node.program(), None
         scope = self._scope
         same = entry is not None and entry.ref() is node
         own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
         frames.append([key, 0, parent[2] or not same or entry.own != own])
         start = len(scope.entries)
-        try:
-            self.run_program(local())
-        finally:
+
+        def store() -> None:
             frames.pop()
-        self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+            self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+
+        return local(), store
 
     def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
         """A technique's scope: compiled once into a nested Scope; its passes run when the frame is drawn."""
@@ -149,10 +157,11 @@ class DrawListCompiler:
         full_key = (mask_key, camera[0].mask if camera is not None else None)
         if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
             self._node_cache.clear()
+            self._occurrences.clear()
         self._full_key = full_key
         root = Scope(None)
         self._scope = root
-        self._compile_frames = [[(), 0, False]]
+        self._compile_frames = [[0, 0, False]]
         try:
             self.run(scene)
         except BaseException:
@@ -183,6 +192,8 @@ class DrawListCompiler:
         """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
         if len(self._node_cache) > self._prune_limit:
             self._node_cache = {k: v for k, v in self._node_cache.items() if v.ref() is not None}
+            live = set(self._node_cache)
+            self._occurrences = {pair: k for pair, k in self._occurrences.items() if k in live}
             self._prune_limit = max(4096, 2 * len(self._node_cache))
 
     # -- what painters call ------------------------------------------------------------

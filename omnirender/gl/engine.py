@@ -141,7 +141,10 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._root: Scope | None = None
         self._compile_frames: list[list[Any]] = []
         self._group_path: list[tuple[frozenset[str], ...]] = [()]
-        self._node_cache: dict[Any, Any] = {}
+        self._node_cache: dict[int, Any] = {}
+        #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
+        self._occurrences: dict[tuple[int, int], int] = {}
+        self._next_occurrence = 0
         self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any] | None = None  # (scene ref, version, mask key)
         self._full_key: Any = None
