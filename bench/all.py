@@ -15,12 +15,14 @@ SCRIPTS = {
     "traversal.py": [],
     "picking.py": [],
     "gl_objects.py": [],
+    "shadows.py": [],
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
+    "shadows.py": ["--frames", "6"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],

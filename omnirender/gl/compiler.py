@@ -286,6 +286,9 @@ class DrawListCompiler:
                 value = self._fill == "wireframe"
             elif k is LineWidth:
                 value = float(style.line_width) if style is not None else 1.0
+            elif k.source() is not None:  # a kind capturing a generic attribute (Shadowing, Mirror)
+                top = mono(k.source())
+                value = k.default if top is None else k.from_attribute(top)
             else:
                 value = k.default
             values.append(value)

@@ -64,7 +64,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     ``samples=0`` turns multisampling off.  ``technique`` replaces the default
     :class:`~.techniques.Forward` technique (the passes every frame and every
     nested technique pass draws items with); ``timing=True`` measures each
-    pass's GPU time with timer queries (``engine.stats["passes"]``).
+    pass's GPU time with timer queries (``engine.stats["passes"]``);
+    ``shadows=False`` turns shadow maps off (they are on by default, see
+    :class:`~.shadows.ShadowMaps`).
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -100,6 +102,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         on_missing: str = "raise",
         mask: Any = None,
         timing: bool = False,
+        shadows: bool = True,
     ) -> None:
         from . import _load
 
@@ -109,6 +112,14 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
         self.timing = bool(timing)
+        #: draw shadow maps for lights that cast shadows (om.gl.ShadowMaps in a scene refines this)
+        self.shadows = bool(shadows)
+        self._shadow_plan: Any = None
+        self._shadow_cache: Any = None
+        self._caster_bounds: Any = None
+        self._shadow_drawn: Any = None
+        self._mirrors: Any = None
+        self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
         self._size = check_size(size, self.ctx)
