@@ -76,6 +76,8 @@ class TransformUpdater:
 
                 _release_filtered(scope)
         self._bounds = None
+        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
+        self._mirrors = None  # mirror planes follow their transforms
         return len(affected)
 
     def _refresh_declarations(self, scene: Any) -> None:
