@@ -134,6 +134,16 @@ class Appearance:
     def has_normal_map(self) -> bool:
         return self.normal_texture is not None or self.bump is not None
 
+    def normal_map(self) -> tuple[Texture | None, float]:
+        """(tangent-space normal map, its xy scale): the material's, or the one derived from the BumpMap."""
+        if self.normal_texture is not None:
+            return self.normal_texture, self.normal_scale
+        if self.bump is not None:
+            from .texturing import bump_normal_texture
+
+            return bump_normal_texture(self.bump), 1.0
+        return None, 1.0
+
     @property
     def transparent(self) -> bool:
         """Whether the surface is drawn blended (see-through), not opaque or cut out."""

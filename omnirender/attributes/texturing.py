@@ -191,3 +191,40 @@ def bake_layers(base: np.ndarray | None, layers: Any, limit: int = BAKE_LIMIT) -
     rgb = linear_to_srgb(out[..., :3])
     result = np.concatenate([rgb, np.clip(out[..., 3:4], 0.0, 1.0)], axis=-1)
     return np.clip(np.round(result * 255.0), 0, 255).astype(np.uint8)
+
+
+_BUMP_CACHE: dict[int, tuple[Any, Any, Any]] = {}
+
+
+def bump_normal_texture(bump: Any) -> Any:
+    """The tangent-space normal map of a ``BumpMap`` as an ``om.Texture`` (made once per bump and texture version).
+
+    It keeps the height texture's wrap, filter, UV set and transform, so every
+    engine's normal-map code draws the bump.
+    """
+    from .appearance import Texture
+
+    tex = bump.texture
+    key = id(bump)
+    found = _BUMP_CACHE.get(key)
+    stamp = (bump.version, id(tex), tex.version)
+    if found is not None and found[0] is bump and found[1] == stamp:
+        return found[2]
+    normals = height_to_normal_map(luminance(tex.image_array()), float(bump.scale), tex.wrap)
+    result = Texture(
+        normals,
+        wrap=tex.wrap,
+        filter=tex.filter,
+        mipmap=tex.mipmap,
+        uv_set=tex.uv_set,
+        offset=tex.offset,
+        scale=tex.scale,
+        rotation=tex.rotation,
+    )
+    if len(_BUMP_CACHE) > 256:
+        _BUMP_CACHE.clear()
+    _BUMP_CACHE[key] = (bump, stamp, result)
+    return result
+
+
+__all__ += ["bump_normal_texture"]

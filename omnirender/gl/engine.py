@@ -141,9 +141,12 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._state_base: tuple = ()
         self._states: dict[tuple, DrawState] = {}
         self._surface_row = np.zeros(ROW.stride, np.float32)
-        self._surface_memo: dict[tuple, tuple[Any, np.ndarray]] = {}
+        self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
+        self._texset: Any = None
         self._point_size = 1.0
         self._blend_on = False
+        self._alpha_tested = False
         self._auto_cull = True
         self._fill = "filled"
         self._kinds_seen = len(kinds())

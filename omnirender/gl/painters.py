@@ -65,7 +65,19 @@ class TriangleSetPainter(ShapePainter):
             _check_optional(colors, "TriangleSet", "colors", path)
             uv = shape.texcoord_array()
             _check_optional(uv, "TriangleSet", "texcoords", path)
-            geom = Geometry("triangles", v, normals, colors, uv, indices=idx, label=f"TriangleSet in {path or '/'}")
+            uv1 = shape.texcoord_array(1)
+            _check_optional(uv1, "TriangleSet", "texcoords1", path)
+            geom = Geometry(
+                "triangles",
+                v,
+                normals,
+                colors,
+                uv,
+                indices=idx,
+                label=f"TriangleSet in {path or '/'}",
+                texcoords1=uv1,
+                tangents=shape.tangent_array if uv is not None else None,
+            )
             engine.geometry_cache.put(shape, geom)
         engine.submit(geom)
 

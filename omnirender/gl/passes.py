@@ -155,7 +155,9 @@ class Shader:
       called with the final linear colour, the eye-space position and normal;
       it may declare more outputs (``layout(location = 1) out vec4 f_normal;``)
       for targets with several colour attachments;
-    * ``uniforms``: values of uniforms the snippets declare.
+    * ``uniforms``: values of uniforms the snippets declare;
+    * ``alpha_cutoff``: fragments whose surface alpha is below it are discarded
+      (a depth-only pass of blended surfaces writes depth where they are mostly opaque).
     """
 
     depth_only: bool = False
@@ -164,8 +166,11 @@ class Shader:
     vertex: str = ""
     fragment: str = ""
     uniforms: Any = ()
+    alpha_cutoff: float | None = None
 
     def __post_init__(self) -> None:
+        if self.alpha_cutoff is not None and not 0.0 <= float(self.alpha_cutoff) <= 1.0:
+            raise ValueError(f"Shader: alpha_cutoff must be in [0, 1] or None, got {self.alpha_cutoff!r}")
         if self.flat_color is not None:
             object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
         for name in ("vertex", "fragment"):
@@ -376,7 +381,10 @@ class Composed:
         flat = None
         vertex: list[str] = []
         fragment: list[str] = []
+        cutoff = None
         for s in self.shader:
+            if s.alpha_cutoff is not None:
+                cutoff = float(s.alpha_cutoff)
             depth_only = depth_only or s.depth_only
             unlit = unlit or s.unlit
             if s.flat_color is not None:
@@ -396,6 +404,8 @@ class Composed:
             out.append(("PASS_VERTEX", tuple(vertex)))
         if fragment and not depth_only:
             out.append(("PASS_FRAGMENT", tuple(fragment)))
+        if cutoff is not None:
+            out.append(("PASS_ALPHA_CUTOFF", cutoff))
         return tuple(out)
 
     def uniforms(self) -> dict[str, Any]:
