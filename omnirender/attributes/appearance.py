@@ -521,7 +521,8 @@ def _check_layers(owner: str, name: str, value: Any) -> tuple[TextureLayer, ...]
         if isinstance(item, Texture):
             item = TextureLayer(item)
         if not isinstance(item, TextureLayer):
-            raise ValueError(f"{owner}: {name}[{i}] must be an om.TextureLayer or om.Texture, got {type(item).__name__}")
+            kind = type(item).__name__
+            raise ValueError(f"{owner}: {name}[{i}] must be an om.TextureLayer or om.Texture, got {kind}")
         layers.append(item)
     if not layers:
         raise ValueError(f"{owner}: give at least one layer")

@@ -76,7 +76,7 @@ def scaled_image(rgba8: np.ndarray, factor: Any) -> np.ndarray:
     f = np.asarray(factor, np.float64).reshape(-1)
     if f.size == 3:
         f = np.append(f, 1.0)
-    if np.all(f == 1.0):
+    if np.allclose(f, 1.0, atol=1e-6):
         return rgba8
     img = np.asarray(rgba8, np.float64) / 255.0
     rgb = linear_to_srgb(srgb_to_linear(img[..., :3]) * srgb_to_linear(f[:3]))

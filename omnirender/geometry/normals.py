@@ -49,7 +49,9 @@ def smooth_normals(vertices: np.ndarray, indices: np.ndarray) -> np.ndarray:
     return out.astype(np.float32)
 
 
-def vertex_tangents(vertices: np.ndarray, indices: np.ndarray, normals: np.ndarray, texcoords: np.ndarray) -> np.ndarray:
+def vertex_tangents(
+    vertices: np.ndarray, indices: np.ndarray, normals: np.ndarray, texcoords: np.ndarray
+) -> np.ndarray:
     """(N, 4) float32 per-vertex tangents for tangent-space normal maps (Lengyel's method).
 
     xyz is the direction of increasing u, orthogonalised against the normal;

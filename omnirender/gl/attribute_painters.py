@@ -12,7 +12,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..attributes import BumpMap, ClipPlane, Color, DrawStyle, Fog, Highlight, Material, MultiTexture, PBRMaterial, Texture
+from ..attributes import (
+    BumpMap,
+    ClipPlane,
+    Color,
+    DrawStyle,
+    Fog,
+    Highlight,
+    Material,
+    MultiTexture,
+    PBRMaterial,
+    Texture,
+)
 from ..core.handler import AttributePainter, registry
 from ..core.light import LightSwitch
 from . import attributes as glattr

@@ -436,7 +436,7 @@ class DrawListCompiler:
         return state
 
     def _resolve_surface(self) -> None:
-        """The one appearance model (:func:`~omnirender.attributes.surface.resolve_appearance`) into a row and textures."""
+        """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
         mono = self.mono
         texture, layers, bump = mono(Texture), mono(MultiTexture), mono(BumpMap)
         highlight = mono(Highlight)

@@ -353,7 +353,8 @@ void main() {
 #endif
     float occlusion = 1.0;
 #ifdef OCCLUSION_TEXTURE
-    occlusion = 1.0 + u_occlusion_strength * (texture(u_occlusion_texture, SLOT_UV(UVSET_OCCLUSION, u_uvm_occlusion)).r - 1.0);
+    vec2 occlusion_uv = SLOT_UV(UVSET_OCCLUSION, u_uvm_occlusion);
+    occlusion = 1.0 + u_occlusion_strength * (texture(u_occlusion_texture, occlusion_uv).r - 1.0);
 #endif
     vec3 N;
 #ifdef POINTS
@@ -633,10 +634,11 @@ LAYER_BLENDS = {"over": 0, "multiply": 1, "add": 2}
 
 
 def _layer_glsl(count: int) -> tuple[str, str]:
-    """Uniform declarations and the unrolled blending code of ``count`` texture layers (samplers need constant indices)."""
+    """Uniform declarations and unrolled blending code of ``count`` texture layers (samplers need constant indices)."""
     uniforms, code = [], []
     for i in range(count):
-        uniforms.append(f"uniform sampler2D u_layer{i};\nuniform mat3 u_uvm_layer{i};\nuniform float u_layer_opacity{i};")
+        uniforms.append(f"uniform sampler2D u_layer{i};\nuniform mat3 u_uvm_layer{i};")
+        uniforms.append(f"uniform float u_layer_opacity{i};")
         code.append(
             f"{{ vec4 l = texture(u_layer{i}, SLOT_UV(UVSET_LAYER{i}, u_uvm_layer{i}));\n"
             f"#if LAYER_BLEND{i} == 0\n surf.rgb = mix(surf.rgb, l.rgb, l.a * u_layer_opacity{i});\n"

@@ -103,6 +103,8 @@ class POVRayEngine(Engine):
     def clear(self) -> None:
         """Forget everything written so far."""
         self.objects: list[str | _Object] = []
+        #: Color / Material / PBRMaterial in the order they became active (the one appearance model)
+        self.surface_stack: list[Any] = []
         self.declarations: list[str] = []
         self.lights_sdl: list[str] = []
         self.resources: list[tuple[str, Any]] = []

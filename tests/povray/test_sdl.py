@@ -156,6 +156,7 @@ def test_names_and_paths_cannot_inject_directives(tmp_path):
     from PIL import Image as PILImage
 
     PILImage.fromarray(np.zeros((2, 2, 3), np.uint8)).save(img, format="PNG")
+    child.add(om.Color(1, 1, 1))  # a white base colour: the texture's file is used as it is
     child.add(om.Texture(str(img)))
     child.add(om.Sphere())
     text, engine = scene_sdl(s)
