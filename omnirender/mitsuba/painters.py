@@ -225,8 +225,12 @@ class TriangleSetPainter(ShapePainter):
             )
             if len(faces) == 0:
                 return
-        linear = None if colors is None else convert.srgb_to_linear(colors[:, :3]).astype(np.float32)
-        bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=texcoords is not None)
+        uv = texcoords is not None
+        linear = glow = None
+        if colors is not None:
+            linear = engine.vertex_colors(convert.srgb_to_linear(colors[:, :3]), uv)
+            glow = engine.vertex_glow(linear, uv)
+        bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=uv)
         name = engine.unique_name("mesh")
         mesh = build_mesh(
             name,
@@ -237,7 +241,7 @@ class TriangleSetPainter(ShapePainter):
             texcoords=texcoords,
             colors=linear,
             bsdf=bsdf,
-            emitter=engine.current_area_emitter(),
+            emitter=engine.current_area_emitter(uv, glow=glow),
         )
         engine.shapes[name] = mesh
 
