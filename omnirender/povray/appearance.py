@@ -128,6 +128,9 @@ def texture_name(engine: Any, uv: bool = False) -> str:
 
 def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
     pigment_attr = engine.mono(Pigment)
+    mr = app.metallic_roughness_texture
+    if uv and mr is not None and app.model == "pbr" and pigment_attr is None:
+        return _metallic_map(engine, app, mr)
     normal = _normal(engine, app, uv)
     emissive = uv and app.emissive_texture is not None
     scale = 2.0 if emissive else 1.0
@@ -148,6 +151,25 @@ def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
         "finish { ambient 0 diffuse 0 emission 2 }"
     )
     return f"average texture_map {{ [1 {lit}] [1 {self_lit}] }}"
+
+
+def _metallic_map(engine: Any, app: Appearance, mr: Any) -> str:
+    """Per-texel metallic: a dielectric and a metal texture blended by the texture's blue channel.
+
+    POV-Ray's ``image_pattern`` selects between the two as the image is dark
+    or bright; roughness (green) uses its mean, an approximation.
+    """
+    from dataclasses import replace
+
+    pixels = mr.image_in("POV-Ray", engine.node_path)
+    rough = app.roughness * channel_mean(pixels, 1)
+    dielectric = replace(app, metallic=0.0, roughness=rough, metallic_roughness_texture=None)
+    metal = replace(app, roughness=rough, metallic_roughness_texture=None)
+    blue = np.repeat(pixels[:, :, 2:3], 3, axis=2)
+    name = engine.resource(("metallic", id(mr), mr.version), blue, ".png")
+    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)} interpolate 2 }}{_uv_transform(mr)}"
+    low, high = _texture_body(engine, dielectric, True), _texture_body(engine, metal, True)
+    return f"{pattern} texture_map {{ [0 {low}] [1 {high}] }}"
 
 
 def _rgb_display(linear: Any) -> np.ndarray:
@@ -196,9 +218,11 @@ def _normal(engine: Any, app: Appearance, uv: bool) -> str:
         return ""
     image = np.repeat(np.round(heights * 255.0).astype(np.uint8)[:, :, None], 3, axis=2)
     name = engine.resource(key, image, ".png")
-    return (
-        f"normal {{ uv_mapping bump_map {{ png {sdl.file_name(name)} interpolate 2 bump_size {sdl.number(size)} }} }}"
-    )
+    # POV-Ray's bump_map takes its slopes per pixel and raises the surface where the image is dark: the size
+    # is the height range in texture-coordinate units times the pixels per unit, negated
+    size *= float(np.sqrt(heights.shape[0] * heights.shape[1]))
+    bump = f"png {sdl.file_name(name)} interpolate 2 bump_size {sdl.number(-size)}"
+    return f"normal {{ uv_mapping bump_map {{ {bump} }} }}"
 
 
 def _image_file(
