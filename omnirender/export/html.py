@@ -88,7 +88,8 @@ def page(
     on_missing: str = "raise",
 ) -> str:
     """The HTML text of the page (see the module docs); ``size`` gives the camera's aspect in the glTF."""
-    glb, engine = build(scene, size=size, on_missing=on_missing, mask=mask)
+    # the page converts omnirender's light units itself (its attenuation in the lights' extras)
+    glb, engine = build(scene, size=size, on_missing=on_missing, mask=mask, physical_lights=False)
     settings = json.dumps(_settings(glb, engine), separators=(",", ":"))
     name = title if title is not None else getattr(scene, "name", "scene")
     r, g, b = (round(255 * c) for c in _background(engine)[:3])
