@@ -57,6 +57,8 @@ def _gltf_transform(tex: Texture) -> dict[str, Any]:
     su, sv = (float(x) for x in tex.scale)
     ou, ov = (float(x) for x in tex.offset)
     return {"offset": [ou - math.sin(r) * sv, 1.0 - ov - math.cos(r) * sv], "rotation": r, "scale": [su, sv]}
+
+
 _WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
 _FILTER = {"linear": 9729, "nearest": 9728}
 _POINTS, _LINES, _TRIANGLES = 0, 1, 4

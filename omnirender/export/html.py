@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.environment import DEFAULT_BACKGROUND  # the page background without an om.Background
 from ..fileio import atomic_write
 from .gltf import build
 
@@ -40,9 +41,6 @@ __all__ = ["export", "page", "ASSETS", "DEFAULT_BACKGROUND"]
 
 #: The committed bundle and three.js's licence notice.
 ASSETS = Path(__file__).parent / "assets"
-#: The page background when the scene has no ``om.Background`` (the GL engine's default clear colour;
-#: adapters do not import each other, a test keeps the two equal).
-DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
 @cache

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Tessellation
+from ..attributes.environment import DEFAULT_BACKGROUND  # the clear colour without an om.Background (shared)
 from ..core.camera import Camera
 from ..core.engine import Engine
 from ..core.technique import Technique
@@ -49,9 +50,6 @@ from .state import defaults, kinds
 from .techniques import Forward, GLTechnique
 
 __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
-
-#: Default clear colour (sRGB): a neutral dark grey.
-DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
 class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
