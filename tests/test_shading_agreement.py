@@ -73,3 +73,15 @@ def test_colour_difference_is_ciede2000():
     for lab1, lab2, expected in pairs:
         assert float(delta_e2000(lab1, lab2)) == pytest.approx(expected, abs=1e-4)
     assert np.allclose(cielab([255, 255, 255]), [100, 0, 0], atol=0.05)
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ENGINES])
+def test_a_scene_without_camera_gets_the_same_fitted_camera_everywhere(name):
+    _require(name)
+    scene = om.Node("s", [om.PointLight(position=(3, 3, 3)), om.Sphere(radius=2, center=(5, 0, 0))])
+    img = om.render(scene, engine=name, size=(64, 48), **({"spp": 4} if name == "mitsuba" else {}))
+    expected = om.Camera.fitted(om.bounds(scene), (64, 48))
+    # the sphere fills the fitted view: its silhouette is a centred disc of the fitted size
+    ys, xs = np.nonzero(img.mask)
+    assert abs(xs.mean() - 31.5) < 1 and abs(ys.mean() - 23.5) < 1
+    assert np.isclose(expected.center, (5, 0, 0)).all() and 0.15 < img.mask.mean() < 0.2
