@@ -249,7 +249,8 @@ def resolve_appearance(
         alpha = 1.0 if color is None else float(color.a)
         specular, shininess, emission, ambient = (0.0, 0.0, 0.0), _DEFAULT_SHININESS, (0.0, 0.0, 0.0), (0.0,) * 3
         follows = True
-    see_through = alpha < 1.0 or _texture_has_alpha(texture) or any(_texture_has_alpha(x.texture) for x in layer_list)
+    # a layer's alpha only blends the layer in; the base texture's alpha is the surface's
+    see_through = alpha < 1.0 or _texture_has_alpha(texture)
     return Appearance(
         model="phong",
         material=material,

@@ -53,6 +53,11 @@ _MISSING = object()
 AMBIENT_SAMPLING_WEIGHT = 0.02
 
 
+def wrap_of(texture: Any) -> str:
+    """A texture's wrap mode ("repeat" without one)."""
+    return "repeat" if texture is None else texture.wrap
+
+
 def _resampled(rgba8: np.ndarray, rows: int, cols: int, srgb: bool) -> np.ndarray:
     """(rows, cols, 3) linear values of an RGBA8 image (nearest resampling to the size)."""
     h, w = rgba8.shape[:2]
@@ -368,7 +373,7 @@ class MitsubaEngine(Engine):
             total = (glow + amb).astype(np.float32)
             if not np.any(total > 0.0):
                 return None
-            radiance = self._bitmap(total, "repeat", None, raw=True)
+            radiance = self._bitmap(total, wrap_of(ref), ref, raw=True)
         else:
             total = emission + ambient
             if not np.any(total > 0.0):
