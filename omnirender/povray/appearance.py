@@ -126,8 +126,13 @@ def texture_name(engine: Any, uv: bool = False) -> str:
     return engine.declare(key, "T", "texture { " + body + " }")
 
 
+_CLEAR = "pigment { rgbt 1 } finish { ambient 0 diffuse 0 specular 0 phong 0 reflection 0 emission 0 }"
+
+
 def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
     pigment_attr = engine.mono(Pigment)
+    if uv and app.alpha_mode == "mask" and app.texture is not None and pigment_attr is None:
+        return _cut_out(engine, app)
     mr = app.metallic_roughness_texture
     if uv and mr is not None and app.model == "pbr" and pigment_attr is None:
         return _metallic_map(engine, app, mr)
@@ -151,6 +156,24 @@ def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
         "finish { ambient 0 diffuse 0 emission 2 }"
     )
     return f"average texture_map {{ [1 {lit}] [1 {self_lit}] }}"
+
+
+def _cut_out(engine: Any, app: Appearance) -> str:
+    """A masked surface: nothing at all (no highlight either) where the alpha is below the cutoff.
+
+    POV-Ray still adds highlights on fully transmitting surfaces, so the
+    texture is switched off there with an ``image_pattern`` of the mask.
+    """
+    from dataclasses import replace
+
+    tex = app.texture
+    alpha = tex.image_in("POV-Ray", engine.node_path)[:, :, 3].astype(np.float64) / 255.0 * app.alpha
+    mask = np.where(alpha >= app.alpha_cutoff, 255, 0).astype(np.uint8)
+    name = engine.resource(("mask", id(tex), tex.version, app.alpha_cutoff), np.repeat(mask[:, :, None], 3, 2), ".png")
+    opaque = _texture_body(engine, replace(app, alpha_mode="opaque"), True)
+    once = " once" if tex.wrap == "clamp" else ""
+    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)}{once} }}{_uv_transform(tex)}"
+    return f"{pattern} texture_map {{ [0.5 {_CLEAR}] [0.5 {opaque}] }}"
 
 
 def _metallic_map(engine: Any, app: Appearance, mr: Any) -> str:
