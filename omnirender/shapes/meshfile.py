@@ -187,12 +187,16 @@ def _material(mat: Any) -> dict[str, Any] | None:
     elif name == "SimpleMaterial":
         diffuse = getattr(mat, "diffuse", None)
         glossiness = getattr(mat, "glossiness", None)
+        shininess = float(glossiness) if glossiness is not None else 1.0
+        # MTL's Ns 0 (common in exported files with Ks 1) means "no highlight", as importers such as Blender read
+        # it (roughness 1): a Phong lobe that wide would whiten the whole surface
+        specular = _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)) if shininess >= 1.0 else (0.0, 0.0, 0.0)
         out = {
             "kind": "phong",
             "ambient": _rgb(getattr(mat, "ambient", None), (0.2, 0.2, 0.2)),
             "diffuse": _rgb(diffuse, (0.8, 0.8, 0.8)),
-            "specular": _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)),
-            "shininess": float(glossiness) if glossiness is not None else 1.0,
+            "specular": specular,
+            "shininess": max(shininess, 1.0),
             "opacity": _alpha(diffuse),
         }
         tex = _texture(getattr(mat, "image", None))

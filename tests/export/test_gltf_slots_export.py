@@ -24,7 +24,9 @@ def slots_scene() -> om.Node:
     """A camera, every kind of light, and surfaces using every material slot and alpha mode."""
     scene = om.Node("slots", [om.Camera.look_at(eye=(0, 2, 6), center=(0, 0, 0), fov=40)])
     scene.add(om.PointLight(position=(3, 4, 3), intensity=0.8))
-    scene.add(om.SpotLight(position=(0, 5, 0), direction=(0, -1, 0), cutoff=30, exponent=4, constant=0.0, quadratic=0.1))
+    scene.add(
+        om.SpotLight(position=(0, 5, 0), direction=(0, -1, 0), cutoff=30, exponent=4, constant=0.0, quadratic=0.1)
+    )
     scene.add(om.DirectionalLight(direction=(0, -1, -1), intensity=0.5))
     checker = (np.indices((8, 8)).sum(axis=0) % 2 * 255).astype(np.uint8)
     textured = om.Texture(np.stack([checker] * 3 + [np.full_like(checker, 255)], -1), offset=(0.1, 0.2), scale=(2, 3),
