@@ -71,19 +71,9 @@ def chromium_program() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
-def gltf_validator() -> list[str] | None:
-    """The command that runs the Khronos glTF validator (npm package, ``tools/gltf-validator``), or None."""
-    import shutil
-    from pathlib import Path
-
-    tool = Path(__file__).parent.parent / "tools" / "gltf-validator"
-    node = shutil.which("node") or shutil.which("nodejs")
-    if node is None or not (tool / "node_modules" / "gltf-validator").is_dir():
-        return None
-    return [node, str(tool / "validate.js")]
-
-
 def _validator() -> tuple[bool, str]:
+    from gltf_files import gltf_validator
+
     return (
         gltf_validator() is not None,
         "the glTF validator is not installed (npm install --prefix tools/gltf-validator)",

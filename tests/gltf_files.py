@@ -21,6 +21,18 @@ UV = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], np.float32)
 INDICES = np.array([0, 1, 2, 0, 2, 3], np.uint16)
 
 
+def gltf_validator() -> list[str] | None:
+    """The command that runs the Khronos glTF validator (npm package, ``tools/gltf-validator``), or None."""
+    import shutil
+    from pathlib import Path
+
+    tool = Path(__file__).parent.parent / "tools" / "gltf-validator"
+    node = shutil.which("node") or shutil.which("nodejs")
+    if node is None or not (tool / "node_modules" / "gltf-validator").is_dir():
+        return None
+    return [node, str(tool / "validate.js")]
+
+
 def png(rgba: np.ndarray) -> bytes:
     from PIL import Image
 

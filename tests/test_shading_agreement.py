@@ -85,3 +85,15 @@ def test_a_scene_without_camera_gets_the_same_fitted_camera_everywhere(name):
     ys, xs = np.nonzero(img.mask)
     assert abs(xs.mean() - 31.5) < 1 and abs(ys.mean() - 23.5) < 1
     assert np.isclose(expected.center, (5, 0, 0)).all() and 0.15 < img.mask.mean() < 0.2
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ("gl", "povray", "mitsuba")])
+def test_a_nearly_opaque_surface_is_in_the_depth_and_mask(name):
+    """A 0.94-opaque cylinder in front of the camera: depth and mask show it in GL as in the offline engines."""
+    _require(name)
+    scene = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5), fov=30), om.PointLight(position=(2, 3, 5))])
+    scene.add(om.Node("glass", [om.Material(diffuse=(0.3, 0.6, 0.9), opacity=0.94), om.Cylinder(radius=0.5)]))
+    options = {"mitsuba": {"spp": 8}, "povray": {"depth": True}}.get(name, {})
+    img = om.render(scene, engine=name, size=(48, 48), **options)
+    assert img.mask[24, 24] and not img.mask[24, 2]
+    assert img.depth is not None and 4.3 < img.depth[24, 24] < 4.7  # the front of the cylinder (radius 0.5)

@@ -130,7 +130,7 @@ def test_camera_group_mask_hides_shapes_from_glb_and_rib(tmp_path):
 
 @pytest.mark.gltf_validator
 def test_the_khronos_validator_finds_no_error(tmp_path):
-    from conftest import gltf_validator
+    from gltf_files import gltf_validator
 
     files = []
     for name, scene in (("slots", slots_scene()), ("demo", demo_scene())):
