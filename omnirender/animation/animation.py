@@ -137,7 +137,7 @@ class Animation(PolyAttribute):
 
 
 def _where(animation: Animation) -> str:
-    owners = animation._owners
+    owners = animation.owners
     return f" (in node {owners[0].path})" if owners else ""
 
 

@@ -62,6 +62,11 @@ class RenderingComponent:
         """Counter bumped on every change of a public parameter."""
         return self._version
 
+    @property
+    def owners(self) -> tuple[Any, ...]:
+        """The nodes that hold this component (one per occurrence in a node's list)."""
+        return tuple(self._owners or ())
+
     def touch(self) -> None:
         """Mark the component as changed: bump its version and its owners' versions."""
         object.__setattr__(self, "_version", self._version + 1)

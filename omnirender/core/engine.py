@@ -271,6 +271,10 @@ class Engine:
             h = registry.lookup(type(self), service, target)
         return h
 
+    def sync_registry(self) -> None:
+        """Forget cached look-ups if default handlers were registered since (engines call it before a traversal)."""
+        self._check_registry()
+
     def _check_registry(self) -> None:
         if self._registry_generation != registry.generation:
             self._registry_generation = registry.generation
@@ -689,6 +693,15 @@ class Engine:
         """The group-mask expression this engine evaluates with (None: everything)."""
         return self._mask
 
+    @property
+    def mask_function(self) -> Callable[[frozenset[str]], bool] | None:
+        """The group-mask predicate in effect (the camera's own mask during its traversal), or None."""
+        return self._mask_fn
+
+    def admits(self, groups: frozenset[str]) -> bool:
+        """Whether the mask in effect lets a node with ``groups`` be evaluated (an untagged node always is)."""
+        return not groups or self._mask_fn is None or bool(self._mask_fn(groups))
+
     @mask.setter
     def mask(self, mask: Any) -> None:
         self._mask = mask
@@ -734,6 +747,12 @@ class Engine:
             return None
         camera, world = self.camera
         return camera.view_matrix() @ np.linalg.inv(world)
+
+    @property
+    def current_node(self) -> Any:
+        """The node being evaluated (innermost), or None outside any node."""
+        stack = self._node_stack
+        return stack[-1] if stack else None
 
     @property
     def node_path(self) -> str:

@@ -150,7 +150,7 @@ class DrawListCompiler:
                 self._scope.entries.extend(entry.entries)
                 return
         groups = node.groups
-        if groups and self._mask_fn is not None and not self._mask_fn(groups):
+        if groups and not self.admits(groups):
             return
         local = getattr(node, "local_program", None)
         if local is None or not frames:  # a viewer snapshot, or immediate mode: nothing to cache
@@ -206,8 +206,8 @@ class DrawListCompiler:
         if c is not None and c[0]() is scene and c[1] == scene.version and c[2] == mask_key:
             self.stats["compiled"] = False
             return self._root
-        self._check_registry()
-        camera = scene.declarations(self._mask_fn).camera
+        self.sync_registry()
+        camera = scene.declarations(self.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
         if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
             self._node_cache.clear()
@@ -292,8 +292,7 @@ class DrawListCompiler:
             # (mirrored instances: the front)
             cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
         state = self._state_for(kind, geometry, extra, cull, int(row[_SHADING_MODEL]))
-        stack = self._node_stack
-        item = DrawItem(geometry, state, row, transparent, stack[-1] if stack else None, self._group_path[-1])
+        item = DrawItem(geometry, state, row, transparent, self.current_node, self._group_path[-1])
         self._scope.entries.append(item)
         return item
 

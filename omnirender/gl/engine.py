@@ -195,8 +195,8 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
 
     def unit_geometry(self, kind: str) -> Geometry:
         """The shared unit mesh of ``kind`` at the active Tessellation level (native painters use it)."""
-        stack = self.context._mono.get(Tessellation)
-        level = stack[-1].level if stack else Tessellation.DEFAULT_LEVEL
+        tessellation = self.mono(Tessellation)
+        level = tessellation.level if tessellation is not None else Tessellation.DEFAULT_LEVEL
         geom = self._units.get((kind, level))
         if geom is None:
             geom = self._units[(kind, level)] = unit_mesh(kind, level)

@@ -251,13 +251,13 @@ class GeometryCache:
         self._entries: dict[tuple, tuple[Any, Geometry]] = {}
 
     def get(self, shape: Any, variant: Any = None) -> Geometry | None:
-        entry = self._entries.get((id(shape), shape._version, variant))
+        entry = self._entries.get((id(shape), shape.version, variant))
         if entry is not None and entry[0]() is shape:
             return entry[1]
         return None
 
     def put(self, shape: Any, geometry: Geometry, variant: Any = None) -> Geometry:
-        self._entries[(id(shape), shape._version, variant)] = (weakref.ref(shape), geometry)
+        self._entries[(id(shape), shape.version, variant)] = (weakref.ref(shape), geometry)
         return geometry
 
     def sweep(self, used: set[int]) -> int:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..core.handler import ShapePainter, default_for
+from ..geometry.topology import is_closed_outward
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
@@ -77,6 +78,7 @@ class TriangleSetPainter(ShapePainter):
                 label=f"TriangleSet in {path or '/'}",
                 texcoords1=uv1,
                 tangents=shape.tangent_array if uv is not None else None,
+                closed=is_closed_outward(v, idx),  # opaque closed meshes get their back faces culled
             )
             engine.geometry_cache.put(shape, geom)
         engine.submit(geom)

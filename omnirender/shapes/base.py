@@ -78,7 +78,7 @@ class DeclaredShape(Shape):
             object.__setattr__(self, "_" + name, stored[name])
         self._cache.clear()
         self._cache.update(derived)
-        object.__setattr__(self, "_cache_version", self._version + 1)
+        object.__setattr__(self, "_cache_version", self.version + 1)
 
     def _validate(self, params: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         return params, {}
@@ -90,16 +90,16 @@ class DeclaredShape(Shape):
         Saves re-validating big arrays when another parameter changes (a volume's
         ``iso``, a mesh's ``colors``).
         """
-        if value is getattr(self, "_" + name, _MISSING) and self._cache_version == self._version and key in self._cache:
+        if value is getattr(self, "_" + name, _MISSING) and self._cache_version == self.version and key in self._cache:
             return self._cache[key]
         return convert(value)
 
     def _cached(self, key: str, compute: Callable[[], Any] | None = None) -> Any:
         """A cached value of the current version: ``compute()`` or, without it, a derived value."""
         cache = self._cache
-        if self._cache_version != self._version:
+        if self._cache_version != self.version:
             cache.clear()
-            object.__setattr__(self, "_cache_version", self._version)
+            object.__setattr__(self, "_cache_version", self.version)
         try:
             return cache[key]
         except KeyError:

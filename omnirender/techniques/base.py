@@ -96,7 +96,7 @@ class AnalysisEngine(Engine):
             self.scene_path = self.node_path
         self.depth += 1
         try:
-            self._technique.handle_shape(shape, self)
+            self.technique.handle_shape(shape, self)
         finally:
             self.depth -= 1
 
