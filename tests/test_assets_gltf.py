@@ -7,11 +7,11 @@ The files come from ``tests/gltf_files.py`` (pygltflib), so nothing is downloade
 from __future__ import annotations
 
 import math
-import os
 import warnings
 
 import numpy as np
 import pytest
+from engines import require
 
 import omnirender as om
 from omnirender.animation.gltf import GLTFImportError
@@ -27,16 +27,8 @@ SUN = {"type": "directional", "intensity": math.pi}  # glTF lux: E = pi shows th
 GRAZING = om.DirectionalLight(direction=(-math.sin(math.radians(75)), 0.0, -math.cos(math.radians(75))))
 
 
-def _require(name: str) -> None:
-    ok, why = om.engines().get(name, (False, "not registered"))
-    if not ok:
-        if os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1":
-            pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
-        pytest.skip(f"engine {name!r} unavailable: {why}")
-
-
 def _render(scene: om.Node, name: str) -> om.Image:
-    _require(name)
+    require(name)
     return om.render(scene, engine=name, size=SIZE, **({"spp": 16} if name == "mitsuba" else {}))
 
 
@@ -206,7 +198,7 @@ def test_sparse_quantized_and_draco_geometry_load_exactly(tmp_path):
 
 @pytest.mark.gl
 def test_draco_quad_renders_in_gl(tmp_path):
-    _require("gl")
+    require("gl")
     pytest.importorskip("DracoPy")
     quad_file(tmp_path / "draco.glb", draco=True, light=SUN)
     img = _render(om.load_gltf(tmp_path / "draco.glb"), "gl")
@@ -243,7 +235,7 @@ def test_required_extensions_are_refused_by_name_and_optional_ones_warn(tmp_path
 
 @pytest.mark.gl
 def test_second_uv_set_feeds_the_occlusion_texture(tmp_path):
-    _require("gl")
+    require("gl")
     uv1 = np.array([[0, 1], [0, 1], [0, 0], [0, 0]], np.float32)  # set 1 (glTF's v grows downwards): v only
     # occlusion texture: top row dark, bottom row bright; through set 1 the top of the quad is occluded
     occ = np.zeros((8, 8, 4), np.uint8)
@@ -260,7 +252,7 @@ def test_second_uv_set_feeds_the_occlusion_texture(tmp_path):
 
 @pytest.mark.gl
 def test_single_sided_materials_cull_back_faces_in_gl(tmp_path):
-    _require("gl")
+    require("gl")
     material = {"pbrMetallicRoughness": {"metallicFactor": 0.0}, "doubleSided": False}
     quad_file(tmp_path / "single.glb", material=material, light=SUN)
     scene = om.load_gltf(tmp_path / "single.glb")

@@ -6,6 +6,7 @@ import os
 import shutil
 
 import pytest
+from engines import require
 
 import omnirender as om
 
@@ -31,14 +32,6 @@ end_header
 """
 
 
-def _require(name: str) -> None:
-    ok, why = om.engines().get(name, (False, "not registered"))
-    if not ok:
-        if os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1":
-            pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
-        pytest.skip(f"engine {name!r} unavailable: {why}")
-
-
 def _scene(shape) -> om.Node:
     s = om.Node("s", [om.Camera.orthographic(eye=(0, 0, 5), height=2.2), om.AmbientLight(intensity=0.8)])
     s.add(om.Node("file", [shape]))
@@ -47,7 +40,7 @@ def _scene(shape) -> om.Node:
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=getattr(pytest.mark, n)) for n in ("gl", "povray", "mitsuba")])
 def test_ply_face_colours_show_per_face(tmp_path, name):
-    _require(name)
+    require(name)
     pytest.importorskip("trimesh")
     (tmp_path / "faces.ply").write_text(PLY)
     img = om.render(_scene(om.MeshFile(tmp_path / "faces.ply")), engine=name, size=(48, 48),
@@ -59,7 +52,7 @@ def test_ply_face_colours_show_per_face(tmp_path, name):
 
 @pytest.mark.gl
 def test_obj_material_with_shininess_zero_shows_its_texture(tmp_path):
-    _require("gl")
+    require("gl")
     pytest.importorskip("trimesh")
     for name in ("textured.obj", "checker.png"):
         shutil.copy(os.path.join(DATA, name), tmp_path / name)

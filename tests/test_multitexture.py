@@ -8,23 +8,14 @@ bake, and every engine shows the road layer over the terrain at known pixels.
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import pytest
+from engines import require
 
 import omnirender as om
 from omnirender.attributes.texturing import bake_layers
 
 SIZE = (64, 64)
-
-
-def _require(name: str) -> None:
-    ok, why = om.engines().get(name, (False, "not registered"))
-    if not ok:
-        if os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1":
-            pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
-        pytest.skip(f"engine {name!r} unavailable: {why}")
 
 
 def terrain() -> np.ndarray:
@@ -71,7 +62,7 @@ def _base() -> om.Texture:
 
 @pytest.mark.gl
 def test_gl_blends_the_layers_in_one_pass_as_the_bake_does():
-    _require("gl")
+    require("gl")
     layered = om.render(scene(_base(), om.MultiTexture(LAYERS)), engine="gl", size=SIZE)
     baked_image = bake_layers(terrain(), LAYERS, limit=64)
     baked = om.render(scene(om.Texture(baked_image, filter="nearest", mipmap=False)), engine="gl", size=SIZE)
@@ -83,7 +74,7 @@ def test_gl_blends_the_layers_in_one_pass_as_the_bake_does():
 
 @pytest.mark.gl
 def test_a_layer_on_the_second_uv_set_tiles_with_its_own_coordinates():
-    _require("gl")
+    require("gl")
     on_uv1 = om.Texture(roads(), filter="nearest", mipmap=False, uv_set=1)
     img = om.render(scene(_base(), om.MultiTexture([on_uv1]), uv1=True), engine="gl", size=SIZE)
     grey = (np.abs(img.rgb[..., 0].astype(int) - img.rgb[..., 1]) < 12) & (img.rgb[..., 0] > 150)
@@ -96,7 +87,7 @@ def test_a_layer_on_the_second_uv_set_tiles_with_its_own_coordinates():
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=getattr(pytest.mark, n)) for n in ("gl", "povray", "mitsuba")])
 def test_roads_show_over_the_terrain_in_every_engine(name):
-    _require(name)
+    require(name)
     layers = om.MultiTexture([om.TextureLayer(om.Texture(roads(), filter="nearest", mipmap=False), "over", 1.0)])
     img = om.render(scene(_base(), layers), engine=name, size=SIZE, **({"spp": 8} if name == "mitsuba" else {}))
     road = img.rgb[32, 10].astype(int)  # on the horizontal road (texel rows 3-4 of 8: the middle)

@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import functools
 import itertools
-import os
 
 import numpy as np
 import pytest
+from engines import marks, require
 
 import omnirender as om
 from omnirender.chart import CHART_PATCHES, material_chart, patch_means
@@ -33,30 +33,18 @@ RULE_LIMIT = (
 RULES = ("color after material", "material after pbr", "color only", "phong red")
 
 
-def _require(name: str) -> None:
-    ok, why = om.engines().get(name, (False, "not registered"))
-    if not ok:
-        if os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1":
-            pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
-        pytest.skip(f"engine {name!r} unavailable: {why}")
-
-
 @functools.cache
 def chart_lab(name: str) -> np.ndarray:
     options = {"mitsuba": {"spp": 16}}.get(name, {})
     return cielab(patch_means(om.render(material_chart(), engine=name, size=SIZE, **options)))
 
 
-def _marks(*names: str) -> list:
-    return [getattr(pytest.mark, n) for n in names]
-
-
 @pytest.mark.parametrize(
-    "a,b", [pytest.param(a, b, marks=_marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
+    "a,b", [pytest.param(a, b, marks=marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
 )
 def test_material_chart_agrees_in_cielab(a, b):
-    _require(a)
-    _require(b)
+    require(a)
+    require(b)
     delta = delta_e2000(chart_lab(a), chart_lab(b))
     worst = int(np.argmax(delta))
     report = f"{a} vs {b}: median dE2000 {np.median(delta):.2f}, worst {CHART_PATCHES[worst]!r} {delta[worst]:.1f}"
@@ -75,9 +63,9 @@ def test_colour_difference_is_ciede2000():
     assert np.allclose(cielab([255, 255, 255]), [100, 0, 0], atol=0.05)
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ENGINES])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=marks(n)) for n in ENGINES])
 def test_a_scene_without_camera_gets_the_same_fitted_camera_everywhere(name):
-    _require(name)
+    require(name)
     scene = om.Node("s", [om.PointLight(position=(3, 3, 3)), om.Sphere(radius=2, center=(5, 0, 0))])
     img = om.render(scene, engine=name, size=(64, 48), **({"spp": 4} if name == "mitsuba" else {}))
     expected = om.Camera.fitted(om.bounds(scene), (64, 48))
@@ -87,10 +75,10 @@ def test_a_scene_without_camera_gets_the_same_fitted_camera_everywhere(name):
     assert np.isclose(expected.center, (5, 0, 0)).all() and 0.15 < img.mask.mean() < 0.2
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ("gl", "povray", "mitsuba")])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=marks(n)) for n in ("gl", "povray", "mitsuba")])
 def test_a_nearly_opaque_surface_is_in_the_depth_and_mask(name):
     """A 0.94-opaque cylinder in front of the camera: depth and mask show it in GL as in the offline engines."""
-    _require(name)
+    require(name)
     scene = om.Node("s", [om.Camera.look_at(eye=(0, 0, 5), fov=30), om.PointLight(position=(2, 3, 5))])
     scene.add(om.Node("glass", [om.Material(diffuse=(0.3, 0.6, 0.9), opacity=0.94), om.Cylinder(radius=0.5)]))
     options = {"mitsuba": {"spp": 8}, "povray": {"depth": True}}.get(name, {})
