@@ -209,6 +209,7 @@ def test_cameras_and_lights_come_from_the_file_with_physical_brightness(tmp_path
     point = {"type": "point", "intensity": 2.0 * math.pi, "color": [1.0, 1.0, 1.0]}
     quad_file(tmp_path / "lit.glb", light=point)
     scene = om.load_gltf(tmp_path / "lit.glb")
+    assert scene["/model/quad"].path == "/model/quad"  # the file's node names make the paths
     declared = scene.declarations()
     camera, world = declared.camera
     assert np.allclose(world[:3, 3], (0, 0, 3)) and camera.fov == pytest.approx(45)
