@@ -19,6 +19,7 @@ SCRIPTS = {
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
+    "gltf_load.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -26,6 +27,7 @@ QUICK = {
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
+    "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
 }
 
 

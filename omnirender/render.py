@@ -139,7 +139,38 @@ def render(
     size = _check_size(size)
     if mask is not None:
         options["mask"] = mask
-    return _resolve(entry.render)(scene, size=size, **options)
+    # the GL engine fits the same camera to what it compiled; the others get it in a stand-in root node
+    viewed = scene if engine == "gl" else with_fitted_camera(scene, size, mask)
+    try:
+        return _resolve(entry.render)(viewed, size=size, **options)
+    finally:
+        if viewed is not scene:
+            viewed.clear()  # the stand-in lets go of the scene's nodes and components again
+
+
+def with_fitted_camera(scene: Any, size: tuple[int, int], mask: str | None = None) -> Any:
+    """``scene``, or, when it has no camera, a node holding ``Camera.fitted`` to its bounds and the scene.
+
+    Every engine then shows a scene without a camera the way the GL engine
+    does (the GL engine fits the same camera itself).
+    """
+    from .core.camera import Camera
+    from .core.component import RenderingComponent
+    from .core.mask import compile_mask
+    from .scene.node import Node
+    from .techniques.bounds import bounds
+
+    if isinstance(scene, Node):
+        node = scene
+    else:
+        node = Node("scene", [scene] if isinstance(scene, RenderingComponent) else list(scene))
+    if node.declarations(None if mask is None else compile_mask(mask)).camera is not None:
+        return scene
+    box = bounds(node, mask=mask)
+    if box is None:
+        return scene
+    # the same name and items (child nodes keep their first parent, so their paths do not change)
+    return Node(node.name, [Camera.fitted(box, size), *node.items])
 
 
 def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> Path:

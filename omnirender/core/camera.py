@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -142,6 +143,28 @@ class Camera(MonoAttribute):
     ) -> Camera:
         """A parallel-projection camera whose view volume is ``height`` units tall."""
         return cls(eye, center, up, fov=None, height=height, near=near, far=far, mask=mask)
+
+    @classmethod
+    def fitted(cls, bounds: Any, size: Sequence[int] = (640, 480), fov: float = 35.0) -> Camera:
+        """The camera every engine uses for a scene without one: looking at ``bounds`` (min, max) from +z.
+
+        The bounding sphere fills the view (vertical ``fov``, narrowed for tall
+        images); near and far planes enclose it.  ``bounds`` None gives the
+        default camera (eye at (0, 0, 5)).
+        """
+        if bounds is None:
+            return cls.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
+        lo, hi = (np.asarray(b, np.float64) for b in bounds)
+        center = (lo + hi) / 2.0
+        radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
+        w, h = (int(v) for v in size)
+        half = math.radians(fov) / 2.0
+        if w < h:
+            half = math.atan(math.tan(half) * w / h)
+        dist = radius / math.sin(half) * 1.02
+        near = max(dist - radius * 1.5, dist * 1e-3)
+        far = dist + radius * 1.5
+        return cls.look_at(tuple(center + (0.0, 0.0, dist)), tuple(center), (0, 1, 0), fov=fov, near=near, far=far)
 
     @property
     def is_orthographic(self) -> bool:

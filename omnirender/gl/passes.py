@@ -186,6 +186,8 @@ class Shader:
       ``{"u_shadow_atlas": ("shadow-atlas", "depth")}`` (texture units 8 and up);
     * ``textures``: sampler uniforms bound to ``om.Texture`` images
       (``{"u_highlight": om.Texture(pattern)}``).
+    * ``alpha_cutoff``: fragments whose surface alpha is below it are discarded
+      (a depth-only pass of blended surfaces writes depth where they are mostly opaque).
     """
 
     depth_only: bool = False
@@ -197,8 +199,11 @@ class Shader:
     defines: Any = ()
     inputs: Any = ()
     textures: Any = ()
+    alpha_cutoff: float | None = None
 
     def __post_init__(self) -> None:
+        if self.alpha_cutoff is not None and not 0.0 <= float(self.alpha_cutoff) <= 1.0:
+            raise ValueError(f"Shader: alpha_cutoff must be in [0, 1] or None, got {self.alpha_cutoff!r}")
         if self.flat_color is not None:
             object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
         for name in ("vertex", "fragment"):
@@ -474,7 +479,10 @@ class Composed:
         flat = None
         vertex: list[str] = []
         fragment: list[str] = []
+        cutoff = None
         for s in self.shader:
+            if s.alpha_cutoff is not None:
+                cutoff = float(s.alpha_cutoff)
             depth_only = depth_only or s.depth_only
             unlit = unlit or s.unlit
             if s.flat_color is not None:
@@ -498,6 +506,8 @@ class Composed:
         for s in self.shader:
             defines.update(s.defines)
         out.extend((name, value) for name, value in sorted(defines.items()) if value is not False)
+        if cutoff is not None:
+            out.append(("PASS_ALPHA_CUTOFF", cutoff))
         return tuple(out)
 
     def inputs(self) -> dict[str, Any]:

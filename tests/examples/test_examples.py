@@ -182,3 +182,19 @@ def test_09_lighting_analysis(tmp_path):
     assert 500 < low < 5623 < high < 5623 + 5400 + 100
     chart = img[:, img.shape[1] // 2 + 10 :]
     assert (chart[:, :, 0] > 200).any() and (chart[:, :, 2] > 150).any()  # red under the lamp, blue in the corner
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+@pytest.mark.mitsuba
+def test_12_assets(tmp_path):
+    run_example("12_assets.py", tmp_path)
+    img = check_image(tmp_path / "12-assets.png")
+    assert (tmp_path / "12-asset.glb").is_file()
+    w = (img.shape[1] - 8) // 3
+    # the ball's glowing band is bright yellow in the middle of every engine's picture
+    for i in range(3):
+        band = img[110:135, i * (w + 4) + 130 : i * (w + 4) + 190]
+        yellow = (band[..., 0] > 200) & (band[..., 1] > 170) & (band[..., 2] < 150)
+        assert yellow.mean() > 0.3, i
