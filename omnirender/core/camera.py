@@ -143,6 +143,23 @@ class Camera(MonoAttribute):
         """A parallel-projection camera whose view volume is ``height`` units tall."""
         return cls(eye, center, up, fov=None, height=height, near=near, far=far, mask=mask)
 
+    @classmethod
+    def fit(cls, bounds: tuple[Sequence[float], Sequence[float]], aspect: float, fov: float = 35.0) -> Camera:
+        """A perspective camera on +z looking at the box ``bounds = (lo, hi)``: its bounding sphere fills the view.
+
+        Near and far enclose the sphere with room to spare; ``aspect`` is the image's width/height.
+        """
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
+        center = (lo + hi) / 2.0
+        radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
+        half = math.radians(fov) / 2.0
+        if aspect < 1.0:
+            half = math.atan(math.tan(half) * aspect)
+        dist = radius / math.sin(half) * 1.02
+        near = max(dist - radius * 1.5, dist * 1e-3)
+        far = dist + radius * 1.5
+        return cls.look_at(tuple(center + (0.0, 0.0, dist)), tuple(center), (0, 1, 0), fov=fov, near=near, far=far)
+
     @property
     def is_orthographic(self) -> bool:
         return self.height is not None

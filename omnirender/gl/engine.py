@@ -17,7 +17,6 @@ context, the targets, cameras and resources.
 from __future__ import annotations
 
 import contextlib
-import math
 import weakref
 from collections.abc import Iterator
 from typing import Any
@@ -377,18 +376,8 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         bounds = self.scene_bounds()
         if bounds is None:
             return Camera.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
-        lo, hi = bounds
-        center = (lo + hi) / 2.0
-        radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
-        fov = 35.0
         w, h = self._size
-        half = math.radians(fov) / 2.0
-        if w < h:
-            half = math.atan(math.tan(half) * w / h)
-        dist = radius / math.sin(half) * 1.02
-        near = max(dist - radius * 1.5, dist * 1e-3)
-        far = dist + radius * 1.5
-        return Camera.look_at(tuple(center + (0.0, 0.0, dist)), tuple(center), (0, 1, 0), fov=fov, near=near, far=far)
+        return Camera.fit(bounds, w / h)
 
     def view_matrix(self) -> np.ndarray | None:
         if self.camera is None:

@@ -14,7 +14,11 @@ A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(..
   default), ``camera`` (an ``om.Camera`` or ``(view, projection)`` matrices,
   e.g. a light's), ``shader`` (:class:`Shader`: depth only, flat colour,
   unlit, user GLSL snippets), or ``fullscreen`` (:class:`FullScreen`: an
-  image-space pass that draws one full-screen triangle instead of items).
+  image-space pass that draws one full-screen triangle instead of items), or
+  ``custom`` (Python drawing code: ``custom(engine, draw)`` is called instead
+  of drawing items; ``draw()`` draws what the pass selects, ``draw(Pass(...))``
+  runs a nested pass, so the code can switch targets, cameras and full-screen
+  effects while it draws, e.g. a compositing tree of renderers).
 
 Passes nest: the pass a nested technique describes is composed with the
 enclosing one (:class:`Composed`): item classes intersect, masks and
@@ -32,12 +36,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME"]
+from .attributes import _DEPTH_FUNCS
+
+__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME", "DEPTH_FUNCS"]
 
 #: The classes of draw items: drawn in this order when a pass selects several.
 ITEM_CLASSES = ("opaque", "transparent", "overlay")
 _ALL = frozenset(ITEM_CLASSES)
 _DTYPES = ("f1", "f2", "f4")
+#: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
+DEPTH_FUNCS = _DEPTH_FUNCS
 
 
 def _classes(items: Any) -> frozenset[str]:
@@ -97,8 +105,11 @@ class Target:
     ``colors`` names its colour attachments (fragment outputs 0, 1, ... in
     that order), ``depth`` adds a depth texture, ``dtype`` is ``"f1"`` (8 bits
     per channel, sRGB-encoded values like the screen), ``"f2"`` or ``"f4"``
-    (linear floats), ``scale`` its size relative to the frame.  Later passes
-    sample it through :class:`FullScreen` ``inputs`` or ``engine.target(name)``.
+    (linear floats), ``scale`` its size relative to the frame, or with
+    ``relative="enclosing"`` relative to the framebuffer the pass is nested in
+    (an offscreen pass inside another offscreen pass, e.g. inside a shadow map,
+    gets that target's size).  Later passes sample it through
+    :class:`FullScreen` ``inputs`` or ``engine.target(name)``.
     """
 
     name: str
@@ -106,6 +117,7 @@ class Target:
     depth: bool = True
     dtype: str = "f1"
     scale: float = 1.0
+    relative: str = "frame"
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -121,6 +133,8 @@ class Target:
             raise ValueError(f"Target {self.name!r}: dtype must be one of {_DTYPES}, got {self.dtype!r}")
         if not (isinstance(self.scale, (int, float)) and 0.0 < self.scale <= 4.0):
             raise ValueError(f"Target {self.name!r}: scale must be in (0, 4], got {self.scale!r}")
+        if self.relative not in ("frame", "enclosing"):
+            raise ValueError(f"Target {self.name!r}: relative must be 'frame' or 'enclosing', got {self.relative!r}")
         object.__setattr__(self, "colors", colors)
         object.__setattr__(self, "scale", float(self.scale))
 
@@ -195,7 +209,11 @@ class FullScreen:
     ``uniforms`` gives other uniform values.  ``blend=True`` composites the
     result over the target ("over", premultiplied by its alpha) instead of
     replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
-    effect_depth(vec2 uv)`` the snippet defines.
+    effect_depth(vec2 uv)`` the snippet defines.  ``depth_test`` compares
+    that depth with the target's (``"less"``, ``"lequal"``, ... as
+    ``om.gl.DepthTest``; None: every fragment passes), so a saved image can be
+    merged back by depth (a depth sprite).  The pass's GL ``state`` (a
+    ``StencilTest``, a ``ScissorTest``, a ``ColorMask``) applies to the triangle.
     """
 
     fragment: str
@@ -203,12 +221,18 @@ class FullScreen:
     uniforms: Any = ()
     blend: bool = False
     depth: bool = False
+    depth_test: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.fragment, str) or "effect" not in self.fragment:
             raise ValueError("FullScreen: fragment must be GLSL defining vec4 effect(vec2 uv)")
         if self.depth and "effect_depth" not in self.fragment:
             raise ValueError("FullScreen: depth=True needs the snippet to define float effect_depth(vec2 uv)")
+        if self.depth_test is not None and self.depth_test not in DEPTH_FUNCS:
+            raise ValueError(f"FullScreen: depth_test must be None or one of {sorted(DEPTH_FUNCS)}, got "
+                             f"{self.depth_test!r}")  # fmt: skip
+        if self.depth_test is not None and not self.depth:
+            raise ValueError("FullScreen: depth_test compares the effect's depth: give depth=True and effect_depth")
         items = self.inputs.items() if isinstance(self.inputs, Mapping) else self.inputs
         inputs = []
         for uniform, source in items:
@@ -241,6 +265,7 @@ class Pass:
     camera: Any = None
     shader: Shader | None = None
     fullscreen: FullScreen | None = None
+    custom: Callable[[Any, Any], Any] | None = None
     _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
     _fallback: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
 
@@ -258,6 +283,11 @@ class Pass:
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Pass {self.name!r}: {name} must be an om.gl.{kind.__name__}, got {value!r}")
+        if self.custom is not None:
+            if not callable(self.custom):
+                raise ValueError(f"Pass {self.name!r}: custom must be a function (engine, draw), got {self.custom!r}")
+            if self.fullscreen is not None:
+                raise ValueError(f"Pass {self.name!r}: give custom or fullscreen, not both")
         object.__setattr__(self, "_state", self._captured("state"))
         object.__setattr__(self, "_fallback", self._captured("fallback"))
         if self.camera is not None:
@@ -296,6 +326,7 @@ class Pass:
             camera,
             self.shader,
             self.fullscreen,
+            self.custom,
         )
 
     def __eq__(self, other: object) -> bool:
