@@ -40,6 +40,7 @@ uniform sampler2D u_shadow;
 uniform mat4 u_inv_view_proj;    // camera clip -> world
 uniform mat4 u_light_view_proj;  // world -> light clip
 uniform vec3 u_light;            // near, far, orthographic (1) of the light's projection
+uniform vec4 u_light_position;   // world position (w = 1) or direction towards the light (w = 0)
 uniform float u_texel;           // world size of a shadow-map texel at distance 1 (perspective) or anywhere
 uniform float u_bias;            // in shadow-map texels
 uniform float u_darkness;
@@ -53,13 +54,20 @@ vec4 effect(vec2 uv) {
     vec4 c = texelFetch(u_color, p, 0);
     float d = texelFetch(u_depth, p, 0).r;
     if (d >= 1.0 || c.a <= 0.0) discard;                     // the children drew nothing here
-    vec4 world = u_inv_view_proj * vec4(uv * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
-    vec4 lc = u_light_view_proj * vec4(world.xyz / world.w, 1.0);
+    vec4 h = u_inv_view_proj * vec4(uv * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
+    vec3 world = h.xyz / h.w;
+    vec4 lc = u_light_view_proj * vec4(world, 1.0);
+    // slope-scaled bias: surfaces seen at a grazing angle from the light need more (the normal from the
+    // world positions of neighbouring pixels; off at depth edges, where the bias is capped)
+    vec3 normal = cross(dFdx(world), dFdy(world));
+    vec3 to_light = u_light_position.w > 0.5 ? u_light_position.xyz - world : u_light_position.xyz;
+    float cosine = abs(dot(normalize(normal), normalize(to_light)));
+    float slope = length(normal) > 0.0 ? min(sqrt(max(1.0 - cosine * cosine, 0.0)) / max(cosine, 1e-3), 4.0) : 4.0;
     float shadow = 0.0;
     if (lc.w > 0.0) {
         vec3 l = lc.xyz / lc.w * 0.5 + 0.5;
         float here = light_distance(l.z);
-        float bias = u_bias * u_texel * (u_light.z > 0.5 ? 1.0 : here);
+        float bias = u_bias * (1.0 + slope) * u_texel * (u_light.z > 0.5 ? 1.0 : here);
         vec2 texel = 1.0 / vec2(textureSize(u_shadow, 0));
         for (int i = -1; i <= 1; ++i) {
             for (int j = -1; j <= 1; ++j) {
@@ -75,6 +83,14 @@ vec4 effect(vec2 uv) {
 }
 float effect_depth(vec2 uv) { return texelFetch(u_depth, ivec2(gl_FragCoord.xy), 0).r; }
 """
+
+
+def light_position(light: Any, world: np.ndarray) -> tuple[float, float, float, float]:
+    """The light's world position (w = 1), or for a directional light the direction towards it (w = 0)."""
+    if isinstance(light, DirectionalLight):
+        return (*(-light.world_direction(world)), 0.0)
+    position = light.world_position(world) if isinstance(light, LightSource) else np.asarray(light, dtype=np.float64)
+    return (*(float(v) for v in position), 1.0)
 
 
 def light_view(light: Any, world: np.ndarray, bounds: Bounds) -> tuple[np.ndarray, np.ndarray, float]:
@@ -119,7 +135,7 @@ class ShadowGroup(RendererGroup):
     ``light`` is an ``om.PointLight``, ``om.SpotLight``, ``om.DirectionalLight``
     or a position; a light placed in the scene graph the group draws in is
     taken where it sits.  ``resolution`` is the shadow map's larger side in
-    pixels, ``bias`` the depth tolerance in shadow-map texels (against shadow
+    pixels (a square map), ``bias`` the depth tolerance in shadow-map texels (against shadow
     acne), ``enabled=False`` draws the children unshadowed (for comparisons).
     """
 
@@ -181,19 +197,19 @@ class ShadowGroup(RendererGroup):
         if box is None:  # off, or nothing known to cast: the children as a plain depth group
             draw_all(canvas, children)
             return
-        view, proj, texel = light_view(self.light, self._light_world(canvas), box)
-        w, h = canvas.size
-        scale = min(4.0, max(0.05, self.resolution / max(w, h)))
-        shadow = Target(target_name(self, "shadow-map"), colors=(), depth=True, scale=scale, relative="enclosing")
+        light_world = self._light_world(canvas)
+        view, proj, texel = light_view(self.light, light_world, box)
+        side = min(self.resolution, int(canvas.engine.max_texture_size))
+        shadow = Target(target_name(self, "shadow-map"), colors=(), depth=True, size=(side, side))
         canvas.into("shadow-map", lambda inner: draw_all(inner, children), target=shadow,
                     clear=Clear(color=None, depth=1.0), camera=(view, proj))  # fmt: skip
         drawn = draw_offscreen(canvas, self, children)
         info = ProjectionInfo.of(proj)
-        side = max(round(w * scale), round(h * scale))
         uniforms = {
             "u_inv_view_proj": _mat(np.linalg.inv(canvas.view_projection)),
             "u_light_view_proj": _mat(proj @ view),
             "u_light": (info.near, info.far, 1.0 if info.is_orthographic else 0.0),
+            "u_light_position": light_position(self.light, light_world),
             "u_texel": texel / side,
             "u_bias": self.bias,
             "u_darkness": self.darkness,

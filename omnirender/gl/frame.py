@@ -381,6 +381,8 @@ class FrameRunner:
     def _frame_target(self, description: Target, size: tuple[int, int] | None = None) -> RenderTarget:
         """The GPU target of ``description`` (at ``size``, else its scale of the frame size), named in this frame."""
         if size is None:
+            size = description.size
+        if size is None:
             base = self._target_size if description.relative == "enclosing" else self._size
             size = (max(1, round(base[0] * description.scale)), max(1, round(base[1] * description.scale)))
         key = (description, size)

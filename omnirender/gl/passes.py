@@ -108,7 +108,8 @@ class Target:
     (linear floats), ``scale`` its size relative to the frame, or with
     ``relative="enclosing"`` relative to the framebuffer the pass is nested in
     (an offscreen pass inside another offscreen pass, e.g. inside a shadow map,
-    gets that target's size).  Later passes sample it through
+    gets that target's size); ``size = (width, height)`` fixes it in pixels
+    instead (a square shadow map).  Later passes sample it through
     :class:`FullScreen` ``inputs`` or ``engine.target(name)``.
     """
 
@@ -118,6 +119,7 @@ class Target:
     dtype: str = "f1"
     scale: float = 1.0
     relative: str = "frame"
+    size: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -135,6 +137,19 @@ class Target:
             raise ValueError(f"Target {self.name!r}: scale must be in (0, 4], got {self.scale!r}")
         if self.relative not in ("frame", "enclosing"):
             raise ValueError(f"Target {self.name!r}: relative must be 'frame' or 'enclosing', got {self.relative!r}")
+        if self.size is not None:
+            try:
+                w, h = self.size
+                ok = all(
+                    isinstance(v, (int, np.integer)) and not isinstance(v, bool) and 1 <= v <= 16384 for v in (w, h)
+                )
+            except (TypeError, ValueError):
+                ok = False
+            if not ok:
+                raise ValueError(
+                    f"Target {self.name!r}: size must be (width, height) in pixels, 1..16384, got {self.size!r}"
+                )
+            object.__setattr__(self, "size", (int(w), int(h)))
         object.__setattr__(self, "colors", colors)
         object.__setattr__(self, "scale", float(self.scale))
 
