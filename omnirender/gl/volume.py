@@ -7,8 +7,9 @@ shader marches the ray front to back through the 3D texture, from where it
 enters the box or crosses the near plane (whichever is later) to the back
 face, maps samples through the transfer function (opacity corrected for the
 step length), composites, and writes ``gl_FragDepth`` at the first sample
-whose accumulated opacity exceeds 5% -- so depth changes exactly where colour
-does (compositing rule 2).  Rays that stay nearly transparent are discarded.
+where the accumulated opacity crosses 5% (interpolated within the step, so the
+depth is smooth) -- so depth changes exactly where colour does (compositing
+rule 2).  Rays that stay nearly transparent are discarded.
 Rays end at the depth already drawn (a copy of the framebuffer's depth taken
 before the volumes are drawn), so opaque shapes inside a volume hide what lies
 behind them and are seen through what lies in front.
@@ -108,9 +109,12 @@ void main() {
         vec4 c = texture(u_tf, vec2(x, 0.5));
         float a = 1.0 - pow(max(1.0 - c.a, 0.0), dt * max(max(u_dims.x, u_dims.y), u_dims.z));
         color += (1.0 - alpha) * a * c.rgb;
+        float before = alpha;
         alpha += (1.0 - alpha) * a;
         if (depth < 0.0 && alpha > 0.05) {
-            vec4 clip = u_mvp * vec4(p, 1.0);
+            // where within this step's stretch the opacity crossed 5 %: a smooth depth, not one in steps
+            float f = clamp((0.05 - before) / max(alpha - before, 1e-6), 0.0, 1.0);
+            vec4 clip = u_mvp * vec4(p + rd * (f - 0.5) * dt, 1.0);
             depth = clip.z / clip.w * 0.5 + 0.5;
         }
         if (alpha > 0.99) break;
