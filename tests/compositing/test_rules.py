@@ -23,7 +23,7 @@ def built_ins() -> dict[str, C.Renderer]:
         "DepthGroup(offscreen)": C.DepthGroup([a, volume], offscreen=True),
         "OcclusionGroup(visible)": C.OcclusionGroup([b]),
         "OcclusionGroup(semi-transparent)": C.OcclusionGroup([b, volume], mode="semi-transparent", opacity=0.4),
-        "ShadowGroup": C.ShadowGroup(LIGHT, [a, b, volume]),
+        "ShadowGroup": C.ShadowGroup(LIGHT, [a, b, volume], resolution=512),
         "LuminanceFilter": C.LuminanceFilter(),
         "BufferDebugFilter(depth)": C.BufferDebugFilter("depth"),
         "BufferDebugFilter(alpha)": C.BufferDebugFilter("alpha"),
@@ -44,7 +44,7 @@ def test_every_built_in_renderer_follows_the_four_rules(name):
 def test_the_light_field_renderer_follows_the_four_rules(small_light_field):
     report = C.check_rules(C.LightFieldRenderer(small_light_field))
     assert report.ok, str(report)
-    tree = C.ShadowGroup(LIGHT, [C.SceneRenderer(cube()), C.LightFieldRenderer(small_light_field)])
+    tree = C.ShadowGroup(LIGHT, [C.SceneRenderer(cube()), C.LightFieldRenderer(small_light_field)], resolution=256)
     assert C.check_rules(tree).ok
 
 

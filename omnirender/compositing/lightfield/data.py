@@ -174,11 +174,12 @@ class LightFieldView:
         fx, fy, cx, cy = self.intrinsics
         w, h = self.size
         # eye-space planes through the eye (normals pointing out of the frustum) and the depth cuts
+        # pixel u = cx + fx x / -z in [0, w] and v = cy - fy y / -z in [0, h] (z < 0 in front of the camera)
         eye_planes = [
-            (np.array([-fx, 0.0, -cx]), 0.0),  # left: x / -z >= -cx / fx
-            (np.array([fx, 0.0, -(w - cx)]), 0.0),  # right
-            (np.array([0.0, fy, -cy]), 0.0),  # top (image y down: eye y up)
-            (np.array([0.0, -fy, -(h - cy)]), 0.0),  # bottom
+            (np.array([-fx, 0.0, cx]), 0.0),  # u >= 0:  -fx x + cx z <= 0
+            (np.array([fx, 0.0, w - cx]), 0.0),  # u <= w:  fx x + (w - cx) z <= 0
+            (np.array([0.0, fy, cy]), 0.0),  # v >= 0:  fy y + cy z <= 0
+            (np.array([0.0, -fy, h - cy]), 0.0),  # v <= h:  -fy y + (h - cy) z <= 0
             (np.array([0.0, 0.0, 1.0]), -near),  # z <= -near
             (np.array([0.0, 0.0, -1.0]), far),  # z >= -far
         ]
@@ -312,21 +313,28 @@ def _inside(folder: Path, name: Any, index: Path) -> Path:
 
 
 def _frusta_bounds(lf: LightField) -> tuple[np.ndarray, np.ndarray]:
-    """Box of the intersection of the views' frusta: a box around all samples clipped by every frustum plane."""
+    """Box of the intersection of the views' frusta: one frustum's box clipped by every frustum's planes."""
     samples = np.concatenate([lf.points(i, 4) for i in range(len(lf))])
-    lo, hi = samples.min(axis=0), samples.max(axis=0)
-    pad = 0.05 * float(np.linalg.norm(hi - lo)) + 1e-6
-    faces = _box_faces(lo - pad, hi + pad)
-    for view in lf.views:
-        planes = view.frustum_planes()
-        if planes is None:
-            continue
-        for plane in planes:
-            faces = _clip(faces, plane[:3], plane[3])
-            if not faces:
-                return lo, hi
+    fallback = (samples.min(axis=0), samples.max(axis=0))
+    planes = [p for p in (view.frustum_planes() for view in lf.views) if p is not None]
+    faces = _box_faces(*_corners_box(planes[0]))
+    for plane in np.concatenate(planes):
+        faces = _clip(faces, plane[:3], plane[3])
+        if not faces:
+            return fallback
     points = np.array([p for face in faces for p in face])
     return points.min(axis=0), points.max(axis=0)
+
+
+def _corners_box(planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The box of a frustum's 8 corners (each the meeting point of a side pair and a depth plane)."""
+    corners = []
+    for a, b in ((0, 2), (0, 3), (1, 2), (1, 3)):
+        for c in (4, 5):
+            m = planes[[a, b, c], :3]
+            corners.append(np.linalg.solve(m, planes[[a, b, c], 3]))
+    corners = np.array(corners)
+    return corners.min(axis=0), corners.max(axis=0)
 
 
 def _box_faces(lo: np.ndarray, hi: np.ndarray) -> list[list[np.ndarray]]:
