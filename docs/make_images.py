@@ -1,6 +1,6 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py [demo] [agreement] [gallery] [examples]
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [gallery] [examples] [compositing]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -119,7 +119,24 @@ def example_images() -> None:
         print("wrote", HERE / "example_11-turntable.gif")
 
 
-SECTIONS = {"demo": demo_images, "agreement": agreement_images, "gallery": gl_gallery, "examples": example_images}
+def compositing_images() -> None:
+    """The renderer-tree examples (12 and 13)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        for script in ("12_renderer_tree.py", "13_user_renderer.py"):
+            subprocess.run([sys.executable, str(ROOT / "examples" / script), tmp], check=True, cwd=ROOT,
+                           stdout=subprocess.DEVNULL)  # fmt: skip
+        for png in sorted(Path(tmp).glob("1[23]-*.png")):
+            shutil.copy(png, HERE / f"example_{png.stem}.png")
+            print("wrote", HERE / f"example_{png.stem}.png")
+
+
+SECTIONS = {
+    "demo": demo_images,
+    "agreement": agreement_images,
+    "gallery": gl_gallery,
+    "examples": example_images,
+    "compositing": compositing_images,
+}
 
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)

@@ -56,3 +56,20 @@ def test_radiance_example_prints_what_its_comments_say(tmp_path, monkeypatch, ca
         d2 = x * x + 9 + z * z
         assert value == pytest.approx(179 * (10 * math.pi * 3 / math.sqrt(d2) / d2 + 20 * math.pi), rel=0.02)
     assert (tmp_path / "room.rad").read_text().startswith("# omnirender scene for Radiance")
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_renderer_tree_example_runs(tmp_path, monkeypatch, capsys):
+    import numpy as np
+    from PIL import Image
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("## Renderer trees: meshes, volumes and light fields together"), "README.md", "exec"), {})
+    assert "ShadowGroup follows the four integration rules" in capsys.readouterr().out
+    for name in ("tree.png", "statue.png", "graph.png"):
+        rgb = np.asarray(Image.open(tmp_path / name).convert("RGB")).astype(int)
+        assert rgb.std() > 10, name
+    statue = np.asarray(Image.open(tmp_path / "statue.png").convert("RGB")).astype(int)
+    drawn = statue.max(axis=2) > 100
+    assert drawn.sum() > 2000 and np.all(statue[drawn].max(axis=1) - statue[drawn].min(axis=1) <= 2)  # grey

@@ -114,7 +114,7 @@ class Canvas:
             draw(inner)
             return inner.calls
 
-        return self._draw(Pass(name, items="none", target=target, clear=clear, camera=camera, custom=custom))
+        return self._draw(Pass(name, target=target, clear=clear, camera=camera, custom=custom))
 
     def fullscreen(
         self,

@@ -131,9 +131,14 @@ def test_a_shadow_group_in_a_scene_graph_shadows_the_rest_of_its_node():
     plain = om.Node("scene", [CAMERA, light, floor, sphere])
     shadowed = om.render(graph, size=SIZE, samples=0)
     unshadowed = om.render(plain, size=SIZE, samples=0)
+    assert np.array_equal(shadowed.mask, unshadowed.mask)  # the node's content is drawn, and only that
     darker = shadowed.array[..., :3].sum(axis=2) < 0.7 * unshadowed.array[..., :3].sum(axis=2)
     assert darker[45:, 30:66].sum() > 40  # the sphere's shadow on the floor below it
     assert not darker[:25].any()  # nothing above the sphere
+    # the same picture as the stand-alone tree of the same content
+    content = om.Node("content", [light, floor, sphere])
+    alone = C.ShadowGroup(light, [C.SceneRenderer(content)]).render(SIZE, camera=CAMERA, samples=0)
+    assert (np.abs(alone.array.astype(int) - shadowed.array.astype(int)).max(axis=2) <= 3).mean() > 0.99
     # engines that cannot composite evaluate the node's content once, as if the group were not there
     shapes = lambda prog: [type(o).__name__ for op, o in prog if op == "eval"]  # noqa: E731
     assert shapes(om.trace(graph)) == shapes(om.trace(plain))
