@@ -21,12 +21,43 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Canvas", "target_name"]
+__all__ = ["Canvas", "target_name", "eye_distance", "EYE_DISTANCE", "fraction"]
+
+#: GLSL: window depth -> distance along the view axis, for ``camera = (near, far, orthographic ? 1 : 0)``.
+EYE_DISTANCE = """
+float eye_distance(float d, vec3 camera) {
+    if (camera.z > 0.5) return mix(camera.x, camera.y, d);
+    return 2.0 * camera.x * camera.y / ((camera.y + camera.x) - (d * 2.0 - 1.0) * (camera.y - camera.x));
+}
+"""
 
 
 def target_name(owner: Any, role: str) -> str:
     """A frame-unique offscreen target name for ``owner`` (a renderer instance) and its ``role``."""
     return f"{type(owner).__name__}@{id(owner):x}.{role}"
+
+
+def eye_distance(window: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """Window depths in [0, 1] -> distances along the view axis of ``projection`` (inf where the depth is 1)."""
+    from ..gl.frame import ProjectionInfo
+
+    info = ProjectionInfo.of(projection)
+    n, f = info.near, info.far
+    d = np.asarray(window, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = n + d * (f - n) if info.is_orthographic else 2.0 * f * n / ((f + n) - (2.0 * d - 1.0) * (f - n))
+    return np.where(d < 1.0, z, np.inf)
+
+
+def fraction(owner: str, name: str, value: Any) -> float:
+    """``value`` as a float in [0, 1], or ValueError naming ``owner`` and ``name``."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not 0.0 <= value <= 1.0:
+        raise ValueError(f"{owner}: {name} must be a number in [0, 1], got {value!r}")
+    return value
 
 
 class Canvas:
@@ -90,6 +121,12 @@ class Canvas:
 
         info = ProjectionInfo.of(self.projection)
         return info.near, info.far
+
+    @property
+    def camera_uniform(self) -> tuple[float, float, float]:
+        """(near, far, 1 if orthographic else 0): the ``camera`` argument of the GLSL :data:`EYE_DISTANCE`."""
+        near, far = self.depth_range
+        return near, far, 1.0 if self.orthographic else 0.0
 
     # -- drawing -----------------------------------------------------------------------------
     def scope(self) -> int:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..gl import StencilTest, Target
-from .canvas import Canvas, target_name
+from .canvas import EYE_DISTANCE, Canvas, eye_distance, fraction, target_name
 from .renderer import Filter
 
 __all__ = ["LuminanceFilter", "BufferDebugFilter", "GLSLFilter", "STENCIL_PALETTE"]
@@ -46,6 +46,7 @@ vec4 effect(vec2 uv) {
 
 DEBUG_DEPTH = (
     _SOURCE
+    + EYE_DISTANCE
     + """
 uniform vec2 u_range;   // linear depth shown white, black
 uniform vec3 u_camera;  // near, far, orthographic (1)
@@ -53,8 +54,7 @@ uniform float u_opacity;
 vec4 effect(vec2 uv) {
     float d = source_depth();
     if (d >= 1.0) discard;                                   // nothing drawn here: no depth to show
-    float z = u_camera.z > 0.5 ? mix(u_camera.x, u_camera.y, d)
-        : 2.0 * u_camera.x * u_camera.y / ((u_camera.y + u_camera.x) - (d * 2.0 - 1.0) * (u_camera.y - u_camera.x));
+    float z = eye_distance(d, u_camera);
     float g = 1.0 - clamp((z - u_range.x) / max(u_range.y - u_range.x, 1e-9), 0.0, 1.0);
     vec4 c = source_color();
     return vec4(mix(c.rgb, vec3(g), u_opacity), c.a);
@@ -99,16 +99,6 @@ def _source(canvas: Canvas, owner: Any, depth: bool = False) -> dict[str, tuple[
     return inputs
 
 
-def _opacity(owner: str, value: Any) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        value = float("nan")
-    if not 0.0 <= value <= 1.0:
-        raise ValueError(f"{owner}: opacity must be a number in [0, 1], got {value!r}")
-    return value
-
-
 class LuminanceFilter(Filter):
     """Colour to grey: the luminance of the linear colour (``weights``: Rec. 709 by default)."""
 
@@ -144,7 +134,7 @@ class BufferDebugFilter(Filter):
         if buffer not in self.BUFFERS:
             raise ValueError(f"BufferDebugFilter: buffer must be one of {self.BUFFERS}, got {buffer!r}")
         self.buffer = buffer
-        self.opacity = _opacity("BufferDebugFilter", opacity)
+        self.opacity = fraction("BufferDebugFilter", "opacity", opacity)
 
     def draw(self, canvas: Canvas) -> None:
         with canvas.preserved():
@@ -158,19 +148,11 @@ class BufferDebugFilter(Filter):
     def _depth(self, canvas: Canvas) -> None:
         inputs = _source(canvas, self, depth=True)
         window = canvas.target(inputs["u_image"][0]).depth_array()
-        near, far = canvas.depth_range
-        drawn = window[window < 1.0].astype(np.float64)
-        if drawn.size == 0:
+        z = eye_distance(window[window < 1.0], canvas.projection)
+        if z.size == 0:
             return
-        if canvas.orthographic:
-            z = near + drawn * (far - near)
-        else:
-            z = 2.0 * far * near / ((far + near) - (2.0 * drawn - 1.0) * (far - near))
-        uniforms = {
-            "u_range": (float(z.min()), float(z.max())),
-            "u_camera": (near, far, 1.0 if canvas.orthographic else 0.0),
-            "u_opacity": self.opacity,
-        }
+        uniforms = {"u_range": (float(z.min()), float(z.max())), "u_camera": canvas.camera_uniform,
+                    "u_opacity": self.opacity}  # fmt: skip
         canvas.fullscreen("debug-depth", DEBUG_DEPTH, inputs, uniforms)
 
     def _stencil(self, canvas: Canvas) -> None:

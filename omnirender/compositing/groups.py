@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from ..gl import Clear, Target
-from .canvas import Canvas, target_name
+from .canvas import Canvas, fraction, target_name
 from .renderer import Renderer, RendererGroup, draw_all
 
 __all__ = ["DepthGroup", "OcclusionGroup", "merge_by_depth", "draw_offscreen", "MERGE"]
@@ -109,14 +109,8 @@ class OcclusionGroup(RendererGroup):
         super().__init__(children)
         if mode not in self.MODES:
             raise ValueError(f"OcclusionGroup: mode must be one of {self.MODES}, got {mode!r}")
-        try:
-            opacity = float(opacity)
-        except (TypeError, ValueError):
-            opacity = float("nan")
-        if not 0.0 <= opacity <= 1.0:
-            raise ValueError(f"OcclusionGroup: opacity must be a number in [0, 1], got {opacity!r}")
         self.mode = mode
-        self.opacity = opacity
+        self.opacity = fraction("OcclusionGroup", "opacity", opacity)
 
     def composite(self, canvas: Canvas, children: tuple[Renderer, ...]) -> None:
         a = target_name(self, "A")

@@ -27,13 +27,15 @@ from ..attributes.lights import DirectionalLight, LightSource
 from ..core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from ..gl import Clear, Target
 from ..gl.frame import ProjectionInfo
-from .canvas import Canvas, target_name
+from .canvas import EYE_DISTANCE, Canvas, fraction, target_name
 from .groups import draw_offscreen
 from .renderer import Bounds, Renderer, RendererGroup, draw_all
 
 __all__ = ["ShadowGroup", "light_view"]
 
-SHADE = """
+SHADE = (
+    EYE_DISTANCE
+    + """
 uniform sampler2D u_color;
 uniform sampler2D u_depth;
 uniform sampler2D u_shadow;
@@ -44,11 +46,7 @@ uniform vec4 u_light_position;   // world position (w = 1) or direction towards 
 uniform float u_texel;           // world size of a shadow-map texel at distance 1 (perspective) or anywhere
 uniform float u_bias;            // in shadow-map texels
 uniform float u_darkness;
-float light_distance(float d) {
-    if (u_light.z > 0.5) return mix(u_light.x, u_light.y, d);
-    float ndc = d * 2.0 - 1.0;
-    return 2.0 * u_light.x * u_light.y / ((u_light.y + u_light.x) - ndc * (u_light.y - u_light.x));
-}
+float light_distance(float d) { return eye_distance(d, u_light); }
 vec4 effect(vec2 uv) {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 c = texelFetch(u_color, p, 0);
@@ -84,6 +82,7 @@ vec4 effect(vec2 uv) {
 }
 float effect_depth(vec2 uv) { return texelFetch(u_depth, ivec2(gl_FragCoord.xy), 0).r; }
 """
+)
 
 
 def light_position(light: Any, world: np.ndarray) -> tuple[float, float, float, float]:
@@ -163,8 +162,6 @@ class ShadowGroup(RendererGroup):
                     f", got {light!r:.60}"
                 )
             light = tuple(float(v) for v in position)
-        if not 0.0 <= float(darkness) <= 1.0:
-            raise ValueError(f"ShadowGroup: darkness must be in [0, 1], got {darkness!r}")
         if (
             isinstance(resolution, bool)
             or not isinstance(resolution, (int, np.integer))
@@ -176,7 +173,7 @@ class ShadowGroup(RendererGroup):
         if not 0.0 <= float(bias) <= 100.0:
             raise ValueError(f"ShadowGroup: bias must be in [0, 100] shadow-map texels, got {bias!r}")
         self.light = light
-        self.darkness = float(darkness)
+        self.darkness = fraction("ShadowGroup", "darkness", darkness)
         self.resolution = int(resolution)
         self.bias = float(bias)
         self.enabled = bool(enabled)

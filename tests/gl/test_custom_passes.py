@@ -9,6 +9,8 @@ import pytest
 
 import omnirender as om
 
+from .test_techniques import OnePass
+
 pytestmark = pytest.mark.gl
 
 
@@ -23,17 +25,6 @@ def engine():
 
 def camera() -> om.Camera:
     return om.Camera.look_at(eye=(0, 0, 6), center=(0, 0, 0), fov=40)
-
-
-class OnePass(om.gl.GLTechnique):
-    __slots__ = ("description",)
-
-    def __init__(self, description: om.gl.Pass) -> None:
-        super().__init__(passes=1)
-        object.__setattr__(self, "description", description)
-
-    def prepare_pass(self, engine):
-        engine.set_pass(self.description)
 
 
 def test_a_custom_pass_draws_its_scope_and_nested_passes(engine):

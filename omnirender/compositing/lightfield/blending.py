@@ -44,7 +44,6 @@ __all__ = [
     "unproject",
     "relevant_views",
     "warp_depth",
-    "eye_distance",
     "eye_of",
 ]
 
@@ -128,18 +127,6 @@ def warp_depth(
         np.minimum.at(buffer, y[inside].astype(np.int64) * w + x[inside].astype(np.int64), distance[ok][inside])
     buffer = buffer.reshape(h, w)
     return np.where(np.isfinite(buffer), buffer, _min_filter(buffer, 1))
-
-
-def eye_distance(window: np.ndarray, proj: np.ndarray) -> np.ndarray:
-    """Window depths in [0, 1] -> distances along the view axis (inf where the depth is 1: nothing)."""
-    d = np.asarray(window, dtype=np.float64)
-    a, b = float(proj[2, 2]), float(proj[2, 3])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        if abs(proj[3, 3] - 1.0) < 1e-9:
-            z = -((2.0 * d - 1.0) - b) / a
-        else:
-            z = b / ((2.0 * d - 1.0) + a)
-    return np.where(d < 1.0, z, np.inf)
 
 
 def _min_filter(a: np.ndarray, radius: int) -> np.ndarray:

@@ -30,9 +30,9 @@ from typing import Any
 import numpy as np
 
 from ...gl import Clear, Target
-from ..canvas import Canvas, target_name
+from ..canvas import Canvas, eye_distance, target_name
 from ..renderer import Bounds, Renderer
-from .blending import ScreenMesh, eye_distance, eye_of, relevant_views, screen_mesh
+from .blending import ScreenMesh, eye_of, relevant_views, screen_mesh
 from .data import LightField
 
 __all__ = ["LightFieldRenderer"]
