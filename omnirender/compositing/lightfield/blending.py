@@ -143,7 +143,10 @@ def _min_filter(a: np.ndarray, radius: int) -> np.ndarray:
 def _box_depth(
     bounds: tuple[np.ndarray, np.ndarray], eye: np.ndarray, rays: np.ndarray, axis: np.ndarray
 ) -> np.ndarray:
-    """Heuristic eye distances: the middle of each ray's stretch inside the box (its centre's where rays miss it)."""
+    """Heuristic eye distances: the middle of each ray's stretch inside the box (its centre's where rays miss it).
+
+    ``eye`` is the rays' common origin (3,) or one origin per ray (N, 3) on the eye plane.
+    """
     lo, hi = bounds
     with np.errstate(divide="ignore", invalid="ignore"):
         inv = 1.0 / rays
@@ -154,7 +157,7 @@ def _box_depth(
     hit = (t_far >= np.maximum(t_near, 0.0)) & np.isfinite(t_near) & np.isfinite(t_far)
     t = np.where(hit, (np.maximum(t_near, 0.0) + t_far) / 2.0, np.nan)
     along = rays @ axis  # eye distance per unit of t
-    center = float(((lo + hi) / 2.0 - eye) @ axis)
+    center = ((lo + hi) / 2.0 - eye) @ axis
     depth = np.where(hit, t * along, center)
     return np.maximum(depth, 1e-6)
 
@@ -250,9 +253,9 @@ def screen_mesh(
     valid = np.isfinite(vertex_depth)
     if not valid.all():
         axis = -toward_viewer
-        if ortho:
+        if ortho:  # parallel rays from the eye plane
             origins = unproject(view, proj, size, pixels[~valid], np.zeros((~valid).sum()))
-            guess = np.array([_box_depth(lf.bounds, o, axis[None], axis)[0] for o in origins])
+            guess = _box_depth(lf.bounds, origins, np.broadcast_to(axis, origins.shape), axis)
         else:
             far_points = unproject(view, proj, size, pixels[~valid], np.ones((~valid).sum()))
             guess = _box_depth(lf.bounds, eye, far_points - eye, axis)
