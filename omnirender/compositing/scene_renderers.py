@@ -35,7 +35,9 @@ class SceneRenderer(Renderer):
     default technique (``om.gl.Forward``) for this scene only, ``on_missing``
     is the engine's policy for shapes without a painter.  The scene's own
     camera is ignored while it is drawn (the tree's is used); its lights light
-    only this scene.
+    only this scene.  A node that is part of a larger graph is drawn in its own
+    coordinates, as a root (the transforms above it do not apply); to draw a
+    part of a graph where it sits, give the whole graph and a group mask.
     """
 
     __slots__ = ("scene", "mask", "technique", "on_missing", "_engines", "_bounds")
@@ -86,8 +88,8 @@ class SceneRenderer(Renderer):
         return engine
 
     def draw(self, canvas: Canvas) -> None:
-        engine = self.engine(canvas.engine)
-        with canvas.preserved():
+        with canvas.preserved():  # making an engine or drawing changes GL state: put it back
+            engine = self.engine(canvas.engine)
             engine.compile(self.scene, mask=self.mask)
             engine.draw(clear=False, camera=(canvas.view, canvas.projection), framebuffer=canvas.framebuffer)
         canvas.count(engine.stats["draw_calls"], engine.stats["items"])
@@ -98,7 +100,7 @@ class SceneRenderer(Renderer):
             return cached[1]
         from ..techniques import bounds
 
-        box = bounds(self.scene, mask=self.mask)
+        box = bounds(Node.transient([self.scene]), mask=self.mask)  # in its own coordinates, as it is drawn
         if box is not None:
             box = (np.asarray(box[0], dtype=np.float64), np.asarray(box[1], dtype=np.float64))
             if not (np.all(np.isfinite(box[0])) and np.all(np.isfinite(box[1]))):
