@@ -125,14 +125,16 @@ float effect_depth(vec2 uv) { return texelFetch(u_depth, ivec2(gl_FragCoord.xy),
 class _Textures:
     """The light field's images, depth maps and depth-map meshes on one GL context (uploaded once, meshes lazily)."""
 
-    def __init__(self, ctx: Any, lf: LightField) -> None:
+    def __init__(self, engine: Any, lf: LightField) -> None:
+        ctx = engine.ctx
         self.ctx = ctx
         self.lf = lf
         self.surfaces: dict[tuple[int, int], tuple[Any, Any, int]] = {}
         self.images = []
         self.depths = []
-        for view in lf.views:
+        for i, view in enumerate(lf.views):
             w, h = view.size
+            engine.check_texture_size(f"LightFieldRenderer: view {i} ({w}x{h})", (w, h), engine.max_texture_size)
             image = ctx.texture((w, h), 4, np.ascontiguousarray(view.image[::-1]).tobytes())
             image.filter = (ctx.LINEAR, ctx.LINEAR)
             image.repeat_x = image.repeat_y = False
@@ -228,7 +230,7 @@ class LightFieldRenderer(Renderer):
         if found is None or found[0] is not self.light_field:
             if found is not None:
                 found[1].release()
-            found = self._gpu[engine] = (self.light_field, _Textures(engine.ctx, self.light_field))
+            found = self._gpu[engine] = (self.light_field, _Textures(engine, self.light_field))
         return found[1]
 
     def draw(self, canvas: Canvas) -> None:
