@@ -1,6 +1,6 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples]
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -150,12 +150,24 @@ def example_images() -> None:
         print("wrote", HERE / "example_11-turntable.gif")
 
 
+def compositing_images() -> None:
+    """The renderer-tree examples (13 and 14)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        for script in ("13_renderer_tree.py", "14_user_renderer.py"):
+            subprocess.run([sys.executable, str(ROOT / "examples" / script), tmp], check=True, cwd=ROOT,
+                           stdout=subprocess.DEVNULL)  # fmt: skip
+        for png in sorted(Path(tmp).glob("1[34]-*.png")):
+            shutil.copy(png, HERE / f"example_{png.stem}.png")
+            print("wrote", HERE / f"example_{png.stem}.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
     "materials": material_images,
     "gallery": gl_gallery,
     "examples": example_images,
+    "compositing": compositing_images,
 }
 
 if __name__ == "__main__":

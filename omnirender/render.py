@@ -112,7 +112,9 @@ def render(
     """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
 
     ``scene`` is an ``om.Node`` (or a list of components); its first camera
-    is used.  ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"``, ``"radiance"`` or any name
+    is used.  Objects with ``as_scene(engine, size)`` (renderer trees of
+    ``om.compositing``) are rendered as the scene graph that method returns.
+    ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"``, ``"radiance"`` or any name
     given to :func:`register_engine`; ``om.engines()`` tells which work here
     and why not the others.  ``size`` is ``(width, height)`` in pixels.
     ``mask`` is a group-mask expression (``"!debug & (left | shared)"``):
@@ -135,8 +137,11 @@ def render(
     entry = _engines.get(engine)
     if entry is None:
         raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
-    _check_scene(f"om.render(engine={engine!r})", scene)
     size = _check_size(size)
+    as_scene = getattr(scene, "as_scene", None)
+    if callable(as_scene):  # not a scene graph but drawn by one (a renderer tree)
+        scene = as_scene(engine, size)
+    _check_scene(f"om.render(engine={engine!r})", scene)
     if mask is not None:
         options["mask"] = mask
     # the GL engine fits the same camera to what it compiled; the others get it in a stand-in root node

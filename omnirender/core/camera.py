@@ -154,13 +154,21 @@ class Camera(MonoAttribute):
         """
         if bounds is None:
             return cls.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
-        lo, hi = (np.asarray(b, np.float64) for b in bounds)
+        w, h = (int(v) for v in size)
+        return cls.fit(bounds, w / h, fov)
+
+    @classmethod
+    def fit(cls, bounds: tuple[Sequence[float], Sequence[float]], aspect: float, fov: float = 35.0) -> Camera:
+        """A perspective camera on +z looking at the box ``bounds = (lo, hi)``: its bounding sphere fills the view.
+
+        Near and far enclose the sphere with room to spare; ``aspect`` is the image's width/height.
+        """
+        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
         center = (lo + hi) / 2.0
         radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
-        w, h = (int(v) for v in size)
         half = math.radians(fov) / 2.0
-        if w < h:
-            half = math.atan(math.tan(half) * w / h)
+        if aspect < 1.0:
+            half = math.atan(math.tan(half) * aspect)
         dist = radius / math.sin(half) * 1.02
         near = max(dist - radius * 1.5, dist * 1e-3)
         far = dist + radius * 1.5
