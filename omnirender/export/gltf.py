@@ -32,6 +32,7 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
+from ..attributes.environment import is_scene_background
 from ..attributes.photometry import phong_roughness
 from ..core import AttributePainter, ShapePainter, default_for
 from ..fileio import atomic_write
@@ -403,14 +404,14 @@ class LightExporter(AttributePainter):
 
 @default_for(GLTFEngine)
 class BackgroundRecorder(AttributePainter):
-    """``Background`` -> remembered as ``engine.background`` (the first one met)."""
+    """``Background`` -> remembered as ``engine.background`` (the scene's, see ``is_scene_background``)."""
 
     __slots__ = ()
     service = GLTFEngine.service
     target = Background
 
     def exec(self, background: Background, engine: GLTFEngine) -> None:
-        if engine.background is None:
+        if engine.background is None and is_scene_background(background, engine):
             engine.background = background
 
 

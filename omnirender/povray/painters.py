@@ -29,6 +29,7 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
+from ..attributes.environment import is_scene_background
 from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from . import sdl
@@ -360,7 +361,8 @@ class BackgroundPainter(AttributePainter):
     target = Background
 
     def exec(self, attribute: Background, engine: POVRayEngine) -> None:
-        engine.background = attribute
+        if is_scene_background(attribute, engine):
+            engine.background = attribute
 
 
 @default_for(POVRayEngine)

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource, Texture
+from ..attributes.environment import is_scene_background
 from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
@@ -441,9 +442,9 @@ class LightPainter(AttributePainter):
 default_for(RadianceEngine)(type("SkyPainter", (LightPainter,), {"__slots__": (), "target": Sky}))
 
 
-def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
+def _recorder(target: type, attribute: str, accept: Any = None) -> type:
     def exec(self: Any, value: Any, engine: RadianceEngine) -> None:
-        if not first_only or getattr(engine, attribute) is None:
+        if accept is None or (getattr(engine, attribute) is None and accept(value, engine)):
             setattr(engine, attribute, value)
 
     cls = type(
@@ -454,7 +455,7 @@ def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
     return default_for(RadianceEngine)(cls)
 
 
-BackgroundPainter = _recorder(Background, "background", first_only=True)  # the root's background
+BackgroundPainter = _recorder(Background, "background", is_scene_background)  # the scene's background
 FogPainter = _recorder(Fog, "fog")
 OptionsPainter = _recorder(Options, "options")  # the last one met applies
 

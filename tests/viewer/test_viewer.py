@@ -261,7 +261,7 @@ def test_bad_renderables_and_sizes_are_rejected(recorder):
     assert v.get_background_color() == (1.0, 0.0, 0.0, 1.0)
 
 
-def test_node_renderable_functions_for_node_methods(recorder):
+def test_render_lists_adapt_nodes_given_directly(recorder):
     from omnirender.viewer import renderable as rmod
 
     scene = om.Node("scene")
@@ -269,15 +269,15 @@ def test_node_renderable_functions_for_node_methods(recorder):
     scene.add(om.Box(size=(2, 2, 2), center=(1, 0, 0)))
     assert rmod.node_render_hints(scene) == TRANSPARENT
     pmin, pmax = np.full(3, np.inf), np.full(3, -np.inf)
-    rmod.node_update_bounds(scene, pmin, pmax)
+    rmod.renderable_of(scene).update_bounds(pmin, pmax)
     assert np.allclose(pmin, (0, -1, -1)) and np.allclose(pmax, (2, 1, 1))
     scene.add(om.Text("label", (0, 0, 0), 12))
     assert rmod.node_render_hints(scene) == TRANSPARENT | TWO_DIMENSIONAL
     rl = RenderList()
-    rmod.node_prerender(scene, rl)
-    seen = []
+    rl.prerender([scene])
+    assert rl.transparent_2d == [rmod.renderable_of(scene)]
     probe = om.Node("probe", [Dot("d")])
-    rmod.node_render(probe, recorder, 0)
+    rmod.renderable_of(probe).render(recorder, 0)
     seen = recorder.drawn()
     assert seen == ["d"]
     # a node drawn by a viewer lands in the sublist its hints say
