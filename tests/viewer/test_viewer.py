@@ -275,7 +275,7 @@ def test_render_lists_adapt_nodes_given_directly(recorder):
     assert rmod.node_render_hints(scene) == TRANSPARENT | TWO_DIMENSIONAL
     rl = RenderList()
     rl.prerender([scene])
-    assert rl.transparent_2d == [rmod.renderable_of(scene)]
+    assert rl.transparent_2d[0].node is scene and rmod.renderable_of(scene) in list(rl)
     probe = om.Node("probe", [Dot("d")])
     rmod.renderable_of(probe).render(recorder, 0)
     seen = recorder.drawn()
