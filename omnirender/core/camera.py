@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .component import MonoAttribute
+from .limits import MIN_MAGNITUDE, as_float
 from .transform import finite_vector
 
 __all__ = ["Camera", "look_at_matrix", "perspective_matrix", "orthographic_matrix"]
@@ -82,15 +83,9 @@ class Camera(MonoAttribute):
             raise ValueError("Camera: center must differ from eye")
         if np.linalg.norm(np.cross(d, u)) < 1e-12 * np.linalg.norm(d) * max(np.linalg.norm(u), 1e-300):
             raise ValueError("Camera: up must not be parallel to the viewing direction center - eye")
-        try:
-            fov = None if fov is None else float(fov)
-            height = None if height is None else float(height)
-            near, far = float(near), float(far)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"Camera: fov, height, near and far must be numbers, got fov={fov!r}, height={height!r}, "
-                f"near={near!r}, far={far!r}"
-            ) from None
+        fov = None if fov is None else as_float("Camera", "fov", fov)
+        height = None if height is None else as_float("Camera", "height", height)
+        near, far = as_float("Camera", "near", near), as_float("Camera", "far", far)
         if mask is not None:
             from .mask import MaskError, compile_mask
 
@@ -106,6 +101,8 @@ class Camera(MonoAttribute):
             raise ValueError(f"Camera: height must be > 0, got {height}")
         if not (0.0 < near < far and math.isfinite(far)):
             raise ValueError(f"Camera: need 0 < near < far, got near={near}, far={far}")
+        if near < MIN_MAGNITUDE or (height is not None and height < MIN_MAGNITUDE):
+            raise ValueError(f"Camera: near and height must be at least {MIN_MAGNITUDE:.0e}, got near={near}, height={height}")
         self.eye = tuple(float(x) for x in e)
         self.center = tuple(float(x) for x in c)
         self.up = tuple(float(x) for x in u)

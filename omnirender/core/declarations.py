@@ -8,7 +8,7 @@ part by setting ``declared`` (a class attribute of
 every placement (lights), ``"first"`` only the first in traversal order
 (camera, background).  Within one node's list the stack semantics of mono
 attributes hold: a later declaration of the same category replaces an earlier
-one (it is on top for the rest of the node), so of two ``Background``\ s in
+one (it is on top for the rest of the node), so of two Backgrounds in
 one node the later one is the scene's, in every engine.  Graphs compute a :class:`Declarations` once per
 version and mask (nodes cache theirs per node, so a change re-walks only the
 changed path) and every engine uses that one result.

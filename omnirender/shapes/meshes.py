@@ -101,7 +101,7 @@ class TriangleSet(_VertexShape):
             else _check.float_array(name, "texcoords", p["texcoords"], (2,), count=n),
         }
         if p["normals"] is not None:
-            derived["normals"] = _check.float_array(name, "normals", p["normals"], (3,), count=n)
+            derived["normals"] = _check.normals(name, "normals", p["normals"], n)
         return p, derived
 
     def index_array(self) -> np.ndarray:
@@ -153,9 +153,7 @@ class Polygon(_VertexShape):
         n = len(v)
         derived: dict[str, Any] = {"vertices": v, "colors": _check.colors(name, "colors", p["colors"], n)}
         if p["normals"] is not None:
-            normals = _check.float_array(
-                name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), (3,), count=n
-            )
+            normals = _check.normals(name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), n)
             derived["normals"] = normals
         _check_polygon_outline(v)
         derived["triangles"] = triangulate_polygon(v, owner=name)
