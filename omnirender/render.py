@@ -176,16 +176,9 @@ def _check_scene(function: str, scene: Any) -> None:
 
 
 def _check_size(size: Any) -> tuple[int, int]:
-    try:
-        values = [float(v) for v in size]
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}") from None
-    if len(values) != 2 or any(v != int(v) for v in values):
-        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}")
-    w, h = int(values[0]), int(values[1])
-    if w <= 0 or h <= 0:
-        raise ValueError(f"size must be positive, got {w}x{h}")
-    return w, h
+    from .options import check_image_size
+
+    return check_image_size("om.render", size)
 
 
 register_engine("gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)")

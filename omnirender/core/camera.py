@@ -102,7 +102,9 @@ class Camera(MonoAttribute):
         if not (0.0 < near < far and math.isfinite(far)):
             raise ValueError(f"Camera: need 0 < near < far, got near={near}, far={far}")
         if near < MIN_MAGNITUDE or (height is not None and height < MIN_MAGNITUDE):
-            raise ValueError(f"Camera: near and height must be at least {MIN_MAGNITUDE:.0e}, got near={near}, height={height}")
+            raise ValueError(
+                f"Camera: near and height must be at least {MIN_MAGNITUDE:.0e}, got near={near}, height={height}"
+            )
         self.eye = tuple(float(x) for x in e)
         self.center = tuple(float(x) for x in c)
         self.up = tuple(float(x) for x in u)

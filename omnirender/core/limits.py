@@ -42,7 +42,9 @@ def as_float(owner: str, name: str, value: Any) -> float:
     try:
         x = float(value)
     except OverflowError:
-        raise ValueError(f"{owner}: {name} must be {_limit_text()}, got an integer of {len(str(value))} digits") from None
+        raise ValueError(
+            f"{owner}: {name} must be {_limit_text()}, got an integer of {len(str(value))} digits"
+        ) from None
     except (TypeError, ValueError):
         raise ValueError(f"{owner}: {name} must be a number, got {value!r:.60}") from None
     if not math.isfinite(x):
@@ -58,7 +60,7 @@ def check_magnitude(owner: str, name: str, x: float) -> float:
 
 
 def check_array_magnitude(owner: str, name: str, arr: np.ndarray) -> np.ndarray:
-    """``arr`` (finite numbers) when every entry is within :data:`MAX_MAGNITUDE`; else ValueError with the first bad row."""
+    """``arr`` (finite numbers) when every entry is within :data:`MAX_MAGNITUDE`, else ValueError (first bad row)."""
     if arr.size and arr.dtype.kind == "f":
         big = np.abs(arr) > MAX_MAGNITUDE
         if big.any():

@@ -25,7 +25,9 @@ def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)
     except OverflowError:
-        raise ValueError(f"{owner}: {name} must be {size} numbers of at most {MAX_MAGNITUDE:.0e}, got {value!r:.60}") from None
+        raise ValueError(
+            f"{owner}: {name} must be {size} numbers of at most {MAX_MAGNITUDE:.0e}, got {value!r:.60}"
+        ) from None
     except (TypeError, ValueError):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}") from None
     if arr.shape != (size,):
@@ -73,7 +75,9 @@ class Matrix(Transform):
         except OverflowError:
             raise ValueError(f"Matrix: entries must be at most {MAX_MAGNITUDE:.0e} in magnitude") from None
         except (TypeError, ValueError):
-            raise ValueError(f"Matrix: matrix must be 4x4 numbers (a nested list or an array), got {matrix!r:.80}") from None
+            raise ValueError(
+                f"Matrix: matrix must be 4x4 numbers (a nested list or an array), got {matrix!r:.80}"
+            ) from None
         if m.shape != (4, 4):
             raise ValueError(f"Matrix: matrix must be 4x4, got shape {m.shape}")
         if not np.all(np.isfinite(m)):

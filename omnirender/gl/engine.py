@@ -109,12 +109,12 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self.timing = bool(timing)
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
-        self._size = check_size(size, self.ctx)
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
             raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
         if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
             raise ValueError(f"GLEngine: samples must be 0 or a power of two (1, 2, 4, 8, 16), got {samples}")
         self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
+        self._size = check_size(size, self.ctx, self._samples)
         self.background = background
         self.programs = ProgramCache(self.ctx)
         self.geometry_cache = GeometryCache()
@@ -228,7 +228,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
 
     @size.setter
     def size(self, value: tuple[int, int]) -> None:
-        value = check_size(value, self.ctx)
+        value = check_size(value, self.ctx, self._samples)
         if value != self._size:
             self._size = value
             self._make_targets()

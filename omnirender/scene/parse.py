@@ -321,7 +321,8 @@ class _LimitedComposer:
                 anchor = event.anchor
                 if anchor in open_anchors:
                     raise ParseError(
-                        path(), f"the alias *{anchor} refers to a collection that contains it (a document cannot "
+                        path(),
+                        f"the alias *{anchor} refers to a collection that contains it (a document cannot "
                         "contain itself)",
                     )
                 if anchor not in anchors:

@@ -56,7 +56,9 @@ class Reader:
     def _mapping(self, data: Any, where: str) -> None:
         if isinstance(data, DuplicateKeys):
             key = data.duplicates[0]
-            raise self.error(f"{where}.{key}" if where else key, f"duplicate key {key!r}; an object names each key once")
+            raise self.error(
+                f"{where}.{key}" if where else key, f"duplicate key {key!r}; an object names each key once"
+            )
 
     def document(self, doc: Any) -> Node:
         try:
@@ -75,7 +77,9 @@ class Reader:
             raise self.error("version", f"unsupported version {version!r} (this omnirender reads version {VERSION})")
         unknown = set(doc) - {"format", "version", "definitions", "root"}
         if unknown:
-            raise self.error(str(sorted(map(str, unknown))[0]), "unknown key (expected format, version, definitions, root)")
+            raise self.error(
+                str(sorted(map(str, unknown))[0]), "unknown key (expected format, version, definitions, root)"
+            )
         if "root" not in doc:
             raise self.error("root", "missing (the root node)")
         definitions = doc.get("definitions", [])
@@ -123,7 +127,9 @@ class Reader:
         if "$id" in data:
             key = data["$id"]
             if not isinstance(key, str) or not key or not key.isprintable():
-                raise self.error(f"{where}.$id", f"must be a non-empty string of printable characters, got {_short(key)}")
+                raise self.error(
+                    f"{where}.$id", f"must be a non-empty string of printable characters, got {_short(key)}"
+                )
             if key in self.objects:
                 raise self.error(f"{where}.$id", f"duplicate id {key!r}")
             self.objects[key] = obj
@@ -238,7 +244,9 @@ class Reader:
                 if len(value) != 1 or not isinstance(value["$dict"], dict):
                     raise self.error(where, "a '$dict' wrapper holds only '$dict' with an object/mapping")
                 self._mapping(value["$dict"], f"{where}.$dict")
-                return {self._key(k, where): self.value(v, f"{where}.{k}", depth + 2) for k, v in value["$dict"].items()}
+                return {
+                    self._key(k, where): self.value(v, f"{where}.{k}", depth + 2) for k, v in value["$dict"].items()
+                }
             if "$array" in value:
                 return self.array(value, where)
             if "$base64" in value:
@@ -311,12 +319,15 @@ class Reader:
         except ValueError as exc:
             raise self.error(where, str(exc)) from None
         except Exception as exc:  # numpy's readers raise many types for corrupt files
-            raise self.error(f"{where}.$file", f"{name!r} is not a readable NumPy file ({type(exc).__name__})") from None
+            raise self.error(
+                f"{where}.$file", f"{name!r} is not a readable NumPy file ({type(exc).__name__})"
+            ) from None
 
 
 def _short(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
+
 
 _ACCEPTED: dict[Any, list[str] | None] = {}
 
@@ -367,5 +378,3 @@ def _locate(where: str, cls: type, kwargs: dict[str, Any], exc: BaseException) -
 def _describe(value: Any) -> str:
     text = repr(value)
     return f"{type(value).__name__} {text[:40]}{'...' if len(text) > 40 else ''}"
-
-

@@ -115,7 +115,9 @@ class UntrustedContentError(SceneFileError):
         self.reason = message
         where = f"{source}: " if source else ""
         shown = shorten_path(path)
-        self.cli_message = f"{where}{shown}: {message}; {TRUST_FIX_CLI}" if path else f"{where}{message}; {TRUST_FIX_CLI}"
+        self.cli_message = (
+            f"{where}{shown}: {message}; {TRUST_FIX_CLI}" if path else f"{where}{message}; {TRUST_FIX_CLI}"
+        )
 
 
 # -- the type registry ------------------------------------------------------------
@@ -301,5 +303,3 @@ def _resolve(name: str, where: str) -> type:
 def _known() -> str:
     names = sorted(n for n in _registry.by_name if "." not in n)
     return ", ".join(names[:12]) + (", ..." if len(names) > 12 else "")
-
-

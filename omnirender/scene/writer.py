@@ -41,7 +41,9 @@ class Writer:
         if arrays not in ARRAY_FORMS:
             raise ValueError(f"save: arrays must be one of {ARRAY_FORMS}, got {arrays!r}")
         if arrays == "npz" and sidecar_name is None:
-            raise ValueError("save: arrays='npz' writes a side-car file next to the scene file; use om.save(scene, path)")
+            raise ValueError(
+                "save: arrays='npz' writes a side-car file next to the scene file; use om.save(scene, path)"
+            )
         self.base_dir = base_dir
         self.arrays = arrays
         self.sidecar_name = sidecar_name

@@ -17,7 +17,7 @@ from ..data import as_array
 
 
 def scalar(owner: str, name: str, value: Any, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """``value`` as a finite float within the magnitude limit (see ``omnirender.core.limits``); optionally > 0 or >= 0."""
+    """``value`` as a finite float within the magnitude limit (``omnirender.core.limits``); optionally > 0 or >= 0."""
     v = as_float(owner, name, value)
     if positive and v <= 0.0:
         raise ValueError(f"{owner}: {name} must be > 0, got {v}")
