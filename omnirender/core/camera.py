@@ -142,6 +142,39 @@ class Camera(MonoAttribute):
         """A parallel-projection camera whose view volume is ``height`` units tall."""
         return cls(eye, center, up, fov=None, height=height, near=near, far=far, mask=mask)
 
+    @classmethod
+    def fitted(
+        cls,
+        lo: Sequence[float],
+        hi: Sequence[float],
+        aspect: float = 4 / 3,
+        direction: Sequence[float] = (0.45, 0.35, 1.0),
+        fov: float = 35.0,
+        margin: float = 1.05,
+    ) -> Camera:
+        """A perspective camera that sees the box ``lo``..``hi`` whole, looking at its centre along ``-direction``.
+
+        The eye is placed so that the box's bounding sphere fits the narrower of
+        the two fields of view (``aspect`` = width / height) with ``margin``;
+        near and far planes enclose the sphere.
+        """
+        lo_v = finite_vector("Camera.fitted", "lo", lo, 3)
+        hi_v = finite_vector("Camera.fitted", "hi", hi, 3)
+        d = finite_vector("Camera.fitted", "direction", direction, 3)
+        if float(np.linalg.norm(d)) == 0.0:
+            raise ValueError("Camera.fitted: direction must not be the zero vector")
+        d = d / np.linalg.norm(d)
+        center = (lo_v + hi_v) / 2.0
+        radius = max(float(np.linalg.norm(hi_v - lo_v)) / 2.0, 1e-6)
+        half = math.radians(fov) / 2.0
+        if aspect < 1.0:
+            half = math.atan(math.tan(half) * aspect)
+        dist = radius / math.sin(half) * margin
+        near = max(dist - radius * 1.5, dist * 1e-3)
+        up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (0.0, 0.0, -1.0)
+        eye = center + d * dist
+        return cls.look_at(tuple(eye), tuple(center), up, fov=fov, near=near, far=dist + radius * 1.5)
+
     @property
     def is_orthographic(self) -> bool:
         return self.height is not None

@@ -18,6 +18,7 @@ from ..geometry.normals import smooth_normals
 from ..geometry.triangulate import best_fit_plane, crossing_edges, project_to_plane, triangulate_polygon
 from . import _check
 from .base import DeclaredShape, parameter
+from .trimeshes import is_trimesh, triangle_arrays
 
 __all__ = ["TriangleSet", "Polygon", "LineSet", "Polyline", "PointSet"]
 
@@ -56,6 +57,8 @@ class TriangleSet(_VertexShape):
     triples; ``normals`` (N, 3), computed smooth (area-weighted) when None;
     ``colors`` (N, 3|4) or one RGB(A) colour for all; ``texcoords`` (N, 2).
     Winding is counter-clockwise seen from the front.  At least one triangle.
+    ``TriangleSet(mesh)`` with a ``trimesh.Trimesh`` takes its vertices, faces,
+    vertex normals (when the mesh has them), colours and texture coordinates.
     """
 
     __slots__ = ("_vertices", "_indices", "_normals", "_colors", "_texcoords")
@@ -74,6 +77,13 @@ class TriangleSet(_VertexShape):
         colors: Any = None,
         texcoords: Any = None,
     ) -> None:
+        if is_trimesh(vertices):
+            given = {"indices": indices, "normals": normals, "colors": colors, "texcoords": texcoords}
+            arrays = triangle_arrays(vertices)
+            arrays.update({k: v for k, v in given.items() if v is not None})  # explicit arguments win
+            vertices, indices, normals, colors, texcoords = (
+                arrays[k] for k in ("vertices", "indices", "normals", "colors", "texcoords")
+            )
         super().__init__(vertices=vertices, indices=indices, normals=normals, colors=colors, texcoords=texcoords)
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:

@@ -30,13 +30,9 @@ _SPACES = ("camera", "world")
 
 def default_lights() -> list[Any]:
     """The default light set (eye coordinates): key, fill and back light, like ArtiSynth's."""
-    from ..attributes import DirectionalLight
+    from ..attributes.lights import default_lights as lights
 
-    return [
-        DirectionalLight(direction=(0.35, -0.45, -1.0), intensity=0.8, ambient=(0.12, 0.12, 0.12)),
-        DirectionalLight(direction=(-0.7, 0.2, -0.6), intensity=0.35),
-        DirectionalLight(direction=(0.1, -0.3, 1.0), intensity=0.2),
-    ]
+    return lights()
 
 
 class Viewer:
