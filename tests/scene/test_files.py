@@ -407,15 +407,22 @@ def test_qualified_engine_types_resolve_lazily():
     assert type(loaded) is finish and _params_equal(loaded.parameters(), sample.parameters())
 
 
-def test_examples_load_and_agree():
+def test_example_scene_files_hold_the_demo_scene():
+    from omnirender.demo import KNOT_PATH, demo_scene
+
     root = Path(__file__).resolve().parents[2] / "examples" / "scenes"
     from_json = om.load(root / "demo.json")
     from_yaml = om.load(root / "demo.yaml")
     assert files.dumps(from_json) == files.dumps(from_yaml)
-    paths = [n.path for n in from_json.walk()] if hasattr(from_json, "walk") else []
-    assert paths
-    assert any(isinstance(c, om.Camera) for c in from_json.components)
-    assert from_json["/demo/wheels/left"].children[0] is from_json["/demo/wheels/right"].children[0]
+    demo = demo_scene()
+    for node in demo.walk():  # the files name the copy of the knot next to them
+        for item in node.items:
+            if isinstance(item, om.MeshFile):
+                item.path = str(root / "meshes" / "knot.obj")
+    assert files.dumps(from_json) == files.dumps(demo)
+    assert (root / "meshes" / "knot.obj").read_bytes() == KNOT_PATH.read_bytes()
+    features = om.load(root / "features.yaml")
+    assert features["/demo/wheels/left"].children[0] is features["/demo/wheels/right"].children[0]
 
 
 def test_trusted_only_types_are_refused_unless_the_caller_trusts_the_file(tmp_path):
