@@ -200,6 +200,13 @@ def depth_stencil_framebuffer(ctx: Any, raw: RawGL, color: Any, size: tuple[int,
         return None
 
 
+def delete_renderbuffer(raw: RawGL, rbo: int) -> None:
+    """Delete a renderbuffer made by :func:`depth_stencil_framebuffer`."""
+    if raw.available:
+        name = ctypes.c_uint(rbo)
+        raw.glDeleteRenderbuffers(1, ctypes.byref(name))
+
+
 def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth: bool | None = None) -> None:
     """Set colour and depth write masks (raw GL when available: moderngl ignores them on detected framebuffers)."""
     if raw.available:

@@ -35,6 +35,7 @@ from .context import (
     RawGL,
     check_size,
     create_context,
+    delete_renderbuffer,
     depth_stencil_framebuffer,
 )
 from .drawlist import Batch, DrawItem, DrawState, Scope
@@ -98,6 +99,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         on_missing: str = "raise",
         mask: Any = None,
         timing: bool = False,
+        programs: ProgramCache | None = None,
     ) -> None:
         from . import _load
 
@@ -116,7 +118,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
         self._size = check_size(size, self.ctx, self._samples)
         self.background = background
-        self.programs = ProgramCache(self.ctx)
+        # compiled shader programs; a cache given by the caller (for its context) outlives this engine
+        self._own_programs = programs is None
+        self.programs = ProgramCache(self.ctx) if programs is None else programs
         self.geometry_cache = GeometryCache()
         self.raw = RawGL()
         self._units: dict[tuple[str, int], Geometry] = {}
@@ -246,13 +250,20 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
             if "OUT_OF_MEMORY" in err:
                 raise GLError(f"GLEngine: out of memory creating {self._size[0]}x{self._size[1]} framebuffers")
 
-    def _create_targets(self) -> None:
+    def _release_targets(self) -> None:
         seen = set()
         for obj in self._targets.values():
             if id(obj) not in seen:
                 seen.add(id(obj))
                 obj.release()
         self._targets.clear()
+        rbo = getattr(self, "_stencil_rbo", None)
+        if rbo is not None:  # made with raw GL calls: moderngl does not know it (each one leaked its pixels)
+            delete_renderbuffer(self.raw, rbo)
+            self._stencil_rbo = None
+
+    def _create_targets(self) -> None:
+        self._release_targets()
         ctx, size = self.ctx, self._size
         t = self._targets
         t["color"] = gpu_call(ctx.renderbuffer, size, 4, what="the colour buffer")
@@ -452,13 +463,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         for query in self._query_pool:
             query.mglo.release() if hasattr(query.mglo, "release") else None
         self._query_pool.clear()
-        self.programs.release()
-        seen = set()
-        for obj in self._targets.values():
-            if id(obj) not in seen:
-                seen.add(id(obj))
-                obj.release()
-        self._targets.clear()
+        if self._own_programs:
+            self.programs.release()
+        self._release_targets()
         self._root = None
         self._node_cache.clear()
         self._compiled = None
