@@ -83,15 +83,15 @@ class Matrix(Transform):
         if not np.all(np.isfinite(m)):
             raise ValueError("Matrix: matrix must be finite")
         check_array_magnitude("Matrix", "matrix", m)
-        if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
-            raise ValueError(
-                f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(m[3].tolist())}; "
-                "projective matrices are not supported by every engine"
-            )
         if np.linalg.matrix_rank(m[:3, :3]) < 3:
             raise ValueError(
                 "Matrix: the upper-left 3x3 part is singular (it flattens space, e.g. all zeros); give an "
                 "invertible matrix (hide a subgraph with a group mask instead of scaling it to nothing)"
+            )
+        if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+            raise ValueError(
+                f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(m[3].tolist())}; "
+                "projective matrices are not supported by every engine"
             )
         self._set_matrix(m)
 

@@ -165,6 +165,10 @@ def render(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
             "read_depth, on_missing and technique (spp/quality are options of the mitsuba/povray engines)"
         )
+    from .context import check_samples_total
+
+    if isinstance(samples, int) and not isinstance(samples, bool) and samples >= 0:
+        check_samples_total(size, samples)  # a size no engine would accept costs no context
     ctx = one_shot_context()
     ctx.mglo.__enter__()  # current in this thread (other engines may have made theirs current since)
     engine = GLEngine(

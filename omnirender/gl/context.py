@@ -44,9 +44,9 @@ def limits(ctx: Any) -> tuple[int, int]:
 MAX_SAMPLES_TOTAL = 1 << 28
 
 
-def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
-    """``size`` as (w, h) ints, or ValueError when zero, negative, above the driver's maximum or
-    (with ``samples`` multisampling) above :data:`MAX_SAMPLES_TOTAL` samples in all."""
+def check_samples_total(size: Any, samples: int = 0) -> tuple[int, int]:
+    """``size`` as (w, h) ints, or ValueError when zero, negative or (with ``samples`` multisampling)
+    above :data:`MAX_SAMPLES_TOTAL` samples in all; needs no context (checked before creating one)."""
     from ..options import check_image_size
 
     w, h = check_image_size("GLEngine", size)
@@ -56,6 +56,12 @@ def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
             f"samples, more than the {MAX_SAMPLES_TOTAL:,} (2 GiB of colour and depth) this engine allocates; "
             "render a smaller image, with fewer samples=, or tiles"
         )
+    return w, h
+
+
+def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
+    """:func:`check_samples_total`, and ValueError above the driver's maximum framebuffer size."""
+    w, h = check_samples_total(size, samples)
     rb, vp = limits(ctx)
     top = min(rb, vp)
     if w > top or h > top:

@@ -33,6 +33,7 @@ from .compiler import DrawListCompiler
 from .context import (
     GLError,
     RawGL,
+    check_samples_total,
     check_size,
     create_context,
     delete_renderbuffer,
@@ -109,6 +110,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
         self.timing = bool(timing)
+        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
+        check_samples_total(size, int(samples))  # before a context exists: a bad size costs nothing
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
@@ -484,6 +488,6 @@ def _background_color(value: Any) -> tuple[float, ...]:
         color = tuple(float(c) for c in value)
     except (TypeError, ValueError):
         raise ValueError(f"GLEngine: background must be an RGB(A) colour, got {value!r:.60}; {fix}") from None
-    if len(color) not in (3, 4) or not all(np.isfinite(color)):
-        raise ValueError(f"GLEngine: background must be 3 or 4 finite numbers, got {value!r:.60}; {fix}")
+    if len(color) not in (3, 4) or not all(0.0 <= c <= 1.0 for c in color):  # NaN fails too
+        raise ValueError(f"GLEngine: background must be 3 or 4 numbers in [0, 1], got {value!r:.60}; {fix}")
     return color

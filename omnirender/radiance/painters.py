@@ -321,12 +321,24 @@ def _mesh_obj(
         )
         if len(faces) == 0:
             return None
+    faces = _with_area(vertices, faces)
+    if len(faces) == 0:
+        return None  # only degenerate triangles: obj2mesh would refuse a mesh without polygons
     if not with_colors:
         return obj_text(vertices, faces, normals, texcoords, owner=engine.owner()), None
     materials: list[str] = []
     unique, groups = face_colors(colors, faces)
     names = [modifier(engine, uv=textured, vertex_rgba=c, sink=materials) for c in unique]
     return obj_text(vertices, faces, normals, texcoords, groups, names, engine.owner()), "".join(materials)
+
+
+def _with_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``faces`` without the triangles of zero area (collinear or repeated corners), which draw nothing."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces)
+    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    scale = np.abs(v).max(initial=1.0)
+    return f[np.einsum("ij,ij->i", cross, cross) > (1e-12 * scale * scale) ** 2]
 
 
 def _pixel(engine: RadianceEngine, world_points: np.ndarray) -> float:

@@ -205,7 +205,12 @@ def load(path: str | os.PathLike[str], *, trusted: bool = False, limits: ParseLi
     except IsADirectoryError:
         raise IsADirectoryError(f"{str(target)!r} is a folder, not a scene file") from None
     except UnicodeDecodeError as exc:
-        raise SceneFileError("", f"not a UTF-8 text file ({exc})", str(target)) from None
+        byte = exc.object[exc.start : exc.start + 1].hex()
+        raise SceneFileError(
+            "",
+            f"not a UTF-8 text file (byte 0x{byte} at offset {exc.start}); scene files are UTF-8 JSON or YAML",
+            str(target),
+        ) from None
     return loads(text, fmt, base_dir=target.resolve().parent, source=str(target), trusted=trusted, limits=limits)
 
 

@@ -68,7 +68,8 @@ class Reader:
 
     def _document(self, doc: Any) -> Node:
         if not isinstance(doc, dict):
-            raise self.error("", f"a scene file must hold an object/mapping, got {type(doc).__name__}")
+            got = "nothing (the file is empty)" if doc is None else f"a {type(doc).__name__}"
+            raise self.error("", f"a scene file must hold an object/mapping, got {got}")
         self._mapping(doc, "")
         if doc.get("format") != FORMAT:
             raise self.error("format", f"expected {FORMAT!r}, got {doc.get('format')!r} (is this a scene file?)")
@@ -299,8 +300,12 @@ class Reader:
             raise self.error(f"{where}.dtype", f"dtype {dtype!r} is not numeric")
         try:
             arr = np.array(value["$array"], dtype=dt)
-        except (TypeError, ValueError, OverflowError) as exc:
-            raise self.error(f"{where}.$array", f"not a regular array of {dtype}: {exc}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise self.error(
+                f"{where}.$array",
+                f"not a regular array of {dtype}: rows of different lengths, values that are not numbers, or "
+                f"numbers out of the range of {dtype}",
+            ) from None
         if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
             raise self.error(f"{where}.$array", "must hold finite numbers")
         return arr

@@ -160,9 +160,7 @@ def json_schema() -> dict[str, Any]:
             "description": "A shape, attribute, handler or technique: its type name and constructor parameters.",
             "properties": {"type": {"enum": list(types)}},
             "required": ["type"],
-            "allOf": [
-                {"if": {"properties": {"type": {"const": n}}}, "then": {"$ref": f"#/$defs/{n}"}} for n in types
-            ],
+            "allOf": [{"if": {"properties": {"type": {"const": n}}}, "then": {"$ref": f"#/$defs/{n}"}} for n in types],
         },
         "entry": {"anyOf": [{"$ref": "#/$defs/node"}, {"$ref": "#/$defs/reference"}, {"$ref": "#/$defs/component"}]},
     }

@@ -43,7 +43,7 @@ def integer(owner: str, name: str, value: Any, minimum: int = 0) -> int:
 
 def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = False) -> tuple[float, ...]:
     """``value`` as a tuple of ``size`` finite floats (a single number is broadcast when ``positive``)."""
-    if isinstance(value, (str, bytes)):
+    if isinstance(value, (str, bytes, bool, np.bool_)):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}")
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)

@@ -50,10 +50,10 @@ def read_plain_obj(path: str) -> dict[str, Any] | None:
             return None  # materials, texture coordinates, lines...: trimesh's job
     if not faces:
         return None
-    v = _numbers(positions, "v")
+    v = _numbers(positions, "v", lines)
     if v is None:
         return None
-    vn = _numbers(normals, "vn") if normals else np.zeros((0, 3))
+    vn = _numbers(normals, "vn", lines) if normals else np.zeros((0, 3))
     if vn is None:
         return None
     corners: list[tuple[int, int]] = []
@@ -77,23 +77,36 @@ def read_plain_obj(path: str) -> dict[str, Any] | None:
     keys = np.array(corners, dtype=np.int64)
     with_normals = bool(len(vn)) and bool(np.all(keys[:, 1] >= 0))
     return {
-        "vertices": v[keys[:, 0]].astype(np.float32),
+        "vertices": v[keys[:, 0]],
         "indices": np.array(triangles, dtype=np.int64),
         "normals": vn[keys[:, 1]].astype(np.float32) if with_normals else None,
     }
 
 
-def _numbers(rows: list[str], kind: str) -> np.ndarray | None:
+def _numbers(rows: list[str], kind: str, lines: list[str]) -> np.ndarray | None:
     try:
         values = [[float(x) for x in row.split()] for row in rows]
-    except ValueError as exc:
-        raise ValueError(f"a '{kind}' line holds something that is not a number ({exc})") from None
+    except ValueError:
+        for number, line in enumerate(lines, 1):  # find the line to name it (only on this error path)
+            head, _, rest = line.strip().partition(" ")
+            if head == kind and any(not _is_number(x) for x in rest.split()):
+                bad = next(x for x in rest.split() if not _is_number(x))
+                raise ValueError(f"line {number}: {bad!r} in a '{kind}' line is not a number") from None
+        raise ValueError(f"a '{kind}' line holds something that is not a number") from None
     if any(len(row) != 3 for row in values):
         return None  # homogeneous coordinates or vertex colours: trimesh reads them
     arr = np.array(values, dtype=np.float64).reshape(-1, 3)
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"a '{kind}' line holds a non-finite number")
     return arr
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _index(token: str, count: int, face: int) -> int:
