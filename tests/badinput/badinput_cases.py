@@ -393,7 +393,7 @@ def file_case(id: str, text: str | bytes, words=(), name: str = "scene.json", ki
 
 
 BOMB = "format: omnirender-scene\nversion: 1\nroot: {node: x}\nbomb:\n  a: &a [x,x,x,x,x,x,x,x,x,x]\n"
-for level, prev in zip("bcdefghi", "abcdefgh"):
+for level, prev in zip("bcdefghi", "abcdefgh", strict=True):
     BOMB += f"  {level}: &{level} [{','.join(['*' + prev] * 10)}]\n"
 
 file_case("json-syntax", '{"format": "omnirender-scene",', words=("invalid JSON", "line"))
