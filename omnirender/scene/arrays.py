@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import os
 from typing import Any
 
 import numpy as np
@@ -96,6 +97,17 @@ class SideCar:
 
     def load(self, path: str, key: Any) -> np.ndarray:
         """The array at ``path`` (a ``.npy`` file, or ``key`` of a ``.npz`` file); OSError/ValueError."""
+        try:
+            return self._load(path, key)
+        except ValueError as exc:
+            if "allow_pickle" in str(exc):  # numpy's refusal of object arrays
+                raise ValueError(
+                    f"{os.path.basename(path)} holds Python objects (a pickle), which scene files never load; "
+                    "save plain numeric arrays"
+                ) from None
+            raise
+
+    def _load(self, path: str, key: Any) -> np.ndarray:
         lower = path.lower()
         if lower.endswith(".npy"):
             if key is not None:
