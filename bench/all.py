@@ -18,12 +18,14 @@ SCRIPTS = {
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
+    "soak.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
+    "soak.py": ["--quick"],
 }
 
 
