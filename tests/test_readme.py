@@ -56,3 +56,13 @@ def test_radiance_example_prints_what_its_comments_say(tmp_path, monkeypatch, ca
         d2 = x * x + 9 + z * z
         assert value == pytest.approx(179 * (10 * math.pi * 3 / math.sqrt(d2) / d2 + 20 * math.pi), rel=0.02)
     assert (tmp_path / "room.rad").read_text().startswith("# omnirender scene for Radiance")
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_techniques_example_runs(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("## Techniques: shadows, mirrors, line styles, CSG"), "README.md", "exec"), {})
+    for name in ("techniques-gl.png", "techniques-pov.png", "techniques-volumes.png"):
+        assert (tmp_path / name).stat().st_size > 1000, name

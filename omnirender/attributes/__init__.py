@@ -17,6 +17,7 @@ from ..core.transform import Matrix, Rotation, Scaling, Transform, Translation
 from .appearance import Color, DrawStyle, Material, PBRMaterial, Texture
 from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
 from .lights import AmbientLight, DirectionalLight, LightSource, PointLight, SpotLight
+from .shadowing import Mirror, Shadowing
 from .transforms import Billboard, BillboardSimplifier, LookAt
 
 __all__ = [
@@ -40,6 +41,8 @@ __all__ = [
     "Highlight",
     "PickId",
     "Collidable",
+    "Shadowing",
+    "Mirror",
 ]
 
 # Re-exported from the core (already om.X through omnirender.core).

@@ -25,6 +25,7 @@ from ..core.light import Light
 from ._params import (
     Param,
     Parameterised,
+    check_bool,
     check_direction,
     check_number,
     check_rgb,
@@ -56,12 +57,13 @@ class _Defaulted(Param):
 class LightSource(Parameterised, Light):
     """Base of the concrete lights: colour, intensity and OpenGL's colour terms."""
 
-    __slots__ = ("_color", "_intensity", "_ambient", "_diffuse", "_specular")
+    __slots__ = ("_color", "_intensity", "_ambient", "_diffuse", "_specular", "_casts_shadows")
     color = Param(check_rgb, "light colour (RGB in [0, 1])")
     intensity = Param(_nonneg, "scale of the colour (>= 0)")
     ambient = Param(check_rgb, "ambient contribution (RGB)")
     diffuse = _Defaulted(optional(check_rgb), "diffuse colour; None: color * intensity")
     specular = _Defaulted(optional(check_rgb), "specular colour; None: color * intensity")
+    casts_shadows = Param(check_bool, "shapes between the light and a surface shadow it (every engine)")
 
     def __init__(
         self,
@@ -70,6 +72,7 @@ class LightSource(Parameterised, Light):
         ambient: Sequence[float] = (0.0, 0.0, 0.0),
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
     ) -> None:
         super().__init__()
         self.color = color
@@ -77,6 +80,7 @@ class LightSource(Parameterised, Light):
         self.ambient = ambient
         self.diffuse = diffuse
         self.specular = specular
+        self.casts_shadows = casts_shadows
 
     @property
     def radiance(self) -> tuple[float, float, float]:
@@ -131,8 +135,9 @@ class DirectionalLight(LightSource):
         ambient: Sequence[float] = (0.0, 0.0, 0.0),
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
         self.direction = direction
 
     def world_direction(self, matrix: np.ndarray) -> np.ndarray:
@@ -157,8 +162,9 @@ class PointLight(_Attenuated):
         ambient: Sequence[float] = (0.0, 0.0, 0.0),
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
         self._init_attenuation(position, constant, linear, quadratic)
 
 
@@ -188,8 +194,9 @@ class SpotLight(_Attenuated):
         ambient: Sequence[float] = (0.0, 0.0, 0.0),
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
         self._init_attenuation(position, constant, linear, quadratic)
         self.direction = direction
         self.cutoff = cutoff
@@ -223,7 +230,7 @@ class AmbientLight(LightSource):
     __slots__ = ()
 
     def __init__(self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2) -> None:
-        super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), False)
 
     @property
     def ambient(self) -> tuple[float, float, float]:  # type: ignore[override]

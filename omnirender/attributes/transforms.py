@@ -102,6 +102,7 @@ class Billboard(Transform):
     """
 
     __slots__ = ("_axis",)
+    static = False  # the rotation depends on the camera
 
     def __init__(self, axis: Sequence[float] | None = None) -> None:
         super().__init__()

@@ -4,7 +4,7 @@ This package imports no graphics library and nothing else of omnirender.
 """
 
 from .camera import Camera, look_at_matrix, orthographic_matrix, perspective_matrix
-from .component import Attribute, MonoAttribute, PolyAttribute, RenderingComponent, Shape, category_of
+from .component import Attribute, ChangeJournal, MonoAttribute, PolyAttribute, RenderingComponent, Shape, category_of
 from .context import RenderingContext
 from .engine import Engine
 from .errors import EvaluationError, NoHandlerError, OmnirenderError
@@ -26,6 +26,7 @@ from .technique import Technique
 from .transform import Matrix, Rotation, Scaling, Transform, Translation, finite_vector
 
 __all__ = [
+    "ChangeJournal",
     "RenderingComponent",
     "Shape",
     "Attribute",

@@ -15,10 +15,12 @@ empty and are recomputed on first use.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
 from typing import Any
 
 __all__ = [
+    "ChangeJournal",
     "RenderingComponent",
     "Shape",
     "Attribute",
@@ -26,6 +28,36 @@ __all__ = [
     "PolyAttribute",
     "category_of",
 ]
+
+
+class ChangeJournal:
+    """The components changed (touched) since the journal was last drained.
+
+    An engine that updates what it compiled in place keeps one: a frame then
+    knows which transforms moved without scanning the scene (the GL engine
+    rewrites only the instance rows that depend on them).  Journals are
+    registered weakly; while one is alive, a component change costs one dict
+    store per journal.
+    """
+
+    __slots__ = ("_changed", "__weakref__")
+
+    def __init__(self) -> None:
+        self._changed: dict[int, RenderingComponent] = {}
+        _JOURNALS.append(weakref.ref(self, _JOURNALS.remove))
+
+    def drain(self) -> list[RenderingComponent]:
+        """The components changed since the last drain, in the order they first changed; empties the journal."""
+        changed = list(self._changed.values())
+        self._changed.clear()
+        return changed
+
+    def __len__(self) -> int:
+        return len(self._changed)
+
+
+#: Live change journals (weak references; a journal removes itself when collected).
+_JOURNALS: list[weakref.ref] = []
 
 
 class RenderingComponent:
@@ -68,8 +100,13 @@ class RenderingComponent:
         return tuple(self._owners or ())
 
     def touch(self) -> None:
-        """Mark the component as changed: bump its version and its owners' versions."""
+        """Mark the component as changed: bump its version and its owners' versions, and tell the journals."""
         object.__setattr__(self, "_version", self._version + 1)
+        if _JOURNALS:
+            for ref in _JOURNALS:
+                journal = ref()
+                if journal is not None:
+                    journal._changed[id(self)] = self
         owners = self._owners
         if owners:
             for node in owners:

@@ -120,7 +120,7 @@ class Engine:
             EVAL: self.eval,
             ENTER: self._enter_hooked if hooked else self._node_stack.append,
             LEAVE: self._leave_hooked if hooked else self._node_stack.pop,
-            NODE: self.eval_node,
+            NODE: self._node_op,
             TECHNIQUE: self._technique_op,
         }
         #: The dispatch table of compiled programs, indexed by opcode (built by name, see OPCODE_NAMES).
@@ -146,17 +146,20 @@ class Engine:
     def _leave_hooked(self, _arg: Any) -> None:
         self.on_leave(self._node_stack.pop())
 
-    def eval_node(self, node: Any) -> None:
-        """Evaluate a child node kept as one op (a node with groups, or any child of a local program).
+    def eval_node(self, node: Any) -> tuple[list[tuple[int, Any]], Callable[[], None] | None] | None:
+        """A child node kept as one op (a node with groups, or any child of a local program).
 
-        Skips the node when the engine's group mask rejects its groups.
-        Engines with per-node caches override this (and call ``run_program``
-        on ``node.program()`` or ``node.local_program()`` on a miss).
+        Returns the program to evaluate for it and a function to call after it
+        (or None), which the interpreter runs without recursion; None when the
+        node is done (skipped because the group mask rejects it, or handled
+        here).  Engines with per-node caches override this: a cache hit
+        returns None, a miss ``node.local_program()`` with the function that
+        stores what it produced.
         """
         groups = node.groups
         if groups and self._mask_fn is not None and not self._mask_fn(groups):
-            return
-        self.run_program(node.program())
+            return None
+        return node.program(), None
 
     def run_technique(self, technique: Technique, program: list[tuple[int, Any]]) -> None:
         """Evaluate ``program`` (the rest of a node after ``technique``) with ``technique``.
@@ -578,10 +581,37 @@ class Engine:
         self.run_program(compile_components(components, []))
 
     def run_program(self, program: list[tuple[int, Any]]) -> None:
-        """Execute a compiled micro program."""
+        """Execute a compiled micro program.
+
+        Child nodes kept as ``NODE`` ops are entered without recursion: when
+        :meth:`eval_node` returns ``(program, on_done)`` the loop continues in
+        that program and calls ``on_done()`` after it, so graphs of any depth
+        evaluate with a constant Python stack.
+        """
         ops = self._ops
-        for code, arg in program:
-            ops[code](arg)
+        pending: list[tuple[Any, Any]] = []
+        ops_iter = iter(program)
+        done = None
+        while True:
+            try:
+                for code, arg in ops_iter:
+                    ops[code](arg)
+            except _Descend as descend:  # a NODE op with a program to enter (see _node_op)
+                pending.append((ops_iter, done))
+                ops_iter, done = iter(descend.program), descend.done
+                continue
+            if done is not None:
+                done()
+            if not pending:
+                return
+            ops_iter, done = pending.pop()
+
+    def _node_op(self, node: Any) -> None:
+        # The NODE op: a program to enter leaves the op loop (no Python recursion per level of the graph); the
+        # loop above catches it, so flat programs pay nothing for the rare NODE op.
+        nested = self.eval_node(node)
+        if nested is not None:
+            raise _Descend(*nested)
 
     def run(self, root: Any, mask: str | None = None) -> None:
         """Pre-evaluate ``root`` (lights, camera), then evaluate it.
@@ -590,7 +620,7 @@ class Engine:
         pre-evaluation and evaluate in the current state.
         """
         if self._running:
-            self.eval_node(root)
+            self.run_program([(NODE, root)])
             return
         if mask is not None:
             self.mask = mask
@@ -598,7 +628,7 @@ class Engine:
         snapshot = self._snapshot()
         try:
             self.begin(root)
-            self.eval_node(root)
+            self.run_program([(NODE, root)])
         except BaseException as exc:
             path = self.node_path
             self._reset(snapshot)
@@ -766,6 +796,16 @@ class Engine:
 
     def _where(self) -> str:
         return f" in node {self.node_path}" if self._node_stack else ""
+
+
+class _Descend(Exception):  # noqa: N818 - control flow of run_program, never seen by users
+    """Raised by the NODE op to make the interpreter continue in a child's program."""
+
+    __slots__ = ("program", "done")
+
+    def __init__(self, program: list[tuple[int, Any]], done: Callable[[], None] | None) -> None:
+        self.program = program
+        self.done = done
 
 
 def _skip(shape: Any, engine: Engine) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from math import isfinite
 
 import numpy as np
 
@@ -39,15 +40,35 @@ def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
 
 
 class Transform(MonoAttribute):
-    """Base of all modelling transforms; subclasses share its category."""
+    """Base of all modelling transforms; subclasses share its category.
+
+    The matrix is made when somebody asks for it (``matrix``), not when a
+    parameter is set: a simulation that moves thousands of transforms per
+    frame pays for validation and bookkeeping only, and each matrix is built
+    once, when a renderer reads it.
+    """
 
     __slots__ = ("_matrix",)
     shares_category = True
+    #: The matrix depends only on the transform's parameters (not on the camera, as a Billboard's does).
+    static = True
 
     @property
     def matrix(self) -> np.ndarray:
         """The 4x4 float64 matrix this transform multiplies onto the current one."""
-        return self._matrix
+        m = self._matrix
+        if m is None:
+            m = self._build_matrix()
+            m.setflags(write=False)
+            object.__setattr__(self, "_matrix", m)
+        return m
+
+    def _build_matrix(self) -> np.ndarray:  # pragma: no cover - every static subclass defines it
+        raise NotImplementedError(f"{type(self).__name__} does not build a matrix")
+
+    def _changed(self) -> None:
+        """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
+        object.__setattr__(self, "_matrix", None)
 
     def _set_matrix(self, m: np.ndarray) -> None:
         m.setflags(write=False)
@@ -124,11 +145,21 @@ class Translation(Transform):
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
-        v = finite_vector("Translation", "offset", value, 3)
-        object.__setattr__(self, "_offset", tuple(float(c) for c in v))
+        offset = None
+        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
+            x, y, z = value
+            if type(x) is float and type(y) is float and type(z) is float and isfinite(x + y + z):
+                if abs(x) <= MAX_MAGNITUDE and abs(y) <= MAX_MAGNITUDE and abs(z) <= MAX_MAGNITUDE:
+                    offset = value
+        if offset is None:
+            offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
+        object.__setattr__(self, "_offset", offset)
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
         m = np.eye(4)
-        m[:3, 3] = v
-        self._set_matrix(m)
+        m[:3, 3] = self._offset
+        return m
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}
@@ -167,7 +198,10 @@ class Rotation(Transform):
             a = a / n
         object.__setattr__(self, "_angle", angle)
         object.__setattr__(self, "_axis", tuple(float(c) for c in a))
-        self._set_matrix(axis_angle_matrix(a, math.radians(angle)))
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
+        return axis_angle_matrix(np.asarray(self._axis), math.radians(self._angle))
 
     @property
     def angle(self) -> float:
@@ -249,7 +283,10 @@ class Scaling(Transform):
                 f"below {MAX_MAGNITUDE:.0e}), got {tuple(float(c) for c in v)}"
             )
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
-        self._set_matrix(np.diag([v[0], v[1], v[2], 1.0]))
+        self._changed()
+
+    def _build_matrix(self) -> np.ndarray:
+        return np.diag([*self._factors, 1.0])
 
     def parameters(self) -> dict:
         return {"factors": list(self.factors)}

@@ -22,6 +22,7 @@ from .attributes import (
     Blend,
     ColorMask,
     CullFace,
+    DepthClamp,
     DepthMask,
     DepthTest,
     GLState,
@@ -39,6 +40,11 @@ __all__ = [
     "GLEngine",
     "GLTechnique",
     "Forward",
+    "ShadowMaps",
+    "ShadowVolumes",
+    "SurfaceStyle",
+    "PhongHighlight",
+    "Supersample",
     "Pass",
     "Target",
     "Clear",
@@ -52,6 +58,7 @@ __all__ = [
     "DepthSprite",
     "DepthTest",
     "DepthMask",
+    "DepthClamp",
     "Blend",
     "CullFace",
     "PolygonOffset",
@@ -62,6 +69,11 @@ __all__ = [
 
 _LAZY = {
     "GLEngine": "engine",
+    "ShadowMaps": "shadows",
+    "ShadowVolumes": "shadow_volumes",
+    "SurfaceStyle": "surface_style",
+    "PhongHighlight": "highlight",
+    "Supersample": "supersample",
     "GLTechnique": "techniques",
     "Forward": "techniques",
     "FramebufferStack": "framebuffer",
@@ -149,7 +161,8 @@ def render(
     RGB(A) colour overriding the scene's ``om.Background``; further options:
     ``read_depth`` (default True: ``image.depth`` holds eye-space distances),
     ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes without a
-    handler) and ``technique`` (an ``om.Technique`` replacing the default one).
+    handler), ``technique`` (an ``om.Technique`` replacing the default one)
+    and ``shadows`` (default True: shadow maps for lights that cast shadows).
     For many frames keep a ``GLEngine`` (or an ``om.Viewer``) instead: this
     function compiles the scene and its shaders on every call.  Calls share one
     hidden GL context per thread (see :func:`one_shot_context`); the engine's
@@ -159,11 +172,11 @@ def render(
     from .engine import GLEngine
 
     read_depth = options.pop("read_depth", True)
-    engine_options = {key: options.pop(key) for key in ("on_missing", "technique") if key in options}
+    engine_options = {key: options.pop(key) for key in ("on_missing", "technique", "shadows") if key in options}
     if options:
         raise TypeError(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
-            "read_depth, on_missing and technique (spp/quality are options of the mitsuba/povray engines)"
+            "read_depth, on_missing, technique and shadows (spp/quality are options of the mitsuba/povray engines)"
         )
     from .context import check_samples_total
 

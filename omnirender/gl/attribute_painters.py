@@ -12,7 +12,18 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..attributes import ClipPlane, Color, DrawStyle, Fog, Highlight, Material, PBRMaterial, Texture
+from ..attributes import (
+    ClipPlane,
+    Color,
+    DrawStyle,
+    Fog,
+    Highlight,
+    Material,
+    Mirror,
+    PBRMaterial,
+    Shadowing,
+    Texture,
+)
 from ..core.handler import AttributePainter, registry
 from ..core.light import LightSwitch
 from . import attributes as glattr
@@ -97,7 +108,7 @@ def _register() -> None:
         cls = type(f"SurfacePainter_{target.__name__}", (SurfacePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])
     # every GL state attribute, also one defined later, through the base class (handler look-up walks the MRO)
-    state_targets = (DrawStyle, Texture, Fog, LightSwitch, glattr.GLState)
+    state_targets = (DrawStyle, Texture, Fog, LightSwitch, Shadowing, Mirror, glattr.GLState)
     for target in state_targets:
         cls = type(f"StatePainter_{target.__name__}", (StatePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])

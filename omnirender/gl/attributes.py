@@ -32,6 +32,7 @@ __all__ = [
     "StencilOp",
     "ScissorTest",
     "AlphaTest",
+    "DepthClamp",
 ]
 
 _FUNCS = ("never", "less", "equal", "lequal", "greater", "notequal", "gequal", "always")
@@ -136,18 +137,24 @@ class DepthTest(GLState):
         return value != "less"
 
 
-class DepthMask(GLState):
-    """Whether the shapes that follow write the depth buffer."""
+class _Switch:
+    """Mixin of GL states that are one on/off flag (the concrete class declares the ``enabled`` slot)."""
 
-    __slots__ = ("enabled",)
-    default = True
+    __slots__ = ()
 
     def __init__(self, enabled: bool = True) -> None:
-        super().__init__()
+        super().__init__()  # type: ignore[call-arg]
         self.enabled = bool(enabled)
 
     def capture(self) -> bool:
         return self.enabled
+
+
+class DepthMask(_Switch, GLState):
+    """Whether the shapes that follow write the depth buffer."""
+
+    __slots__ = ("enabled",)
+    default = True
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
@@ -396,3 +403,20 @@ class AlphaTest(GLState):
     @classmethod
     def uniforms(cls, value: Any) -> tuple[tuple[str, Any], ...]:
         return () if value is None else (("u_alpha_ref", float(value[1])),)
+
+
+class DepthClamp(_Switch, GLState):
+    """Clamp depth to the far plane instead of clipping (GL_DEPTH_CLAMP): shadow volumes reach infinity."""
+
+    __slots__ = ("enabled",)
+    default = False
+
+    @classmethod
+    def apply(cls, gl: GLCalls, value: Any) -> None:
+        if value:
+            gl.ctx.enable_direct(_GL_DEPTH_CLAMP)
+        else:
+            gl.ctx.disable_direct(_GL_DEPTH_CLAMP)
+
+
+_GL_DEPTH_CLAMP = 0x864F

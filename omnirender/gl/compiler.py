@@ -31,6 +31,7 @@ from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMateri
 from ..attributes.photometry import linear_rgb
 from ..core.component import RenderingComponent
 from ..core.light import LightSwitch
+from ..core.transform import Transform
 from ..scene.node import Node
 from .attributes import CullFace, GLState
 from .drawlist import DrawItem, DrawState, Scope
@@ -75,35 +76,43 @@ class DrawListCompiler:
     def on_leave(self, node: Any) -> None:
         self._group_path.pop()
 
-    def eval_node(self, node: Any) -> None:
-        """A child node: replayed from the per-occurrence cache when unchanged, else evaluated (local program)."""
+    def eval_node(self, node: Any) -> Any:
+        """A child node: replayed from the per-occurrence cache when unchanged, else its local program.
+
+        Occurrences are keyed by small integers (parent occurrence, ordinal),
+        so keys stay flat in graphs of any depth.
+        """
         frames = self._compile_frames
         if frames:
             parent = frames[-1]
             parent[1] += 1
-            key = (parent[0], parent[1])
+            pair = (parent[0], parent[1])
+            key = self._occurrences.get(pair)
+            if key is None:
+                self._next_occurrence += 1
+                key = self._occurrences[pair] = self._next_occurrence
             entry = self._node_cache.get(key)
             # an entry exists only for a node the (unchanged) mask admitted: the hit needs no mask test
             if entry is not None and not parent[2] and entry.ref() is node and entry.version == node.version:
                 self._scope.entries.extend(entry.entries)
-                return
+                return None
         groups = node.groups
         if groups and not self.admits(groups):
-            return
+            return None
         local = getattr(node, "local_program", None)
         if local is None or not frames:  # a viewer snapshot, or immediate mode: nothing to cache
-            self.run_program(node.program())
-            return
+            return node.program(), None
         scope = self._scope
         same = entry is not None and entry.ref() is node
         own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
         frames.append([key, 0, parent[2] or not same or entry.own != own])
         start = len(scope.entries)
-        try:
-            self.run_program(local())
-        finally:
+
+        def store() -> None:
             frames.pop()
-        self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+            self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+
+        return local(), store
 
     def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
         """A technique's scope: compiled once into a nested Scope; its passes run when the frame is drawn."""
@@ -138,21 +147,31 @@ class DrawListCompiler:
             scene = Node.transient([scene] if isinstance(scene, RenderingComponent) else scene)
         mask_key = self._mask
         c = self._compiled
+        changed = self._journal.drain()
         if len(kinds()) != self._kinds_seen:
             self._new_state_kinds()
             c = None
-        if c is not None and c[0]() is scene and c[1] == scene.version and c[2] == mask_key:
-            self.stats["compiled"] = False
-            return self._root
+        if c is not None and c[0]() is scene and c[2] == mask_key:
+            if c[1] == scene.version:
+                self.stats["compiled"] = False
+                return self._root
+            if c[3] == scene.structure_version and self._moved_only(changed):
+                # only transforms moved: rewrite the rows below them, no traversal (see dynamic.py)
+                self.stats["incremental"] = self._apply_moves(changed)
+                self._refresh_declarations(scene)
+                self._compiled = (c[0], scene.version, mask_key, c[3])
+                self.stats["compiled"] = False
+                return self._root
         self.sync_registry()
         camera = scene.declarations(self.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
         if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
             self._node_cache.clear()
+            self._occurrences.clear()
         self._full_key = full_key
         root = Scope(None)
         self._scope = root
-        self._compile_frames = [[(), 0, False]]
+        self._compile_frames = [[0, 0, False]]
         try:
             self.run(scene)
         except BaseException:
@@ -164,9 +183,10 @@ class DrawListCompiler:
         finally:
             self._compile_frames = []
             self._scope = self._immediate
-        self._compiled = (weakref.ref(scene), scene.version, mask_key)
+        self._compiled = (weakref.ref(scene), scene.version, mask_key, scene.structure_version)
         self._prune_caches()
         self._install(root)
+        self._dependent_index = None
         self.stats["compiled"] = True
         return root
 
@@ -183,6 +203,8 @@ class DrawListCompiler:
         """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
         if len(self._node_cache) > self._prune_limit:
             self._node_cache = {k: v for k, v in self._node_cache.items() if v.ref() is not None}
+            live = set(self._node_cache)
+            self._occurrences = {pair: k for pair, k in self._occurrences.items() if k in live}
             self._prune_limit = max(4096, 2 * len(self._node_cache))
 
     # -- what painters call ------------------------------------------------------------
@@ -224,7 +246,16 @@ class DrawListCompiler:
             # a closed opaque surface never shows its back faces: cull them (mirrored instances: the front)
             cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
         state = self._state_for(kind, geometry, extra, cull, int(row[_SHADING_MODEL]))
-        item = DrawItem(geometry, state, row, transparent, self.current_node, self._group_path[-1])
+        item = DrawItem(
+            geometry,
+            state,
+            row,
+            transparent,
+            self.current_node,
+            self._group_path[-1],
+            tuple(self.context.mono_stack(Transform)),
+            local,
+        )
         self._scope.entries.append(item)
         return item
 
@@ -255,6 +286,9 @@ class DrawListCompiler:
                 value = self._fill == "wireframe"
             elif k is LineWidth:
                 value = float(style.line_width) if style is not None else 1.0
+            elif k.source() is not None:  # a kind capturing a generic attribute (Shadowing, Mirror)
+                top = mono(k.source())
+                value = k.default if top is None else k.from_attribute(top)
             else:
                 value = k.default
             values.append(value)

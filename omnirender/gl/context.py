@@ -137,6 +137,25 @@ class RawGL:
                 ("glColorMask", [ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte]),
                 ("glDepthMask", [ctypes.c_ubyte]),
                 ("glTexParameteri", [ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
+                ("glGenTextures", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                ("glDeleteTextures", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                ("glBindTexture", [ctypes.c_uint, ctypes.c_uint]),
+                ("glDeleteFramebuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
+                (
+                    "glTexImage2D",
+                    [
+                        ctypes.c_uint,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_int,
+                        ctypes.c_uint,
+                        ctypes.c_uint,
+                        ctypes.c_void_p,
+                    ],
+                ),
+                ("glFramebufferTexture2D", [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
             ):
                 fn = getattr(lib, name)
                 fn.argtypes = args
@@ -213,6 +232,54 @@ def delete_renderbuffer(raw: RawGL, rbo: int) -> None:
         raw.glDeleteRenderbuffers(1, ctypes.byref(name))
 
 
+GL_TEXTURE_2D = 0x0DE1
+GL_DEPTH_STENCIL = 0x84F9
+GL_UNSIGNED_INT_24_8 = 0x84FA
+GL_NEAREST = 0x2600
+GL_CLAMP_TO_EDGE = 0x812F
+
+
+def depth_stencil_target(ctx: Any, raw: RawGL, colors: list[Any], size: tuple[int, int]) -> tuple | None:
+    """A framebuffer of moderngl colour textures and a 24/8 depth-stencil *texture*, or None.
+
+    Returns (framebuffer, depth texture wrapped for sampling, release function).
+    moderngl makes depth textures without stencil; offscreen passes that need
+    both (shadow volumes into a float target) get this one, built with raw GL.
+    """
+    if not raw.available:
+        return None
+    previous = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_FRAMEBUFFER_BINDING, ctypes.byref(previous))
+    tex = ctypes.c_uint(0)
+    fbo = ctypes.c_uint(0)
+    raw.glGenTextures(1, ctypes.byref(tex))
+    raw.glBindTexture(GL_TEXTURE_2D, tex.value)
+    raw.glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH24_STENCIL8, size[0], size[1], 0, GL_DEPTH_STENCIL,
+                     GL_UNSIGNED_INT_24_8, None)  # fmt: skip
+    for pname, value in ((0x2801, GL_NEAREST), (0x2800, GL_NEAREST), (0x2802, GL_CLAMP_TO_EDGE),
+                         (0x2803, GL_CLAMP_TO_EDGE)):  # fmt: skip
+        raw.glTexParameteri(GL_TEXTURE_2D, pname, value)
+    raw.glBindTexture(GL_TEXTURE_2D, 0)
+    raw.glGenFramebuffers(1, ctypes.byref(fbo))
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+    for i, color in enumerate(colors):
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D, color.glo, 0)
+    raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, tex.value, 0)
+    ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, previous.value)
+
+    def release() -> None:
+        raw.glDeleteFramebuffers(1, ctypes.byref(fbo))
+        raw.glDeleteTextures(1, ctypes.byref(tex))
+
+    if not ok:
+        release()
+        return None
+    wrapped = ctx.detect_framebuffer(fbo.value)
+    depth = ctx.external_texture(tex.value, size, 1, 0, "f4")
+    return wrapped, depth, release
+
+
 def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth: bool | None = None) -> None:
     """Set colour and depth write masks (raw GL when available: moderngl ignores them on detected framebuffers)."""
     if raw.available:
@@ -228,7 +295,8 @@ def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth:
 
 
 def clear_stencil(raw: RawGL, value: int = 0) -> None:
-    """Clear the stencil buffer of the bound framebuffer."""
+    """Clear the stencil buffer of the bound framebuffer (every bit: glClear obeys the stencil write mask)."""
     if raw.available:
+        raw._mask(0xFF)
         raw.glClearStencil(int(value))
         raw.glClear(GL_STENCIL_BUFFER_BIT)

@@ -94,7 +94,7 @@ class DrawState:
 class DrawItem:
     """One shape occurrence: geometry, state, instance row, transparency, node and group tags on its path."""
 
-    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups")
+    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups", "chain", "local", "slot")
 
     def __init__(
         self,
@@ -104,6 +104,8 @@ class DrawItem:
         transparent: bool,
         node: Any = None,
         groups: tuple[frozenset[str], ...] = (),
+        chain: tuple[Any, ...] = (),
+        local: np.ndarray | None = None,
     ) -> None:
         self.geometry = geometry
         self.state = state
@@ -112,6 +114,12 @@ class DrawItem:
         self.node = node
         #: the group sets of the tagged nodes on the item's path (outermost first), for pass masks
         self.groups = groups
+        #: the transforms whose product (then ``local``) is the model matrix, outermost first
+        self.chain = chain
+        #: the painter's shape-local matrix, or None
+        self.local = local
+        #: (batch, index) of the item's row in its opaque batch, or None
+        self.slot: tuple[Batch, int] | None = None
 
     @property
     def item_class(self) -> str:
@@ -150,6 +158,7 @@ class Batch:
         "dirty",
         "uniform",
         "sorted_for",
+        "position",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -167,6 +176,8 @@ class Batch:
         self.uniform = False
         #: the view (bytes of the view matrix) the instances were last sorted front to back for, or None
         self.sorted_for: bytes | None = None
+        #: when sorted: the GPU buffer position of each row (so changed rows are rewritten where they lie)
+        self.position: np.ndarray | None = None
 
     def mark(self, index: int) -> None:
         d = self.dirty

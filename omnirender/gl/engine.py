@@ -26,6 +26,7 @@ import numpy as np
 
 from ..attributes import Tessellation
 from ..core.camera import Camera
+from ..core.component import ChangeJournal
 from ..core.engine import Engine
 from ..core.technique import Technique
 from ..image import Image
@@ -40,6 +41,7 @@ from .context import (
     depth_stencil_framebuffer,
 )
 from .drawlist import Batch, DrawItem, DrawState, Scope
+from .dynamic import TransformUpdater
 from .frame import FrameRunner
 from .geometry import Geometry, GeometryCache, unit_mesh
 from .imagespace import FullScreenPrograms
@@ -56,7 +58,7 @@ __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
 DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
-class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
+class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
 
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
@@ -64,7 +66,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
     ``samples=0`` turns multisampling off.  ``technique`` replaces the default
     :class:`~.techniques.Forward` technique (the passes every frame and every
     nested technique pass draws items with); ``timing=True`` measures each
-    pass's GPU time with timer queries (``engine.stats["passes"]``).
+    pass's GPU time with timer queries (``engine.stats["passes"]``);
+    ``shadows=False`` turns shadow maps off (they are on by default, see
+    :class:`~.shadows.ShadowMaps`).
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -101,6 +105,7 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         mask: Any = None,
         timing: bool = False,
         programs: ProgramCache | None = None,
+        shadows: bool = True,
     ) -> None:
         from . import _load
 
@@ -113,10 +118,16 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
             raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
         check_samples_total(size, int(samples))  # before a context exists: a bad size costs nothing
+        #: draw shadow maps for lights that cast shadows (om.gl.ShadowMaps in a scene refines this)
+        self.shadows = bool(shadows)
+        self._shadow_plan: Any = None
+        self._shadow_cache: Any = None
+        self._caster_bounds: Any = None
+        self._shadow_drawn: Any = None
+        self._mirrors: Any = None
+        self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
-        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
-            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
         if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
             raise ValueError(f"GLEngine: samples must be 0 or a power of two (1, 2, 4, 8, 16), got {samples}")
         self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
@@ -138,9 +149,14 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
         self._root: Scope | None = None
         self._compile_frames: list[list[Any]] = []
         self._group_path: list[tuple[frozenset[str], ...]] = [()]
-        self._node_cache: dict[Any, Any] = {}
+        self._node_cache: dict[int, Any] = {}
+        #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
+        self._occurrences: dict[tuple[int, int], int] = {}
+        self._next_occurrence = 0
         self._prune_limit = 4096
-        self._compiled: tuple[Any, int, Any] | None = None  # (scene ref, version, mask key)
+        self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
+        self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
+        self._dependent_index: dict[int, list[Any]] | None = None
         self._full_key: Any = None
         self._surface: list[Any] = []
         self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
@@ -325,7 +341,9 @@ class GLEngine(DrawListCompiler, BatchRenderer, FrameRunner, Engine):
                 self.compile(scene, mask=mask)
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
+                self._journal.drain()  # nothing compiled to update in place: forget what changed
                 self._install(self._immediate)
+                self._dependent_index = None
                 self._immediate = Scope()
                 self._scope = self._immediate
                 self._compiled = None

@@ -22,6 +22,7 @@ frames describe the same targets and released when no pass uses them any more.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,9 @@ import numpy as np
 from .context import GLError, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
+from .mirrors import Mirrors, mirror_items
 from .passes import Composed, FullScreen, Pass, Target
+from .shadows import ShadowPlan, caster_bounds, frame_settings
 from .state import GLCalls, RasterApplier
 
 __all__ = ["FrameRunner", "PassRecord"]
@@ -81,6 +84,16 @@ class FrameRunner:
         return self._proj
 
     @property
+    def frame_camera(self) -> Any:
+        """The ``om.Camera`` of the frame (its near and far planes, projection kind)."""
+        return self._camera_used
+
+    @property
+    def frame_eye(self) -> np.ndarray:
+        """World position of the eye of the pass being drawn."""
+        return np.linalg.inv(self._view)[:3, 3]
+
+    @property
     def frame_orthographic(self) -> bool:
         """Whether the pass being drawn uses an orthographic projection."""
         return self._ortho
@@ -114,6 +127,7 @@ class FrameRunner:
         self._applier = RasterApplier(GLCalls(ctx, self.raw, fbo, self._target_size))
         self._nclip = 0
         set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        self._frame_background = background
         if clear:
             fbo.clear(*self.clear_color(background), depth=1.0)
             if self.has_stencil and not self._target_stack:
@@ -129,8 +143,11 @@ class FrameRunner:
         self._targets_used: set[Target] = set()
         self._frame_targets = {}
         root = self._root if self._root is not None else Scope()
+        self._shadow_plan = None
         try:
-            calls = self._run(self.technique, root, Composed(), item_level=True)
+            calls = self._shadow_map_passes(root)
+            calls += self._run(self.technique, root, Composed(), item_level=True)
+            calls += self._mirror_passes(root)
         finally:
             self._close_query()
             self._restore_defaults()
@@ -153,6 +170,53 @@ class FrameRunner:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
 
+    def _shadow_map_passes(self, root: Scope) -> int:
+        """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
+        settings = frame_settings(root if self._root is not None else None, self.shadows)
+        if settings is None:
+            return 0
+        lights = [(light, m) for light, m in self.scene_lights if getattr(light, "casts_shadows", False)]
+        if not lights:
+            return 0
+        if self._caster_bounds is None:
+            self._caster_bounds = (caster_bounds(root),)
+        bounds = self._caster_bounds[0]
+        if bounds is None:
+            return 0
+        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+        plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
+        if plan is None:
+            plan = ShadowPlan(settings, lights, bounds)
+            self._shadow_cache = (key, plan, plan.technique())
+        technique = self._shadow_cache[2]
+        if technique is None:
+            return 0
+        self._shadow_plan = plan
+        drawn = (key, self._caster_bounds, self._size)
+        last = self._shadow_drawn
+        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
+        if fresh and self._keep_target(plan.target):
+            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
+        calls = self._run(technique, root, Composed(), item_level=True)
+        self._shadow_drawn = drawn
+        return calls
+
+    def _mirror_passes(self, root: Scope) -> int:
+        """The mirror stage (:mod:`.mirrors`) after the frame's technique; returns the draw calls made."""
+        if self._mirrors is None:
+            self._mirrors = mirror_items(root.all_items()) if self._root is not None else []
+        if not self._mirrors:
+            return 0
+        if not self.has_stencil or self._target_stack:
+            if not self._warned_mirrors:
+                self._warned_mirrors = True
+                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
+                              "surfaces here", stacklevel=4)  # fmt: skip
+            return 0
+        technique = Mirrors.plan(self._mirrors, self._view, self._proj, self.clear_color(self._frame_background))
+        return self._run(technique, root, Composed(), item_level=False)
+
     def _set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         self._view = view
         self._proj = proj
@@ -161,6 +225,7 @@ class FrameRunner:
         self._frame_uniforms = {
             "u_view": view.T.astype(np.float32).tobytes(),
             "u_proj": proj.T.astype(np.float32).tobytes(),
+            "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
         }
         self._light_cache = {}
 
@@ -202,7 +267,10 @@ class FrameRunner:
         )
         self._records.append(record)
         saved_target = self._bind_target(description.target) if description.target is not None else None
+        saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
         saved_camera = None
+        if description.front_face != "ccw":
+            self.ctx.front_face = description.front_face
         if description.camera is not None:
             saved_camera = (self._view, self._proj, self._ortho)
             view, proj = description.camera
@@ -216,16 +284,23 @@ class FrameRunner:
         try:
             if description.clear is not None:
                 self._clear(description.clear)
+            source = self._root if description.source == "scene" and self._root is not None else scope
             if description.fullscreen is not None:
                 calls = self._fullscreen(description.fullscreen)
+            elif composed.scopes == "items":  # every item below, without running the nested techniques
+                calls = sum(self._draw_items(s, composed, None) for s in source.walk())
             elif item_level:
-                calls = self._draw_items(scope, composed, lambda child: self._nested(child, composed))
+                calls = self._draw_items(source, composed, lambda child: self._nested(child, composed))
             else:
-                calls = self._run(self.technique, scope, composed, item_level=True)
+                calls = self._run(self.technique, source, composed, item_level=True)
         finally:
             self._leave_record()
             if saved_camera is not None:
                 self._set_camera(*saved_camera)
+            if saved_viewport is not None:
+                self._restore_viewport(saved_viewport)
+            if description.front_face != "ccw":
+                self.ctx.front_face = "ccw"
             if saved_target is not None:
                 self._unbind_target(saved_target)
         return calls
@@ -276,8 +351,13 @@ class FrameRunner:
         key = (description, self._size)
         target = self._target_cache.get(key)
         if target is None:
-            size = (max(1, round(self._size[0] * description.scale)), max(1, round(self._size[1] * description.scale)))
-            target = self._target_cache[key] = RenderTarget(self.ctx, description, size)
+            size = description.pixels(self._size)
+            if max(size) > self.max_texture_size:
+                raise ValueError(
+                    f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
+                    f"allows ({self.max_texture_size} per side); lower its size or resolution"
+                )
+            target = self._target_cache[key] = RenderTarget(self.ctx, description, size, self.raw)
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
         saved = (self._applier.gl.framebuffer, self._target_size, self._linear_output)
@@ -299,6 +379,26 @@ class FrameRunner:
         self._applier.gl.size = size
         self._target_size = size
         self._linear_output = linear
+
+    def _set_viewport(self, box: tuple[int, int, int, int]) -> tuple:
+        """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound target."""
+        saved = (self.ctx.viewport, self._target_size)
+        self.ctx.viewport = box
+        self._target_size = (box[2], box[3])
+        return saved
+
+    def _restore_viewport(self, saved: tuple) -> None:
+        self.ctx.viewport, self._target_size = saved
+
+    def _keep_target(self, description: Target) -> bool:
+        """Keep the target of ``description`` from the last frame in this one (False when it is gone)."""
+        key = (description, self._size)
+        target = self._target_cache.get(key)
+        if target is None:
+            return False
+        self._targets_used.add(key)
+        self._frame_targets[description.name] = target
+        return True
 
     def _release_unused_targets(self) -> None:
         for key in [k for k in self._target_cache if k not in self._targets_used]:
@@ -325,6 +425,7 @@ class FrameRunner:
             set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         if clear.stencil is not None:
             clear_stencil(self.raw, int(clear.stencil))
+            self._applier.forget()  # the stencil write mask was reset to clear every bit
 
     # -- image-space passes --------------------------------------------------------------
     def _fullscreen(self, effect: FullScreen) -> int:
@@ -356,7 +457,7 @@ class FrameRunner:
         ctx.disable(ctx.CULL_FACE)
         if effect.depth:
             ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "1"
+            ctx.depth_func = "<=" if effect.depth_test else "1"
             set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=True)
         else:
             ctx.disable(ctx.DEPTH_TEST)

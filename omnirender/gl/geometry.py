@@ -116,6 +116,19 @@ class Geometry:
             self.buffers = bufs
         return self.buffers
 
+    def adjacency_buffer(self, ctx: Any) -> Any:
+        """The ``triangles_adjacency`` index buffer (made on first use: shadow volumes need it)."""
+        bufs = self.upload(ctx)
+        found = bufs.get("adjacency")
+        if found is None:
+            from ..geometry.topology import adjacency_indices
+            from .resources import gpu_call
+
+            tris = self.indices if self.indices is not None else np.arange(len(self.positions), dtype=np.uint32)
+            data = adjacency_indices(self.positions, tris)
+            found = bufs["adjacency"] = gpu_call(ctx.buffer, data, what=f"adjacency of {self.label}")
+        return found
+
     def release(self) -> None:
         """Free the GPU buffers (the CPU arrays stay, so the geometry can upload again)."""
         if self.buffers is not None:

@@ -21,7 +21,7 @@ import numpy as np
 from .passes import FullScreen, Target
 from .resources import gpu_call
 
-__all__ = ["RenderTarget", "FullScreenPrograms", "PingPong"]
+__all__ = ["RenderTarget", "FullScreenPrograms", "PingPong", "RESOLVE", "resolve"]
 
 _TRIANGLE = np.array([-1.0, -1.0, 3.0, -1.0, -1.0, 3.0], np.float32)
 
@@ -51,7 +51,7 @@ vec3 to_linear(vec3 c) {
 class RenderTarget:
     """Textures and framebuffer of one offscreen target (made from a :class:`Target` at a pixel size)."""
 
-    def __init__(self, ctx: Any, description: Target, size: tuple[int, int]) -> None:
+    def __init__(self, ctx: Any, description: Target, size: tuple[int, int], raw: Any = None) -> None:
         self.ctx = ctx
         self.description = description
         self.size = size
@@ -63,6 +63,18 @@ class RenderTarget:
             tex.repeat_x = tex.repeat_y = False
             self.colors[name] = tex
         self.depth = None
+        self._release_raw = None
+        if description.stencil:
+            from .context import depth_stencil_target
+
+            made = depth_stencil_target(ctx, raw, list(self.colors.values()), size) if raw is not None else None
+            if made is None:
+                raise ValueError(
+                    f"target {description.name!r}: this OpenGL driver offers no depth-stencil texture; "
+                    "techniques that need one (om.gl.ShadowVolumes) cannot run here"
+                )
+            self.fbo, self.depth, self._release_raw = made
+            return
         if description.depth:
             self.depth = gpu_call(ctx.depth_texture, size, what=f"depth of target {description.name!r}")
             self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
@@ -100,7 +112,11 @@ class RenderTarget:
         return np.frombuffer(raw, np.float32).reshape(h, w)[::-1].copy()
 
     def release(self) -> None:
-        self.fbo.release()
+        if self._release_raw is not None:
+            self._release_raw()  # the raw framebuffer and depth-stencil texture (the wrappers own nothing)
+            self.depth = None
+        else:
+            self.fbo.release()
         for tex in self.colors.values():
             tex.release()
         if self.depth is not None:
@@ -149,6 +165,26 @@ class FullScreenPrograms:
         if self._triangle is not None:
             self._triangle.release()
             self._triangle = None
+
+
+#: Composite a float target holding premultiplied linear colour (``u_sum`` divided by ``u_count`` samples)
+#: over the frame, with its depth (``u_depth``) tested against the frame's: how offscreen techniques return.
+RESOLVE = """uniform sampler2D u_sum;
+uniform sampler2D u_depth;
+uniform float u_count;
+vec4 effect(vec2 uv) {
+    vec4 c = texture(u_sum, uv) / u_count;
+    if (c.a <= 0.0) discard;
+    return vec4(to_srgb(c.rgb / c.a), min(c.a, 1.0));
+}
+float effect_depth(vec2 uv) { return texture(u_depth, uv).r; }
+"""
+
+
+def resolve(target: str, color: str = "color", depth_target: str | None = None, count: float = 1.0) -> FullScreen:
+    """The full-screen pass compositing a float target over the frame (see :data:`RESOLVE`)."""
+    return FullScreen(RESOLVE, inputs={"u_sum": (target, color), "u_depth": (depth_target or target, "depth")},
+                      uniforms={"u_count": float(count)}, blend=True, depth=True, depth_test=True)  # fmt: skip
 
 
 class PingPong:

@@ -22,7 +22,19 @@ __all__ = ["LightUniforms", "GLOBAL_AMBIENT", "HEADLIGHT"]
 class LightUniforms:
     """Packed light arrays for one light switch state."""
 
-    __slots__ = ("count", "types", "pos", "diffuse", "specular", "attenuation", "spot", "exponent", "ambient", "_bytes")
+    __slots__ = (
+        "count",
+        "types",
+        "order",
+        "pos",
+        "diffuse",
+        "specular",
+        "attenuation",
+        "spot",
+        "exponent",
+        "ambient",
+        "_bytes",
+    )
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], view: np.ndarray, headlight: bool) -> None:
         from ..attributes import AmbientLight, DirectionalLight, SpotLight
@@ -39,6 +51,7 @@ class LightUniforms:
         rot = view[:3, :3]
         n = 0
         types = []
+        order: list[Any] = []  # the light of each index
         for light, matrix in lights:
             amb = getattr(light, "ambient", None)
             if amb is not None:
@@ -67,6 +80,7 @@ class LightUniforms:
                     types[-1] = "s"
             else:
                 continue
+            order.append(light)
             n += 1
         if n == 0 and headlight:
             pos[0, :3] = HEADLIGHT
@@ -76,6 +90,7 @@ class LightUniforms:
             n = 1
         self.count = n
         self.types = "".join(types)
+        self.order = order
         self.pos, self.diffuse, self.specular, self.attenuation = pos, diffuse, specular, att
         self.spot, self.exponent = spot, exponent
         self.ambient = ambient.astype(np.float32)

@@ -8,11 +8,12 @@ A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(..
   nested technique ``scopes`` are drawn;
 * **where**: ``target`` (an offscreen :class:`Target` with named colour
   attachments and a depth texture that later passes can sample; None: the
-  enclosing target), ``clear`` (:class:`Clear`);
+  enclosing target), ``viewport`` (a pixel rectangle of the target: tiles of
+  a shadow-map atlas), ``clear`` (:class:`Clear`);
 * **how**: ``state`` (GL state attributes forced on every item, e.g.
   ``CullFace("front")``), ``fallback`` (applied where an item has the
   default), ``camera`` (an ``om.Camera`` or ``(view, projection)`` matrices,
-  e.g. a light's), ``shader`` (:class:`Shader`: depth only, flat colour,
+  e.g. a light's), ``front_face`` (``"cw"`` for mirrored views), ``shader`` (:class:`Shader`: depth only, flat colour,
   unlit, user GLSL snippets), or ``fullscreen`` (:class:`FullScreen`: an
   image-space pass that draws one full-screen triangle instead of items).
 
@@ -97,8 +98,12 @@ class Target:
     ``colors`` names its colour attachments (fragment outputs 0, 1, ... in
     that order), ``depth`` adds a depth texture, ``dtype`` is ``"f1"`` (8 bits
     per channel, sRGB-encoded values like the screen), ``"f2"`` or ``"f4"``
-    (linear floats), ``scale`` its size relative to the frame.  Later passes
-    sample it through :class:`FullScreen` ``inputs`` or ``engine.target(name)``.
+    (linear floats), ``scale`` its size relative to the frame, or ``size``
+    its size in pixels (independent of the frame: shadow maps).  ``stencil``
+    gives the depth texture a stencil buffer (stencil techniques offscreen).
+    Later passes
+    sample it through :class:`FullScreen` ``inputs``, :class:`Shader`
+    ``inputs`` or ``engine.target(name)``.
     """
 
     name: str
@@ -106,6 +111,8 @@ class Target:
     depth: bool = True
     dtype: str = "f1"
     scale: float = 1.0
+    size: tuple[int, int] | None = None
+    stencil: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -121,8 +128,24 @@ class Target:
             raise ValueError(f"Target {self.name!r}: dtype must be one of {_DTYPES}, got {self.dtype!r}")
         if not (isinstance(self.scale, (int, float)) and 0.0 < self.scale <= 4.0):
             raise ValueError(f"Target {self.name!r}: scale must be in (0, 4], got {self.scale!r}")
+        if self.size is not None:
+            try:
+                w, h = (int(v) for v in self.size)
+            except (TypeError, ValueError):
+                w = h = 0
+            if w <= 0 or h <= 0:
+                raise ValueError(f"Target {self.name!r}: size must be (width, height) > 0 pixels, got {self.size!r}")
+            object.__setattr__(self, "size", (w, h))
+        if self.stencil and not self.depth:
+            raise ValueError(f"Target {self.name!r}: stencil=True needs depth=True (they share one texture)")
         object.__setattr__(self, "colors", colors)
         object.__setattr__(self, "scale", float(self.scale))
+
+    def pixels(self, frame: tuple[int, int]) -> tuple[int, int]:
+        """The target's size in pixels for a frame of size ``frame``."""
+        if self.size is not None:
+            return self.size
+        return (max(1, round(frame[0] * self.scale)), max(1, round(frame[1] * self.scale)))
 
 
 @dataclass(frozen=True)
@@ -155,7 +178,14 @@ class Shader:
       called with the final linear colour, the eye-space position and normal;
       it may declare more outputs (``layout(location = 1) out vec4 f_normal;``)
       for targets with several colour attachments;
-    * ``uniforms``: values of uniforms the snippets declare.
+    * ``uniforms``: values of uniforms the snippets declare;
+    * ``defines``: preprocessor features of the engine's own shaders
+      (``{"SHADOWS_OFF": True}``, ``{"LIGHT_SELECT": True}``; an inner pass's
+      value of a name wins);
+    * ``inputs``: sampler uniforms bound to offscreen targets,
+      ``{"u_shadow_atlas": ("shadow-atlas", "depth")}`` (texture units 8 and up);
+    * ``textures``: sampler uniforms bound to ``om.Texture`` images
+      (``{"u_highlight": om.Texture(pattern)}``).
     """
 
     depth_only: bool = False
@@ -164,6 +194,9 @@ class Shader:
     vertex: str = ""
     fragment: str = ""
     uniforms: Any = ()
+    defines: Any = ()
+    inputs: Any = ()
+    textures: Any = ()
 
     def __post_init__(self) -> None:
         if self.flat_color is not None:
@@ -181,6 +214,44 @@ class Shader:
                 "Shader: the fragment snippet must define void pass_fragment(inout vec4 color, vec3 P, vec3 N)"
             )
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
+        object.__setattr__(self, "defines", _defines(self.defines))
+        object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
+        items = self.textures.items() if isinstance(self.textures, Mapping) else self.textures
+        textures = []
+        for uniform, texture in items:
+            if not isinstance(uniform, str) or not uniform.isidentifier() or not hasattr(texture, "image_array"):
+                raise ValueError(
+                    f"Shader: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}"
+                )
+            textures.append((uniform, texture))
+        object.__setattr__(self, "textures", tuple(sorted(textures, key=lambda p: p[0])))
+
+
+def _defines(values: Any) -> tuple[tuple[str, Any], ...]:
+    items = values.items() if isinstance(values, Mapping) else values
+    out = []
+    for name, value in items:
+        if not isinstance(name, str) or not name.isidentifier() or not name.isupper():
+            raise ValueError(f"Shader: define names must be upper-case GLSL identifiers, got {name!r}")
+        if not isinstance(value, (bool, int, float)):
+            raise ValueError(f"Shader: define {name} must be True or a number, got {value!r}")
+        out.append((name, value))
+    return tuple(sorted(out))
+
+
+def _inputs(values: Any, owner: str) -> tuple[tuple[str, str, str], ...]:
+    """Sampler inputs as sorted (uniform, target name, attachment) triples."""
+    items = values.items() if isinstance(values, Mapping) else values
+    inputs = []
+    for uniform, source in items:
+        if not isinstance(uniform, str) or not uniform.isidentifier():
+            raise ValueError(f"{owner}: input names must be GLSL identifiers, got {uniform!r}")
+        try:
+            target, attachment = source
+        except (TypeError, ValueError):
+            raise ValueError(f"{owner}: input {uniform} must be (target name, attachment), got {source!r}") from None
+        inputs.append((uniform, str(target), str(attachment)))
+    return tuple(sorted(inputs))
 
 
 @dataclass(frozen=True)
@@ -195,7 +266,9 @@ class FullScreen:
     ``uniforms`` gives other uniform values.  ``blend=True`` composites the
     result over the target ("over", premultiplied by its alpha) instead of
     replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
-    effect_depth(vec2 uv)`` the snippet defines.
+    effect_depth(vec2 uv)`` the snippet defines; with ``depth_test=True``
+    that depth is tested (``<=``) against the target's, so the effect hides
+    behind nearer surfaces (image-space outlines).
     """
 
     fragment: str
@@ -203,25 +276,18 @@ class FullScreen:
     uniforms: Any = ()
     blend: bool = False
     depth: bool = False
+    depth_test: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.fragment, str) or "effect" not in self.fragment:
             raise ValueError("FullScreen: fragment must be GLSL defining vec4 effect(vec2 uv)")
+        if self.depth_test and not self.depth:
+            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
+        if self.depth_test and not self.depth:
+            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
         if self.depth and "effect_depth" not in self.fragment:
             raise ValueError("FullScreen: depth=True needs the snippet to define float effect_depth(vec2 uv)")
-        items = self.inputs.items() if isinstance(self.inputs, Mapping) else self.inputs
-        inputs = []
-        for uniform, source in items:
-            if not isinstance(uniform, str) or not uniform.isidentifier():
-                raise ValueError(f"FullScreen: input names must be GLSL identifiers, got {uniform!r}")
-            try:
-                target, attachment = source
-            except (TypeError, ValueError):
-                raise ValueError(
-                    f"FullScreen: input {uniform} must be (target name, attachment), got {source!r}"
-                ) from None
-            inputs.append((uniform, str(target), str(attachment)))
-        object.__setattr__(self, "inputs", tuple(sorted(inputs)))
+        object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
 
 
@@ -233,12 +299,15 @@ class Pass:
     items: Any = "all"
     mask: str | None = None
     select: Callable[[Any], bool] | None = None
-    scopes: bool = True
+    scopes: Any = True
+    source: str = "scope"
     target: Target | None = None
+    viewport: tuple[int, int, int, int] | None = None
     clear: Clear | None = None
     state: tuple[Any, ...] = ()
     fallback: tuple[Any, ...] = ()
     camera: Any = None
+    front_face: str = "ccw"
     shader: Shader | None = None
     fullscreen: FullScreen | None = None
     _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
@@ -252,6 +321,24 @@ class Pass:
             from ..core.mask import compile_mask
 
             compile_mask(self.mask)  # a syntax error is reported here, with the expression
+        if self.front_face not in ("ccw", "cw"):
+            raise ValueError(
+                f"Pass {self.name!r}: front_face must be 'ccw' or 'cw' (mirrored views), got {self.front_face!r}"
+            )
+        if self.scopes not in (True, False, "items"):
+            raise ValueError(f"Pass {self.name!r}: scopes must be True, False or 'items', got {self.scopes!r}")
+        if self.source not in ("scope", "scene"):
+            raise ValueError(f"Pass {self.name!r}: source must be 'scope' or 'scene', got {self.source!r}")
+        if self.viewport is not None:
+            try:
+                box = tuple(int(v) for v in self.viewport)
+            except (TypeError, ValueError):
+                box = ()
+            if len(box) != 4 or box[0] < 0 or box[1] < 0 or box[2] <= 0 or box[3] <= 0:
+                raise ValueError(
+                    f"Pass {self.name!r}: viewport must be (x, y, width, height) pixels, got {self.viewport!r}"
+                )
+            object.__setattr__(self, "viewport", box)
         if self.select is not None and not callable(self.select):
             raise ValueError(f"Pass {self.name!r}: select must be a function of a draw item, got {self.select!r}")
         for name, kind in (("target", Target), ("clear", Clear), ("shader", Shader), ("fullscreen", FullScreen)):
@@ -267,14 +354,22 @@ class Pass:
         from .attributes import GLState
 
         values = getattr(self, name)
-        if isinstance(values, GLState):
+        if isinstance(values, GLState) or (
+            isinstance(values, tuple) and len(values) == 2 and isinstance(values[0], type)
+        ):
             values = (values,)
         out = []
         for attribute in values:
+            if isinstance(attribute, tuple) and len(attribute) == 2 and isinstance(attribute[0], type):
+                kind, value = attribute  # a derived kind's value, e.g. (FillMode, True) for wireframe
+                if getattr(kind, "index", -1) < 0:
+                    raise ValueError(f"Pass {self.name!r}: {kind!r} is not a registered GL state kind")
+                out.append((kind.index, value))
+                continue
             if not isinstance(attribute, GLState):
                 raise ValueError(
                     f"Pass {self.name!r}: {name} takes GL state attributes (om.gl.CullFace(...), om.gl.DepthMask(...)"
-                    f", ...), got {attribute!r}"
+                    f", ...) or (state kind, value) pairs, got {attribute!r}"
                 )
             out.append((type(attribute).index, attribute.capture()))
         object.__setattr__(self, name, tuple(values))
@@ -289,11 +384,14 @@ class Pass:
             self.mask,
             self.select,
             self.scopes,
+            self.source,
             self.target,
+            self.viewport,
             self.clear,
             self._state,
             self._fallback,
             camera,
+            self.front_face,
             self.shader,
             self.fullscreen,
         )
@@ -396,7 +494,21 @@ class Composed:
             out.append(("PASS_VERTEX", tuple(vertex)))
         if fragment and not depth_only:
             out.append(("PASS_FRAGMENT", tuple(fragment)))
+        defines: dict[str, Any] = {}
+        for s in self.shader:
+            defines.update(s.defines)
+        out.extend((name, value) for name, value in sorted(defines.items()) if value is not False)
         return tuple(out)
+
+    def inputs(self) -> dict[str, Any]:
+        """Sampler inputs of the shader overrides: uniform -> (target name, attachment) or an om.Texture."""
+        out: dict[str, Any] = {}
+        for s in self.shader:
+            for uniform, target, attachment in s.inputs:
+                out[uniform] = (target, attachment)
+            for uniform, texture in s.textures:
+                out[uniform] = texture
+        return out
 
     def uniforms(self) -> dict[str, Any]:
         """Uniform values of the shader overrides (the flat colour among them, linear)."""

@@ -26,11 +26,14 @@ from .lighting import LightUniforms
 from .passes import Composed
 from .resources import gpu_call
 from .shaders import instance_fields
-from .state import LineWidth
+from .shadows import ATLAS, SHADOW_UNIT
+from .state import LineWidth, ShadowingState
 
 __all__ = ["BatchRenderer", "SORT_MIN"]
 
 _GL_CLIP_DISTANCE0 = 0x3000
+#: First texture unit of a pass's Shader inputs (after the shadow atlas; units below are the materials').
+PASS_INPUT_UNIT = SHADOW_UNIT + 1
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
@@ -49,6 +52,8 @@ class BatchRenderer:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
         old = self._root
         self._bounds = None
+        self._caster_bounds = None
+        self._mirrors = None
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             return
@@ -100,10 +105,14 @@ class BatchRenderer:
             batch.dirty = (0, len(group))
             batch.uniform = uniform_material(batch.rows)
             batch.sorted_for = None
+            batch.position = None
             batches[key] = batch
             self._batch_pool[pool_key] = batch
         segment.batches = list(batches.values())
         segment.slots = [None if s is None else (batches[s[0]], s[1]) for s in slots]
+        if not where or where[0] != "filtered":
+            for item, slot in zip(items, segment.slots, strict=True):
+                item.slot = slot
         return segment
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
@@ -133,6 +142,7 @@ class BatchRenderer:
                 else:
                     batch, index = slot
                     batch.items[index] = y
+                    y.slot = slot
                     batch.rows[index] = y.row
                     batch.mark(index)
                     if batch.uniform and not uniform_material(batch.rows[[0, index]]):
@@ -182,7 +192,7 @@ class BatchRenderer:
         if "opaque" in classes or composed.scopes:
             for index, part in enumerate(parts):
                 if isinstance(part, Scope):
-                    if composed.scopes:
+                    if composed.scopes is True:
                         calls += nested(part)
                     continue
                 if "opaque" in classes:
@@ -245,6 +255,10 @@ class BatchRenderer:
             lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
             if lit:
                 features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+                plan = self._shadow_plan
+                if plan is not None and state.raster[ShadowingState.index][1]:
+                    if not any(name == "SHADOWS_OFF" for name, _ in shading):
+                        features = features + plan.features()
             if self._ortho:
                 features = features + (("ORTHO", True),)
             if not uniform:
@@ -281,18 +295,31 @@ class BatchRenderer:
             )
             batch.capacity = max(n, 1)
             batch.dirty = (0, n)
+        volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
-            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout)
+            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume)
         if fields:
             columns = self._columns(batch.layout)
             if n >= SORT_MIN and not state.special:
-                # opaque instances front to back: early depth tests then skip hidden fragments
-                if batch.dirty is not None or batch.sorted_for != self._view_key:
+                # opaque instances front to back: early depth tests then skip hidden fragments; the order is
+                # made again when the view changes, and rows that changed are rewritten where they lie
+                if batch.sorted_for != self._view_key or batch.position is None or len(batch.position) != n:
                     z = batch.rows[:, _TRANSLATION] @ self._view[2, :3]
                     order = np.argsort(-z, kind="stable")
                     batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.position = np.empty(n, np.int64)
+                    batch.position[order] = np.arange(n)
                     batch.sorted_for = self._view_key
+                    batch.dirty = None
+                elif batch.dirty is not None:
+                    lo, hi = batch.dirty
+                    where = batch.position[lo:hi]
+                    first, last = int(where.min()), int(where.max()) + 1
+                    order = np.empty(n, np.int64)
+                    order[batch.position] = np.arange(n)
+                    data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
+                    batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
                     batch.dirty = None
             elif batch.dirty is not None:
                 lo, hi = batch.dirty
@@ -309,7 +336,7 @@ class BatchRenderer:
         self._set_uniforms(prog, state, composed)
         if batch.uniform:
             self._set_material(prog, batch.rows[0])
-        vao.render(self._mode(batch.geometry, state.kind), instances=n)
+        vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
         self.count(1, n)
         return 1
 
@@ -320,13 +347,17 @@ class BatchRenderer:
             cols = self._column_cache[key] = layout.columns(ROW)
         return cols
 
-    def _vao(self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any) -> Any:
+    def _vao(
+        self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False
+    ) -> Any:
         self.upload(geometry)
         content = geometry.content(program)
         if buffer is not None and layout is not None:
             fmt, names = layout.vertex_format()
             content.append((buffer, fmt, *names))
         index = geometry.buffers.get("index") if kind != "points" else None
+        if adjacency:
+            index = geometry.adjacency_buffer(self.ctx)
         return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
 
     def _mode(self, geometry: Geometry, kind: str) -> int:
@@ -342,6 +373,10 @@ class BatchRenderer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(row[ROW.slice(field)].tobytes())
+
+    def light_order(self) -> list[Any]:
+        """The lights of the pass being drawn in shader order (index i is light i of the light loops)."""
+        return self._lights_for(None).order
 
     def _lights_for(self, switch: Any) -> LightUniforms:
         key = id(switch)
@@ -359,7 +394,10 @@ class BatchRenderer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(data)
-        self._lights_for(state.switch).apply(prog)
+        lights = self._lights_for(state.switch)
+        lights.apply(prog)
+        if self._shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
+            self._shadow_plan.apply(prog, self.target(ATLAS).depth, lights.order)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -383,7 +421,23 @@ class BatchRenderer:
         for name, value in composed.uniforms().items():
             u = prog.get(name, None)
             if u is not None:
-                u.value = value
+                if isinstance(value, tuple) and len(value) > 4:  # arrays and matrices: written as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
+        inputs = composed.inputs()
+        if inputs:
+            for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
+                u = prog.get(uniform, None)
+                if u is not None:
+                    if isinstance(source, tuple):
+                        name, attachment = source
+                        target = self.target(name)
+                        texture = target.depth if attachment == "depth" else target.texture(attachment)
+                    else:
+                        texture = self._texture(source)  # an om.Texture of the pass
+                    texture.use(unit)
+                    u.value = unit
 
     def _apply_raster(self, raster: tuple, state: DrawState) -> None:
         self._applier.apply(raster)
@@ -608,3 +662,4 @@ def _two_faced(geometry: Geometry, state: DrawState) -> bool:
 
 
 _GL_SRGB8_ALPHA8 = 0x8C43
+_TRIANGLES_ADJACENCY = 0x000C

@@ -26,6 +26,7 @@ from __future__ import annotations
 from typing import Any
 
 from .layout import PBR, PHONG
+from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
 __all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
 
@@ -214,6 +215,7 @@ uniform vec3 u_latt[MAX_LIGHTS];    // constant, linear, quadratic
 uniform vec4 u_lspot[MAX_LIGHTS];   // spot axis (view space), cos(cutoff); w < -1.5: no spot
 uniform float u_lexp[MAX_LIGHTS];
 uniform vec3 u_ambient;
+uniform mat4 u_eye_to_world;        // the pass camera's eye space to world space (shadows, pass snippets)
 #ifdef TEXTURE
 uniform sampler2D u_texture;
 #endif
@@ -245,6 +247,7 @@ float any_light(int i, vec3 P, out vec3 L) {
     if (u_lspot[i].w > -1.5) return spot_light(i, P, L);
     return point_light(i, P, L);
 }
+SHADOW_CODE
 vec3 half_vector(vec3 L, vec3 V, vec3 N) {
     vec3 h = L + V;
     float hh = dot(h, h);
@@ -322,26 +325,28 @@ void main() {
     vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
     float k = (rough + 1.0) * (rough + 1.0) / 8.0;
     vec3 albedo = base.rgb;
-    color = M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic);
+    color = AMBIENT_ON * (M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic));
 #ifdef PBR_LIGHTS
     PBR_LIGHTS
 #else
     for (int i = 0; i < NLIGHTS; ++i) {
         vec3 L;
         float att = any_light(i, P, L);
+        SHADOW_ATT(i)
         color += pbr_light(i, att, L, N, V, albedo, F0, metallic, a2, k);
     }
 #endif
 #else
     vec3 kd = base.rgb;
     // the texture modulates the ambient term too (GL_MODULATE, POV-Ray's pigment, Mitsuba's albedo)
-    color = M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient;
+    color = AMBIENT_ON * (M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient);
 #ifdef PHONG_LIGHTS
     PHONG_LIGHTS
 #else
     for (int i = 0; i < NLIGHTS; ++i) {
         vec3 L;
         float att = any_light(i, P, L);
+        SHADOW_ATT(i)
         color += phong_light(i, att, L, N, V, kd);
     }
 #endif
@@ -508,7 +513,7 @@ def _light_code(types: str) -> list[str]:
     calls = {"d": "dir_light({i}, L)", "p": "point_light({i}, P, L)", "s": "spot_light({i}, P, L)"}
     phong, pbr = ["{ vec3 L; float att;"], ["{ vec3 L; float att;"]
     for i, t in enumerate(types):
-        att = "att = " + calls[t].format(i=i) + ";"
+        att = "att = " + calls[t].format(i=i) + f"; SHADOW_ATT({i})"
         phong.append(f"{att} color += phong_light({i}, att, L, N, V, kd);")
         pbr.append(f"{att} color += pbr_light({i}, att, L, N, V, albedo, F0, metallic, a2, k);")
     phong.append("}")
@@ -549,6 +554,8 @@ def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> s
     f_code = "\n".join(s.replace("pass_fragment", f"pass_fragment_{i}") for i, s in enumerate(fragment))
     f_calls = " ".join(f"pass_fragment_{i}(result, P, N);" for i in range(len(fragment)))
     state_code = "\n".join(kind.fragment_code for kind in code)
+    if "SHADOW_CODE" in source:
+        source = source.replace("SHADOW_CODE", shadow_code(features))
     state_main = "\n    ".join(kind.fragment_main for kind in code if kind.fragment_main)
     return (
         source.replace("PASS_VERTEX_CODE", v_code)
@@ -588,7 +595,9 @@ class ProgramCache:
         if kind == "points":
             defines["POINTS"] = True
         head = _header(dict(defines))
-        if kind in ("mesh", "points"):
+        if kind == "mesh" and "SHADOW_VOLUME" in defines:
+            vs, gs, fs = VERTEX, VOLUME_GEOMETRY, VOLUME_FRAGMENT
+        elif kind in ("mesh", "points"):
             vs, gs, fs = VERTEX, None, FRAGMENT
         elif kind == "lines":
             vs, gs, fs = LINE_VERTEX, LINE_GEOMETRY, LINE_FRAGMENT

@@ -20,7 +20,19 @@ from __future__ import annotations
 from collections.abc import Hashable
 from typing import Any
 
-__all__ = ["StateKind", "GLCalls", "kinds", "register_kind", "RasterApplier", "FillMode", "LineWidth"]
+__all__ = [
+    "StateKind",
+    "GLCalls",
+    "kinds",
+    "register_kind",
+    "RasterApplier",
+    "FillMode",
+    "LineWidth",
+    "ShadowingState",
+    "MirrorState",
+    "casts_shadows",
+    "not_mirror",
+]
 
 
 class StateKind:
@@ -37,6 +49,17 @@ class StateKind:
     #: GLSL run in the fragment shader's ``main`` once the surface colour ``base`` (vec4, linear, texture
     #: applied) is known and before lighting; it may ``discard``.
     fragment_main: str = ""
+
+    @classmethod
+    def source(cls) -> type | None:
+        """A generic attribute class whose active instance the kind captures (``from_attribute`` makes the
+        value); None for GL attributes and the kinds derived from DrawStyle."""
+        return None
+
+    @classmethod
+    def from_attribute(cls, attribute: Any) -> Hashable:
+        """The value captured while ``attribute`` (an instance of ``source``) is active."""
+        return cls.default
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
@@ -108,6 +131,53 @@ class LineWidth(StateKind):
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
         gl.ctx.line_width = float(value)
+
+
+@register_kind
+class ShadowingState(StateKind):
+    """``om.Shadowing``: (casts, receives) shadows; shadow techniques select casters and receivers by it."""
+
+    name = "shadowing"
+    default = (True, True)
+
+    @classmethod
+    def source(cls) -> type:
+        from ..attributes import Shadowing
+
+        return Shadowing
+
+    @classmethod
+    def from_attribute(cls, attribute: Any) -> Hashable:
+        return (bool(attribute.cast), bool(attribute.receive))
+
+
+@register_kind
+class MirrorState(StateKind):
+    """``om.Mirror``: (reflectance, plane normal, plane offset) in the shape's coordinates, or None."""
+
+    name = "mirror"
+    default = None
+
+    @classmethod
+    def source(cls) -> type:
+        from ..attributes import Mirror
+
+        return Mirror
+
+    @classmethod
+    def from_attribute(cls, attribute: Any) -> Hashable:
+        normal, offset = attribute.plane
+        return (float(attribute.reflectance), tuple(normal), float(offset)) if attribute.reflectance > 0 else None
+
+
+def casts_shadows(item: Any) -> bool:
+    """Pass predicate: the item is opaque geometry that casts shadows (``om.Shadowing(cast=...)``)."""
+    return item.state.kind == "mesh" and item.state.raster[ShadowingState.index][0]
+
+
+def not_mirror(item: Any) -> bool:
+    """Pass predicate: the item is not a mirror (what a mirror's reflection shows)."""
+    return item.state.raster[MirrorState.index] is None
 
 
 class RasterApplier:

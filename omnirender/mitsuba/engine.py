@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Material, PBRMaterial, Texture
+from ..attributes import Material, Mirror, PBRMaterial, Texture
 from ..attributes.clipping import ClipRecords
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
@@ -171,7 +171,8 @@ class MitsubaEngine(Engine):
         user = self.mono(BSDF)
         tex = self.mono(Texture) if texcoords else None
         material, color = self.surface()
-        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, material, color)) + (
+        mirror = self.mono(Mirror)
+        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, material, color, mirror)) + (
             two_sided,
             vertex_colors,
         )
@@ -211,6 +212,11 @@ class MitsubaEngine(Engine):
             bsdf, opacity = convert.material_bsdf(material, reflectance), material.opacity
         else:
             bsdf, opacity = convert.color_bsdf(color, reflectance), 1.0
+        mirror = self.mono(Mirror)
+        if mirror is not None and mirror.reflectance > 0.0:
+            # the surface with weight 1 - reflectance, a perfect mirror with weight reflectance (as GL blends them)
+            mirror_bsdf = {"type": "conductor", "material": "none"}
+            bsdf = {"type": "blendbsdf", "weight": float(mirror.reflectance), "bsdf_0": bsdf, "bsdf_1": mirror_bsdf}
         if color is not None:
             opacity *= color.a
         bsdf = convert.wrap_bsdf(bsdf, float(opacity), two_sided)

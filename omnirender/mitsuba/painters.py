@@ -25,6 +25,7 @@ import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, LightSource
 from ..attributes.environment import is_scene_background
+from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
 from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
@@ -340,6 +341,8 @@ class PointSetPainter(ShapePainter):
 
 
 track_surfaces(MitsubaEngine)  # Color / Material / PBRMaterial in activation order
+# a path tracer: every light casts shadows and every shape casts and receives them (a warning says so)
+register_shadowing_warnings(MitsubaEngine, "Mitsuba", mirror=True)
 
 
 @default_for(MitsubaEngine)
@@ -351,6 +354,7 @@ class LightPainter(AttributePainter):
     target = LightSource
 
     def exec(self, light: LightSource, engine: MitsubaEngine) -> None:
+        check_light_shadows(engine, light, "Mitsuba")
         engine.add_light(light)
 
 

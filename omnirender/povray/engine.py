@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes import Mirror, Shadowing
 from ..core import Camera, Engine, LightSwitch, Technique
 from . import sdl
 from .attributes import GlobalSettings, Interior, Raw
@@ -166,6 +167,7 @@ class POVRayEngine(Engine):
             placement.append(f"  {sdl.matrix(m, self._owner())}\n")
         for plane in self._clip_planes():
             placement.append(f"  {plane}\n")
+        placement.extend(self._shadow_and_mirror())
         for raw in self.poly(Raw):
             if raw.placement == "object":
                 placement.append(f"  {raw.text}\n")
@@ -179,12 +181,30 @@ class POVRayEngine(Engine):
             "".join(placement),
             plain,
         )
-        if self.mono(LightSwitch) is not None:
+        shadowing = self.mono(Shadowing)
+        receives = shadowing is None or shadowing.receive
+        if self.mono(LightSwitch) is not None or not receives:
             lit = [id(light) for light, _ in self.lights()]
-            if len(lit) != len(self.light_texts) or any(i not in self.light_texts for i in lit):
-                # only some lights reach this object: a light group with copies of them
-                obj.group = "".join(self.light_texts[i] for i in lit if i in self.light_texts)
+            if not receives or len(lit) != len(self.light_texts) or any(i not in self.light_texts for i in lit):
+                # only some lights reach this object, or no shadow may fall on it: a light group with
+                # copies of its lights (shadowless copies for an object that receives no shadows)
+                texts = [self.light_texts[i] for i in lit if i in self.light_texts]
+                if not receives:
+                    texts = [_shadowless(t) for t in texts]
+                obj.group = "".join(texts)
         self.objects.append(obj)
+
+    def _shadow_and_mirror(self) -> list[str]:
+        """Object modifiers of the generic ``Shadowing`` (``no_shadow``) and ``Mirror`` (a reflecting finish)."""
+        out = []
+        shadowing = self.mono(Shadowing)
+        if shadowing is not None and not shadowing.cast:
+            out.append("  no_shadow\n")
+        mirror = self.mono(Mirror)
+        if mirror is not None and mirror.reflectance > 0.0:
+            # added to the texture's finish; conserve_energy dims the surface's own colour by the reflected part
+            out.append(f"  finish {{ reflection {{ {sdl.number(mirror.reflectance)} }} conserve_energy }}\n")
+        return out
 
     def _owner(self) -> str:
         path = self.node_path
@@ -246,7 +266,19 @@ class POVRayEngine(Engine):
         view = self.depth_view()
         towards = np.linalg.inv(view)[:3, :3] @ HEADLIGHT
         towards /= np.linalg.norm(towards)
-        return f"light_source {{ {sdl.vector(towards * 1e5)} rgb <1,1,1> parallel point_at <0,0,0> }} // headlight\n"
+        # shadowless, as the GL engine's headlight (it sits at the eye, where shadows hide behind their casters)
+        return (
+            f"light_source {{ {sdl.vector(towards * 1e5)} rgb <1,1,1> parallel point_at <0,0,0> shadowless }}"
+            " // headlight\n"
+        )
+
+
+def _shadowless(light_text: str) -> str:
+    """A ``light_source`` text made ``shadowless`` (once)."""
+    if " shadowless" in light_text:
+        return light_text
+    end = light_text.rindex("}")
+    return f"{light_text[:end]}shadowless {light_text[end:]}"
 
 
 def _rgb(attr: Any) -> tuple[float, float, float]:

@@ -31,7 +31,7 @@ from ..attributes import (
 )
 from ..attributes.environment import is_scene_background
 from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
-from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
+from ..shapes import CSG, Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from . import sdl
 from .appearance import finish_name, srgb_to_linear, texture_name
 from .attributes import GlobalSettings, Raw
@@ -287,6 +287,40 @@ class PointSetPainter(ShapePainter):
         engine.emit(_union(_spheres(vertices, radii)), texture_name(engine))
 
 
+@default_for(POVRayEngine)
+class CSGPainter(ShapePainter):
+    """``CSG`` -> POV-Ray's native ``union`` / ``intersection`` / ``difference`` of the operands.
+
+    The operands are evaluated in place (their objects, with world matrices
+    and without textures, become the children); the CSG object gets the
+    texture active where it is evaluated.
+    """
+
+    __slots__ = ()
+    service = PAINT
+    target = CSG
+
+    def exec(self, shape: CSG, engine: POVRayEngine) -> None:
+        children = []
+        for operand in shape.operands():
+            saved = engine.objects
+            engine.objects = []
+            try:
+                engine.evaluate(operand if hasattr(operand, "local_program") else [operand])
+                made = engine.objects
+            finally:
+                engine.objects = saved
+            for obj in made:
+                if isinstance(obj, str):  # scene-level text met inside an operand stays at the top level
+                    engine.objects.append(obj)
+                else:
+                    children.append(f"object {{\n  {obj.geometry}\n{obj.placement}}}")
+            if not any(not isinstance(obj, str) for obj in made):
+                children.append("sphere { <0,0,0>, 0 }")  # an empty operand: POV-Ray needs an object
+        body = "\n".join(children)
+        engine.emit(f"{shape.operation} {{\n{body}\n}}", texture_name(engine), matrix=np.eye(4))
+
+
 # -- attributes -------------------------------------------------------------
 def _light_matrix(light: Any, engine: POVRayEngine) -> np.ndarray:
     for other, matrix in engine.lights():
@@ -329,7 +363,7 @@ class LightPainter(AttributePainter):
         color = np.asarray(light.diffuse, dtype=np.float64)
         if isinstance(light, DirectionalLight):
             d = light.world_direction(world)
-            text = f"light_source {{ {sdl.vector(-d * 1e5)} {sdl.color(color)} parallel point_at <0,0,0> }}\n"
+            text = f"light_source {{ {sdl.vector(-d * 1e5)} {sdl.color(color)} parallel point_at <0,0,0>"
         else:
             p = light.world_position(world)
             scale, fade = _fade(light)
@@ -344,7 +378,9 @@ class LightPainter(AttributePainter):
                     f" spotlight point_at {sdl.vector(p + axis)} radius {_n(radius * 0.999)}"
                     f" falloff {_n(cutoff)} tightness {_n(light.exponent)}"
                 )
-            text += " }\n"
+        if not light.casts_shadows:
+            text += " shadowless"
+        text += " }\n"
         engine.lights_sdl.append(text)
         engine.light_texts[id(light)] = text
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource, Texture
 from ..attributes.environment import is_scene_background
+from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
 from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
@@ -447,11 +448,14 @@ class LightPainter(AttributePainter):
     target = LightSource
 
     def exec(self, light: Any, engine: RadianceEngine) -> None:
+        check_light_shadows(engine, light, "Radiance")
         if not any(light is other for other, _ in engine.pending_lights):
             engine.pending_lights.append((light, np.array(_light_matrix(light, engine))))
 
 
 default_for(RadianceEngine)(type("SkyPainter", (LightPainter,), {"__slots__": (), "target": Sky}))
+# every Radiance source casts shadows onto every surface, and mirrors are not converted: warnings say so
+register_shadowing_warnings(RadianceEngine, "Radiance", mirror=False)
 
 
 def _recorder(target: type, attribute: str, accept: Any = None) -> type:

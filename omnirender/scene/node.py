@@ -65,7 +65,9 @@ class Node:
         "_items",
         "_parents",
         "_version",
+        "_stamp",
         "_structure",
+        "_sstamp",
         "_own",
         "_groups",
         "_program",
@@ -82,6 +84,8 @@ class Node:
         self._items: list[Any] = []
         self._parents: list[Node] = []
         self._version = 0
+        self._stamp = -1  # the observation epoch in which the version was last bumped (see touch)
+        self._sstamp = -1  # the same for the structure counter
         self._structure = 0  # bumped when this node's list or a descendant's list changes (programs)
         self._own = 0  # bumped when this node's own list or groups change (its local program)
         self._groups = _group_set(groups)
@@ -159,47 +163,58 @@ class Node:
     @property
     def version(self) -> int:
         """Counter bumped when this node or anything below it changes."""
+        _EPOCH[0] += 1  # an observation: the next change must reach every ancestor again (see touch)
         return self._version
 
+    @property
+    def structure_version(self) -> int:
+        """Counter bumped when this node's list, or the list of a node below it, changes (not parameters)."""
+        _EPOCH[0] += 1
+        return self._structure
+
     def touch(self) -> None:
-        """Mark the node changed; the change reaches every ancestor exactly once."""
+        """Mark the node changed: bump its version and every ancestor's.
+
+        Propagation stops at an ancestor already bumped since versions were
+        last observed (read): its version already differs from anything an
+        observer saw, and so, by the same rule, do its ancestors'.  Changes
+        between two observations therefore cost O(1) amortised per node, not
+        O(depth): building a chain of 100,000 nested nodes is linear, and a
+        simulation moving thousands of nodes per frame walks each ancestor once.
+        """
+        epoch = _EPOCH[0]
         self._version += 1
+        self._stamp = epoch
         parents = self._parents
         if not parents:
             return
-        if len(parents) == 1 and len(parents[0]._parents) <= 1:
-            # a plain chain (the common case): no bookkeeping
+        if len(parents) == 1:
             node = parents[0]
-            while node is not None:
+            while node._stamp != epoch:
                 node._version += 1
+                node._stamp = epoch
                 up = node._parents
-                if len(up) > 1:
-                    _touch_ancestors(up)
+                if len(up) != 1:
+                    if up:
+                        _bump_ancestors(up, epoch, "_version", "_stamp")
                     return
-                node = up[0] if up else None
+                node = up[0]
             return
-        _touch_ancestors(parents)
+        _bump_ancestors(parents, epoch, "_version", "_stamp")
 
     def _restructure(self) -> None:
         """This node's list changed: its programs, and the flat programs of every ancestor, recompile.
 
         A component changing a parameter does not restructure: programs hold
         the components themselves, so they stay valid (only ``version`` moves).
+        Propagation stops like :meth:`touch`'s.
         """
+        epoch = _EPOCH[0]
         self._own += 1
         self._structure += 1
-        parents = self._parents
-        if not parents:
-            return
-        seen: set[int] = set()
-        stack = list(parents)
-        while stack:
-            node = stack.pop()
-            if id(node) in seen:
-                continue
-            seen.add(id(node))
-            node._structure += 1
-            stack.extend(node._parents)
+        self._sstamp = epoch
+        if self._parents:
+            _bump_ancestors(self._parents, epoch, "_structure", "_sstamp")
 
     # -- contents ---------------------------------------------------------
     def add(self, item: Any) -> Any:
@@ -297,6 +312,8 @@ class Node:
             stack.extend(reversed(node.children))
 
     def _is_ancestor_of(self, other: Node) -> bool:
+        if not any(isinstance(item, Node) for item in self._items):
+            return False  # a node without child nodes is nobody's ancestor: adding a leaf is O(1), not O(depth)
         stack = list(other._parents)
         seen: set[int] = set()
         while stack:
@@ -362,6 +379,7 @@ class Node:
         Stale descendants are compiled first, bottom-up with an explicit stack,
         so deep graphs need no deep recursion.
         """
+        _EPOCH[0] += 1
         if self._program_version == self._structure and self._program is not None:
             return self._program
         order: list[Node] = []
@@ -397,6 +415,7 @@ class Node:
         evaluate each child through :meth:`~omnirender.core.engine.Engine.eval_node`.
         Cached while this node's own list is unchanged.
         """
+        _EPOCH[0] += 1
         if self._local_version != self._own or self._local is None:
             program: list[tuple[int, Any]] = [(ENTER, self)]
             compile_components(self._items, program, _Where(self), inline=False)
@@ -407,9 +426,13 @@ class Node:
 
     def _compile_node(self, program: list[tuple[int, Any]]) -> None:
         if self._groups:
-            program.append((NODE, self))
+            program.append((NODE, self))  # the mask is tested when the program runs
+            return
+        own = self.program()
+        if len(own) > _INLINE_LIMIT:
+            program.append((NODE, self))  # a big subtree stays one op: deep chains cost linear memory
         else:
-            program.extend(self.program())
+            program.extend(own)
 
     def declarations(self, mask_fn: Any = None) -> Declarations:
         """What the graph below declares: every light and the first camera and background, with world matrices.
@@ -419,6 +442,7 @@ class Node:
         placements in its own coordinates per version and mask, so after a
         change only the nodes on the changed path are walked again.
         """
+        _EPOCH[0] += 1
         cached = self._pre
         if cached is not None and cached[0] == self._version and cached[1] is mask_fn:
             return cached[2]
@@ -532,15 +556,24 @@ class _Where:
         return str(self)
 
 
-def _touch_ancestors(start: list[Node]) -> None:
-    seen: set[int] = set()
+#: Child programs of at most this many ops are inlined into their parent's; larger ones stay one NODE op.
+#: Inlining copies references, so a wide node of small children is one flat loop, while a chain of
+#: 100,000 nested nodes does not hold 100,000 ever longer copies of its tail (quadratic memory).
+_INLINE_LIMIT = 64
+
+#: Observation epoch: bumped whenever a version or structure counter is read (see Node.touch).
+_EPOCH = [0]
+
+
+def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> None:
+    """Bump ``counter`` of every ancestor from ``start`` up, stopping at nodes already stamped in ``epoch``."""
     stack = list(start)
     while stack:
         node = stack.pop()
-        if id(node) in seen:
+        if getattr(node, stamp) == epoch:
             continue
-        seen.add(id(node))
-        node._version += 1
+        setattr(node, counter, getattr(node, counter) + 1)
+        setattr(node, stamp, epoch)
         stack.extend(node._parents)
 
 

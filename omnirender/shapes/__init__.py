@@ -7,6 +7,7 @@ PointSets, so any engine can show any shape; painters are optional speed-ups.
 
 from . import simplifiers  # noqa: E402,F401  (registers the default simplifiers)
 from .base import DeclaredShape
+from .csg import CSG
 from .grids import Heightfield, TransferFunction, Volume
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
 from .meshfile import MeshFile
@@ -32,5 +33,8 @@ __all__ = [
     "TransferFunction",
     "Text",
     "MeshFile",
+    "CSG",
     "DeclaredShape",
 ]
+
+from . import csg_simplifier  # noqa: E402,F401  (registers the CSG's mesh-boolean simplifier)

@@ -7,6 +7,7 @@ fallback for everything else.  Importing this package also adds the
 ``triangles`` figure to ``om.statistics``.
 """
 
+from . import csg_picking  # noqa: F401  (registers the CSG intersector)
 from .base import AnalysisEngine, evaluate_in_place, world_matrix_of
 from .bounds import BoundsEngine, BoundsHandler, analytic_bounds, bounds
 from .collision import CollisionEngine, bodies_collide, collisions

@@ -33,6 +33,8 @@ def _examples():
         om.PickId(42),
         om.PickId("door"),
         om.Collidable(False),
+        om.Shadowing(cast=False, receive=True),
+        om.Mirror(0.4, plane=((0, 0, 2), 0.5)),
     ]
 
 

@@ -131,7 +131,7 @@ def test_eval_node_and_run_technique_are_the_hooks_engines_override():
 
         def eval_node(self, node):
             self.calls.append(f"node {node.name}")
-            super().eval_node(node)
+            return super().eval_node(node)
 
         def run_technique(self, technique, program):
             self.calls.append(f"technique {technique.passes}")

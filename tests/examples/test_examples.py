@@ -154,6 +154,16 @@ def test_06_outline_technique(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.gl
+def test_07_techniques(tmp_path):
+    out = run_example("07_techniques.py", tmp_path)
+    figure = check_image(tmp_path / "07-techniques.png")
+    assert "07-techniques.png" in out and figure.shape[:2] == (540, 720)  # 2x2 panels of 360x270
+    wire = figure[:270, 360:]
+    assert (wire.max(axis=2) < 100).mean() < 0.1 and (wire.min(axis=2) > 240).mean() > 0.8  # lines on white
+
+
+@pytest.mark.slow
+@pytest.mark.gl
 @pytest.mark.povray
 def test_11_turntable(tmp_path):
     args = ("--seconds", "1", "--fps", "2", "--size", "96x72")

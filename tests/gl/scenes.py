@@ -219,3 +219,46 @@ SCENES: dict[str, Callable[[], om.Node]] = {
     "pbr": pbr,
     "flat_and_highlight": flat_and_highlight,
 }
+
+
+# -- issue 10: the VRS techniques ------------------------------------------------------------
+def technique_scene(*techniques: om.Component, mirror: bool = False) -> om.Node:
+    """The stage with a ball and a ring after ``techniques`` (in one node), the floor a mirror if asked."""
+    s = stage()
+    if mirror:
+        floor = s["/floor"]
+        floor.insert(1, om.Mirror(0.6))
+    body = s.add(om.Node("body", list(techniques)))
+    body.add(om.Node("ball", [om.Material(diffuse=(0.95, 0.45, 0.3), specular=(0.6, 0.6, 0.6), shininess=40),
+                              om.Sphere(center=(-0.5, -0.35, 0.2), radius=0.6)]))  # fmt: skip
+    ring = [om.Translation(0.7, -0.4, -0.3), om.Rotation(60, (1, 0, 0)), om.Material(diffuse=(0.3, 0.5, 0.95))]
+    body.add(om.Node("ring", [*ring, om.Torus(major_radius=0.45, minor_radius=0.15)]))
+    return s
+
+
+def csg() -> om.Node:
+    s = stage()
+    solid = om.CSG("difference", om.Sphere(radius=0.8), om.Box(size=0.9, center=(0.45, 0.45, 0.45)))
+    s.add(om.Node("solid", [om.Material(diffuse=(0.9, 0.7, 0.3)), om.Translation(0, -0.2, 0), solid]))
+    return s
+
+
+def _lobe() -> om.Texture:
+    return om.Texture(om.gl.PhongHighlight.lobe(30))
+
+
+SCENES.update(
+    {
+        "technique_shadow_volumes": lambda: om.Node("root", [om.gl.ShadowVolumes(), technique_scene()]),
+        "technique_mirror": lambda: technique_scene(mirror=True),
+        "technique_silhouette": lambda: technique_scene(om.gl.SurfaceStyle("silhouette", width=2)),
+        "technique_haloed": lambda: technique_scene(om.gl.SurfaceStyle("haloed", width=1, halo=2), om.Tessellation(1)),
+        "technique_hidden_line": lambda: technique_scene(
+            om.gl.SurfaceStyle("hidden-line", width=1), om.Tessellation(1)
+        ),
+        "technique_phong_highlight": lambda: technique_scene(om.gl.PhongHighlight(_lobe())),
+        "technique_supersample": lambda: technique_scene(om.gl.Supersample(4)),
+        "technique_shadow_maps_soft": lambda: om.Node("root", [om.gl.ShadowMaps(softness=3), technique_scene()]),
+        "shape_csg": csg,
+    }
+)

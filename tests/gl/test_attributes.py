@@ -22,7 +22,7 @@ def engine():
 def base() -> om.Node:
     s = om.Node("scene")
     s.add(om.Camera.look_at(eye=(0, 0, 5), fov=40))
-    s.add(om.DirectionalLight(direction=(0, 0, -1)))
+    s.add(om.DirectionalLight(direction=(0, 0, -1), casts_shadows=False))  # depth and state tests, not shadows
     return s
 
 

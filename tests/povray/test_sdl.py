@@ -117,7 +117,7 @@ def test_light_conversions():
 
 def test_a_scene_without_lights_gets_the_gl_headlight():
     text, _ = scene_sdl(_scene(om.Sphere()))
-    m = re.search(r"light_source \{ <([^>]*)> rgb <1,1,1> parallel point_at <0,0,0> \} // headlight", text)
+    m = re.search(r"light_source \{ <([^>]*)> rgb <1,1,1> parallel point_at <0,0,0> shadowless \} // headlight", text)
     towards = np.array([float(v) for v in m.group(1).split(",")])
     assert np.allclose(
         towards / np.linalg.norm(towards), np.array([-0.25, 0.35, 1.0]) / np.linalg.norm([-0.25, 0.35, 1])

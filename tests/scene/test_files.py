@@ -26,6 +26,9 @@ def _samples(tmp: Path) -> dict[str, list]:
     tri = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     return {
         "Sphere": [om.Sphere(center=(1, 2, 3), radius=0.5)],
+        "CSG": [om.CSG("difference", om.Sphere(radius=1.5), om.Box(size=1, center=(1, 0, 0)))],
+        "Shadowing": [om.Shadowing(cast=False, receive=True)],
+        "Mirror": [om.Mirror(0.4, plane=((0, 0, 2), 0.5))],
         "Box": [om.Box(size=(1, 2, 3), center=(0, 1, 0))],
         "Cylinder": [om.Cylinder(radius=0.3, height=1.5)],
         "Cone": [om.Cone(radius=0.4, height=1.0)],

@@ -19,6 +19,7 @@ SAMPLES = {
     "Emitter": lambda m: m.Emitter({"type": "constant", "radiance": {"type": "rgb", "value": 0.5}}),
     "Integrator": lambda m: m.Integrator({"type": "path", "max_depth": 4}),
     "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
+    "PhongHighlight": lambda m: m.PhongHighlight(om.Texture(m.PhongHighlight.lobe(20, size=8)), strength=0.5),
 }
 #: Raw differs by engine: each takes its own language
 RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
@@ -34,6 +35,8 @@ def _components():
 
 
 def _same(a, b):
+    if isinstance(a, RenderingComponent):  # a component parameter (a technique's texture): equal parameters
+        return type(a) is type(b) and _same(a.parameters(), b.parameters())
     if isinstance(a, dict):
         return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
     if isinstance(a, (list, tuple, np.ndarray)):

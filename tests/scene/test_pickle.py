@@ -75,8 +75,10 @@ def test_unpickled_components_are_live():
     body = again["/scene/body"]
     before = (again.version, body.version)
     body.components[0].eye = (1, 2, 3)
+    assert again.version > before[0] and body.version > before[1]
+    before = (again.version, body.version)
     body.components[1].radius = 2.0
-    assert again.version == before[0] + 2 and body.version == before[1] + 2
+    assert again.version > before[0] and body.version > before[1]
     assert body.components[0].eye == (1, 2, 3)
     with pytest.raises(ValueError, match="must be > 0"):  # validation is back too
         body.components[1].radius = -1
