@@ -21,7 +21,9 @@ HEAD = "format: omnirender-scene\nversion: 1\n"
 
 
 def doc(*contents, **extra) -> str:
-    return json.dumps({"format": "omnirender-scene", "version": 1, **extra, "root": {"node": "s", "contents": list(contents)}})
+    return json.dumps(
+        {"format": "omnirender-scene", "version": 1, **extra, "root": {"node": "s", "contents": list(contents)}}
+    )
 
 
 # -- limits ----------------------------------------------------------------------------------------
@@ -30,7 +32,9 @@ def test_a_billion_laughs_is_refused_at_once_with_its_path():
     for level, prev in zip("bcdefghi", "abcdefgh", strict=True):
         text += f"  {level}: &{level} [{','.join(['*' + prev] * 10)}]\n"
     started = time.perf_counter()
-    with pytest.raises(SceneFileError, match=r"bomb\.f\[\d\]: YAML aliases expand this document by more than 1,000,000"):
+    with pytest.raises(
+        SceneFileError, match=r"bomb\.f\[\d\]: YAML aliases expand this document by more than 1,000,000"
+    ):
         files.loads(text, "yaml")
     assert time.perf_counter() - started < 5  # refused while parsing, not after expanding 10^9 nodes
 
@@ -44,7 +48,9 @@ def test_aliases_within_the_limit_are_data_and_the_limit_is_a_parameter():
 
 
 def test_a_document_that_contains_itself_is_refused():
-    with pytest.raises(SceneFileError, match=r"root\.contents\[0\]: the alias \*r refers to a collection that contains it"):
+    with pytest.raises(
+        SceneFileError, match=r"root\.contents\[0\]: the alias \*r refers to a collection that contains it"
+    ):
         files.loads(HEAD + "root: &r {node: s, contents: [*r]}\n", "yaml")
 
 
@@ -70,10 +76,16 @@ def test_nesting_inside_a_value_is_refused_by_the_reader_with_its_path():
     "text, fmt, where",
     [
         ('{"format": "omnirender-scene", "version": 1, "version": 1, "root": {"node": "s"}}', "json", "version"),
-        (doc({"type": "Sphere", "radius": 1}).replace('"radius": 1', '"radius": 1, "radius": 3'), "json",
-         r"root\.contents\[0\]\.radius"),  # fmt: skip
-        (HEAD + "root:\n  node: s\n  contents:\n  - type: Sphere\n    radius: 1\n    radius: 2\n", "yaml",
-         r"root\.contents\[0\]\.radius"),  # fmt: skip
+        (
+            doc({"type": "Sphere", "radius": 1}).replace('"radius": 1', '"radius": 1, "radius": 3'),
+            "json",
+            r"root\.contents\[0\]\.radius",
+        ),  # fmt: skip
+        (
+            HEAD + "root:\n  node: s\n  contents:\n  - type: Sphere\n    radius: 1\n    radius: 2\n",
+            "yaml",
+            r"root\.contents\[0\]\.radius",
+        ),  # fmt: skip
     ],
 )
 def test_duplicate_keys_are_refused(text, fmt, where):
