@@ -11,17 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_cli import run
 
 import omnirender as om
-from omnirender.cli import EXIT_CODES, main
+from omnirender.cli import EXIT_CODES
 
 OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.5\nf 1 2 3\nf 2 4 3\n"
-
-
-def run(capsys, *args: str) -> tuple[int, str, str]:
-    code = main(list(args))
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_the_exit_codes_are_documented_in_help(capsys):
