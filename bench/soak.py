@@ -104,7 +104,8 @@ def persistent(frames: int) -> None:
     def frame():
         mesh = om.TriangleSet(rng.normal(size=(300, 3)).astype(np.float32))
         texture = om.Texture(rng.integers(0, 255, size=(32, 32, 4), dtype=np.uint8))
-        engine.render(om.Node("s", [om.Camera.look_at(eye=(0, 0, 8)), texture, mesh]), read_depth=False)
+        lit = [om.Camera.look_at(eye=(0, 0, 8)), om.PointLight(position=(3, 3, 6)), texture, mesh]
+        engine.render(om.Node("s", lit), read_depth=False)
     for _ in range(100):
         frame()
     first = rss_mb(); t = time.perf_counter()

@@ -455,6 +455,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         if getattr(self, "_released", False):
             return
         with self.current():
+            # Mesa's llvmpipe leaks the queued work of a texture deleted before the work ran (0.7 MB for a
+            # shadow atlas, every one-shot render): finish the queue before anything is freed
+            self.ctx.finish()
             self._release()
         if self._own_context:
             self.ctx.release()
