@@ -139,7 +139,6 @@ def _json_depth_path(text: str, limit: int) -> str:
 
 
 # -- YAML ------------------------------------------------------------------------------
-_PLAIN_TYPES = (str, int, float, bool, type(None), list, dict)
 
 
 def parse_yaml(text: str, limits: ParseLimits = LIMITS) -> Any:
@@ -359,8 +358,3 @@ class _LimitedComposer:
             if done is not None:
                 root = done
                 return root
-
-
-def check_plain(value: Any) -> bool:
-    """Whether ``value`` is one of JSON's types (the reader refuses the others)."""
-    return isinstance(value, _PLAIN_TYPES)
