@@ -19,6 +19,8 @@ SCRIPTS = {
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
+    "gltf_load.py": [],
+    "compositing.py": [],
     "soak.py": [],
 }
 QUICK = {
@@ -27,6 +29,8 @@ QUICK = {
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
+    "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
+    "compositing.py": ["--frames", "2"],
     "soak.py": ["--quick"],
 }
 

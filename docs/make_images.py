@@ -1,6 +1,6 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py [demo] [agreement] [gallery] [examples]
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -106,6 +106,37 @@ def agreement_images() -> None:
     print("wrote", HERE / "engines_side_by_side.png")
 
 
+def material_images() -> None:
+    """The material chart (omnirender.chart) in every engine, with the CIEDE2000 medians (material_chart.png)."""
+    import itertools
+
+    from omnirender.chart import CHART_PATCHES, CHART_SIZE, material_chart, patch_means
+    from omnirender.colorimetry import cielab, delta_e2000
+
+    names = {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3", "radiance": "Radiance"}
+    tiles, labs = [], {}
+    for name, (ok, _) in om.engines().items():
+        if not ok or name not in names:
+            continue
+        options = {"mitsuba": {"spp": 128}}.get(name, {})
+        img = om.render(material_chart(), engine=name, size=CHART_SIZE, **options)
+        labs[name] = cielab(patch_means(img))
+        tiles.append((name, Image.fromarray(img.rgb, "RGB")))
+    w, h = CHART_SIZE
+    sheet = Image.new("RGB", (w * 2 + 6, (h + 24) * ((len(tiles) + 1) // 2)), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for i, (name, tile) in enumerate(tiles):
+        x, y = (i % 2) * (w + 6), (i // 2) * (h + 24)
+        sheet.paste(tile, (x, y + 24))
+        draw.text((x + 6, y + 6), names[name], fill=(0, 0, 0))
+    sheet.save(HERE / "material_chart.png")
+    print("wrote", HERE / "material_chart.png")
+    for a, b in itertools.combinations(labs, 2):
+        d = delta_e2000(labs[a], labs[b])
+        worst = int(d.argmax())
+        print(f"{a} vs {b}: median dE2000 {np.median(d):.2f}, worst {CHART_PATCHES[worst]!r} {d[worst]:.1f}")
+
+
 def example_images() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for script in sorted((ROOT / "examples").glob("0*.py")):
@@ -119,7 +150,25 @@ def example_images() -> None:
         print("wrote", HERE / "example_11-turntable.gif")
 
 
-SECTIONS = {"demo": demo_images, "agreement": agreement_images, "gallery": gl_gallery, "examples": example_images}
+def compositing_images() -> None:
+    """The renderer-tree examples (13 and 14)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        for script in ("13_renderer_tree.py", "14_user_renderer.py"):
+            subprocess.run([sys.executable, str(ROOT / "examples" / script), tmp], check=True, cwd=ROOT,
+                           stdout=subprocess.DEVNULL)  # fmt: skip
+        for png in sorted(Path(tmp).glob("1[34]-*.png")):
+            shutil.copy(png, HERE / f"example_{png.stem}.png")
+            print("wrote", HERE / f"example_{png.stem}.png")
+
+
+SECTIONS = {
+    "demo": demo_images,
+    "agreement": agreement_images,
+    "materials": material_images,
+    "gallery": gl_gallery,
+    "examples": example_images,
+    "compositing": compositing_images,
+}
 
 if __name__ == "__main__":
     HERE.mkdir(exist_ok=True)

@@ -38,6 +38,7 @@ _LAZY_MODULES = {
     "rib",
     "cli",
     "animation",
+    "compositing",
 }
 
 # Public functions and classes that live in lazily imported modules.

@@ -184,7 +184,9 @@ def render(
     """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
 
     ``scene`` is an ``om.Node`` (or a list of components); its first camera
-    is used.  ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"``, ``"radiance"`` or any name
+    is used.  Objects with ``as_scene(engine, size)`` (renderer trees of
+    ``om.compositing``) are rendered as the scene graph that method returns.
+    ``engine`` is ``"gl"``, ``"povray"``, ``"mitsuba"``, ``"radiance"`` or any name
     given to :func:`register_engine`; ``om.engines()`` tells which work here
     and why not the others.  ``size`` is ``(width, height)`` in pixels.
     ``mask`` is a group-mask expression (``"!debug & (left | shared)"``):
@@ -207,11 +209,45 @@ def render(
     entry = _engines.get(engine)
     if entry is None:
         raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
-    _check_scene(f"om.render(engine={engine!r})", scene)
     size = _check_size(size)
+    as_scene = getattr(scene, "as_scene", None)
+    if callable(as_scene):  # not a scene graph but drawn by one (a renderer tree)
+        scene = as_scene(engine, size)
+    _check_scene(f"om.render(engine={engine!r})", scene)
     if mask is not None:
         options["mask"] = mask
-    return _resolve(entry.render)(scene, size=size, **options)
+    # the GL engine fits the same camera to what it compiled; the others get it in a stand-in root node
+    viewed = scene if engine == "gl" else with_fitted_camera(scene, size, mask)
+    try:
+        return _resolve(entry.render)(viewed, size=size, **options)
+    finally:
+        if viewed is not scene:
+            viewed.clear()  # the stand-in lets go of the scene's nodes and components again
+
+
+def with_fitted_camera(scene: Any, size: tuple[int, int], mask: str | None = None) -> Any:
+    """``scene``, or, when it has no camera, a node holding ``Camera.fitted`` to its bounds and the scene.
+
+    Every engine then shows a scene without a camera the way the GL engine
+    does (the GL engine fits the same camera itself).
+    """
+    from .core.camera import Camera
+    from .core.component import RenderingComponent
+    from .core.mask import compile_mask
+    from .scene.node import Node
+    from .techniques.bounds import bounds
+
+    if isinstance(scene, Node):
+        node = scene
+    else:
+        node = Node("scene", [scene] if isinstance(scene, RenderingComponent) else list(scene))
+    if node.declarations(None if mask is None else compile_mask(mask)).camera is not None:
+        return scene
+    box = bounds(node, mask=mask)
+    if box is None:
+        return scene
+    # the same name and items (child nodes keep their first parent, so their paths do not change)
+    return Node(node.name, [Camera.fitted(box, size), *node.items])
 
 
 def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> Path:

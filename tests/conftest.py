@@ -1,7 +1,8 @@
 """Shared test configuration.
 
 Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba``,
-``radiance``, ``window`` or ``chromium`` (web pages in headless Chromium).  When
+``radiance``, ``window``, ``chromium`` (web pages in headless Chromium) or
+``gltf_validator`` (the Khronos validator from npm).  When
 the engine is missing they are skipped, except when
 ``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
 can never pass by skipping.
@@ -71,7 +72,17 @@ def chromium_program() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+def _validator() -> tuple[bool, str]:
+    from gltf_files import gltf_validator
+
+    return (
+        gltf_validator() is not None,
+        "the glTF validator is not installed (npm install --prefix tools/gltf-validator)",
+    )
+
+
 _CHECKS = {
+    "gltf_validator": _validator,
     "gl": _gl,
     "povray": _povray,
     "mitsuba": _mitsuba,

@@ -20,10 +20,10 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-import os
 
 import numpy as np
 import pytest
+from engines import marks, require
 
 import omnirender as om
 
@@ -157,12 +157,6 @@ def analytic_mask(size: tuple[int, int] = SIZE, view: str = "perspective") -> np
 
 
 # -- rendering ------------------------------------------------------------------
-def _require(name: str) -> None:
-    ok, why = om.engines().get(name, (False, "not registered"))
-    if not ok:
-        if os.environ.get("OMNIRENDER_REQUIRE_ENGINES") == "1":
-            pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
-        pytest.skip(f"engine {name!r} unavailable: {why}")
 
 
 @functools.cache
@@ -180,14 +174,10 @@ def agreement(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.mean(a == b))
 
 
-def _marks(*names: str) -> list:
-    return [getattr(pytest.mark, n) for n in names]
-
-
 @pytest.mark.parametrize("view", VIEWS)
-@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks(n)) for n in ENGINES])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=marks(n)) for n in ENGINES])
 def test_engine_matches_the_analytic_mask(name, view):
-    _require(name)
+    require(name)
     img = rendered(name, view)
     ref = reference(view)
     assert img.size == SIZE
@@ -198,11 +188,11 @@ def test_engine_matches_the_analytic_mask(name, view):
 
 @pytest.mark.parametrize("view", VIEWS)
 @pytest.mark.parametrize(
-    "a,b", [pytest.param(a, b, marks=_marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
+    "a,b", [pytest.param(a, b, marks=marks(a, b), id=f"{a}-{b}") for a, b in itertools.combinations(ENGINES, 2)]
 )
 def test_engines_agree_pairwise(a, b, view):
-    _require(a)
-    _require(b)
+    require(a)
+    require(b)
     score = agreement(rendered(a, view).mask, rendered(b, view).mask)
     assert score >= THRESHOLD, f"{a} and {b} masks ({view}) agree on only {score:.2%} of pixels"
 
@@ -239,9 +229,9 @@ def patch_colours(name: str) -> np.ndarray:
     return np.array([img.rgb[35:45, 40 * i + 15 : 40 * i + 25].reshape(-1, 3).mean(0) for i in range(6)])
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=_marks("gl", n)) for n in ENGINES if n != "gl"])
+@pytest.mark.parametrize("name", [pytest.param(n, marks=marks("gl", n)) for n in ENGINES if n != "gl"])
 def test_lit_colours_agree_with_gl(name):
-    _require("gl")
-    _require(name)
+    require("gl")
+    require(name)
     delta = np.linalg.norm(cielab(patch_colours(name)) - cielab(patch_colours("gl")), axis=1)
     assert delta.max() < MAX_DELTA_E, f"{name}: CIELAB distances to GL {np.round(delta, 2)}"

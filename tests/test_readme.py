@@ -66,3 +66,18 @@ def test_techniques_example_runs(tmp_path, monkeypatch):
     exec(compile(_block("## Techniques: shadows, mirrors, line styles, CSG"), "README.md", "exec"), {})
     for name in ("techniques-gl.png", "techniques-pov.png", "techniques-volumes.png"):
         assert (tmp_path / name).stat().st_size > 1000, name
+
+
+def test_renderer_tree_example_runs(tmp_path, monkeypatch, capsys):
+    import numpy as np
+    from PIL import Image
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("## Renderer trees: meshes, volumes and light fields together"), "README.md", "exec"), {})
+    assert "ShadowGroup follows the four integration rules" in capsys.readouterr().out
+    for name in ("tree.png", "statue.png", "graph.png"):
+        rgb = np.asarray(Image.open(tmp_path / name).convert("RGB")).astype(int)
+        assert rgb.std() > 10, name
+    statue = np.asarray(Image.open(tmp_path / "statue.png").convert("RGB")).astype(int)
+    drawn = statue.max(axis=2) > 100
+    assert drawn.sum() > 2000 and np.all(statue[drawn].max(axis=1) - statue[drawn].min(axis=1) <= 2)  # grey

@@ -10,11 +10,22 @@ on a node's translation, rotation or scale becomes a :class:`Keyframes` track
 on the matching component (STEP, LINEAR with quaternion slerp, CUBICSPLINE
 with the file's tangents), collected in an ``om.Animation`` in the root node.
 
+Materials keep everything the metallic-roughness model has: base colour,
+metallic-roughness, normal (with its scale), occlusion (with its strength) and
+emissive textures, each with its texture coordinate set (``TEXCOORD_0``/``_1``)
+and ``KHR_texture_transform``; ``alphaMode``/``alphaCutoff``, ``doubleSided``
+and ``KHR_materials_emissive_strength``.  Vertex colours (``COLOR_0``) and
+tangents are kept.  Sparse accessors, ``KHR_mesh_quantization`` and
+``KHR_draco_mesh_compression`` (through DracoPy) are read.  Cameras become
+``om.Camera``; ``KHR_lights_punctual`` lights become lights whose OpenGL
+brightness is the physical one (:func:`light_from_gltf`).  An extension the
+file *requires* that is not supported raises :class:`GLTFImportError` naming
+it; an unsupported optional one warns once.
+
 Not imported (a warning says so): skins (meshes stay in their bind pose),
-morph targets and their ``weights`` channels, sparse accessors, and
-extensions other than the punctual lights.  Colours are converted from glTF's
-linear values to the display values omnirender's attributes hold; texture
-coordinates get omnirender's convention (v = 0 at the image's bottom row).
+morph targets and their ``weights`` channels.  Colours are converted from
+glTF's linear values to the display values omnirender's attributes hold;
+texture coordinates get omnirender's convention (v = 0 at the image's bottom row).
 """
 
 from __future__ import annotations
@@ -39,7 +50,19 @@ from ..shapes import LineSet, PointSet, TriangleSet
 from .animation import Animation
 from .tracks import Keyframes
 
-__all__ = ["load_gltf", "GLTFImportError"]
+__all__ = ["load_gltf", "GLTFImportError", "flatten_gltf", "SUPPORTED_EXTENSIONS", "light_from_gltf"]
+
+#: glTF extensions the importer reads.
+SUPPORTED_EXTENSIONS = frozenset(
+    {
+        "KHR_lights_punctual",
+        "KHR_texture_transform",
+        "KHR_materials_emissive_strength",
+        "KHR_mesh_quantization",
+        "KHR_draco_mesh_compression",
+    }
+)
+_ALPHA_MODES = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
 
 _COMPONENTS = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
@@ -72,8 +95,10 @@ class _Reader:
                 raise self.error(f"neither a GLB file nor glTF JSON ({exc})") from None
         if not isinstance(self.doc, dict) or str(self.doc.get("asset", {}).get("version", "")).split(".")[0] != "2":
             raise self.error("not a glTF 2.0 document (asset.version must be 2.x)")
+        self._check_extensions()
         self.buffers: dict[int, bytes] = {}
-        self.textures: dict[int, Texture] = {}
+        self.textures: dict[Any, Texture] = {}
+        self.images: dict[int, np.ndarray] = {}
         self.materials: dict[int, list[Any]] = {}
         self.primitives: dict[tuple[int, int], Node | None] = {}
         #: glTF node index -> its Translation / Rotation / Scaling components by channel path
@@ -81,6 +106,21 @@ class _Reader:
 
     def error(self, message: str) -> GLTFImportError:
         return GLTFImportError(f"load_gltf {str(self.path)!r}: {message}")
+
+    def _check_extensions(self) -> None:
+        required = [e for e in self.doc.get("extensionsRequired", []) if e not in SUPPORTED_EXTENSIONS]
+        if required:
+            raise self.error(
+                f"the file requires the extension(s) {', '.join(map(str, required))}, which omnirender does not "
+                f"support (supported: {', '.join(sorted(SUPPORTED_EXTENSIONS))}); convert the file without them"
+            )
+        unknown = [e for e in self.doc.get("extensionsUsed", []) if e not in SUPPORTED_EXTENSIONS]
+        if unknown:
+            warnings.warn(
+                f"load_gltf {self.path.name}: optional extension(s) {', '.join(map(str, unknown))} are not "
+                "supported and were ignored",
+                stacklevel=4,
+            )
 
     def _glb(self, data: bytes) -> dict[str, Any]:
         if len(data) < 20:
@@ -155,40 +195,54 @@ class _Reader:
             raise self.error(f"bufferViews[{index}] lies outside its buffer")
         return data[start : start + length], length, view.get("byteStride")
 
-    def accessor(self, index: int) -> np.ndarray:
-        acc = self.item("accessors", index)
-        where = f"accessors[{index}]"
-        if "sparse" in acc:
-            raise self.error(f"{where}: sparse accessors are not supported")
-        dtype = _COMPONENTS.get(acc.get("componentType"))
-        width = _WIDTH.get(acc.get("type"))
-        count = acc.get("count")
-        if dtype is None or width is None or not isinstance(count, int) or count < 0:
-            raise self.error(f"{where}: bad componentType, type or count")
+    def _elements(self, view: int, offset: int, dtype: Any, width: int, count: int, where: str) -> np.ndarray:
+        """``count`` elements of ``width`` components from a buffer view (strided rows copied once)."""
         item = np.dtype(dtype).itemsize * width
-        if "bufferView" not in acc:
-            return np.zeros((count, width), np.float32 if acc.get("normalized") else dtype)
-        data, length, stride = self.view(acc["bufferView"])
-        offset = int(acc.get("byteOffset", 0))
+        data, length, stride = self.view(view)
         stride = int(stride or item)
         if count and (offset < 0 or stride < item or offset + stride * (count - 1) + item > length):
             raise self.error(f"{where}: {count} elements do not fit in its buffer view")
         raw = np.frombuffer(data, np.uint8, count=stride * (count - 1) + item if count else 0, offset=offset)
         rows = np.lib.stride_tricks.as_strided(raw, (count, item), (stride, 1)) if count else raw.reshape(0, item)
-        out = np.ascontiguousarray(rows).view(np.dtype(dtype).newbyteorder("<")).reshape(count, width)
+        return np.ascontiguousarray(rows).view(np.dtype(dtype).newbyteorder("<")).reshape(count, width)
+
+    def accessor(self, index: int) -> np.ndarray:
+        acc = self.item("accessors", index)
+        where = f"accessors[{index}]"
+        dtype = _COMPONENTS.get(acc.get("componentType"))
+        width = _WIDTH.get(acc.get("type"))
+        count = acc.get("count")
+        if dtype is None or width is None or not isinstance(count, int) or count < 0:
+            raise self.error(f"{where}: bad componentType, type or count")
+        if "bufferView" in acc:
+            out = self._elements(acc["bufferView"], int(acc.get("byteOffset", 0)), dtype, width, count, where)
+        else:
+            out = np.zeros((count, width), dtype)
+        sparse = acc.get("sparse")
+        if sparse is not None:  # replace the listed elements (a morph target's or an edited copy's few changes)
+            n = int(sparse.get("count", 0))
+            idx_spec, val_spec = sparse.get("indices", {}), sparse.get("values", {})
+            idx_type = _COMPONENTS.get(idx_spec.get("componentType"))
+            if idx_type is None or n < 0 or "bufferView" not in idx_spec or "bufferView" not in val_spec:
+                raise self.error(f"{where}: malformed sparse accessor")
+            rows = self._elements(
+                idx_spec["bufferView"], int(idx_spec.get("byteOffset", 0)), idx_type, 1, n, where
+            ).reshape(-1)
+            if n and (rows.min() < 0 or rows.max() >= count):
+                raise self.error(f"{where}: a sparse index is out of range 0..{count - 1}")
+            values = self._elements(val_spec["bufferView"], int(val_spec.get("byteOffset", 0)), dtype, width, n, where)
+            out = np.array(out)
+            out[rows.astype(np.int64)] = values
         if acc.get("normalized") and np.dtype(dtype).kind in "iu":
             info = np.iinfo(dtype)
             out = np.maximum(out.astype(np.float64) / info.max, -1.0)
         return out
 
     # -- scene --------------------------------------------------------------------
-    def texture(self, index: int) -> Texture | None:
-        if index in self.textures:
-            return self.textures[index]
-        tex = self.item("textures", index)
-        source = tex.get("source")
-        if source is None:
-            return None
+    def image(self, source: int) -> np.ndarray:
+        found = self.images.get(source)
+        if found is not None:
+            return found
         image = self.item("images", source)
         where = f"images[{source}]"
         if "bufferView" in image:
@@ -204,11 +258,45 @@ class _Reader:
                 pixels = np.asarray(img.convert("RGBA"), np.uint8)
         except OSError as exc:
             raise self.error(f"{where} is not a readable image: {exc}") from None
+        pixels.setflags(write=False)
+        self.images[source] = pixels
+        return pixels
+
+    def texture(self, index: int, info: dict[str, Any] | None = None) -> Texture | None:
+        """The texture ``index`` as a slot's ``textureInfo`` uses it (its UV set and texture transform)."""
+        info = info or {}
+        transform = info.get("extensions", {}).get("KHR_texture_transform", {})
+        uv_set = int(transform.get("texCoord", info.get("texCoord", 0)))
+        key = (index, uv_set, json.dumps(transform, sort_keys=True))
+        if key in self.textures:
+            return self.textures[key]
+        tex = self.item("textures", index)
+        source = tex.get("source")
+        if source is None:
+            return None
+        pixels = self.image(source)
         sampler = self.item("samplers", tex["sampler"]) if "sampler" in tex else {}
         wrap = _WRAP.get(sampler.get("wrapS", 10497), "repeat")
         nearest = sampler.get("magFilter") == 9728
-        result = self.textures[index] = Texture(pixels, wrap=wrap, filter="nearest" if nearest else "linear")
+        if uv_set > 1:
+            warnings.warn(f"load_gltf {self.path.name}: TEXCOORD_{uv_set} is not supported; set 0 used", stacklevel=4)
+            uv_set = 0
+        offset, scale, rotation = _texture_transform(transform)
+        result = self.textures[key] = Texture(
+            pixels,
+            wrap=wrap,
+            filter="nearest" if nearest else "linear",
+            uv_set=uv_set,
+            offset=offset,
+            scale=scale,
+            rotation=rotation,
+        )
         return result
+
+    def _slot(self, info: Any, textured: bool) -> Texture | None:
+        if not textured or not isinstance(info, dict) or "index" not in info:
+            return None
+        return self.texture(info["index"], info)
 
     def material(self, index: int | None, textured: bool) -> list[Any]:
         if index is None:
@@ -219,21 +307,67 @@ class _Reader:
         mat = self.item("materials", index)
         pbr = mat.get("pbrMetallicRoughness", {})
         base = list(pbr.get("baseColorFactor", [1.0, 1.0, 1.0, 1.0]))
-        out: list[Any] = [
-            PBRMaterial(
+        extensions = mat.get("extensions", {})
+        strength = float(extensions.get("KHR_materials_emissive_strength", {}).get("emissiveStrength", 1.0))
+        emissive = [float(c) for c in mat.get("emissiveFactor", [0.0, 0.0, 0.0])]
+        peak = max(emissive) if max(emissive) > 1.0 else 1.0  # factors above 1 are kept in the strength
+        normal = mat.get("normalTexture")
+        occlusion = mat.get("occlusionTexture")
+        mode = _ALPHA_MODES.get(str(mat.get("alphaMode", "OPAQUE")))
+        if mode is None:
+            raise self.error(f"materials[{index}]: unknown alphaMode {mat.get('alphaMode')!r}")
+        try:
+            material = PBRMaterial(
                 base_color=_linear_to_srgb(base[:3]),
                 metallic=float(pbr.get("metallicFactor", 1.0)),
                 roughness=float(pbr.get("roughnessFactor", 1.0)),
-                emission=_linear_to_srgb(mat.get("emissiveFactor", [0.0, 0.0, 0.0])),
-                opacity=float(base[3]) if mat.get("alphaMode", "OPAQUE") != "OPAQUE" else 1.0,
+                emission=_linear_to_srgb([c / peak for c in emissive]),
+                opacity=float(base[3]),
+                base_color_texture=self._slot(pbr.get("baseColorTexture"), textured),
+                metallic_roughness_texture=self._slot(pbr.get("metallicRoughnessTexture"), textured),
+                normal_texture=self._slot(normal, textured),
+                normal_scale=float(normal.get("scale", 1.0)) if isinstance(normal, dict) else 1.0,
+                occlusion_texture=self._slot(occlusion, textured),
+                occlusion_strength=float(occlusion.get("strength", 1.0)) if isinstance(occlusion, dict) else 1.0,
+                emissive_texture=self._slot(mat.get("emissiveTexture"), textured),
+                emissive_strength=strength * peak,
+                alpha_mode=mode,
+                alpha_cutoff=float(mat.get("alphaCutoff", 0.5)),
+                double_sided=bool(mat.get("doubleSided", False)),
             )
-        ]
-        info = pbr.get("baseColorTexture")
-        if textured and isinstance(info, dict) and "index" in info:
-            tex = self.texture(info["index"])
-            if tex is not None:
-                out.append(tex)
+        except ValueError as exc:
+            raise self.error(f"materials[{index}]: {exc}") from None
+        out: list[Any] = [material]
         self.materials[key] = out
+        return out
+
+    def _draco(self, prim: dict[str, Any], where: str) -> dict[str, np.ndarray]:
+        """The attributes (and "indices") of a Draco-compressed primitive, decoded with DracoPy."""
+        spec = prim["extensions"]["KHR_draco_mesh_compression"]
+        try:
+            import DracoPy
+        except ImportError:
+            raise self.error(
+                f"{where} is Draco-compressed (KHR_draco_mesh_compression); reading it needs DracoPy "
+                "(pip install DracoPy)"
+            ) from None
+        try:
+            mesh = DracoPy.decode(self.view(spec["bufferView"])[0])
+        except Exception as exc:
+            raise self.error(f"{where}: the Draco data cannot be decoded: {exc}") from None
+        out: dict[str, np.ndarray] = {}
+        for name, uid in spec.get("attributes", {}).items():
+            attr = mesh.get_attribute_by_unique_id(int(uid))
+            if attr is None:
+                raise self.error(f"{where}: Draco attribute {name} (id {uid}) is missing")
+            data = np.asarray(attr["data"])
+            accessor = prim["attributes"].get(name)
+            if data.dtype.kind in "iu" and accessor is not None and self.item("accessors", accessor).get("normalized"):
+                data = data.astype(np.float64) / np.iinfo(data.dtype).max
+            out[name] = data.reshape(len(data), -1)
+        faces = getattr(mesh, "faces", None)
+        if faces is not None and len(faces):
+            out["indices"] = np.asarray(faces, np.int64).reshape(-1)
         return out
 
     def primitive(self, prim: dict[str, Any], where: str) -> Node | None:
@@ -242,31 +376,48 @@ class _Reader:
             return None
         if prim.get("targets"):
             warnings.warn(f"load_gltf {self.path.name}: {where} has morph targets; they are not imported", stacklevel=4)
-        vertices = self.accessor(attrs["POSITION"]).astype(np.float32)
+        draco = self._draco(prim, where) if "KHR_draco_mesh_compression" in prim.get("extensions", {}) else {}
+
+        def read(name: str) -> np.ndarray:
+            return draco[name] if name in draco else self.accessor(attrs[name])
+
+        vertices = read("POSITION").astype(np.float32)
         mode = prim.get("mode", 4)
-        indices = (
-            self.accessor(prim["indices"]).reshape(-1).astype(np.int64)
-            if "indices" in prim
-            else np.arange(len(vertices))
-        )
+        if "indices" in draco:
+            indices = draco["indices"]
+        elif "indices" in prim:
+            indices = self.accessor(prim["indices"]).reshape(-1).astype(np.int64)
+        else:
+            indices = np.arange(len(vertices))
         if len(indices) and (indices.min() < 0 or indices.max() >= len(vertices)):
             raise self.error(f"{where}: an index is out of range")
         colors = None
         if "COLOR_0" in attrs:
-            c = self.accessor(attrs["COLOR_0"]).astype(np.float64)
+            c = read("COLOR_0").astype(np.float64)
             rgb = np.array([_linear_to_srgb(row) for row in c[:, :3]]) if len(c) else c[:, :3]
             colors = rgb if c.shape[1] == 3 else np.concatenate([rgb, c[:, 3:4]], axis=1)
-        uv = None
+        uv = uv1 = tangents = None
         if "TEXCOORD_0" in attrs:
-            uv = self.accessor(attrs["TEXCOORD_0"]).astype(np.float32)
+            uv = read("TEXCOORD_0").astype(np.float32)
             uv[:, 1] = 1.0 - uv[:, 1]
+        if "TEXCOORD_1" in attrs and uv is not None:
+            uv1 = read("TEXCOORD_1").astype(np.float32)
+            uv1[:, 1] = 1.0 - uv1[:, 1]
+        if "TANGENT" in attrs and uv is not None:
+            tangents = read("TANGENT").astype(np.float32).copy()
+            tangents[:, 3] = np.where(tangents[:, 3] < 0.0, 1.0, -1.0)  # v is flipped: so is the bitangent
         items = self.material(prim.get("material"), uv is not None and mode in (4, 5, 6))
         if mode in (4, 5, 6):
             faces = _triangles(indices, mode)
             if len(faces) == 0:
                 return None
-            normals = self.accessor(attrs["NORMAL"]).astype(np.float32) if "NORMAL" in attrs else None
-            shape: Any = TriangleSet(vertices, faces, normals=normals, colors=colors, texcoords=uv)
+            normals = read("NORMAL").astype(np.float32) if "NORMAL" in attrs else None
+            if normals is not None:
+                length = np.linalg.norm(normals, axis=1, keepdims=True)
+                normals = np.where(length > 0.0, normals / np.maximum(length, 1e-30), normals)
+            shape: Any = TriangleSet(
+                vertices, faces, normals=normals, colors=colors, texcoords=uv, texcoords1=uv1, tangents=tangents
+            )
         elif mode in (1, 2, 3):
             shape = LineSet(vertices, indices=_segments(indices, mode), colors=colors)
         elif mode == 0:
@@ -347,16 +498,10 @@ class _Reader:
         lights = self.doc.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
         if not isinstance(index, int) or not 0 <= index < len(lights):
             raise self.error(f"KHR_lights_punctual light {index!r} does not exist")
-        spec = lights[index]
-        color = _linear_to_srgb(spec.get("color", (1.0, 1.0, 1.0)))
-        intensity = float(spec.get("intensity", 1.0))
-        kind = spec.get("type")
-        if kind == "directional":
-            return DirectionalLight(direction=(0, 0, -1), color=color, intensity=intensity)
-        if kind == "spot":
-            outer = math.degrees(float(spec.get("spot", {}).get("outerConeAngle", math.pi / 4)))
-            return SpotLight(position=(0, 0, 0), direction=(0, 0, -1), cutoff=outer, color=color, intensity=intensity)
-        return PointLight(position=(0, 0, 0), color=color, intensity=intensity)
+        try:
+            return light_from_gltf(lights[index])
+        except (ValueError, TypeError) as exc:
+            raise self.error(f"KHR_lights_punctual light {index}: {exc}") from None
 
     def animation(self, index: int) -> Animation:
         spec = self.item("animations", index)
@@ -399,6 +544,52 @@ class _Reader:
             except ValueError as exc:
                 raise self.error(f"{where}: {exc}") from None
         return Animation(tracks)
+
+
+def light_from_gltf(spec: dict[str, Any]) -> Any:
+    """A ``KHR_lights_punctual`` light as an omnirender light of the same physical brightness.
+
+    glTF's intensities are physical (candela for point and spot lights, lux
+    for directional ones) and taken as radiometric; omnirender's lights follow
+    OpenGL (:mod:`omnirender.attributes.photometry`): a diffuse surface shows
+    ``kd * c * att(d)``, a physical renderer ``kd * I / (pi d^2)``.  So a point
+    or spot light gets intensity ``I / pi`` with attenuation ``1 / d^2``, a
+    directional one ``E / pi``; the spot's inner cone angle becomes the
+    exponent whose ``cos^exponent`` is one half there.
+    """
+    color = _linear_to_srgb(spec.get("color", (1.0, 1.0, 1.0)))
+    intensity = float(spec.get("intensity", 1.0)) / math.pi
+    kind = spec.get("type")
+    if kind == "directional":
+        return DirectionalLight(direction=(0, 0, -1), color=color, intensity=intensity)
+    if kind == "spot":
+        cone = spec.get("spot", {})
+        outer = float(cone.get("outerConeAngle", math.pi / 4))
+        inner = min(float(cone.get("innerConeAngle", 0.0)), outer)
+        exponent = math.log(0.5) / math.log(math.cos(inner)) if 1e-6 < inner < math.pi / 2 else 0.0
+        return SpotLight(
+            position=(0, 0, 0), direction=(0, 0, -1), cutoff=math.degrees(outer), exponent=exponent,
+            color=color, intensity=intensity, constant=0.0, quadratic=1.0,
+        )  # fmt: skip
+    if kind != "point":
+        raise ValueError(f"unknown light type {kind!r}")
+    return PointLight(position=(0, 0, 0), color=color, intensity=intensity, constant=0.0, quadratic=1.0)
+
+
+def _texture_transform(spec: dict[str, Any]) -> tuple[tuple[float, float], tuple[float, float], float]:
+    """``KHR_texture_transform`` (glTF's v-down coordinates) as omnirender's (offset, scale, rotation in degrees).
+
+    glTF looks up ``t + R(r) (s * uv)`` with ``R(r) = [[cos, sin], [-sin, cos]]``;
+    with v flipped (v' = 1 - v) that is ``offset + R'(r) (s * uv')`` with the
+    usual counter-clockwise R' and ``offset = (t_u + sin(r) s_v, 1 - t_v - cos(r) s_v)``.
+    """
+    tu, tv = (float(x) for x in spec.get("offset", (0.0, 0.0)))
+    su, sv = (float(x) for x in spec.get("scale", (1.0, 1.0)))
+    r = float(spec.get("rotation", 0.0))
+    if (tu, tv, su, sv, r) == (0.0, 0.0, 1.0, 1.0, 0.0):
+        return (0.0, 0.0), (1.0, 1.0), 0.0
+    offset = (tu + math.sin(r) * sv, 1.0 - tv - math.cos(r) * sv)
+    return offset, (su, sv), math.degrees(r)
 
 
 def _name(value: Any, default: str) -> str:
@@ -483,3 +674,61 @@ def load_gltf(path: str | os.PathLike[str], animation: int | str | None = 0) -> 
         if anim.tracks:
             root.add(anim)
     return root
+
+
+def flatten_gltf(path: str | os.PathLike[str]) -> list[tuple[list[Any], Any]]:
+    """The triangle primitives of a glTF file's default scene in world coordinates, with their attributes.
+
+    ``[(attributes, TriangleSet)]``: what ``om.MeshFile`` needs (one static
+    mesh per primitive, materials and textures kept), read with the full
+    importer (:func:`load_gltf`), so Draco, sparse accessors, quantization and
+    every material slot behave as in ``load_gltf``.
+    """
+    from ..core.transform import Transform
+
+    root = load_gltf(path, animation=None)
+    out: list[tuple[list[Any], Any]] = []
+
+    def walk(node: Node, matrix: np.ndarray) -> None:
+        attrs: list[Any] = []
+        for item in node.items:
+            if isinstance(item, Transform):
+                matrix = matrix @ item.matrix
+            elif isinstance(item, Node):
+                walk(item, matrix)
+            elif isinstance(item, TriangleSet):
+                out.append((list(attrs), _placed(item, matrix)))
+            elif isinstance(item, (PBRMaterial, Texture)):
+                attrs.append(item)
+
+    walk(root, np.eye(4))
+    return out
+
+
+def _placed(shape: TriangleSet, matrix: np.ndarray) -> TriangleSet:
+    """``shape`` with ``matrix`` applied to its vertices, normals and tangents (winding kept outward)."""
+    if np.array_equal(matrix, np.eye(4)):
+        return shape
+    linear = matrix[:3, :3]
+    vertices = shape.vertex_array() @ linear.T + matrix[:3, 3]
+    normals = shape.normal_array() @ np.linalg.inv(linear)
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+    faces = shape.index_array()
+    if np.linalg.det(linear) < 0.0:
+        faces = faces[:, ::-1]
+    tangents = shape.tangents
+    if tangents is not None:
+        t = np.asarray(shape.tangent_array(), np.float64)
+        xyz = t[:, :3] @ linear.T
+        xyz /= np.maximum(np.linalg.norm(xyz, axis=1, keepdims=True), 1e-30)
+        w = t[:, 3] * (-1.0 if np.linalg.det(linear) < 0.0 else 1.0)
+        tangents = np.column_stack([xyz, w])
+    return TriangleSet(
+        vertices,
+        faces,
+        normals=normals,
+        colors=shape.colors,
+        texcoords=shape.texcoords,
+        texcoords1=shape.texcoords1,
+        tangents=tangents,
+    )

@@ -1,7 +1,8 @@
 """Attribute declarations common to all engines (issue 3).
 
 Appearance (``Color``, ``Material``, ``PBRMaterial``, ``Texture``,
-``DrawStyle``), lights with OpenGL's parameters (``DirectionalLight``,
+``DrawStyle``, ``BumpMap``, ``MultiTexture``; combined by the one appearance
+model of :mod:`.surface`), lights with OpenGL's parameters (``DirectionalLight``,
 ``PointLight``, ``SpotLight``, ``AmbientLight``), transforms (``LookAt``,
 ``Billboard``) and environment attributes (``ClipPlane``, ``Fog``,
 ``Background``, ``Tessellation``, ``Highlight``, ``PickId``, ``Collidable``).
@@ -14,7 +15,7 @@ from here too but stay in the core's ``__all__`` (they are ``om.X`` already).
 from ..core.camera import Camera
 from ..core.light import Light, LightSwitch
 from ..core.transform import Matrix, Rotation, Scaling, Transform, Translation
-from .appearance import Color, DrawStyle, Material, PBRMaterial, Texture
+from .appearance import BumpMap, Color, DrawStyle, Material, MultiTexture, PBRMaterial, Texture, TextureLayer
 from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
 from .lights import AmbientLight, DirectionalLight, LightSource, PointLight, SpotLight
 from .shadowing import Mirror, Shadowing
@@ -26,6 +27,9 @@ __all__ = [
     "PBRMaterial",
     "Texture",
     "DrawStyle",
+    "BumpMap",
+    "TextureLayer",
+    "MultiTexture",
     "LightSource",
     "DirectionalLight",
     "PointLight",

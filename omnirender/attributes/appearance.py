@@ -21,11 +21,31 @@ from ._params import (
     check_choice,
     check_number,
     check_rgb,
+    check_vector,
+    optional,
 )
 
-__all__ = ["Color", "Material", "PBRMaterial", "Texture", "DrawStyle"]
+__all__ = [
+    "Color",
+    "Material",
+    "PBRMaterial",
+    "Texture",
+    "DrawStyle",
+    "BumpMap",
+    "TextureLayer",
+    "MultiTexture",
+    "ALPHA_MODES",
+    "BLEND_MODES",
+    "MAX_UV_SETS",
+]
 
 _unit = check_number(0.0, 1.0)
+#: How a PBR material's alpha is used (glTF's alphaMode): ignored, a cut-out at ``alpha_cutoff``, blended.
+ALPHA_MODES = ("opaque", "mask", "blend")
+#: How a texture layer combines with what is under it.
+BLEND_MODES = ("over", "multiply", "add")
+#: Texture coordinate sets a triangle set can carry (``texcoords`` is set 0).
+MAX_UV_SETS = 2
 
 
 class Color(Parameterised, MonoAttribute):
@@ -106,19 +126,67 @@ class Material(Parameterised, MonoAttribute):
         return frozenset({"transparent"}) if self._opacity < 1.0 else frozenset()
 
 
+def _check_texture(owner: str, name: str, value: Any) -> Any:
+    if value is None or isinstance(value, Texture):
+        return value
+    raise ValueError(f"{owner}: {name} must be an om.Texture or None, got {type(value).__name__}")
+
+
 class PBRMaterial(Parameterised, MonoAttribute):
-    """Metallic-roughness material (the glTF model).
+    """Metallic-roughness material (the glTF 2.0 model), with glTF's texture slots.
 
     ``metallic`` and ``roughness`` in [0, 1]; ``base_color`` is the albedo
-    (dielectric) or specular colour (metal).
+    (dielectric) or specular colour (metal).  Texture slots (each an
+    ``om.Texture`` or None; its ``uv_set`` and transform apply):
+
+    - ``base_color_texture``: multiplies ``base_color`` (RGB) and the opacity (alpha);
+    - ``metallic_roughness_texture``: blue scales ``metallic``, green ``roughness``;
+    - ``normal_texture``: a tangent-space normal map (OpenGL convention, green up),
+      its x and y scaled by ``normal_scale``;
+    - ``occlusion_texture``: red darkens the ambient light by ``occlusion_strength``;
+    - ``emissive_texture``: multiplies ``emission`` (RGB), which ``emissive_strength`` scales.
+
+    ``alpha_mode`` is ``"opaque"`` (alpha ignored), ``"mask"`` (cut out where
+    alpha < ``alpha_cutoff``, the rest opaque) or ``"blend"`` (see-through); the
+    default ``None`` means blend when ``opacity`` < 1, else opaque.
+    ``double_sided`` False culls back faces.  Per-vertex colours multiply the
+    base colour (glTF's ``COLOR_0``).
     """
 
-    __slots__ = ("_base_color", "_metallic", "_roughness", "_emission", "_opacity")
+    __slots__ = (
+        "_base_color",
+        "_metallic",
+        "_roughness",
+        "_emission",
+        "_opacity",
+        "_base_color_texture",
+        "_metallic_roughness_texture",
+        "_normal_texture",
+        "_normal_scale",
+        "_occlusion_texture",
+        "_occlusion_strength",
+        "_emissive_texture",
+        "_emissive_strength",
+        "_alpha_mode",
+        "_alpha_cutoff",
+        "_double_sided",
+    )
     base_color = Param(check_rgb, "albedo (RGB)")
     metallic = Param(_unit, "0 dielectric ... 1 metal")
     roughness = Param(_unit, "0 mirror ... 1 rough")
     emission = Param(check_rgb, "emitted colour (RGB)")
     opacity = Param(_unit, "1 opaque ... 0 invisible")
+    base_color_texture = Param(_check_texture, "base colour (RGB) and alpha texture")
+    metallic_roughness_texture = Param(_check_texture, "metallic (blue) and roughness (green) texture")
+    normal_texture = Param(_check_texture, "tangent-space normal map")
+    normal_scale = Param(check_number(), "scale of the normal map's x and y")
+    occlusion_texture = Param(_check_texture, "ambient occlusion (red) texture")
+    occlusion_strength = Param(_unit, "how much the occlusion texture darkens ambient light")
+    emissive_texture = Param(_check_texture, "emission (RGB) texture")
+    emissive_strength = Param(check_number(0.0), "scale of the emission (KHR_materials_emissive_strength)")
+    alpha_mode = Param(optional(check_choice(*ALPHA_MODES)), "opaque, mask or blend (None: from opacity)")
+    alpha_cutoff = Param(_unit, "alpha below which a masked surface is cut out")
+    double_sided = Param(check_bool, "False: back faces are culled")
 
     def __init__(
         self,
@@ -127,6 +195,18 @@ class PBRMaterial(Parameterised, MonoAttribute):
         roughness: float = 0.5,
         emission: Sequence[float] = (0.0, 0.0, 0.0),
         opacity: float = 1.0,
+        *,
+        base_color_texture: Texture | None = None,
+        metallic_roughness_texture: Texture | None = None,
+        normal_texture: Texture | None = None,
+        normal_scale: float = 1.0,
+        occlusion_texture: Texture | None = None,
+        occlusion_strength: float = 1.0,
+        emissive_texture: Texture | None = None,
+        emissive_strength: float = 1.0,
+        alpha_mode: str | None = None,
+        alpha_cutoff: float = 0.5,
+        double_sided: bool = True,
     ) -> None:
         super().__init__()
         self.base_color = base_color
@@ -134,10 +214,56 @@ class PBRMaterial(Parameterised, MonoAttribute):
         self.roughness = roughness
         self.emission = emission
         self.opacity = opacity
+        self.base_color_texture = base_color_texture
+        self.metallic_roughness_texture = metallic_roughness_texture
+        self.normal_texture = normal_texture
+        self.normal_scale = normal_scale
+        self.occlusion_texture = occlusion_texture
+        self.occlusion_strength = occlusion_strength
+        self.emissive_texture = emissive_texture
+        self.emissive_strength = emissive_strength
+        self.alpha_mode = alpha_mode
+        self.alpha_cutoff = alpha_cutoff
+        self.double_sided = double_sided
+
+    @property
+    def effective_alpha_mode(self) -> str:
+        """``alpha_mode``, or ``"blend"`` / ``"opaque"`` from the opacity when it is None."""
+        if self._alpha_mode is not None:
+            return self._alpha_mode
+        return "blend" if self._opacity < 1.0 else "opaque"
+
+    @property
+    def textures(self) -> tuple[Texture, ...]:
+        """The textures of the slots that are set."""
+        slots = (
+            self._base_color_texture,
+            self._metallic_roughness_texture,
+            self._normal_texture,
+            self._occlusion_texture,
+            self._emissive_texture,
+        )
+        return tuple(t for t in slots if t is not None)
 
     @property
     def hints(self) -> frozenset[str]:  # type: ignore[override]
-        return frozenset({"transparent"}) if self._opacity < 1.0 else frozenset()
+        return frozenset({"transparent"}) if self.effective_alpha_mode == "blend" else frozenset()
+
+    def parameters(self) -> dict[str, Any]:
+        out = super().parameters()
+        defaults = {
+            "normal_scale": 1.0,
+            "occlusion_strength": 1.0,
+            "emissive_strength": 1.0,
+            "alpha_cutoff": 0.5,
+            "double_sided": True,
+        }
+        for name, value in list(out.items()):
+            if (name.endswith("_texture") and value is None) or (name == "alpha_mode" and value is None):
+                del out[name]
+            elif name in defaults and value == defaults[name]:
+                del out[name]
+        return out
 
 
 #: The largest texture image accepted (per side, and in all): GPUs stop at 16384 or 32768 per side.
@@ -207,14 +333,23 @@ class Texture(Parameterised, MonoAttribute):
     of uint8 (integers in [0, 255]) or floats in [0, 1].  Row 0 is the top of the image.  ``wrap`` is
     ``"repeat"``, ``"clamp"`` or ``"mirror"``; ``filter`` ``"linear"`` or
     ``"nearest"``; ``mipmap`` asks engines for mipmapped minification.
+
+    ``uv_set`` picks the shape's texture coordinate set (0: ``texcoords``, 1:
+    ``texcoords1``); ``offset``, ``scale`` and ``rotation`` (degrees,
+    counter-clockwise) transform the coordinates before the look-up, as
+    glTF's ``KHR_texture_transform``: ``uv' = offset + R(rotation) (scale * uv)``.
     """
 
-    __slots__ = ("_image", "_wrap", "_filter", "_mipmap", "_cache")
+    __slots__ = ("_image", "_wrap", "_filter", "_mipmap", "_uv_set", "_offset", "_scale", "_rotation", "_cache")
     _transient = {"_cache": lambda: None}  # a file's pixels are read again where the texture is unpickled
     image = Param(_check_image, "path or image array")
     wrap = Param(check_choice("repeat", "clamp", "mirror"), "behaviour outside [0, 1]")
     filter = Param(check_choice("linear", "nearest"), "magnification filter")
     mipmap = Param(check_bool, "use mipmaps for minification")
+    uv_set = Param(check_number(0, MAX_UV_SETS - 1, integer=True), "texture coordinate set (0 or 1)")
+    offset = Param(check_vector(2), "texture coordinate offset (u, v)")
+    scale = Param(check_vector(2), "texture coordinate scale (u, v)")
+    rotation = Param(check_number(), "texture coordinate rotation in degrees (counter-clockwise)")
 
     def __init__(
         self,
@@ -222,12 +357,33 @@ class Texture(Parameterised, MonoAttribute):
         wrap: str = "repeat",
         filter: str = "linear",
         mipmap: bool = True,
+        uv_set: int = 0,
+        offset: Sequence[float] = (0.0, 0.0),
+        scale: Sequence[float] = (1.0, 1.0),
+        rotation: float = 0.0,
     ) -> None:
         super().__init__()
         self.image = image
         self.wrap = wrap
         self.filter = filter
         self.mipmap = mipmap
+        self.uv_set = uv_set
+        self.offset = offset
+        self.scale = scale
+        self.rotation = rotation
+
+    def uv_matrix(self) -> np.ndarray:
+        """The 3x3 matrix taking (u, v, 1) to the looked-up coordinates (identity without a transform)."""
+        a = np.radians(float(self._rotation))
+        c, s = np.cos(a), np.sin(a)
+        su, sv = self._scale
+        m = np.array([[c * su, -s * sv, self._offset[0]], [s * su, c * sv, self._offset[1]], [0.0, 0.0, 1.0]])
+        return m
+
+    @property
+    def transformed(self) -> bool:
+        """Whether the texture coordinates are transformed (offset, scale or rotation set)."""
+        return self._offset != (0.0, 0.0) or self._scale != (1.0, 1.0) or self._rotation != 0.0
 
     def __setattr__(self, name: str, value: Any) -> None:
         if name == "image":
@@ -275,7 +431,12 @@ class Texture(Parameterised, MonoAttribute):
             ) from None
 
     def parameters(self) -> dict[str, Any]:
-        return {"image": self._image, "wrap": self._wrap, "filter": self._filter, "mipmap": self._mipmap}
+        out = {"image": self._image, "wrap": self._wrap, "filter": self._filter, "mipmap": self._mipmap}
+        if self._uv_set:
+            out["uv_set"] = self._uv_set
+        if self.transformed:
+            out.update(offset=self._offset, scale=self._scale, rotation=self._rotation)
+        return out
 
 
 def _check_cull(owner: str, name: str, value: Any) -> str:
@@ -314,3 +475,96 @@ class DrawStyle(Parameterised, MonoAttribute):
         self.point_size = point_size
         self.cull = cull
         self.shading = shading
+
+
+class BumpMap(Parameterised, MonoAttribute):
+    """Bump mapping from a height texture (the VRS paper's third advanced technique).
+
+    ``texture``'s luminance is a height in [0, 1]; ``scale`` is the height of
+    the value 1 in texture-coordinate units (the texture spans 1), so slopes
+    are ``scale * dh/du``.  Engines derive a tangent-space normal map from it
+    (:func:`omnirender.attributes.texturing.height_to_normal_map`) and use their
+    normal-map code; POV-Ray uses its native ``bump_map``.
+    """
+
+    __slots__ = ("_texture", "_scale")
+    texture = Param(_check_texture, "height texture")
+    scale = Param(check_number(), "height of the value 1 in texture-coordinate units")
+
+    def __init__(self, texture: Texture, scale: float = 0.05) -> None:
+        super().__init__()
+        if texture is None:
+            raise ValueError("BumpMap: give a height texture (om.Texture)")
+        self.texture = texture
+        self.scale = scale
+
+
+class TextureLayer(Parameterised, MonoAttribute):
+    """One layer of a :class:`MultiTexture`: a texture, how it blends and its opacity.
+
+    ``blend`` ``"over"`` (alpha blending with the texture's alpha times
+    ``opacity``), ``"multiply"`` or ``"add"`` (mixed in by ``opacity``).  The
+    texture's own ``uv_set`` and transform apply.  Only meaningful inside a
+    MultiTexture (as an attribute of its own it does nothing).
+    """
+
+    __slots__ = ("_texture", "_blend", "_opacity")
+    texture = Param(_check_texture, "the layer's texture")
+    blend = Param(check_choice(*BLEND_MODES), "over, multiply or add")
+    opacity = Param(_unit, "layer opacity in [0, 1]")
+
+    def __init__(self, texture: Texture, blend: str = "over", opacity: float = 1.0) -> None:
+        super().__init__()
+        if texture is None:
+            raise ValueError("TextureLayer: give a texture (om.Texture)")
+        self.texture = texture
+        self.blend = blend
+        self.opacity = opacity
+
+
+def _check_layers(owner: str, name: str, value: Any) -> tuple[TextureLayer, ...]:
+    if isinstance(value, (TextureLayer, Texture)):
+        value = [value]
+    try:
+        items = list(value)
+    except TypeError:
+        raise ValueError(f"{owner}: {name} must be a list of om.TextureLayer (or om.Texture)") from None
+    layers = []
+    for i, item in enumerate(items):
+        if isinstance(item, Texture):
+            item = TextureLayer(item)
+        if not isinstance(item, TextureLayer):
+            kind = type(item).__name__
+            raise ValueError(f"{owner}: {name}[{i}] must be an om.TextureLayer or om.Texture, got {kind}")
+        layers.append(item)
+    if not layers:
+        raise ValueError(f"{owner}: give at least one layer")
+    return tuple(layers)
+
+
+class MultiTexture(Parameterised, MonoAttribute):
+    """Several texture layers over the base colour, each with its own UV set, blend mode and opacity.
+
+    The layers apply in order over the base colour (after an ``om.Texture`` or
+    a base colour texture), like the VRS paper's terrain: a satellite image and
+    a road network over one terrain.  The GL engine draws up to
+    :data:`MAX_LAYERS` layers in one pass; offline engines and the glTF
+    exporter bake the layers into one texture in the coordinates of UV set 0
+    (:func:`omnirender.attributes.texturing.bake_layers`).
+    """
+
+    __slots__ = ("_layers",)
+    MAX_LAYERS = 4
+    layers = Param(_check_layers, "texture layers, bottom first")
+
+    def __init__(self, layers: Sequence[TextureLayer | Texture]) -> None:
+        super().__init__()
+        self.layers = layers
+        if len(self._layers) > self.MAX_LAYERS:
+            raise ValueError(
+                f"MultiTexture: at most {self.MAX_LAYERS} layers, got {len(self._layers)}; bake some of them into one "
+                "image first"
+            )
+
+    def parameters(self) -> dict[str, Any]:
+        return {"layers": list(self._layers)}

@@ -24,7 +24,13 @@ from ._params import (
     check_rgba,
 )
 
-__all__ = ["ClipPlane", "Fog", "Background", "Tessellation", "Highlight", "PickId", "Collidable", "is_scene_background"]
+__all__ = ["ClipPlane", "Fog", "Background", "Tessellation", "Highlight", "PickId", "Collidable", "DEFAULT_BACKGROUND",
+           "is_scene_background"]
+
+#: The background of a scene without an ``om.Background`` (sRGB display values, opaque), shared by every
+#: engine that must draw one: the GL engine's clear colour, the web page, a stand-alone ``.pov`` file.
+#: Offline renders keep a transparent background there instead (alpha 0), to be composited by the caller.
+DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
 class ClipPlane(Parameterised, PolyAttribute):

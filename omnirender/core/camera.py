@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -143,37 +144,47 @@ class Camera(MonoAttribute):
         return cls(eye, center, up, fov=None, height=height, near=near, far=far, mask=mask)
 
     @classmethod
-    def fitted(
-        cls,
-        lo: Sequence[float],
-        hi: Sequence[float],
-        aspect: float = 4 / 3,
-        direction: Sequence[float] = (0.45, 0.35, 1.0),
-        fov: float = 35.0,
-        margin: float = 1.05,
-    ) -> Camera:
-        """A perspective camera that sees the box ``lo``..``hi`` whole, looking at its centre along ``-direction``.
+    def fitted(cls, bounds: Any, size: Sequence[int] = (640, 480), fov: float = 35.0) -> Camera:
+        """The camera every engine uses for a scene without one: looking at ``bounds`` (min, max) from +z.
 
-        The eye is placed so that the box's bounding sphere fits the narrower of
-        the two fields of view (``aspect`` = width / height) with ``margin``;
-        near and far planes enclose the sphere.
+        The bounding sphere fills the view (vertical ``fov``, narrowed for tall
+        images); near and far planes enclose it.  ``bounds`` None gives the
+        default camera (eye at (0, 0, 5)).
         """
-        lo_v = finite_vector("Camera.fitted", "lo", lo, 3)
-        hi_v = finite_vector("Camera.fitted", "hi", hi, 3)
-        d = finite_vector("Camera.fitted", "direction", direction, 3)
+        if bounds is None:
+            return cls.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
+        w, h = (int(v) for v in size)
+        return cls.fit(bounds, w / h, fov)
+
+    @classmethod
+    def fit(
+        cls,
+        bounds: tuple[Sequence[float], Sequence[float]],
+        aspect: float,
+        fov: float = 35.0,
+        direction: Sequence[float] = (0.0, 0.0, 1.0),
+        margin: float = 1.02,
+    ) -> Camera:
+        """A perspective camera looking at the box ``bounds = (lo, hi)`` along ``-direction`` (from +z by default):
+        its bounding sphere fills the view, with ``margin``.
+
+        Near and far enclose the sphere with room to spare; ``aspect`` is the image's width/height.
+        """
+        lo, hi = (finite_vector("Camera.fit", "bounds", b, 3) for b in bounds)
+        d = finite_vector("Camera.fit", "direction", direction, 3)
         if float(np.linalg.norm(d)) == 0.0:
-            raise ValueError("Camera.fitted: direction must not be the zero vector")
+            raise ValueError("Camera.fit: direction must not be the zero vector")
         d = d / np.linalg.norm(d)
-        center = (lo_v + hi_v) / 2.0
-        radius = max(float(np.linalg.norm(hi_v - lo_v)) / 2.0, 1e-6)
+        center = (lo + hi) / 2.0
+        radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
         half = math.radians(fov) / 2.0
         if aspect < 1.0:
             half = math.atan(math.tan(half) * aspect)
         dist = radius / math.sin(half) * margin
         near = max(dist - radius * 1.5, dist * 1e-3)
+        far = dist + radius * 1.5
         up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (0.0, 0.0, -1.0)
-        eye = center + d * dist
-        return cls.look_at(tuple(eye), tuple(center), up, fov=fov, near=near, far=dist + radius * 1.5)
+        return cls.look_at(tuple(center + d * dist), tuple(center), up, fov=fov, near=near, far=far)
 
     @property
     def is_orthographic(self) -> bool:

@@ -24,16 +24,19 @@ import numpy as np
 from ..attributes import (
     AmbientLight,
     Background,
+    BumpMap,
     DirectionalLight,
     LightSource,
     Material,
-    PBRMaterial,
+    MultiTexture,
     PointLight,
     SpotLight,
     Texture,
 )
 from ..attributes.environment import is_scene_background
-from ..attributes.photometry import phong_roughness
+from ..attributes.photometry import intensity_scale, phong_roughness
+from ..attributes.surface import appearance_key, engine_appearance
+from ..attributes.texturing import bake_layers
 from ..core import AttributePainter, ShapePainter, default_for
 from ..fileio import atomic_write
 from ..scene import Node
@@ -45,9 +48,29 @@ from .walk import NodeTrackingEngine, track_surfaces
 __all__ = ["export", "to_bytes", "build", "GLTFEngine", "LIGHTS_EXTENSION"]
 
 LIGHTS_EXTENSION = "KHR_lights_punctual"
+TRANSFORM_EXTENSION = "KHR_texture_transform"
+EMISSIVE_STRENGTH = "KHR_materials_emissive_strength"
+
+
+def _gltf_transform(tex: Texture) -> dict[str, Any]:
+    """omnirender's texture transform (v up) as ``KHR_texture_transform`` (v down): the importer's inverse."""
+    r = math.radians(float(tex.rotation))
+    su, sv = (float(x) for x in tex.scale)
+    ou, ov = (float(x) for x in tex.offset)
+    return {"offset": [ou - math.sin(r) * sv, 1.0 - ov - math.cos(r) * sv], "rotation": r, "scale": [su, sv]}
+
+
 _WRAP = {"repeat": 10497, "clamp": 33071, "mirror": 33648}
 _FILTER = {"linear": 9729, "nearest": 9728}
 _POINTS, _LINES, _TRIANGLES = 0, 1, 4
+
+
+def unit_normals(normals: np.ndarray) -> np.ndarray:
+    """float32 normals of length 1 within glTF's tolerance (zero ones become +z): the validator checks them."""
+    n = np.asarray(normals, np.float64)
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.where(length > 1e-12, n / np.maximum(length, 1e-300), np.array([0.0, 0.0, 1.0]))
+    return n.astype(np.float32)
 
 
 def _column_major(m: np.ndarray) -> list[float]:
@@ -91,6 +114,8 @@ class GLTFEngine(NodeTrackingEngine):
         self._origin: str | None = None
         #: The scene's first ``om.Background`` (glTF has none; the HTML page uses it), or None.
         self.background: Any = None
+        #: lights in physical units (glTF's); False keeps omnirender's (the web page converts them itself)
+        self.physical_lights = True
 
     def eval(self, shape: Any) -> None:
         """Evaluate ``shape``, remembering the class of the outermost shape for the mesh names."""
@@ -152,41 +177,85 @@ class GLTFEngine(NodeTrackingEngine):
         return attrs
 
     # -- materials ------------------------------------------------------------
-    def material_index(self, textured: bool = True) -> int:
-        """The glTF material for the active appearance attributes (shared when identical)."""
-        material, col = self.surface()
-        tex = self.mono(Texture) if textured else None
-        key = tuple((id(a), a.version) if a is not None else None for a in (material, col, tex))
+    def material_index(self, textured: bool = True, vertex_colors: bool = False) -> int:
+        """The glTF material of the active appearance (the one appearance model), shared when identical.
+
+        Every slot is written (base colour with its layers baked, metallic-
+        roughness, normal or the normal map of a ``BumpMap``, occlusion,
+        emissive), with ``KHR_texture_transform`` and the UV set; alpha mode,
+        cutoff and double-sidedness; emission above 1 through
+        ``KHR_materials_emissive_strength``.  Phong materials become the
+        nearest metallic-roughness material (roughness from the shininess).
+        Per-vertex colours replace a Phong colour (glTF multiplies: the factor
+        is then white).
+        """
+        mono = self.mono
+        layers = mono(MultiTexture) if textured else None
+        bump = mono(BumpMap) if textured else None
+        tex = mono(Texture) if textured else None
+        key = (appearance_key(self.surface_stack, tex, layers, bump), textured, vertex_colors)
         found = self._materials.get(key)
         if found is not None:
             return found
-        if isinstance(material, PBRMaterial):
-            base, alpha = material.base_color, material.opacity
-            metallic, roughness, emission = material.metallic, material.roughness, material.emission
-            name = "PBRMaterial"
-        elif isinstance(material, Material):
-            base, alpha, metallic, emission = material.diffuse, material.opacity, 0.0, material.emission
-            shiny = float(np.mean(material.specular)) > 0.0
-            roughness = phong_roughness(material.shininess) if shiny else 1.0
-            name = "Material"
+        app = engine_appearance(self, texcoords=textured)
+        base = np.asarray(app.base, np.float64)
+        if vertex_colors and app.vertex_colors == "replace":
+            base = np.ones(3)
+        if app.model == "pbr":
+            metallic, roughness, name = app.metallic, app.roughness, "PBRMaterial"
         else:
-            base, alpha = (0.8, 0.8, 0.8), 1.0
-            metallic, roughness, emission, name = 0.0, 1.0, (0.0, 0.0, 0.0), "Color"
-        if col is not None:  # a Color after the material replaces its colour (as in the GL engine)
-            base, alpha = col.rgb, alpha * col.a
-        factor = [*(float(v) for v in srgb_to_linear(base)), float(alpha)]
-        pbr_block: dict[str, Any] = {"metallicFactor": float(metallic), "roughnessFactor": float(roughness)}
-        if tex is not None:
-            factor[:3] = [1.0, 1.0, 1.0]  # the texture replaces the colour (as in the other engines)
-            pbr_block["baseColorTexture"] = {"index": self.texture_index(tex)}
-        pbr_block["baseColorFactor"] = factor
-        material: dict[str, Any] = {"name": name, "pbrMetallicRoughness": pbr_block, "doubleSided": True}
-        if max(emission) > 0.0:
-            material["emissiveFactor"] = [float(v) for v in srgb_to_linear(emission)]
-        if alpha < 1.0:
+            shiny = float(np.mean(app.specular)) > 0.0
+            metallic, roughness = 0.0, phong_roughness(app.shininess) if shiny else 1.0
+            name = "Material" if isinstance(app.material, Material) else "Color"
+        alpha = app.alpha if app.alpha_mode != "opaque" else 1.0
+        pbr_block: dict[str, Any] = {
+            "baseColorFactor": [*(float(v) for v in base), float(alpha)],
+            "metallicFactor": float(metallic),
+            "roughnessFactor": float(roughness),
+        }
+        material: dict[str, Any] = {"name": name, "pbrMetallicRoughness": pbr_block, "doubleSided": app.double_sided}
+        if app.texture is not None or app.layers:
+            if app.layers:
+                image = bake_layers(None if app.texture is None else app.texture.image_array(), app.layers)
+                baked = Texture(image, wrap="repeat")
+                pbr_block["baseColorTexture"] = self.texture_info(baked)
+            else:
+                pbr_block["baseColorTexture"] = self.texture_info(app.texture)
+        if app.metallic_roughness_texture is not None:
+            pbr_block["metallicRoughnessTexture"] = self.texture_info(app.metallic_roughness_texture)
+        normal, scale = app.normal_map()
+        if normal is not None:
+            material["normalTexture"] = {**self.texture_info(normal), "scale": float(scale)}
+        if app.occlusion_texture is not None:
+            info = self.texture_info(app.occlusion_texture)
+            material["occlusionTexture"] = {**info, "strength": float(app.occlusion_strength)}
+        emission = np.asarray(app.emission, np.float64)
+        if app.emits:
+            peak = float(emission.max())
+            if peak > 1.0:
+                self.gltf.use_extension(EMISSIVE_STRENGTH)
+                material["extensions"] = {EMISSIVE_STRENGTH: {"emissiveStrength": peak}}
+                emission = emission / peak
+            material["emissiveFactor"] = [float(v) for v in emission]
+            if app.emissive_texture is not None:
+                material["emissiveTexture"] = self.texture_info(app.emissive_texture)
+        if app.alpha_mode == "mask":
+            material["alphaMode"] = "MASK"
+            material["alphaCutoff"] = float(app.alpha_cutoff)
+        elif app.alpha_mode == "blend":
             material["alphaMode"] = "BLEND"
         index = self._materials[key] = self.gltf.append("materials", material)
         return index
+
+    def texture_info(self, tex: Texture) -> dict[str, Any]:
+        """A glTF ``textureInfo``: the texture, its UV set and its ``KHR_texture_transform``."""
+        info: dict[str, Any] = {"index": self.texture_index(tex)}
+        if tex.uv_set:
+            info["texCoord"] = int(tex.uv_set)
+        if tex.transformed:
+            self.gltf.use_extension(TRANSFORM_EXTENSION)
+            info["extensions"] = {TRANSFORM_EXTENSION: _gltf_transform(tex)}
+        return info
 
     def texture_index(self, tex: Texture) -> int:
         key = (id(tex), tex.version)
@@ -231,6 +300,13 @@ class GLTFEngine(NodeTrackingEngine):
                 return
         self._lights.append((light, self.model_matrix()))
 
+    def reference_point(self) -> np.ndarray:
+        """Where GL's light attenuation is matched by the inverse square: the camera's centre of interest."""
+        if self.camera is None:
+            return np.zeros(3)
+        camera, world = self.camera
+        return (np.asarray(world, np.float64) @ np.array([*camera.center, 1.0]))[:3]
+
     def _write_lights(self) -> None:
         ambient = [0.0, 0.0, 0.0]
         lights: list[dict[str, Any]] = []
@@ -239,7 +315,19 @@ class GLTFEngine(NodeTrackingEngine):
             if isinstance(light, AmbientLight):
                 ambient = [a + float(b) for a, b in zip(ambient, light.ambient, strict=True)]
                 continue
-            entry: dict[str, Any] = {"name": type(light).__name__, "color": color, "intensity": float(light.intensity)}
+            # physical units: lux (E = pi c) and candela (I = pi c att(d) d^2, matched at the camera's centre
+            # of interest), so physically based importers (three.js, Blender) show GL's brightness
+            if not self.physical_lights:
+                physical = 1.0
+            elif isinstance(light, DirectionalLight):
+                physical = math.pi
+            else:
+                physical = intensity_scale(light, light.world_position(world), self.reference_point())
+            entry: dict[str, Any] = {
+                "name": type(light).__name__,
+                "color": color,
+                "intensity": float(light.intensity) * physical,
+            }
             if isinstance(light, DirectionalLight):
                 entry["type"] = "directional"
                 matrix = _frame_looking(light.world_direction(world), np.zeros(3))
@@ -332,18 +420,19 @@ class TriangleSetExporter(ShapePainter):
             return
         g = engine.gltf
         attrs = engine.vertex_attributes(shape)
-        attrs["NORMAL"] = g.accessor(shape.normal_array().astype(np.float32), ARRAY_BUFFER)
+        attrs["NORMAL"] = g.accessor(unit_normals(shape.normal_array()), ARRAY_BUFFER)
         uv = shape.texcoord_array()
-        if uv is not None:
-            flipped = np.array(uv, np.float32)
-            flipped[:, 1] = 1.0 - flipped[:, 1]
-            attrs["TEXCOORD_0"] = g.accessor(flipped, ARRAY_BUFFER)
+        for index, coords in enumerate((uv, shape.texcoord_array(1) if uv is not None else None)):
+            if coords is not None:
+                flipped = np.array(coords, np.float32)
+                flipped[:, 1] = 1.0 - flipped[:, 1]
+                attrs[f"TEXCOORD_{index}"] = g.accessor(flipped, ARRAY_BUFFER)
         indices = g.accessor(faces.astype(np.uint32).reshape(-1), ELEMENT_ARRAY_BUFFER)
         primitive = {
             "attributes": attrs,
             "indices": indices,
             "mode": _TRIANGLES,
-            "material": engine.material_index(uv is not None),
+            "material": engine.material_index(uv is not None, vertex_colors=shape.color_array() is not None),
         }
         engine.add_primitive("TriangleSet", primitive)
         engine.triangle_count += len(faces)
@@ -416,12 +505,18 @@ class BackgroundRecorder(AttributePainter):
 
 
 def build(
-    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "raise", mask: str | None = None
+    scene: Any,
+    *,
+    size: tuple[int, int] = (640, 480),
+    on_missing: str = "raise",
+    mask: str | None = None,
+    physical_lights: bool = True,
 ) -> tuple[bytes, GLTFEngine]:
     """The GLB bytes of ``scene`` and the engine that wrote them (its camera, lights and background)."""
     if not isinstance(scene, Node):
         scene = Node("scene", scene)
     engine = GLTFEngine(size, on_missing=on_missing, mask=mask)
+    engine.physical_lights = physical_lights
     engine.run(scene)
     return engine.finish(scene.name), engine
 

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.environment import DEFAULT_BACKGROUND  # the page background without an om.Background
 from ..fileio import atomic_write
 from .gltf import build
 
@@ -40,9 +41,6 @@ __all__ = ["export", "page", "ASSETS", "DEFAULT_BACKGROUND"]
 
 #: The committed bundle and three.js's licence notice.
 ASSETS = Path(__file__).parent / "assets"
-#: The page background when the scene has no ``om.Background`` (the GL engine's default clear colour;
-#: adapters do not import each other, a test keeps the two equal).
-DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
 @cache
@@ -88,7 +86,8 @@ def page(
     on_missing: str = "raise",
 ) -> str:
     """The HTML text of the page (see the module docs); ``size`` gives the camera's aspect in the glTF."""
-    glb, engine = build(scene, size=size, on_missing=on_missing, mask=mask)
+    # the page converts omnirender's light units itself (its attenuation in the lights' extras)
+    glb, engine = build(scene, size=size, on_missing=on_missing, mask=mask, physical_lights=False)
     settings = json.dumps(_settings(glb, engine), separators=(",", ":"))
     name = title if title is not None else getattr(scene, "name", "scene")
     r, g, b = (round(255 * c) for c in _background(engine)[:3])

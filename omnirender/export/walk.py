@@ -18,7 +18,12 @@ __all__ = ["NodeTrackingEngine", "track_surfaces"]
 
 
 class NodeTrackingEngine(Engine):
-    """An engine that calls :meth:`enter_node` / :meth:`leave_node` around every node's contents."""
+    """An engine that calls :meth:`enter_node` / :meth:`leave_node` around every node's contents.
+
+    Exporters honour the camera's group mask as the renderers do (a hidden debug shape is not exported).
+    """
+
+    uses_camera_mask = True
 
     def __init__(self, **options: Any) -> None:
         super().__init__(**options)

@@ -6,8 +6,11 @@ frame after frame with ``engine.render(scene)``.  GL-specific attributes
 ``ColorMask``, ``StencilTest``, ``StencilOp``, ``ScissorTest``,
 ``AlphaTest``) and GL techniques (``GLTechnique`` and the default
 ``Forward``, described pass by pass with ``Pass``, ``Target``, ``Clear``,
-``Shader``, ``FullScreen`` and ``PingPong``) live here; other engines ignore
-them.  moderngl is imported only when an engine is created.
+``Shader``, ``FullScreen`` and ``PingPong``; ``Pass(custom=...)`` runs
+Python drawing code in a pass) live here; other engines ignore them.
+``capture_state`` / ``preserved_state`` snapshot and restore the GL raster
+state (``GLStateSnapshot``).  moderngl is imported only when an engine is
+created.
 """
 
 from __future__ import annotations
@@ -65,6 +68,9 @@ __all__ = [
     "ColorMask",
     "StencilTest",
     "StencilOp",
+    "GLStateSnapshot",
+    "capture_state",
+    "preserved_state",
 ]
 
 _LAZY = {
@@ -78,6 +84,9 @@ _LAZY = {
     "Forward": "techniques",
     "FramebufferStack": "framebuffer",
     "DepthSprite": "framebuffer",
+    "GLStateSnapshot": "glstate",
+    "capture_state": "glstate",
+    "preserved_state": "glstate",
 }
 _loaded = False
 

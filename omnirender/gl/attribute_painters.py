@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..attributes import (
+    BumpMap,
     ClipPlane,
     Color,
     DrawStyle,
@@ -20,6 +21,7 @@ from ..attributes import (
     Highlight,
     Material,
     Mirror,
+    MultiTexture,
     PBRMaterial,
     Shadowing,
     Texture,
@@ -108,7 +110,7 @@ def _register() -> None:
         cls = type(f"SurfacePainter_{target.__name__}", (SurfacePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])
     # every GL state attribute, also one defined later, through the base class (handler look-up walks the MRO)
-    state_targets = (DrawStyle, Texture, Fog, LightSwitch, Shadowing, Mirror, glattr.GLState)
+    state_targets = (DrawStyle, Texture, MultiTexture, BumpMap, Fog, LightSwitch, Shadowing, Mirror, glattr.GLState)
     for target in state_targets:
         cls = type(f"StatePainter_{target.__name__}", (StatePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])

@@ -27,8 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Background, Color, DrawStyle, Fog, Highlight, PBRMaterial, Texture
+from ..attributes import Background, BumpMap, DrawStyle, Fog, Highlight, MultiTexture, Texture
 from ..attributes.photometry import linear_rgb
+from ..attributes.surface import Appearance, appearance_key, resolve_appearance
 from ..core.component import RenderingComponent
 from ..core.light import LightSwitch
 from ..core.transform import Transform
@@ -37,19 +38,80 @@ from .attributes import CullFace, GLState
 from .drawlist import DrawItem, DrawState, Scope
 from .geometry import Geometry
 from .layout import PBR, PHONG, ROW
+from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, defaults, kinds
 
-__all__ = ["DrawListCompiler", "linear_rgb"]
+__all__ = ["DrawListCompiler", "TextureSet", "linear_rgb"]
 
 _DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, points get its default size
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
-_ALPHA = ROW.at("color", "alpha")
 _SHADING_MODEL = ROW.at("emission", "model")
-_FOLLOWS_COLOR = ROW.at("ambient", "follows_color")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 _FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+
+
+def _uv_matrix(texture: Any) -> tuple[float, ...]:
+    """A texture's coordinate transform as a GLSL mat3 (column-major)."""
+    return tuple(float(x) for x in texture.uv_matrix().T.ravel())
+
+
+class TextureSet:
+    """What an appearance needs from the GL state: textures to bind, program features, uniforms.
+
+    ``textures`` are (sampler uniform, om.Texture, sRGB) triples; ``features``
+    and ``uniforms`` apply where the shape has texture coordinates, ``alpha``
+    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.
+    """
+
+    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+
+    def __init__(self, app: Appearance) -> None:
+        textures: list[tuple[str, Any, bool]] = []
+        features: list[tuple[str, Any]] = []
+        uniforms: list[tuple[str, Any]] = []
+
+        def slot(feature: str, sampler: str, suffix: str, texture: Any, srgb: bool) -> None:
+            textures.append((sampler, texture, srgb))
+            if feature:
+                features.append((feature, True))
+            features.append((f"UVSET_{suffix.upper()}", int(texture.uv_set)))
+            uniforms.append((f"u_uvm_{suffix}", _uv_matrix(texture)))
+
+        self.base = app.texture
+        if app.texture is not None:
+            slot("TEXTURE", "u_texture", "base", app.texture, True)
+        if app.layers:
+            features.append(("LAYERS", len(app.layers)))
+            for i, layer in enumerate(app.layers):
+                slot("", f"u_layer{i}", f"layer{i}", layer.texture, True)
+                features.append((f"LAYER_BLEND{i}", LAYER_BLENDS[layer.blend]))
+                uniforms.append((f"u_layer_opacity{i}", float(layer.opacity)))
+        normal, scale = app.normal_map()
+        self.normal = normal is not None
+        if normal is not None:
+            slot("", "u_normal_texture", "normal", normal, False)
+            uniforms.append(("u_normal_scale", float(scale)))
+        if app.model == "pbr":
+            if app.metallic_roughness_texture is not None:
+                slot("MR_TEXTURE", "u_mr_texture", "mr", app.metallic_roughness_texture, False)
+            if app.occlusion_texture is not None:
+                slot("OCCLUSION_TEXTURE", "u_occlusion_texture", "occlusion", app.occlusion_texture, False)
+                uniforms.append(("u_occlusion_strength", float(app.occlusion_strength)))
+            if app.emissive_texture is not None:
+                slot("EMISSIVE_TEXTURE", "u_emissive_texture", "emissive", app.emissive_texture, True)
+        self.textures = tuple(textures)
+        self.features = tuple(features)
+        self.uniforms = tuple(uniforms)
+        self.uv1 = any(t.uv_set == 1 for _, t, _ in textures)
+        if app.alpha_mode == "mask":
+            self.alpha: tuple[tuple[str, Any], ...] = (("ALPHA_MASK", True),)
+            self.alpha_uniforms: tuple[tuple[str, Any], ...] = (("u_alpha_cutoff", float(app.alpha_cutoff)),)
+        elif app.model == "pbr" and app.alpha_mode == "opaque":
+            self.alpha, self.alpha_uniforms = (("ALPHA_OPAQUE", True),), ()
+        else:
+            self.alpha, self.alpha_uniforms = (), ()
 
 
 class _NodeEntry:
@@ -239,11 +301,17 @@ class DrawListCompiler:
                 if geometry.mode == "triangles" and self._fill == "points"
                 else ("mesh" if geometry.mode == "triangles" else geometry.mode)
             )
+        app = self._appearance
         if transparent is None:
-            transparent = self._blend_on or row[_ALPHA] < 1.0 or geometry.translucent
+            see_through = app.alpha_mode == "blend" or (
+                app.alpha_mode == "opaque" and app.model == "phong" and geometry.translucent
+            )
+            transparent = self._blend_on or (see_through and not self._alpha_tested)
         cull = None
-        if geometry.closed and not transparent and kind == "mesh" and self._auto_cull:
-            # a closed opaque surface never shows its back faces: cull them (mirrored instances: the front)
+        single = not app.double_sided and kind == "mesh"
+        if (single or (geometry.closed and not transparent)) and kind == "mesh" and self._auto_cull:
+            # a closed opaque surface never shows its back faces, a single-sided material hides them: cull them
+            # (mirrored instances: the front)
             cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
         state = self._state_for(kind, geometry, extra, cull, int(row[_SHADING_MODEL]))
         item = DrawItem(
@@ -262,9 +330,6 @@ class DrawListCompiler:
     def _resolve_state(self) -> None:
         mono = self.mono
         style = mono(DrawStyle)
-        texture = mono(Texture)
-        if texture is not None:
-            self._check_texture(texture)
         self._fill = style.mode if style is not None else "filled"
         # without a DrawStyle: DrawStyle's default (1 px), as in POV-Ray and Mitsuba
         self._point_size = float(style.point_size) if style is not None else _DEFAULT_POINT_SIZE
@@ -301,9 +366,11 @@ class DrawListCompiler:
                     if k.fragment_code or k.fragment_main:
                         code.append(k)
         raster = tuple(values)
-        from .attributes import Blend
+        from .attributes import AlphaTest, Blend
 
         self._blend_on = raster[Blend.index] is not None
+        # an om.gl.AlphaTest cuts out what the alpha hides: such surfaces are drawn (and write depth) as opaque ones
+        self._alpha_tested = raster[AlphaTest.index] is not None
         cull_value = raster[CullFace.index]
         # automatic back-face culling only where nothing decides culling and nothing shows the inside
         self._auto_cull = not cull_set and cull_value == "none" and not self._clips and self._fill != "wireframe"
@@ -323,7 +390,6 @@ class DrawListCompiler:
             tuple(uniforms),
             tuple(code),
             special,
-            texture,
             tuple(plane for _, plane in self._clips),
             fog_key,
             mono(LightSwitch),
@@ -348,13 +414,25 @@ class DrawListCompiler:
         self._checked_textures[id(texture)] = (weakref.ref(texture), texture.version)
 
     def _state_for(self, kind: str, geometry: Geometry, extra: Any, cull_override: str | None, model: int) -> DrawState:
-        raster, state_features, uniforms, code, special, texture, clip, fog, switch, flat = self._state_base
+        raster, state_features, uniforms, code, special, clip, fog, switch, flat = self._state_base
+        texset = self._texset
         features: list[tuple[str, Any]] = []
         if geometry.colors is not None:
             features.append(("VCOLOR", True))
-        textured = texture is not None and geometry.texcoords is not None and kind == "mesh"
+        textured = bool(texset.textures) and geometry.texcoords is not None and kind == "mesh"
+        bound: tuple = ()
         if textured:
-            features.append(("TEXTURE", True))
+            features.append(("UVS", True))
+            features.extend(texset.features)
+            if texset.uv1 and geometry.texcoords1 is not None:
+                features.append(("UV1", True))
+            if texset.normal and geometry.tangent_source is not None:
+                features.append(("NORMAL_MAP", True))
+            uniforms = uniforms + texset.uniforms
+            bound = texset.textures
+        if kind in ("mesh", "points") and texset.alpha:
+            features.extend(texset.alpha)
+            uniforms = uniforms + texset.alpha_uniforms
         if flat and kind == "mesh":
             features.append(("FLAT", True))
         if clip:
@@ -368,7 +446,7 @@ class DrawListCompiler:
             features.extend(state_features)
         if cull_override is not None:
             raster = raster[: CullFace.index] + (cull_override,) + raster[CullFace.index + 1 :]
-        key = (kind, tuple(features), extra, raster, textured and texture, clip, fog, switch, uniforms, code)
+        key = (kind, tuple(features), extra, raster, bound, clip, fog, switch, uniforms, code)
         state = self._states.get(key)
         if state is None:
             if len(self._states) > 4096:  # e.g. text labels that change every frame
@@ -379,7 +457,8 @@ class DrawListCompiler:
                 raster,
                 uniforms=uniforms if kind in ("mesh", "points") else (),
                 code=code if kind in ("mesh", "points") else (),
-                texture=texture if textured else None,
+                texture=texset.base if textured else None,
+                textures=bound,
                 clip=clip,
                 fog=fog,
                 switch=switch,
@@ -390,61 +469,47 @@ class DrawListCompiler:
         return state
 
     def _resolve_surface(self) -> None:
-        material = None
-        color = None
-        for attr in reversed(self._surface):
-            if isinstance(attr, Color):
-                if color is None:
-                    color = attr
-            else:
-                material = attr
-                break
-        highlight = self.mono(Highlight)
+        """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
+        mono = self.mono
+        texture, layers, bump = mono(Texture), mono(MultiTexture), mono(BumpMap)
+        highlight = mono(Highlight)
         key = (
-            id(material),
-            material.version if material is not None else 0,
-            id(highlight),
-            highlight.version if highlight is not None else 0,
+            appearance_key(self._surface, texture, layers, bump),
+            None if highlight is None else (id(highlight), highlight.version),
         )
         memo = self._surface_memo
-        base = memo.get(key)
-        if base is None or base[0] is not material:
-            base = (material, self._material_row(material, highlight))
+        entry = memo.get(key)
+        if entry is None:
+            app = resolve_appearance(self._surface, texture, layers, bump)
+            for tex in app.textures:
+                self._check_texture(tex)
+            # the attributes are kept alive with the entry, so the ids in its key stay theirs
+            entry = (app, self._material_row(app, highlight), TextureSet(app), (texture, layers, bump, highlight))
             if len(memo) > 256:
                 memo.clear()
-            memo[key] = base
-        row = base[1]
+            memo[key] = entry
+        app, row, texset, _ = entry
         point_size = self._point_size
-        if color is not None or row[_POINT_SIZE] != point_size:
+        if row[_POINT_SIZE] != point_size:
             row = row.copy()
             row[_POINT_SIZE] = point_size
-            if color is not None:
-                row[_COLOR] = (*linear_rgb((color.r, color.g, color.b)), color.a * row[_ALPHA])
-                if not isinstance(material, PBRMaterial):
-                    row[_FOLLOWS_COLOR] = 1.0  # colour material: ambient follows the colour
+        self._appearance = app
+        self._texset = texset
         self._surface_row = row
         self._surface_dirty = False
 
-    def _material_row(self, material: Any, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item).
-
-        Surface colours are display (sRGB) values, as in the other engines; the
-        shaders light in linear space, so they are linearised here.
-        """
+    def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
         row = np.zeros(ROW.stride, np.float32)
-        if isinstance(material, PBRMaterial):
-            row[_COLOR] = (*linear_rgb(material.base_color), material.opacity)
-            row[ROW.slice("emission")] = (*linear_rgb(material.emission), PBR)
-            row[ROW.slice("pbr")] = (material.roughness, material.metallic, 0.0, 0.0)
-        elif material is not None:
-            row[_COLOR] = (*linear_rgb(material.diffuse), material.opacity)
-            row[ROW.slice("specular")] = (*linear_rgb(material.specular), material.shininess)
-            row[ROW.slice("emission")] = (*linear_rgb(material.emission), PHONG)
-            row[ROW.slice("ambient")] = (*linear_rgb(material.ambient), 0.0)
+        alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
+        row[_COLOR] = (*app.base, alpha)
+        if app.model == "pbr":
+            row[ROW.slice("emission")] = (*app.emission, PBR)
+            row[ROW.slice("pbr")] = (app.roughness, app.metallic, 0.0, 0.0)
         else:
-            row[_COLOR] = (*linear_rgb((0.8, 0.8, 0.8)), 1.0)
-            row[ROW.slice("specular")] = (0.0, 0.0, 0.0, 32.0)
-            row[ROW.slice("ambient")] = (0.0, 0.0, 0.0, 1.0)  # ambient follows the colour
+            row[ROW.slice("specular")] = (*app.specular, app.shininess)
+            row[ROW.slice("emission")] = (*app.emission, PHONG)
+            row[ROW.slice("ambient")] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
         if highlight is not None:
             row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
         row[_POINT_SIZE] = _DEFAULT_POINT_SIZE

@@ -94,6 +94,59 @@ _STENCIL_OPS = {
 }
 GL_STENCIL_TEST = 0x0B90
 
+_u, _i, _f, _d, _b = ctypes.c_uint, ctypes.c_int, ctypes.c_float, ctypes.c_double, ctypes.c_ubyte
+_pi, _pu, _pf, _pb = ctypes.POINTER(_i), ctypes.POINTER(_u), ctypes.POINTER(_f), ctypes.POINTER(_b)
+#: The GL entry points moderngl lacks: name -> (argument types, result type).
+_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
+    "glGenFramebuffers": ([_i, _pu], None),
+    "glGenRenderbuffers": ([_i, _pu], None),
+    "glDeleteRenderbuffers": ([_i, _pu], None),
+    "glBindFramebuffer": ([_u, _u], None),
+    "glBindRenderbuffer": ([_u, _u], None),
+    "glRenderbufferStorageMultisample": ([_u, _i, _u, _i, _i], None),
+    "glFramebufferRenderbuffer": ([_u, _u, _u, _u], None),
+    "glCheckFramebufferStatus": ([_u], _u),
+    "glBlitFramebuffer": ([_i, _i, _i, _i, _i, _i, _i, _i, _u, _u], None),
+    "glClearStencil": ([_i], None),
+    "glClear": ([_u], None),
+    "glGetIntegerv": ([_u, _pi], None),
+    "glGetFloatv": ([_u, _pf], None),
+    "glGetBooleanv": ([_u, _pb], None),
+    "glIsEnabled": ([_u], _b),
+    "glEnable": ([_u], None),
+    "glDisable": ([_u], None),
+    "glColorMask": ([_b, _b, _b, _b], None),
+    "glDepthMask": ([_b], None),
+    "glTexParameteri": ([_u, _u, _i], None),
+    "glViewport": ([_i, _i, _i, _i], None),
+    "glScissor": ([_i, _i, _i, _i], None),
+    "glDepthFunc": ([_u], None),
+    "glBlendFuncSeparate": ([_u, _u, _u, _u], None),
+    "glBlendEquationSeparate": ([_u, _u], None),
+    "glBlendColor": ([_f, _f, _f, _f], None),
+    "glCullFace": ([_u], None),
+    "glFrontFace": ([_u], None),
+    "glPolygonMode": ([_u, _u], None),
+    "glPolygonOffset": ([_f, _f], None),
+    "glLineWidth": ([_f], None),
+    "glPointSize": ([_f], None),
+    "glDepthRange": ([_d, _d], None),
+    "glStencilFuncSeparate": ([_u, _u, _i, _u], None),
+    "glStencilOpSeparate": ([_u, _u, _u, _u], None),
+    "glStencilMaskSeparate": ([_u, _u], None),
+    "glSampleCoverage": ([_f, _b], None),
+    "glProvokingVertex": ([_u], None),
+    "glReadPixels": ([_i, _i, _i, _i, _u, _u, ctypes.c_void_p], None),
+    "glPixelStorei": ([_u, _i], None),
+    "glGenTextures": ([_i, _pu], None),
+    "glDeleteTextures": ([_i, _pu], None),
+    "glBindTexture": ([_u, _u], None),
+    "glDeleteFramebuffers": ([_i, _pu], None),
+    "glTexImage2D": ([_u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p], None),
+    "glFramebufferTexture2D": ([_u, _u, _u, _u, _i], None),
+    "glGetFramebufferAttachmentParameteriv": ([_u, _u, _u, _pi], None),
+}
+
 
 class RawGL:
     """The handful of GL calls moderngl lacks (stencil state), loaded from libOpenGL/libGL."""
@@ -119,46 +172,10 @@ class RawGL:
             self._op.argtypes = [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]
             self._mask = lib.glStencilMask
             self._mask.argtypes = [ctypes.c_uint]
-            for name, args in (
-                ("glGenFramebuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                ("glGenRenderbuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                ("glDeleteRenderbuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                ("glBindFramebuffer", [ctypes.c_uint, ctypes.c_uint]),
-                ("glBindRenderbuffer", [ctypes.c_uint, ctypes.c_uint]),
-                (
-                    "glRenderbufferStorageMultisample",
-                    [ctypes.c_uint, ctypes.c_int, ctypes.c_uint, ctypes.c_int, ctypes.c_int],
-                ),
-                ("glFramebufferRenderbuffer", [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]),
-                ("glCheckFramebufferStatus", [ctypes.c_uint]),
-                ("glClearStencil", [ctypes.c_int]),
-                ("glClear", [ctypes.c_uint]),
-                ("glGetIntegerv", [ctypes.c_uint, ctypes.POINTER(ctypes.c_int)]),
-                ("glColorMask", [ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte, ctypes.c_ubyte]),
-                ("glDepthMask", [ctypes.c_ubyte]),
-                ("glTexParameteri", [ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
-                ("glGenTextures", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                ("glDeleteTextures", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                ("glBindTexture", [ctypes.c_uint, ctypes.c_uint]),
-                ("glDeleteFramebuffers", [ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]),
-                (
-                    "glTexImage2D",
-                    [
-                        ctypes.c_uint,
-                        ctypes.c_int,
-                        ctypes.c_int,
-                        ctypes.c_int,
-                        ctypes.c_int,
-                        ctypes.c_int,
-                        ctypes.c_uint,
-                        ctypes.c_uint,
-                        ctypes.c_void_p,
-                    ],
-                ),
-                ("glFramebufferTexture2D", [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_uint, ctypes.c_int]),
-            ):
+            for name, (args, result) in _SIGNATURES.items():
                 fn = getattr(lib, name)
                 fn.argtypes = args
+                fn.restype = result
                 setattr(self, name, fn)
 
     def _require(self) -> None:
@@ -300,3 +317,30 @@ def clear_stencil(raw: RawGL, value: int = 0) -> None:
         raw._mask(0xFF)
         raw.glClearStencil(int(value))
         raw.glClear(GL_STENCIL_BUFFER_BIT)
+
+
+GL_READ_FRAMEBUFFER = 0x8CA8
+GL_DRAW_FRAMEBUFFER = 0x8CA9
+GL_DRAW_FRAMEBUFFER_BINDING = 0x8CA6
+GL_READ_FRAMEBUFFER_BINDING = 0x8CAA
+GL_COLOR_BUFFER_BIT = 0x4000
+GL_DEPTH_BUFFER_BIT = 0x100
+GL_NEAREST = 0x2600
+
+
+def blit(raw: RawGL, source: Any, target: Any, size: tuple[int, int], color: bool, depth: bool) -> None:
+    """Copy colour (the read buffer to the draw buffers) and/or depth of framebuffer ``source`` into ``target``.
+
+    Both are moderngl framebuffers of ``size``; a multisampled source is resolved.  The framebuffer
+    bindings are restored afterwards (moderngl's idea of the bound framebuffer stays true).
+    """
+    previous_draw, previous_read = ctypes.c_int(0), ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(previous_draw))
+    raw.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, ctypes.byref(previous_read))
+    raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, source.glo)
+    raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target.glo)
+    bits = (GL_COLOR_BUFFER_BIT if color else 0) | (GL_DEPTH_BUFFER_BIT if depth else 0)
+    w, h = size
+    raw.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, bits, GL_NEAREST)
+    raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, previous_draw.value)
+    raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, previous_read.value)

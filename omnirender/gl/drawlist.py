@@ -46,6 +46,7 @@ class DrawState:
         "uniforms",
         "code",
         "texture",
+        "textures",
         "clip",
         "fog",
         "switch",
@@ -63,6 +64,7 @@ class DrawState:
         code: tuple = (),
         texture: Any = None,
         clip: tuple = (),
+        textures: tuple = (),
         fog: Any = None,
         switch: Any = None,
         extra: Any = None,
@@ -74,7 +76,10 @@ class DrawState:
         self.raster = raster
         self.uniforms = uniforms
         self.code = code
+        #: the base colour texture (or None)
         self.texture = texture
+        #: every texture to bind: (sampler uniform, om.Texture, sRGB) triples, in texture-unit order
+        self.textures = textures
         self.clip = clip
         self.fog = fog
         self.switch = switch

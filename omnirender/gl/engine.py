@@ -17,7 +17,6 @@ context, the targets, cameras and resources.
 from __future__ import annotations
 
 import contextlib
-import math
 import weakref
 from collections.abc import Iterator
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Tessellation
+from ..attributes.environment import DEFAULT_BACKGROUND  # the clear colour without an om.Background (shared)
 from ..core.camera import Camera
 from ..core.component import ChangeJournal
 from ..core.engine import Engine
@@ -53,9 +53,6 @@ from .state import defaults, kinds
 from .techniques import Forward, GLTechnique
 
 __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
-
-#: Default clear colour (sRGB): a neutral dark grey.
-DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
 
 
 class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, Engine):
@@ -165,9 +162,12 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._state_base: tuple = ()
         self._states: dict[tuple, DrawState] = {}
         self._surface_row = np.zeros(ROW.stride, np.float32)
-        self._surface_memo: dict[tuple, tuple[Any, np.ndarray]] = {}
+        self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
+        self._texset: Any = None
         self._point_size = 1.0
         self._blend_on = False
+        self._alpha_tested = False
         self._auto_cull = True
         self._fill = "filled"
         self._kinds_seen = len(kinds())
@@ -406,22 +406,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         return camera, view, camera.projection_matrix(aspect)
 
     def default_camera(self) -> Camera:
-        """Auto-fit: look at the compiled scene's bounds from +z (vertical fov 35 degrees)."""
-        bounds = self.scene_bounds()
-        if bounds is None:
-            return Camera.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
-        lo, hi = bounds
-        center = (lo + hi) / 2.0
-        radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
-        fov = 35.0
-        w, h = self._size
-        half = math.radians(fov) / 2.0
-        if w < h:
-            half = math.atan(math.tan(half) * w / h)
-        dist = radius / math.sin(half) * 1.02
-        near = max(dist - radius * 1.5, dist * 1e-3)
-        far = dist + radius * 1.5
-        return Camera.look_at(tuple(center + (0.0, 0.0, dist)), tuple(center), (0, 1, 0), fov=fov, near=near, far=far)
+        """Auto-fit: look at the compiled scene's bounds from +z (``Camera.fitted``, as every engine does)."""
+        return Camera.fitted(self.scene_bounds(), self._size)
 
     def view_matrix(self) -> np.ndarray | None:
         if self.camera is None:

@@ -27,15 +27,34 @@ from typing import Any
 
 import numpy as np
 
-from .context import GLError, clear_stencil, set_masks
+from .context import GLError, blit, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
 from .mirrors import Mirrors, mirror_items
-from .passes import Composed, FullScreen, Pass, Target
+from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target, _camera
 from .shadows import ShadowPlan, caster_bounds, frame_settings
 from .state import GLCalls, RasterApplier
 
-__all__ = ["FrameRunner", "PassRecord"]
+__all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
+
+_GL_SCISSOR_TEST = 0x0C11
+
+
+class ProjectionInfo:
+    """Near, far and kind of a projection given as a matrix (what depth read-back needs of a camera)."""
+
+    __slots__ = ("near", "far", "is_orthographic")
+
+    def __init__(self, near: float, far: float, is_orthographic: bool) -> None:
+        self.near, self.far, self.is_orthographic = near, far, is_orthographic
+
+    @classmethod
+    def of(cls, proj: np.ndarray) -> ProjectionInfo:
+        """The near and far planes of an OpenGL perspective or orthographic projection matrix."""
+        a, b = float(proj[2, 2]), float(proj[2, 3])
+        if abs(proj[3, 3] - 1.0) < 1e-9:  # orthographic: ndc z = a z + b
+            return cls((b + 1.0) / a, (b - 1.0) / a, True)
+        return cls(b / (a - 1.0), b / (a + 1.0), False)
 
 
 class PassRecord(dict):
@@ -108,21 +127,29 @@ class FrameRunner:
         self._applier.forget()
 
     # -- the frame ---------------------------------------------------------------------
-    def draw(self, background: Any = None, clear: bool = True) -> None:
+    def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
         """Draw the installed scopes into the framebuffer: the engine technique's passes and every nested one.
 
         ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        ``camera`` (an ``om.Camera`` or ``(view, projection)`` 4x4 matrices) replaces the scene's camera
+        for this frame; ``framebuffer`` (a moderngl framebuffer on this engine's context, e.g. another
+        engine's :attr:`current_framebuffer`) is drawn into instead of the engine's own.  Together they
+        let one engine draw its scene into a frame another engine is composing, seen by that frame's camera.
         """
+        if framebuffer is not None and not hasattr(framebuffer, "use"):
+            raise TypeError(f"GLEngine.draw: framebuffer must be a moderngl Framebuffer, got {framebuffer!r:.60}")
+        override = None if camera is None else _camera(camera, "GLEngine.draw")
         with self.current():
-            self._draw_frame(background, clear)
+            self._draw_frame(background, clear, override, framebuffer)
 
-    def _draw_frame(self, background: Any, clear: bool) -> None:
+    def _draw_frame(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
         ctx = self.ctx
-        fbo = self.framebuffer
+        fbo = self.framebuffer if framebuffer is None else framebuffer
+        size = tuple(self._size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
         fbo.use()
-        ctx.viewport = (0, 0, *self._size)
-        self._target_size = tuple(self._size)
+        ctx.viewport = (0, 0, *size)
+        self._target_size = size
         self._linear_output = False
         self._applier = RasterApplier(GLCalls(ctx, self.raw, fbo, self._target_size))
         self._nclip = 0
@@ -130,10 +157,10 @@ class FrameRunner:
         self._frame_background = background
         if clear:
             fbo.clear(*self.clear_color(background), depth=1.0)
-            if self.has_stencil and not self._target_stack:
+            if self.has_stencil and not self._target_stack and framebuffer is None:
                 clear_stencil(self.raw, 0)
         ctx.enable(ctx.PROGRAM_POINT_SIZE)
-        camera, view, proj = self._camera_matrices()
+        camera, view, proj = self._frame_camera(override, size)
         self._camera_used = camera
         self._set_camera(view, proj, camera.is_orthographic)
         self._records: list[PassRecord] = []
@@ -144,13 +171,15 @@ class FrameRunner:
         self._frame_targets = {}
         root = self._root if self._root is not None else Scope()
         self._shadow_plan = None
+        self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
             calls += self._run(self.technique, root, Composed(), item_level=True)
             calls += self._mirror_passes(root)
         finally:
+            self._drawing = False
             self._close_query()
-            self._restore_defaults()
+            self._restore_defaults(fbo, size)
         self._release_unused_targets()
         if self.timing:
             for record in self._records:
@@ -216,6 +245,16 @@ class FrameRunner:
             return 0
         technique = Mirrors.plan(self._mirrors, self._view, self._proj, self.clear_color(self._frame_background))
         return self._run(technique, root, Composed(), item_level=False)
+
+    def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:
+        """(camera, view, projection) of a frame: the scene's, or ``override`` (validated ``(view, Camera|proj)``)."""
+        if override is None:
+            camera, view, _ = self._camera_matrices()
+            return camera, view, camera.projection_matrix(size[0] / size[1])
+        view, proj = override
+        if isinstance(proj, np.ndarray):
+            return ProjectionInfo.of(proj), view, proj
+        return proj, view, proj.projection_matrix(size[0] / size[1])
 
     def _set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         self._view = view
@@ -286,13 +325,11 @@ class FrameRunner:
                 self._clear(description.clear)
             source = self._root if description.source == "scene" and self._root is not None else scope
             if description.fullscreen is not None:
-                calls = self._fullscreen(description.fullscreen)
-            elif composed.scopes == "items":  # every item below, without running the nested techniques
-                calls = sum(self._draw_items(s, composed, None) for s in source.walk())
-            elif item_level:
-                calls = self._draw_items(source, composed, lambda child: self._nested(child, composed))
+                calls = self._fullscreen(description.fullscreen, composed)
+            elif description.custom is not None:
+                calls = self._custom(technique, description.custom, source, composed, item_level)
             else:
-                calls = self._run(self.technique, source, composed, item_level=True)
+                calls = self._draw_scope(source, composed, item_level)
         finally:
             self._leave_record()
             if saved_camera is not None:
@@ -307,6 +344,76 @@ class FrameRunner:
 
     def _nested(self, scope: Scope, composed: Composed) -> int:
         return self._run(scope.technique, scope, composed, item_level=False)
+
+    def _draw_scope(self, scope: Scope, composed: Composed, item_level: bool) -> int:
+        """What a pass that draws items draws: the scope's items (and nested scopes), or them through the
+        engine's technique when the pass is a nested technique's; with ``scopes="items"`` every item below,
+        without running the nested techniques."""
+        if composed.scopes == "items":
+            return sum(self._draw_items(s, composed, None) for s in scope.walk())
+        if item_level:
+            return self._draw_items(scope, composed, lambda child: self._nested(child, composed))
+        return self._run(self.technique, scope, composed, item_level=True)
+
+    def _custom(self, technique: Any, custom: Any, scope: Scope, composed: Composed, item_level: bool) -> int:
+        """A custom pass: ``custom(engine, draw)``; ``draw()`` draws what the pass selects, ``draw(Pass)`` nests."""
+        calls = 0
+
+        def draw(nested: Pass | None = None) -> int:
+            nonlocal calls
+            if nested is None:
+                made = self._draw_scope(scope, composed, item_level)
+            elif isinstance(nested, Pass):
+                made = self._execute(technique, nested, scope, composed, item_level)
+            else:
+                raise TypeError(f"draw() takes an om.gl.Pass or nothing, got {nested!r:.60}")
+            calls += made
+            return made
+
+        gl = self._applier.gl
+        fbo, size = gl.framebuffer, gl.size
+        try:
+            own = custom(self, draw)
+        finally:
+            # the code may have changed any GL state and binding: the next draw applies its state in full
+            self._applier.forget()
+            fbo.use()
+            self.ctx.viewport = (0, 0, *size)
+        if own is not None and (isinstance(own, bool) or not isinstance(own, int)):
+            raise TypeError(f"a custom pass returns the draw calls it made itself (an int) or None, got {own!r:.60}")
+        return calls + (own or 0)
+
+    @property
+    def current_framebuffer(self) -> Any:
+        """The framebuffer being drawn into: the pass's offscreen target while a frame is drawn, else the engine's."""
+        if getattr(self, "_drawing", False):
+            return self._applier.gl.framebuffer
+        return self.framebuffer
+
+    def copy_framebuffer(self, description: Target) -> RenderTarget:
+        """Copy colour and depth of :attr:`current_framebuffer` into the frame's offscreen target ``description``.
+
+        The target (made at the current framebuffer's size, kept while later frames copy into it) is then
+        read by :class:`FullScreen` inputs by its name, like a pass's; multisampling is resolved.  Custom
+        passes and drawers use it to read what is already drawn (a filter, a merge by depth, the depth a
+        volume's rays stop at).  The scissor test is switched off for the copy.
+        """
+        if not isinstance(description, Target):
+            raise TypeError(f"GLEngine.copy_framebuffer needs an om.gl.Target, got {description!r:.60}")
+        if len(description.colors) > 1:
+            raise ValueError(
+                f"GLEngine.copy_framebuffer: target {description.name!r} has {len(description.colors)} colour "
+                "attachments; a copy fills one (give colors=('color',) or colors=() for depth only)"
+            )
+        if not getattr(self, "_drawing", False):
+            raise RuntimeError("GLEngine.copy_framebuffer: no frame is being drawn; call it from a custom pass")
+        source = self.current_framebuffer
+        size = tuple(source.size)
+        target = self._frame_target(description, size)
+        self.ctx.disable_direct(_GL_SCISSOR_TEST)
+        blit(self.raw, source, target.fbo, size, bool(description.colors), description.depth)
+        self._applier.forget()
+        return target
 
     # -- the report and timer queries ----------------------------------------------------------
     def count(self, calls: int, instances: int) -> None:
@@ -347,11 +454,21 @@ class FrameRunner:
         self._suspend_query()
 
     # -- targets ------------------------------------------------------------------------
-    def _bind_target(self, description: Target) -> tuple:
-        key = (description, self._size)
+    def _target_key(self, description: Target, size: tuple[int, int] | None = None) -> tuple[Target, tuple[int, int]]:
+        """(description, pixel size): the key of a target's GPU objects (``size``, else its own or its scale's)."""
+        if size is None:
+            size = description.size
+        if size is None:
+            base = self._target_size if description.relative == "enclosing" else self._size
+            size = (max(1, round(base[0] * description.scale)), max(1, round(base[1] * description.scale)))
+        return description, size
+
+    def _frame_target(self, description: Target, size: tuple[int, int] | None = None) -> RenderTarget:
+        """The GPU target of ``description`` (at ``size``, else its scale of the frame size), named in this frame."""
+        key = self._target_key(description, size)
+        size = key[1]
         target = self._target_cache.get(key)
         if target is None:
-            size = description.pixels(self._size)
             if max(size) > self.max_texture_size:
                 raise ValueError(
                     f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
@@ -360,6 +477,10 @@ class FrameRunner:
             target = self._target_cache[key] = RenderTarget(self.ctx, description, size, self.raw)
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
+        return target
+
+    def _bind_target(self, description: Target) -> tuple:
+        target = self._frame_target(description)
         saved = (self._applier.gl.framebuffer, self._target_size, self._linear_output)
         self._applier.forget()
         target.fbo.use()
@@ -392,7 +513,7 @@ class FrameRunner:
 
     def _keep_target(self, description: Target) -> bool:
         """Keep the target of ``description`` from the last frame in this one (False when it is gone)."""
-        key = (description, self._size)
+        key = self._target_key(description)
         target = self._target_cache.get(key)
         if target is None:
             return False
@@ -431,7 +552,7 @@ class FrameRunner:
             self._applier.forget()  # the stencil write mask was reset to clear every bit
 
     # -- image-space passes --------------------------------------------------------------
-    def _fullscreen(self, effect: FullScreen) -> int:
+    def _fullscreen(self, effect: FullScreen, composed: Composed) -> int:
         """Draw one full-screen triangle shaded by ``effect`` into the current target."""
         ctx = self.ctx
         programs: FullScreenPrograms = self._fullscreen_programs
@@ -456,15 +577,20 @@ class FrameRunner:
         u = prog.get("u_resolution", None)
         if u is not None:
             u.value = tuple(float(v) for v in self._target_size)
+        # the pass's GL state (a stencil test, a scissor, a colour mask), then what the triangle needs
+        self._applier.forget()
+        self._applier.apply(composed.raster(self._defaults, self._defaults))
         self._applier.forget()
         ctx.disable(ctx.CULL_FACE)
+        ctx.wireframe = False
+        ctx.polygon_offset = (0.0, 0.0)
         if effect.depth:
             ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "<=" if effect.depth_test else "1"
+            ctx.depth_func = DEPTH_FUNCS[effect.depth_test or "always"]
             set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=True)
         else:
             ctx.disable(ctx.DEPTH_TEST)
-            set_masks(ctx, self.raw, self._applier.gl.framebuffer, color=(True, True, True, True), depth=False)
+            set_masks(ctx, self.raw, self._applier.gl.framebuffer, depth=False)
         if effect.blend:
             ctx.enable(ctx.BLEND)
             ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
@@ -475,8 +601,8 @@ class FrameRunner:
         self.count(1, 0)
         return 1
 
-    def _restore_defaults(self) -> None:
-        """State preservation: leave the context as a plain moderngl user expects it."""
+    def _restore_defaults(self, fbo: Any = None, size: tuple[int, int] | None = None) -> None:
+        """State preservation: leave the context as a plain moderngl user expects it, ``fbo`` bound."""
         ctx = self.ctx
         self._applier.apply(self._defaults)
         self._applier.forget()
@@ -486,9 +612,10 @@ class FrameRunner:
         ctx.wireframe = False
         ctx.polygon_offset = (0.0, 0.0)
         ctx.scissor = None
-        set_masks(ctx, self.raw, self.framebuffer, color=(True, True, True, True), depth=True)
+        fbo = self.framebuffer if fbo is None else fbo
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         for i in range(self._nclip):
             ctx.disable_direct(0x3000 + i)
         self._nclip = 0
-        self.framebuffer.use()
-        ctx.viewport = (0, 0, *self._size)
+        fbo.use()
+        ctx.viewport = (0, 0, *(self._size if size is None else size))

@@ -29,6 +29,8 @@ class Geometry:
         "normals",
         "colors",
         "texcoords",
+        "texcoords1",
+        "tangent_source",
         "sizes",
         "indices",
         "bounds",
@@ -53,6 +55,8 @@ class Geometry:
         persistent: bool = False,
         label: str = "",
         closed: bool = False,
+        texcoords1: np.ndarray | None = None,
+        tangents: Any = None,
     ) -> None:
         name = label or "Geometry"
         if mode not in _ARITY:
@@ -75,6 +79,11 @@ class Geometry:
             colors[:, :3] = srgb_to_linear(rgb)
         self.colors = colors
         self.texcoords = None if texcoords is None else np.ascontiguousarray(texcoords, dtype=np.float32)
+        if texcoords1 is not None:
+            texcoords1 = _vertex_array(texcoords1, 2, "texture coordinates (set 1)", name, n)
+        self.texcoords1 = texcoords1
+        #: tangents (N, 4) or a callable computing them, uploaded only for programs that read them (normal maps)
+        self.tangent_source = tangents
         self.sizes = None if sizes is None else np.ascontiguousarray(sizes, dtype=np.float32)
         self.indices = indices
         p = self.positions
@@ -129,6 +138,29 @@ class Geometry:
             found = bufs["adjacency"] = gpu_call(ctx.buffer, data, what=f"adjacency of {self.label}")
         return found
 
+    def _lazy_buffers(self, program: Any) -> None:
+        """Upload the second UV set and the tangents the first time a program reads them."""
+        from .resources import gpu_call
+
+        bufs = self.buffers
+        assert bufs is not None
+        for name, source in (("in_texcoord1", self.texcoords1), ("in_tangent", self.tangent_source)):
+            if name in bufs or source is None:
+                continue
+            try:
+                program[name]
+            except KeyError:
+                continue
+            arr = source() if callable(source) else source
+            if arr is None:
+                continue
+            data = np.ascontiguousarray(arr, dtype=np.float32)
+            bufs[name] = gpu_call(self._ctx_of(bufs), data, what=f"{name[3:]} of {self.label}")
+
+    @staticmethod
+    def _ctx_of(bufs: dict[str, Any]) -> Any:
+        return bufs["in_position"].ctx.buffer
+
     def release(self) -> None:
         """Free the GPU buffers (the CPU arrays stay, so the geometry can upload again)."""
         if self.buffers is not None:
@@ -140,9 +172,9 @@ class Geometry:
         """moderngl vertex-array content for the per-vertex attributes ``program`` uses."""
         bufs = self.buffers
         assert bufs is not None
-        formats = {"in_position": "3f", "in_normal": "3f", "in_color": "4f", "in_texcoord": "2f", "in_size": "1f"}
+        self._lazy_buffers(program)
         out = []
-        for name, fmt in formats.items():
+        for name, fmt in _FORMATS.items():
             if name in bufs:
                 try:
                     program[name]
@@ -153,6 +185,15 @@ class Geometry:
 
 
 _ARITY = {"triangles": 3, "lines": 2, "points": 1}
+_FORMATS = {
+    "in_position": "3f",
+    "in_normal": "3f",
+    "in_color": "4f",
+    "in_texcoord": "2f",
+    "in_texcoord1": "2f",
+    "in_tangent": "4f",
+    "in_size": "1f",
+}
 
 
 def _vertex_array(values: Any, width: int, what: str, name: str, count: int | None = None) -> np.ndarray:
@@ -280,6 +321,11 @@ def unit_mesh(kind: str, level: int = 3) -> Geometry:
         m = tessellate.rectangle((1.0, 1.0))
     else:
         raise ValueError(f"unit_mesh: unknown kind {kind!r}")
+    from ..geometry.normals import vertex_tangents
+
+    def tangents() -> np.ndarray:
+        return vertex_tangents(m.vertices, m.indices, m.normals, m.texcoords)
+
     return Geometry(
         "triangles",
         m.vertices,
@@ -289,4 +335,5 @@ def unit_mesh(kind: str, level: int = 3) -> Geometry:
         persistent=True,
         label=f"unit {kind}",
         closed=kind in CLOSED,
+        tangents=tangents if m.texcoords is not None else None,
     )

@@ -66,6 +66,8 @@ class TriangleSetPainter(ShapePainter):
             _check_optional(colors, "TriangleSet", "colors", path)
             uv = shape.texcoord_array()
             _check_optional(uv, "TriangleSet", "texcoords", path)
+            uv1 = shape.texcoord_array(1)
+            _check_optional(uv1, "TriangleSet", "texcoords1", path)
             geom = Geometry(
                 "triangles",
                 v,
@@ -74,6 +76,8 @@ class TriangleSetPainter(ShapePainter):
                 uv,
                 indices=idx,
                 label=f"TriangleSet in {path or '/'}",
+                texcoords1=uv1,
+                tangents=shape.tangent_array if uv is not None else None,
                 closed=is_closed_outward(v, idx),  # opaque closed meshes get their back faces culled
             )
             engine.geometry_cache.put(shape, geom)

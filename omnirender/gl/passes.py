@@ -15,7 +15,11 @@ A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(..
   default), ``camera`` (an ``om.Camera`` or ``(view, projection)`` matrices,
   e.g. a light's), ``front_face`` (``"cw"`` for mirrored views), ``shader`` (:class:`Shader`: depth only, flat colour,
   unlit, user GLSL snippets), or ``fullscreen`` (:class:`FullScreen`: an
-  image-space pass that draws one full-screen triangle instead of items).
+  image-space pass that draws one full-screen triangle instead of items), or
+  ``custom`` (Python drawing code: ``custom(engine, draw)`` is called instead
+  of drawing items; ``draw()`` draws what the pass selects, ``draw(Pass(...))``
+  runs a nested pass, so the code can switch targets, cameras and full-screen
+  effects while it draws, e.g. a compositing tree of renderers).
 
 Passes nest: the pass a nested technique describes is composed with the
 enclosing one (:class:`Composed`): item classes intersect, masks and
@@ -33,12 +37,16 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME"]
+from .attributes import _DEPTH_FUNCS
+
+__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME", "DEPTH_FUNCS"]
 
 #: The classes of draw items: drawn in this order when a pass selects several.
 ITEM_CLASSES = ("opaque", "transparent", "overlay")
 _ALL = frozenset(ITEM_CLASSES)
 _DTYPES = ("f1", "f2", "f4")
+#: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
+DEPTH_FUNCS = _DEPTH_FUNCS
 
 
 def _classes(items: Any) -> frozenset[str]:
@@ -98,12 +106,14 @@ class Target:
     ``colors`` names its colour attachments (fragment outputs 0, 1, ... in
     that order), ``depth`` adds a depth texture, ``dtype`` is ``"f1"`` (8 bits
     per channel, sRGB-encoded values like the screen), ``"f2"`` or ``"f4"``
-    (linear floats), ``scale`` its size relative to the frame, or ``size``
-    its size in pixels (independent of the frame: shadow maps).  ``stencil``
-    gives the depth texture a stencil buffer (stencil techniques offscreen).
-    Later passes
-    sample it through :class:`FullScreen` ``inputs``, :class:`Shader`
-    ``inputs`` or ``engine.target(name)``.
+    (linear floats), ``scale`` its size relative to the frame, or with
+    ``relative="enclosing"`` relative to the framebuffer the pass is nested in
+    (an offscreen pass inside another offscreen pass, e.g. inside a shadow map,
+    gets that target's size); ``size = (width, height)`` fixes it in pixels
+    instead (a square shadow map).  ``stencil`` gives the depth texture a
+    stencil buffer (stencil techniques offscreen).  Later passes sample it
+    through :class:`FullScreen` ``inputs``, :class:`Shader` ``inputs`` or
+    ``engine.target(name)``.
     """
 
     name: str
@@ -111,6 +121,7 @@ class Target:
     depth: bool = True
     dtype: str = "f1"
     scale: float = 1.0
+    relative: str = "frame"
     size: tuple[int, int] | None = None
     stencil: bool = False
 
@@ -128,14 +139,21 @@ class Target:
             raise ValueError(f"Target {self.name!r}: dtype must be one of {_DTYPES}, got {self.dtype!r}")
         if not (isinstance(self.scale, (int, float)) and 0.0 < self.scale <= 4.0):
             raise ValueError(f"Target {self.name!r}: scale must be in (0, 4], got {self.scale!r}")
+        if self.relative not in ("frame", "enclosing"):
+            raise ValueError(f"Target {self.name!r}: relative must be 'frame' or 'enclosing', got {self.relative!r}")
         if self.size is not None:
             try:
-                w, h = (int(v) for v in self.size)
+                w, h = self.size
+                ok = all(
+                    isinstance(v, (int, np.integer)) and not isinstance(v, bool) and 1 <= v <= 16384 for v in (w, h)
+                )
             except (TypeError, ValueError):
-                w = h = 0
-            if w <= 0 or h <= 0:
-                raise ValueError(f"Target {self.name!r}: size must be (width, height) > 0 pixels, got {self.size!r}")
-            object.__setattr__(self, "size", (w, h))
+                ok = False
+            if not ok:
+                raise ValueError(
+                    f"Target {self.name!r}: size must be (width, height) in pixels, 1..16384, got {self.size!r}"
+                )
+            object.__setattr__(self, "size", (int(w), int(h)))
         if self.stencil and not self.depth:
             raise ValueError(f"Target {self.name!r}: stencil=True needs depth=True (they share one texture)")
         object.__setattr__(self, "colors", colors)
@@ -186,6 +204,8 @@ class Shader:
       ``{"u_shadow_atlas": ("shadow-atlas", "depth")}`` (texture units 8 and up);
     * ``textures``: sampler uniforms bound to ``om.Texture`` images
       (``{"u_highlight": om.Texture(pattern)}``).
+    * ``alpha_cutoff``: fragments whose surface alpha is below it are discarded
+      (a depth-only pass of blended surfaces writes depth where they are mostly opaque).
     """
 
     depth_only: bool = False
@@ -197,8 +217,11 @@ class Shader:
     defines: Any = ()
     inputs: Any = ()
     textures: Any = ()
+    alpha_cutoff: float | None = None
 
     def __post_init__(self) -> None:
+        if self.alpha_cutoff is not None and not 0.0 <= float(self.alpha_cutoff) <= 1.0:
+            raise ValueError(f"Shader: alpha_cutoff must be in [0, 1] or None, got {self.alpha_cutoff!r}")
         if self.flat_color is not None:
             object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
         for name in ("vertex", "fragment"):
@@ -266,9 +289,12 @@ class FullScreen:
     ``uniforms`` gives other uniform values.  ``blend=True`` composites the
     result over the target ("over", premultiplied by its alpha) instead of
     replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
-    effect_depth(vec2 uv)`` the snippet defines; with ``depth_test=True``
-    that depth is tested (``<=``) against the target's, so the effect hides
-    behind nearer surfaces (image-space outlines).
+    effect_depth(vec2 uv)`` the snippet defines.  ``depth_test`` compares
+    that depth with the target's (``"less"``, ``"lequal"``, ... as
+    ``om.gl.DepthTest``; ``True`` means ``"lequal"``, so the effect hides
+    behind nearer surfaces; None: every fragment passes), so a saved image
+    can be merged back by depth (a depth sprite).  The pass's GL ``state`` (a
+    ``StencilTest``, a ``ScissorTest``, a ``ColorMask``) applies to the triangle.
     """
 
     fragment: str
@@ -276,17 +302,22 @@ class FullScreen:
     uniforms: Any = ()
     blend: bool = False
     depth: bool = False
-    depth_test: bool = False
+    depth_test: str | bool | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.fragment, str) or "effect" not in self.fragment:
             raise ValueError("FullScreen: fragment must be GLSL defining vec4 effect(vec2 uv)")
-        if self.depth_test and not self.depth:
-            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
-        if self.depth_test and not self.depth:
-            raise ValueError("FullScreen: depth_test=True needs depth=True (and float effect_depth(vec2 uv))")
         if self.depth and "effect_depth" not in self.fragment:
             raise ValueError("FullScreen: depth=True needs the snippet to define float effect_depth(vec2 uv)")
+        if self.depth_test is True:
+            object.__setattr__(self, "depth_test", "lequal")
+        elif self.depth_test is False:
+            object.__setattr__(self, "depth_test", None)
+        if self.depth_test is not None and self.depth_test not in DEPTH_FUNCS:
+            raise ValueError(f"FullScreen: depth_test must be None or one of {sorted(DEPTH_FUNCS)}, got "
+                             f"{self.depth_test!r}")  # fmt: skip
+        if self.depth_test is not None and not self.depth:
+            raise ValueError("FullScreen: depth_test compares the effect's depth: give depth=True and effect_depth")
         object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
 
@@ -310,6 +341,7 @@ class Pass:
     front_face: str = "ccw"
     shader: Shader | None = None
     fullscreen: FullScreen | None = None
+    custom: Callable[[Any, Any], Any] | None = None
     _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
     _fallback: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
 
@@ -345,6 +377,11 @@ class Pass:
             value = getattr(self, name)
             if value is not None and not isinstance(value, kind):
                 raise ValueError(f"Pass {self.name!r}: {name} must be an om.gl.{kind.__name__}, got {value!r}")
+        if self.custom is not None:
+            if not callable(self.custom):
+                raise ValueError(f"Pass {self.name!r}: custom must be a function (engine, draw), got {self.custom!r}")
+            if self.fullscreen is not None:
+                raise ValueError(f"Pass {self.name!r}: give custom or fullscreen, not both")
         object.__setattr__(self, "_state", self._captured("state"))
         object.__setattr__(self, "_fallback", self._captured("fallback"))
         if self.camera is not None:
@@ -394,6 +431,7 @@ class Pass:
             self.front_face,
             self.shader,
             self.fullscreen,
+            self.custom,
         )
 
     def __eq__(self, other: object) -> bool:
@@ -474,7 +512,10 @@ class Composed:
         flat = None
         vertex: list[str] = []
         fragment: list[str] = []
+        cutoff = None
         for s in self.shader:
+            if s.alpha_cutoff is not None:
+                cutoff = float(s.alpha_cutoff)
             depth_only = depth_only or s.depth_only
             unlit = unlit or s.unlit
             if s.flat_color is not None:
@@ -498,6 +539,8 @@ class Composed:
         for s in self.shader:
             defines.update(s.defines)
         out.extend((name, value) for name, value in sorted(defines.items()) if value is not False)
+        if cutoff is not None:
+            out.append(("PASS_ALPHA_CUTOFF", cutoff))
         return tuple(out)
 
     def inputs(self) -> dict[str, Any]:

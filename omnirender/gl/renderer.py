@@ -168,7 +168,7 @@ class BatchRenderer:
             if id(geom) not in used and not geom.persistent:
                 geom.release()
         if self._textures:
-            live = {id(it.state.texture) for it in items if it.state.texture is not None}
+            live = {(id(t), srgb) for it in items for _, t, srgb in it.state.textures}
             for key in [k for k in self._textures if k not in live]:
                 self._textures.pop(key)[2].release()
 
@@ -409,11 +409,11 @@ class BatchRenderer:
         if state.kind == "lines":
             prog["u_viewport"].value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
             prog["u_line_width"].value = float(state.value(LineWidth))
-        if state.texture is not None:
-            self._texture(state.texture).use(0)
-            u = prog.get("u_texture", None)
+        for unit, (sampler, texture, srgb) in enumerate(state.textures):
+            u = prog.get(sampler, None)
             if u is not None:
-                u.value = 0
+                self._texture(texture, srgb).use(unit)
+                u.value = unit
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
@@ -450,8 +450,10 @@ class BatchRenderer:
                     self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
             self._nclip = nclip
 
-    def _texture(self, attr: Any) -> Any:
-        entry = self._textures.get(id(attr))
+    def _texture(self, attr: Any, srgb: bool = True) -> Any:
+        """The GL texture of an ``om.Texture``: sRGB colour data, or linear data (normal, roughness maps)."""
+        key = (id(attr), srgb)
+        entry = self._textures.get(key)
         if entry is not None and entry[0]() is attr and entry[1] == attr.version:
             return entry[2]
         if entry is not None:
@@ -460,7 +462,8 @@ class BatchRenderer:
         h, w = img.shape[:2]
         # GL_SRGB8_ALPHA8: texture images are display (sRGB) values; the GPU decodes them before filtering
         # and mipmapping, so minified and magnified textures average light, not encoded values
-        tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=_GL_SRGB8_ALPHA8, what="a texture")
+        internal = _GL_SRGB8_ALPHA8 if srgb else _GL_RGBA8
+        tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=internal, what="a texture")
         mipmap = attr.mipmap
         if mipmap:
             tex.build_mipmaps()
@@ -477,7 +480,7 @@ class BatchRenderer:
             tex.use(0)
             for pname in (0x2802, 0x2803):  # GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
                 self.raw.glTexParameteri(0x0DE1, pname, 0x8370)
-        self._textures[id(attr)] = (weakref.ref(attr), attr.version, tex)
+        self._textures[key] = (weakref.ref(attr), attr.version, tex)
         return tex
 
     # -- transparent items -------------------------------------------------------------
@@ -528,7 +531,8 @@ class BatchRenderer:
             raster = list(composed.raster(state.raster, self._defaults))
             if raster[Blend.index] is None:
                 raster[Blend.index] = _OVER
-            raster[DepthMask.index] = False
+            if DepthMask.index not in composed.state:
+                raster[DepthMask.index] = False
             self._set_uniforms(prog, state, composed)
             mode = self._mode(geometry, state.kind)
             if _two_faced(geometry, state):
@@ -663,3 +667,4 @@ def _two_faced(geometry: Geometry, state: DrawState) -> bool:
 
 _GL_SRGB8_ALPHA8 = 0x8C43
 _TRIANGLES_ADJACENCY = 0x000C
+_GL_RGBA8 = 0x8058

@@ -68,8 +68,17 @@ in vec3 in_normal;
 #ifdef VCOLOR
 in vec4 in_color;
 #endif
-#ifdef TEXTURE
+#ifdef UVS
 in vec2 in_texcoord;
+out vec2 v_uv0;
+#ifdef UV1
+in vec2 in_texcoord1;
+out vec2 v_uv1;
+#endif
+#endif
+#ifdef NORMAL_MAP
+in vec4 in_tangent;
+out vec4 v_tangent;
 #endif
 #ifdef VSIZE
 in float in_size;
@@ -112,9 +121,6 @@ out float gl_ClipDistance[NCLIP];
 out vec3 v_pos;
 out vec3 v_normal;
 out vec4 v_color;
-#ifdef TEXTURE
-out vec2 v_uv;
-#endif
 PASS_VERTEX_CODE
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
@@ -127,6 +133,10 @@ void main() {
     if (dot(m[0], cof[0]) < 0.0) normal = -normal;
     float nn = dot(normal, normal);
     normal = nn > 0.0 ? normal * inversesqrt(nn) : vec3(0.0, 0.0, 1.0);
+#ifdef NORMAL_MAP
+    // the tangent follows the surface (model matrix); a mirroring matrix flips the bitangent
+    v_tangent = vec4(mat3(u_view) * (m * in_tangent.xyz), dot(m[0], cof[0]) < 0.0 ? -in_tangent.w : in_tangent.w);
+#endif
 #endif
     PASS_VERTEX_CALLS
     vec4 eye = u_view * world;
@@ -143,13 +153,18 @@ void main() {
     v_normal = mat3(u_view) * normal;
 #endif
     v_pos = eye.xyz;
-#ifdef VCOLOR
-    v_color = vec4(in_color.rgb, in_color.a * i_color.a);
+#if defined(VCOLOR) && MODEL == 1
+    v_color = in_color * i_color;  // glTF: vertex colours multiply the base colour
+#elif defined(VCOLOR)
+    v_color = vec4(in_color.rgb, in_color.a * i_color.a);  // OpenGL's colour material: they replace it
 #else
     v_color = i_color;
 #endif
-#ifdef TEXTURE
-    v_uv = in_texcoord;
+#ifdef UVS
+    v_uv0 = in_texcoord;
+#ifdef UV1
+    v_uv1 = in_texcoord1;
+#endif
 #endif
 #ifdef INSTANCE_MATERIAL
     v_emis = i_emis;
@@ -173,8 +188,41 @@ FRAGMENT = """
 in vec3 v_pos;
 in vec3 v_normal;
 in vec4 v_color;
-#ifdef TEXTURE
-in vec2 v_uv;
+#ifdef UVS
+in vec2 v_uv0;
+#ifdef UV1
+in vec2 v_uv1;
+#define UV_SET1 v_uv1
+#else
+#define UV_SET1 v_uv0
+#endif
+// a texture slot's coordinates: its UV set, then its transform (KHR_texture_transform)
+#define SLOT_UV(set, m) ((m) * vec3((set) == 1 ? UV_SET1 : v_uv0, 1.0)).xy
+#endif
+#ifdef NORMAL_MAP
+in vec4 v_tangent;
+uniform sampler2D u_normal_texture;
+uniform mat3 u_uvm_normal;
+uniform float u_normal_scale;
+#endif
+#ifdef MR_TEXTURE
+uniform sampler2D u_mr_texture;
+uniform mat3 u_uvm_mr;
+#endif
+#ifdef OCCLUSION_TEXTURE
+uniform sampler2D u_occlusion_texture;
+uniform mat3 u_uvm_occlusion;
+uniform float u_occlusion_strength;
+#endif
+#ifdef EMISSIVE_TEXTURE
+uniform sampler2D u_emissive_texture;
+uniform mat3 u_uvm_emissive;
+#endif
+#ifdef ALPHA_MASK
+uniform float u_alpha_cutoff;
+#endif
+#ifdef LAYERS
+LAYER_UNIFORMS
 #endif
 #ifdef INSTANCE_MATERIAL
 flat in vec4 v_emis;
@@ -218,6 +266,7 @@ uniform vec3 u_ambient;
 uniform mat4 u_eye_to_world;        // the pass camera's eye space to world space (shadows, pass snippets)
 #ifdef TEXTURE
 uniform sampler2D u_texture;
+uniform mat3 u_uvm_base;
 #endif
 #ifdef FLAT_COLOR
 uniform vec4 u_flat_color;          // linear
@@ -283,11 +332,32 @@ vec3 pbr_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 albedo, vec3 F0, f
 void main() {
     vec3 P = v_pos;
     vec4 base = v_color;
-    vec3 texel = vec3(1.0);
+    vec4 surf = vec4(1.0);
 #ifdef TEXTURE
-    vec4 tex = texture(u_texture, v_uv);  // an sRGB texture: filtered and returned linear by the GPU
-    base *= tex;
-    texel = tex.rgb;
+    surf = texture(u_texture, SLOT_UV(UVSET_BASE, u_uvm_base));  // sRGB: filtered and returned linear by the GPU
+#endif
+#ifdef LAYERS
+    LAYER_CODE
+#endif
+    base *= surf;  // the texture (and its layers) multiply the base colour and the alpha
+    vec3 texel = surf.rgb;
+#ifdef PASS_ALPHA_CUTOFF
+    if (base.a < float(PASS_ALPHA_CUTOFF)) discard;
+#endif
+#ifdef ALPHA_MASK
+    if (base.a < u_alpha_cutoff) discard;
+    base.a = 1.0;
+#elif defined(ALPHA_OPAQUE)
+    base.a = 1.0;
+#endif
+    vec3 emission = M_EMIS.rgb;
+#ifdef EMISSIVE_TEXTURE
+    emission *= texture(u_emissive_texture, SLOT_UV(UVSET_EMISSIVE, u_uvm_emissive)).rgb;
+#endif
+    float occlusion = 1.0;
+#ifdef OCCLUSION_TEXTURE
+    vec2 occlusion_uv = SLOT_UV(UVSET_OCCLUSION, u_uvm_occlusion);
+    occlusion = 1.0 + u_occlusion_strength * (texture(u_occlusion_texture, occlusion_uv).r - 1.0);
 #endif
     vec3 N;
 #ifdef POINTS
@@ -301,6 +371,20 @@ void main() {
 #else
     N = dot(v_normal, v_normal) > 0.0 ? normalize(v_normal) : vec3(0.0, 0.0, 1.0);
     if (!gl_FrontFacing) N = -N;
+#ifdef NORMAL_MAP
+    {   // tangent-space normal map (OpenGL convention: x along u, y along v, z out of the surface)
+        vec3 t = v_tangent.xyz - N * dot(N, v_tangent.xyz);
+        float tt = dot(t, t);
+        if (tt > 1e-20) {
+            t *= inversesqrt(tt);
+            vec3 b = cross(N, t) * (v_tangent.w < 0.0 ? -1.0 : 1.0);
+            vec3 tn = texture(u_normal_texture, SLOT_UV(UVSET_NORMAL, u_uvm_normal)).xyz * 2.0 - 1.0;
+            tn.xy *= u_normal_scale;
+            vec3 n = t * tn.x + b * tn.y + N * tn.z;
+            N = dot(n, n) > 0.0 ? normalize(n) : N;
+        }
+    }
+#endif
 #endif
     STATE_MAIN
 #ifdef DEPTH_ONLY
@@ -321,11 +405,16 @@ void main() {
 #elif MODEL == 1
     float metallic = clamp(M_PBR.y, 0.0, 1.0);
     float rough = clamp(M_PBR.x, 0.04, 1.0);
+#ifdef MR_TEXTURE
+    vec4 mr = texture(u_mr_texture, SLOT_UV(UVSET_MR, u_uvm_mr));  // glTF: roughness in green, metallic in blue
+    metallic = clamp(M_PBR.y * mr.b, 0.0, 1.0);
+    rough = clamp(M_PBR.x * mr.g, 0.04, 1.0);
+#endif
     float a2 = rough * rough * rough * rough;
     vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
     float k = (rough + 1.0) * (rough + 1.0) / 8.0;
     vec3 albedo = base.rgb;
-    color = AMBIENT_ON * (M_EMIS.rgb + u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic));
+    color = AMBIENT_ON * (emission + occlusion * u_ambient * (base.rgb * (1.0 - metallic) + F0 * metallic));
 #ifdef PBR_LIGHTS
     PBR_LIGHTS
 #else
@@ -339,7 +428,7 @@ void main() {
 #else
     vec3 kd = base.rgb;
     // the texture modulates the ambient term too (GL_MODULATE, POV-Ray's pigment, Mitsuba's albedo)
-    color = AMBIENT_ON * (M_EMIS.rgb + (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient);
+    color = AMBIENT_ON * (emission + occlusion * (M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel) * u_ambient);
 #ifdef PHONG_LIGHTS
     PHONG_LIGHTS
 #else
@@ -545,6 +634,25 @@ def _header(defines: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: The blend modes of texture layers, as the LAYER_BLEND<i> defines number them.
+LAYER_BLENDS = {"over": 0, "multiply": 1, "add": 2}
+
+
+def _layer_glsl(count: int) -> tuple[str, str]:
+    """Uniform declarations and unrolled blending code of ``count`` texture layers (samplers need constant indices)."""
+    uniforms, code = [], []
+    for i in range(count):
+        uniforms.append(f"uniform sampler2D u_layer{i};\nuniform mat3 u_uvm_layer{i};")
+        uniforms.append(f"uniform float u_layer_opacity{i};")
+        code.append(
+            f"{{ vec4 l = texture(u_layer{i}, SLOT_UV(UVSET_LAYER{i}, u_uvm_layer{i}));\n"
+            f"#if LAYER_BLEND{i} == 0\n surf.rgb = mix(surf.rgb, l.rgb, l.a * u_layer_opacity{i});\n"
+            f"#elif LAYER_BLEND{i} == 1\n surf.rgb *= mix(vec3(1.0), l.rgb, u_layer_opacity{i});\n"
+            f"#else\n surf.rgb += l.rgb * l.a * u_layer_opacity{i};\n#endif\n}}"
+        )
+    return "\n".join(uniforms), "\n".join(code)
+
+
 def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> str:
     """Insert the pass snippets (renamed per occurrence) and the state kinds' GLSL at their hooks."""
     vertex = features.get("PASS_VERTEX", ())
@@ -557,8 +665,11 @@ def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> s
     if "SHADOW_CODE" in source:
         source = source.replace("SHADOW_CODE", shadow_code(features))
     state_main = "\n    ".join(kind.fragment_main for kind in code if kind.fragment_main)
+    layer_uniforms, layer_code = _layer_glsl(int(features.get("LAYERS", 0)))
     return (
-        source.replace("PASS_VERTEX_CODE", v_code)
+        source.replace("LAYER_UNIFORMS", layer_uniforms)
+        .replace("LAYER_CODE", layer_code)
+        .replace("PASS_VERTEX_CODE", v_code)
         .replace("PASS_VERTEX_CALLS", v_calls)
         .replace("PASS_FRAGMENT_CODE", f_code)
         .replace("PASS_FRAGMENT_CALLS", f_calls)

@@ -19,7 +19,8 @@ from __future__ import annotations
 from typing import Any
 
 from ..core.technique import Technique
-from .passes import Pass
+from .attributes import Blend, ColorMask, DepthMask
+from .passes import Pass, Shader
 
 __all__ = ["GLTechnique", "Forward"]
 
@@ -57,6 +58,9 @@ class Forward(GLTechnique):
       technique scopes where they were met;
     * ``transparent``: transparent items back to front, blended ("over" where
       no ``Blend`` is set), depth writes off, closed shapes back faces first;
+    * ``transparent depth``: the transparent items' depth where their alpha is
+      at least one half, colour untouched, so the depth (and the mask) of the
+      image shows them as POV-Ray, Mitsuba and picking do;
     * ``overlay``: 2D items (text) over everything.
     """
 
@@ -64,6 +68,13 @@ class Forward(GLTechnique):
     PASSES = (
         Pass("opaque", items="opaque"),
         Pass("transparent", items="transparent", scopes=False),
+        Pass(
+            "transparent depth",
+            items="transparent",
+            scopes=False,
+            state=(ColorMask(False, False, False, False), DepthMask(True), Blend(None)),
+            shader=Shader(depth_only=True, alpha_cutoff=0.5),
+        ),
         Pass("overlay", items="overlay", scopes=False),
     )
 

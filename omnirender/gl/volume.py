@@ -7,8 +7,12 @@ shader marches the ray front to back through the 3D texture, from where it
 enters the box or crosses the near plane (whichever is later) to the back
 face, maps samples through the transfer function (opacity corrected for the
 step length), composites, and writes ``gl_FragDepth`` at the first sample
-whose accumulated opacity exceeds 5% -- so depth changes exactly where colour
-does (compositing rule 2).  Rays that stay nearly transparent are discarded.
+where the accumulated opacity crosses 5% (interpolated within the step, so the
+depth is smooth) -- so depth changes exactly where colour does (compositing
+rule 2).  Rays that stay nearly transparent are discarded.
+Rays end at the depth already drawn (a copy of the framebuffer's depth taken
+before the volumes are drawn), so opaque shapes inside a volume hide what lies
+behind them and are seen through what lies in front.
 """
 
 from __future__ import annotations
@@ -24,10 +28,13 @@ from .context import set_masks
 from .engine import GLEngine
 from .geometry import Geometry, unit_mesh
 from .layout import ROW
+from .passes import Target
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
 
 _GL_DEPTH_CLAMP = 0x864F
+#: Where the depth drawn before the volumes is copied (a frame target: made once, kept while volumes are drawn).
+_DRAWN_DEPTH = Target("gl.volume.drawn-depth", colors=(), depth=True)
 
 _VS = """
 in vec3 in_position;
@@ -49,7 +56,10 @@ uniform vec2 u_range;          // transfer function value range
 uniform vec3 u_dims;           // voxels along x, y, z
 uniform vec4 u_eye;            // eye in local coordinates (w = 1) or viewing direction (w = 0, orthographic)
 uniform mat4 u_mvp;
+uniform mat4 u_inv_mvp;
 uniform float u_steps;
+uniform sampler2D u_scene_depth;  // depth drawn before the volumes (window depth, 1 = nothing)
+uniform vec2 u_viewport;
 out vec4 f_color;
 
 vec2 box(vec3 ro, vec3 rd) {
@@ -78,6 +88,12 @@ void main() {
     } else if (a0 < 0.0) {
         discard;
     }
+    // end the ray where it meets what is already drawn
+    float drawn = texelFetch(u_scene_depth, ivec2(gl_FragCoord.xy), 0).r;
+    if (drawn < 1.0) {
+        vec4 q = u_inv_mvp * vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, drawn * 2.0 - 1.0, 1.0);
+        t.y = min(t.y, dot(q.xyz / q.w - ro, rd));
+    }
     if (t.y <= t.x) discard;
     float len = t.y - t.x;
     float dt = 1.7320508 / u_steps;
@@ -93,9 +109,12 @@ void main() {
         vec4 c = texture(u_tf, vec2(x, 0.5));
         float a = 1.0 - pow(max(1.0 - c.a, 0.0), dt * max(max(u_dims.x, u_dims.y), u_dims.z));
         color += (1.0 - alpha) * a * c.rgb;
+        float before = alpha;
         alpha += (1.0 - alpha) * a;
         if (depth < 0.0 && alpha > 0.05) {
-            vec4 clip = u_mvp * vec4(p, 1.0);
+            // where within this step's stretch the opacity crossed 5 %: a smooth depth, not one in steps
+            float f = clamp((0.05 - before) / max(alpha - before, 1e-6), 0.0, 1.0);
+            vec4 clip = u_mvp * vec4(p + rd * (f - 0.5) * dt, 1.0);
             depth = clip.z / clip.w * 0.5 + 0.5;
         }
         if (alpha > 0.99) break;
@@ -159,6 +178,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     if not engine.programs.registered("volume"):
         engine.programs.register("volume", _VS, _FS)
     prog = engine.programs.get("volume")
+    drawn = engine.copy_framebuffer(_DRAWN_DEPTH)
     engine.forget_gl_state()
     ctx.enable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
     ctx.depth_func = "<"
@@ -167,7 +187,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     ctx.cull_face = "front"
     ctx.enable_direct(_GL_DEPTH_CLAMP)
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-    set_masks(ctx, engine.raw, engine.framebuffer, depth=True)
+    set_masks(ctx, engine.raw, engine.current_framebuffer, depth=True)
     view, proj = engine.frame_view, engine.frame_projection
     calls = 0
     for item in items:
@@ -194,6 +214,8 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         prog["u_view"].write(view.T.astype(np.float32).tobytes())
         prog["u_proj"].write(proj.T.astype(np.float32).tobytes())
         prog["u_mvp"].write(mvp.T.astype(np.float32).tobytes())
+        prog["u_inv_mvp"].write(np.linalg.inv(mvp).T.astype(np.float32).tobytes())
+        prog["u_viewport"].value = tuple(float(v) for v in engine.target_size)
         prog["u_eye"].value = tuple(float(x) for x in eye)
         d, h, w = geom.data.shape
         prog["u_dims"].value = (float(w), float(h), float(d))
@@ -201,8 +223,10 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         prog["u_steps"].value = float(min(2 * max(w, h, d), 1024))
         vol.use(0)
         tf.use(1)
+        drawn.depth.use(2)
         prog["u_volume"].value = 0
         prog["u_tf"].value = 1
+        prog["u_scene_depth"].value = 2
         vao = ctx.vertex_array(prog, [(geom.buffers["in_position"], "3f", "in_position")], geom.buffers["index"], 4)
         vao.render(ctx.TRIANGLES)
         vao.release()

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import AmbientLight, Color, DirectionalLight, Material, PBRMaterial, PointLight, SpotLight
+from ..attributes import AmbientLight, Color, DirectionalLight, PointLight, SpotLight
 from ..attributes.photometry import (
     GLOBAL_AMBIENT,
     HEADLIGHT,
@@ -63,32 +63,32 @@ def rgb(value: Any, *, linearize: bool = True) -> dict[str, Any]:
     return {"type": "rgb", "value": [float(x) for x in v]}
 
 
-def material_bsdf(material: Material, reflectance: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Phong ``Material`` -> ``diffuse``, or ``roughplastic`` when it has a specular colour.
+def material_bsdf(app: Any, reflectance: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A resolved Phong appearance -> ``diffuse``, or ``roughplastic`` when it has a specular colour.
 
     ``reflectance`` (a texture dict) replaces the diffuse colour when given.
     """
-    diffuse = reflectance if reflectance is not None else rgb(material.diffuse)
-    spec = float(np.mean(material.specular))
+    diffuse = reflectance if reflectance is not None else rgb(app.base, linearize=False)
+    spec = float(np.mean(app.specular))
     if spec <= 0.0:
         return {"type": "diffuse", "reflectance": diffuse}
     return {
         "type": "roughplastic",
         "distribution": "beckmann",
-        "alpha": phong_roughness(material.shininess),
+        "alpha": phong_roughness(app.shininess),
         "diffuse_reflectance": diffuse,
-        "specular_reflectance": min(1.0, spec),
+        "specular_reflectance": min(1.0, float(np.mean(linear_to_srgb(app.specular)))),
         "nonlinear": True,
     }
 
 
-def pbr_bsdf(material: PBRMaterial, base_color: dict[str, Any] | None = None) -> dict[str, Any]:
-    """``PBRMaterial`` -> ``principled`` (the same metallic-roughness model)."""
+def pbr_bsdf(app: Any, base_color: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A resolved PBR appearance -> ``principled`` (the same metallic-roughness model)."""
     return {
         "type": "principled",
-        "base_color": base_color if base_color is not None else rgb(material.base_color),
-        "metallic": float(material.metallic),
-        "roughness": float(max(material.roughness, 0.01)),
+        "base_color": base_color if base_color is not None else rgb(app.base, linearize=False),
+        "metallic": float(app.metallic),
+        "roughness": float(max(app.roughness, 0.01)),
     }
 
 

@@ -17,9 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Material, Mirror, PBRMaterial, Texture
+from ..attributes import BumpMap, Mirror, MultiTexture, Texture
 from ..attributes.clipping import ClipRecords
-from ..attributes.surface import resolve_surface
+from ..attributes.photometry import ambient_total, linear_to_srgb, srgb_to_linear
+from ..attributes.surface import Appearance, appearance_key, engine_appearance, resolve_surface
+from ..attributes.texturing import bake_layers, scaled_image
 from ..core import Camera, Engine, Technique
 from . import convert
 from ._mi import mitsuba, transform
@@ -46,6 +48,23 @@ MASKED_COVERAGE_INTEGRATOR: dict[str, Any] = {
 }
 
 _WRAP = {"repeat": "repeat", "clamp": "clamp", "mirror": "mirror"}
+_MISSING = object()
+#: Relative sampling weight of the emitters that carry emission and ambient light (the lights have 1).
+AMBIENT_SAMPLING_WEIGHT = 0.02
+
+
+def wrap_of(texture: Any) -> str:
+    """A texture's wrap mode ("repeat" without one)."""
+    return "repeat" if texture is None else texture.wrap
+
+
+def _resampled(rgba8: np.ndarray, rows: int, cols: int, srgb: bool) -> np.ndarray:
+    """(rows, cols, 3) linear values of an RGBA8 image (nearest resampling to the size)."""
+    h, w = rgba8.shape[:2]
+    img = rgba8[(np.arange(rows) * h) // rows][:, (np.arange(cols) * w) // cols, :3].astype(np.float64) / 255.0
+    return srgb_to_linear(img) if srgb else img
+
+
 _FILTER = {"linear": "bilinear", "nearest": "nearest"}
 
 
@@ -104,6 +123,7 @@ class MitsubaEngine(Engine):
         self._lights_converted = False
         #: active clip planes with their world rows, see :meth:`clip_planes`
         self._clips = ClipRecords()
+        self._ambient: np.ndarray | None = None
 
     # -- clip planes ----------------------------------------------------------
     def add_clip(self, plane: Any) -> None:
@@ -160,25 +180,43 @@ class MitsubaEngine(Engine):
         Color active after the material replaces its diffuse/base colour and scales its opacity."""
         return resolve_surface(self.surface_stack)
 
+    def appearance(self, texcoords: bool = True) -> Appearance:
+        """The one appearance model's resolution of the active attributes (textures only with ``texcoords``)."""
+        return engine_appearance(self, texcoords=texcoords)
+
+    def _appearance_key(self, texcoords: bool) -> tuple:
+        mono = self.mono
+        if not texcoords:
+            return appearance_key(self.surface_stack)
+        return appearance_key(self.surface_stack, mono(Texture), mono(MultiTexture), mono(BumpMap))
+
     def current_bsdf(self, *, two_sided: bool = True, vertex_colors: bool = False, texcoords: bool = True) -> Any:
         """The Mitsuba BSDF object for the active appearance attributes (cached).
 
-        Priority: ``om.mitsuba.BSDF`` (passed through), ``PBRMaterial``,
-        ``Material``, ``Color``, default grey.  A ``Texture`` (when the shape
-        has texture coordinates) or per-vertex colours replace the diffuse
-        colour.  Converted BSDFs are two-sided and use ``mask`` for opacity < 1.
+        ``om.mitsuba.BSDF`` is passed through; otherwise the resolved appearance
+        (:mod:`omnirender.attributes.surface`): ``principled`` for PBR (textured
+        base colour, metallic and roughness), ``diffuse`` / ``roughplastic`` for
+        Phong, wrapped in ``normalmap`` (normal maps, bump maps), ``twosided``
+        and ``mask`` (blended opacity, cut-outs).  Per-vertex colours are read
+        from the mesh (``vertex_colors``).
         """
         user = self.mono(BSDF)
-        tex = self.mono(Texture) if texcoords else None
-        material, color = self.surface()
         mirror = self.mono(Mirror)
-        key = tuple((id(a), a.version) if a is not None else None for a in (user, tex, material, color, mirror)) + (
+        key = (
+            None if user is None else (id(user), user.version),
+            self._appearance_key(texcoords),
+            None if mirror is None else (id(mirror), mirror.version),
             two_sided,
             vertex_colors,
+            texcoords,
         )
         found = self._bsdfs.get(key)
         if found is None:
-            plugin = self._bsdf_dict(user, tex, material, color, two_sided, vertex_colors)
+            if user is not None:
+                plugin = user.plugin_dict()
+                self.has_masks |= plugin.get("type") == "mask"
+            else:
+                plugin = self._bsdf_dict(self.appearance(texcoords), two_sided, vertex_colors)
             found = self._bsdfs[key] = self.instantiate(plugin, "om.mitsuba.BSDF" if user is not None else "BSDF")
         return found
 
@@ -193,71 +231,181 @@ class MitsubaEngine(Engine):
                 f"check the plugin name and parameters against Mitsuba's plugin reference"
             ) from None
 
-    def _bsdf_dict(self, user, tex, material, color, two_sided, vertex_colors) -> dict[str, Any]:
-        if user is not None:
-            plugin = user.plugin_dict()
-            self.has_masks |= plugin.get("type") == "mask"
-            return plugin
-        reflectance = None
-        if tex is not None:
-            self.texture_image(tex)  # a missing image file fails here, naming the node
-            reflectance = self._texture_dict(tex)
+    def _base_image(self, app: Appearance) -> np.ndarray | None:
+        """The base colour texture (with its layers) times the base colour, RGBA8, or None."""
+        if app.texture is None and not app.layers:
+            return None
+        base = None if app.texture is None else self.texture_image(app.texture)
+        image = bake_layers(base, app.layers) if app.layers else base
+        factor = (*linear_to_srgb(np.asarray(app.base)), 1.0)
+        return scaled_image(image, factor)
+
+    def _bsdf_dict(self, app: Appearance, two_sided: bool, vertex_colors: bool) -> dict[str, Any]:
+        image = self._base_image(app)
+        wrap = app.texture.wrap if app.texture is not None else "repeat"
+        if image is not None:
+            reflectance = self._bitmap(image[:, :, :3], wrap, app.texture)
         elif vertex_colors:
             reflectance = {"type": "mesh_attribute", "name": "vertex_color"}
-        elif color is not None and material is not None:
-            reflectance = convert.rgb(color.rgb)
-        if isinstance(material, PBRMaterial):
-            bsdf, opacity = convert.pbr_bsdf(material, reflectance), material.opacity
-        elif isinstance(material, Material):
-            bsdf, opacity = convert.material_bsdf(material, reflectance), material.opacity
         else:
-            bsdf, opacity = convert.color_bsdf(color, reflectance), 1.0
+            reflectance = convert.rgb(app.base, linearize=False)
+        if app.model == "pbr":
+            bsdf = convert.pbr_bsdf(app, reflectance)
+            mr = app.metallic_roughness_texture
+            if mr is not None:
+                rgba = self.texture_image(mr).astype(np.float32) / 255.0
+                bsdf["metallic"] = self._bitmap(rgba[:, :, 2:3] * app.metallic, mr.wrap, mr, raw=True)
+                rough = np.maximum(rgba[:, :, 1:2] * app.roughness, 0.01)
+                bsdf["roughness"] = self._bitmap(rough, mr.wrap, mr, raw=True)
+        else:
+            bsdf = convert.material_bsdf(app, reflectance)
+        normal, scale = app.normal_map()
+        if normal is not None:
+            bsdf = {"type": "normalmap", "normalmap": self._normal_bitmap(normal, scale), "bsdf": bsdf}
         mirror = self.mono(Mirror)
         if mirror is not None and mirror.reflectance > 0.0:
             # the surface with weight 1 - reflectance, a perfect mirror with weight reflectance (as GL blends them)
             mirror_bsdf = {"type": "conductor", "material": "none"}
             bsdf = {"type": "blendbsdf", "weight": float(mirror.reflectance), "bsdf_0": bsdf, "bsdf_1": mirror_bsdf}
-        if color is not None:
-            opacity *= color.a
+        opacity = app.alpha if app.alpha_mode == "blend" else 1.0
         bsdf = convert.wrap_bsdf(bsdf, float(opacity), two_sided)
-        if tex is not None and tex.image_array()[:, :, 3].min() < 255:
-            # the texture's alpha cuts the surface out (GL multiplies it into the alpha)
-            alpha = np.ascontiguousarray(tex.image_array()[::-1, :, 3:4].astype(np.float32) / 255.0)
-            cutout = {"type": "bitmap", "bitmap": mitsuba().Bitmap(alpha), "raw": True}
-            cutout["wrap_mode"] = _WRAP.get(tex.wrap, "repeat")
-            bsdf = {"type": "mask", "opacity": cutout, "material": bsdf}
+        if image is not None and app.alpha_mode != "opaque" and image[:, :, 3].min() < 255:
+            # the texture's alpha: see-through where it is below 1 (blend), cut out below the cutoff (mask)
+            alpha = image[:, :, 3:4].astype(np.float32) / 255.0
+            if app.alpha_mode == "mask":
+                alpha = (alpha >= app.alpha_cutoff).astype(np.float32)
+            bsdf = {"type": "mask", "opacity": self._bitmap(alpha, wrap, app.texture, raw=True), "material": bsdf}
         self.has_masks |= bsdf["type"] == "mask"
         return bsdf
+
+    def _bitmap(self, pixels: np.ndarray, wrap: str, texture: Any, raw: bool = False) -> dict[str, Any]:
+        """A ``bitmap`` texture dict of (H, W, C) pixels (uint8 sRGB, or float ``raw`` data); rows flipped.
+
+        Mitsuba looks up v = 0 in the image's first row; omnirender follows
+        OpenGL (v = 0 at the bottom row).  The texture's transform is
+        Mitsuba's ``to_uv``.
+        """
+        data = np.ascontiguousarray(pixels[::-1])
+        out: dict[str, Any] = {
+            "type": "bitmap",
+            "bitmap": mitsuba().Bitmap(data),
+            "wrap_mode": _WRAP.get(wrap, "repeat"),
+            "filter_type": _FILTER.get(texture.filter if texture is not None else "linear", "bilinear"),
+        }
+        if raw:
+            out["raw"] = True
+        if texture is not None and texture.transformed:
+            # Mitsuba flips v after to_uv (1 - v): conjugate the transform with that flip
+            flip = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, 1.0]])
+            m3 = flip @ texture.uv_matrix() @ flip
+            out["to_uv"] = mitsuba().ScalarTransform3f(m3.tolist())
+        return out
+
+    def _normal_bitmap(self, texture: Texture, scale: float) -> dict[str, Any]:
+        """A tangent-space normal map for Mitsuba's ``normalmap`` (linear data, x and y scaled by ``scale``)."""
+        n = self.texture_image(texture)[:, :, :3].astype(np.float32) / 255.0 * 2.0 - 1.0
+        if scale != 1.0:
+            n[:, :, :2] *= scale
+            n /= np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-6)
+        return self._bitmap((n + 1.0) * 0.5, texture.wrap, texture, raw=True)
 
     def texture_image(self, tex: Texture) -> np.ndarray:
         """``tex.image_array()``; a missing or unreadable image file raises naming the node and the fix."""
         return tex.image_in("MitsubaEngine", self.node_path)
 
-    def _texture_dict(self, tex: Texture) -> dict[str, Any]:
-        mi = mitsuba()
-        rgba = tex.image_array()
-        # Mitsuba looks up v = 0 in the image's first row; omnirender follows
-        # OpenGL (v = 0 at the bottom row), so the rows are flipped.
-        image = np.ascontiguousarray(rgba[::-1, :, :3])
-        return {
-            "type": "bitmap",
-            "bitmap": mi.Bitmap(image),
-            "wrap_mode": _WRAP.get(tex.wrap, "repeat"),
-            "filter_type": _FILTER.get(tex.filter, "bilinear"),
-        }
+    def current_area_emitter(self, texcoords: bool = True, glow: np.ndarray | None = None) -> Any:
+        """The area emitter of the next shape: its emission plus GL's ambient term, or ``om.mitsuba.Emitter("area")``.
 
-    def current_area_emitter(self) -> Any:
-        """An area emitter object for the next shape (emissive material or ``om.mitsuba.Emitter("area")``)."""
-        mi = mitsuba()
+        The ambient light every engine adds (GL's global ambient plus the
+        lights' ambient terms, times the ambient reflectance) is emitted by the
+        surface itself, as POV-Ray's ``ambient`` and GL's ambient term are: no
+        environment lights the scene, so Phong materials reflect their own
+        ambient colour and shadowed parts are as bright as in GL.  The emitter
+        is sampled rarely (``sampling_weight``), so the lights keep the samples.
+        """
         areas = [e for e in self.poly(Emitter) if e.is_area]
         if areas:
             self.has_area_emitters = True
             return self.instantiate(areas[-1].plugin_dict(), "om.mitsuba.Emitter")
-        material, _ = self.surface()
-        if material is not None and max(material.emission) > 0.0:
+        if self.mono(BSDF) is not None:
+            return None
+        if glow is not None:
+            # a vertex-coloured mesh: the mean of its per-vertex ambient and emission (Mitsuba cannot sample
+            # a mesh attribute on an emitter)
+            value = np.asarray(glow, np.float64).mean(axis=0)
+            if not np.any(value > 0.0):
+                return None
             self.has_area_emitters = True
-            return mi.load_dict({"type": "area", "radiance": convert.rgb(material.emission)})
-        return None
+            radiance = convert.rgb(value, linearize=False)
+            return self.instantiate(
+                {"type": "area", "radiance": radiance, "sampling_weight": AMBIENT_SAMPLING_WEIGHT}, "area emitter"
+            )
+        key = ("emitter", self._appearance_key(texcoords))
+        plugin = self._bsdfs.get(key, _MISSING)
+        if plugin is _MISSING:
+            plugin = self._bsdfs[key] = self._emitter_dict(self.appearance(texcoords))
+        if plugin is None:
+            return None
+        self.has_area_emitters = True
+        return self.instantiate(dict(plugin), "area emitter")  # an emitter object belongs to one shape
+
+    def _emitter_dict(self, app: Appearance) -> dict[str, Any] | None:
+        ambient_light = self.ambient_light()
+        emission = np.asarray(app.emission, np.float64)
+        image = self._base_image(app)
+        follows = app.ambient_follows_base
+        ambient = app.ambient_reflectance() * ambient_light
+        if app.occlusion_texture is not None or app.emissive_texture is not None or (image is not None):
+            # textured: bake emission + ambient into one linear image over UV set 0
+            ref = app.emissive_texture or app.texture or app.occlusion_texture
+            rows, cols = self.texture_image(ref).shape[:2] if image is None else image.shape[:2]
+            glow = np.zeros((rows, cols, 3), np.float64) + emission
+            if app.emissive_texture is not None:
+                glow = emission * _resampled(self.texture_image(app.emissive_texture), rows, cols, True)
+            if image is not None and follows:
+                texel = _resampled(image, rows, cols, True)
+                amb = (texel * app.ambient_weight + app.ambient_offset) * ambient_light
+            elif image is not None:
+                amb = (
+                    np.asarray(app.ambient)
+                    * ambient_light
+                    * _resampled(image, rows, cols, True)
+                    / np.maximum(np.asarray(app.base), 1e-6)
+                )
+            else:
+                amb = np.zeros((rows, cols, 3)) + ambient
+            if app.occlusion_texture is not None:
+                occ = _resampled(self.texture_image(app.occlusion_texture), rows, cols, False)[:, :, :1]
+                amb = amb * (1.0 + app.occlusion_strength * (occ - 1.0))
+            total = (glow + amb).astype(np.float32)
+            if not np.any(total > 0.0):
+                return None
+            radiance = self._bitmap(total, wrap_of(ref), ref, raw=True)
+        else:
+            total = emission + ambient
+            if not np.any(total > 0.0):
+                return None
+            radiance = convert.rgb(total, linearize=False)
+        return {"type": "area", "radiance": radiance, "sampling_weight": AMBIENT_SAMPLING_WEIGHT}
+
+    def vertex_glow(self, linear_colors: np.ndarray, texcoords: bool = False) -> np.ndarray:
+        """Per-vertex emitted radiance (emission plus ambient) of a vertex-coloured mesh, (N, 3) float32."""
+        app = self.appearance(texcoords)
+        ambient = (linear_colors[:, :3] * app.ambient_weight + app.ambient_offset) * self.ambient_light()
+        return (ambient + np.asarray(app.emission)).astype(np.float32)
+
+    def vertex_colors(self, linear_colors: np.ndarray, texcoords: bool = False) -> np.ndarray:
+        """Linear per-vertex colours as the appearance model applies them: replacing or multiplying the base."""
+        app = self.appearance(texcoords)
+        if app.vertex_colors == "multiply":
+            return (linear_colors[:, :3] * np.asarray(app.base)).astype(np.float32)
+        return linear_colors[:, :3].astype(np.float32)
+
+    def ambient_light(self) -> np.ndarray:
+        """GL's ambient radiance: the global ambient plus every light's ambient term (see ``ambient_total``)."""
+        if self._ambient is None:
+            self._ambient = ambient_total(self.lights(), self.global_ambient)
+        return self._ambient
 
     # -- evaluation ---------------------------------------------------------
     def begin(self, root: Any) -> None:
@@ -289,7 +437,11 @@ class MitsubaEngine(Engine):
 
     def coverage_integrator(self) -> dict[str, Any]:
         """The integrator of the coverage/depth pass; its output has alpha in channel 3 and depth last."""
-        return dict(MASKED_COVERAGE_INTEGRATOR if self.has_masks else COVERAGE_INTEGRATOR)
+        if not self.has_masks:
+            return dict(COVERAGE_INTEGRATOR)
+        # emitting surfaces (ambient, emission) must count as hits; only an environment must not
+        hits = {**MASKED_COVERAGE_INTEGRATOR["hits"], "hide_emitters": self.has_environment()}
+        return {**MASKED_COVERAGE_INTEGRATOR, "hits": hits}
 
     def integrator_dict(self, integrator: dict[str, Any] | None = None) -> dict[str, Any]:
         """The integrator to use: ``integrator``, else the scene's, else :data:`DEFAULT_INTEGRATOR`."""
@@ -319,8 +471,8 @@ class MitsubaEngine(Engine):
         """Turn the queued generic lights into emitter plugins, as the GL engine lights the scene.
 
         Point and spot lights are matched at :meth:`reference_point`; ambient terms
-        (plus the global ambient) become one constant environment; a scene without
-        any light or emitter gets the GL engine's headlight.
+        (plus the global ambient) are emitted by the surfaces (:meth:`current_area_emitter`);
+        a scene without any light or emitter gets the GL engine's headlight.
         """
         if self._lights_converted:
             return
@@ -328,9 +480,6 @@ class MitsubaEngine(Engine):
         if not self.pending_lights and not self.emitters and self.headlight:
             self.add_emitter(convert.headlight_emitter(*self.camera_or_default()), "headlight")
         reference = self.reference_point()
-        ambient = convert.ambient_emitter(self.pending_lights, self.global_ambient)
-        if ambient is not None and not self.has_environment():  # Mitsuba allows one environment
-            self.add_emitter(ambient, "ambient")
         for light, matrix in self.pending_lights:
             plugin = convert.light_emitter(light, matrix, reference)
             if plugin is not None:

@@ -89,4 +89,5 @@ def build_mesh(
     params.update()
     if colors is not None:
         mesh.add_attribute("vertex_color", 3, np.ascontiguousarray(colors[:, :3], dtype=np.float32).reshape(-1))
+
     return mesh

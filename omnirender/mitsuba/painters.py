@@ -227,8 +227,31 @@ class TriangleSetPainter(ShapePainter):
             )
             if len(faces) == 0:
                 return
-        linear = None if colors is None else convert.srgb_to_linear(colors[:, :3]).astype(np.float32)
-        bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=texcoords is not None)
+        uv = texcoords is not None
+        linear = glow = None
+        if colors is not None:
+            linear = engine.vertex_colors(convert.srgb_to_linear(colors[:, :3]), uv)
+            glow = engine.vertex_glow(linear, uv)
+        bsdf = engine.current_bsdf(vertex_colors=colors is not None, texcoords=uv)
+        if glow is not None and len(faces) > 1:
+            # each group of faces of about the same colour emits its own ambient glow (per-face colours exact)
+            for group in _glow_groups(glow, faces):
+                keep = np.unique(faces[group])
+                remap = np.full(len(vertices), -1, np.int64)
+                remap[keep] = np.arange(len(keep))
+                name = engine.unique_name("mesh")
+                engine.shapes[name] = build_mesh(
+                    name,
+                    vertices[keep],
+                    remap[faces[group]],
+                    matrix=matrix,
+                    normals=None if normals is None else normals[keep],
+                    texcoords=None if texcoords is None else texcoords[keep],
+                    colors=linear[keep],
+                    bsdf=bsdf,
+                    emitter=engine.current_area_emitter(uv, glow=glow[keep]),
+                )
+            return
         name = engine.unique_name("mesh")
         mesh = build_mesh(
             name,
@@ -239,9 +262,28 @@ class TriangleSetPainter(ShapePainter):
             texcoords=texcoords,
             colors=linear,
             bsdf=bsdf,
-            emitter=engine.current_area_emitter(),
+            emitter=engine.current_area_emitter(uv, glow=glow),
         )
         engine.shapes[name] = mesh
+
+
+#: At most this many groups of faces of one ambient glow per vertex-coloured mesh.
+MAX_GLOW_GROUPS = 256
+
+
+def _glow_groups(glow: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
+    """Face indices grouped by their mean glow (quantised; coarser until at most MAX_GLOW_GROUPS groups)."""
+    face_glow = glow[faces].mean(axis=1)
+    top = max(float(face_glow.max()), 1e-12)
+    for levels in (32, 16, 8, 4, 2):
+        keys = np.round(face_glow / top * levels).astype(np.int64)
+        unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+        if len(unique) <= MAX_GLOW_GROUPS:
+            break
+    inverse = inverse.reshape(-1)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.searchsorted(inverse[order], np.arange(len(unique) + 1))
+    return [order[bounds[i] : bounds[i + 1]] for i in range(len(unique))]
 
 
 #: Above this many points a PointSet becomes one mesh of octahedra instead of Mitsuba spheres.

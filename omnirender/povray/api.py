@@ -23,7 +23,7 @@ from .runner import POVRayError, find_povray, read_png, read_ppm, run_povray
 
 __all__ = ["render", "export", "available", "scene_sdl", "node_at_line"]
 
-_ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix"}
+_ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix", "resource_dir"}
 #: POV-Ray holds the image in memory as floats (and we read it back as RGBA bytes).
 SIZE_LIMITS = SizeLimits(32768, 1 << 26, "POV-Ray keeps about 20 bytes per pixel in memory")
 
@@ -96,9 +96,16 @@ def export(scene: Any, path: str | os.PathLike[str], size: tuple[int, int] = (64
     """
     target = Path(path)
     prefix = "".join(ch if ch.isalnum() or ch in "_-" else "_" for ch in target.stem) + "_"
-    text, engine = scene_sdl(scene, size, resource_prefix=prefix, **options)
-    _write_files(target.parent if str(target.parent) else Path("."), text, target.name, engine.resources)
+    folder = (target.parent if str(target.parent) else Path(".")).resolve()
+    # textures are named with their absolute folder, so ``povray scene.pov`` finds them from any working folder
+    # (a folder whose name SDL cannot hold safely falls back to names relative to the file's folder)
+    where = str(folder) if _SAFE_DIR.match(str(folder)) else None
+    _, engine = scene_sdl(scene, size, resource_prefix=prefix, resource_dir=where, **options)
+    _write_files(folder, engine.sdl(standalone=True), target.name, engine.resources)
     return target
+
+
+_SAFE_DIR = re.compile(r"[A-Za-z0-9_./\-]+\Z")
 
 
 _LINE = re.compile(r"File '(scene|depth)\.pov' line (\d+)")

@@ -1,14 +1,29 @@
-"""Default conversion of the generic appearance attributes to POV-Ray textures.
+"""The one appearance model (:mod:`omnirender.attributes.surface`) as POV-Ray textures.
 
-Colours of ``Color``, ``Material`` and ``PBRMaterial`` are display (sRGB)
-values, as the GL engine shows them; the scene is written with
-``assumed_gamma 1.0`` and the output encoded as sRGB, so they are converted to
-linear values here and a fully lit surface gets the colour GL shows.  The
-base colour comes from ``PBRMaterial``, else ``Material``, else ``Color``,
-else grey 0.8.  POV-Ray multiplies ``ambient`` and ``emission`` by the
-pigment, so those are divided by the pigment colour.  The renderer-specific
-``Pigment`` replaces the derived pigment, ``Finish`` items are appended to the
-derived finish (later items win in POV-Ray) and ``Normal`` is added.
+The scene is written with ``assumed_gamma 1.0`` and the output encoded as
+sRGB, so the resolved (linear) colours go in unchanged and a fully lit surface
+gets the colour GL shows.  The mapping:
+
+- base colour: the pigment; a base colour texture (or texture layers) times
+  the base colour is baked into one image (``image_map``, its PNG alpha is
+  POV-Ray's transmit: cut-outs are baked as 0 or 1, opaque PBR surfaces as 1);
+- ambient: ``ambient`` = ambient reflectance / pigment, for every material (PBR
+  too: POV-Ray's ``ambient 0`` made shadowed PBR surfaces black), times the
+  mean of an occlusion texture;
+- Phong specular: ``phong`` with ``phong_size`` = shininess (the GL engine's lobe);
+  PBR: ``specular`` / ``roughness`` / ``metallic`` / ``reflection`` from the
+  factors (a metallic-roughness texture contributes its mean);
+- emission: ``emission`` (divided by the pigment, which POV-Ray multiplies it
+  with); an emissive texture makes the texture the average of the lit
+  surface and a self-lit one, each doubled;
+- normal maps (and the heights of a ``BumpMap``): ``normal { bump_map }``
+  with heights integrated from the normal map (Frankot-Chellappa), an
+  approximation: POV-Ray bumps with heights, not normals;
+- per-vertex colours replace a Phong diffuse colour and multiply a PBR base colour.
+
+The renderer-specific ``Pigment`` replaces the derived pigment, ``Finish``
+items are appended to the derived finish (later items win in POV-Ray) and
+``Normal`` replaces a derived normal.
 """
 
 from __future__ import annotations
@@ -18,58 +33,13 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Color, Material, PBRMaterial, Texture
+from ..attributes.photometry import srgb_to_linear
+from ..attributes.surface import Appearance, appearance_key, engine_appearance
+from ..attributes.texturing import bake_layers, channel_mean, luminance, normal_to_height, scaled_image
 from . import sdl
 from .attributes import Finish, Normal, Pigment
 
-__all__ = ["srgb_to_linear", "surface", "texture_name", "finish_name"]
-
-_DEFAULT_RGB = (0.8, 0.8, 0.8)
-
-
-def srgb_to_linear(c: Any) -> np.ndarray:
-    """sRGB-encoded values in [0, 1] to linear values."""
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, None)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def surface(engine: Any) -> tuple[np.ndarray, float, list[str]]:
-    """(linear base colour, transmit, finish items) from the active generic attributes."""
-    pbr = engine.mono(PBRMaterial)
-    mat = engine.mono(Material)
-    col = engine.mono(Color)
-    items: list[str] = []
-    if pbr is not None:
-        base = srgb_to_linear(pbr.base_color)
-        transmit = 1.0 - float(pbr.opacity)
-        metallic, rough = float(pbr.metallic), float(pbr.roughness)
-        items.append(f"ambient 0 diffuse {sdl.number(1.0 - 0.9 * metallic)}")
-        items.append(f"specular {sdl.number(0.04 + 0.96 * metallic * (1 - rough) + 0.3 * (1 - rough))}")
-        items.append(f"roughness {sdl.number(max(rough * rough * 0.5, 1e-4))}")
-        if metallic > 0.0:
-            items.append(f"metallic {sdl.number(metallic)}")
-            items.append(f"reflection {{ {sdl.number(metallic * (1.0 - rough))} metallic }}")
-        emission = srgb_to_linear(pbr.emission)
-        base = _lift(base, emission)
-    elif mat is not None:
-        base = _lift(srgb_to_linear(mat.diffuse), srgb_to_linear(mat.ambient), srgb_to_linear(mat.emission))
-        transmit = 1.0 - float(mat.opacity)
-        items.append(f"ambient rgb {sdl.vector(_over(srgb_to_linear(mat.ambient), base))} diffuse 1")
-        spec = float(np.mean(srgb_to_linear(mat.specular)))
-        if spec > 0.0:
-            items.append(f"phong {sdl.number(spec)} phong_size {sdl.number(max(float(mat.shininess), 1.0))}")
-        emission = srgb_to_linear(mat.emission)
-    else:
-        rgb = _DEFAULT_RGB if col is None else col.rgb
-        base = srgb_to_linear(rgb)
-        transmit = 0.0 if col is None else 1.0 - float(col.a)
-        # the default GL material: ambient 0.2, diffuse 0.8 -> ambient is a quarter of the base colour
-        items.append("ambient 0.25 diffuse 1")
-        emission = np.zeros(3)
-    if np.any(emission > 0.0):
-        items.append(f"emission rgb {sdl.vector(_over(emission, base))}")
-    return base, transmit, items
-
+__all__ = ["srgb_to_linear", "texture_name", "finish_name", "finish_items", "vertex_colors"]
 
 _MIN_PIGMENT = 1e-4  # linear; 0.3/255 in sRGB: invisible under any light, yet it carries ambient and emission
 
@@ -90,6 +60,41 @@ def _over(value: np.ndarray, base: np.ndarray) -> np.ndarray:
     return np.where(base > 0.0, value / np.maximum(base, _MIN_PIGMENT), value)
 
 
+def _mean_texture(engine: Any, texture: Any, channel: int) -> float:
+    return channel_mean(texture.image_in("POV-Ray", engine.node_path), channel)
+
+
+def finish_items(engine: Any, app: Appearance, scale: float = 1.0) -> tuple[np.ndarray, list[str]]:
+    """(pigment colour, finish items) of a resolved appearance; ``scale`` multiplies the reflection."""
+    base = np.asarray(app.base, np.float64)
+    emission = np.asarray(app.emission, np.float64)
+    ambient = app.ambient_reflectance()
+    if app.occlusion_texture is not None:
+        ambient = ambient * (1.0 + app.occlusion_strength * (_mean_texture(engine, app.occlusion_texture, 0) - 1.0))
+    base = _lift(base, ambient, emission)
+    items = [f"ambient rgb {sdl.vector(_over(ambient, base) * scale)}"]
+    n = sdl.number
+    if app.model == "pbr":
+        metallic, rough = app.metallic, app.roughness
+        if app.metallic_roughness_texture is not None:
+            metallic *= _mean_texture(engine, app.metallic_roughness_texture, 2)
+            rough *= _mean_texture(engine, app.metallic_roughness_texture, 1)
+        items.append(f"diffuse {n((1.0 - 0.9 * metallic) * scale)}")
+        items.append(f"specular {n((0.04 + 0.96 * metallic * (1 - rough) + 0.3 * (1 - rough)) * scale)}")
+        items.append(f"roughness {n(max(rough * rough * 0.5, 1e-4))}")
+        if metallic > 0.0:
+            items.append(f"metallic {n(metallic)}")
+            items.append(f"reflection {{ {n(metallic * (1.0 - rough) * scale)} metallic }}")
+    else:
+        items.append(f"diffuse {n(scale)}")
+        spec = float(np.mean(app.specular))
+        if spec > 0.0:
+            items.append(f"phong {n(spec * scale)} phong_size {n(max(app.shininess, 1.0))}")
+    if np.any(emission > 0.0) and app.emissive_texture is None:
+        items.append(f"emission rgb {sdl.vector(_over(emission, base) * scale)}")
+    return base, items
+
+
 def _finish_text(engine: Any, items: list[str]) -> str:
     extra = engine.mono(Finish)
     body = " ".join(items)
@@ -98,69 +103,202 @@ def _finish_text(engine: Any, items: list[str]) -> str:
     return f"finish {{ {body} }}"
 
 
-def _key(*attrs: Any) -> tuple:
-    return tuple((id(a), a.version) if a is not None else None for a in attrs)
+def _active_key(engine: Any, uv: bool) -> tuple:
+    from ..attributes import BumpMap, MultiTexture, Texture
 
-
-def _active(engine: Any) -> tuple:
-    return (
-        engine.mono(PBRMaterial),
-        engine.mono(Material),
-        engine.mono(Color),
-        engine.mono(Finish),
-    )
+    mono = engine.mono
+    texture = (mono(Texture), mono(MultiTexture), mono(BumpMap)) if uv else (None, None, None)
+    extra = tuple((id(a), a.version) if a is not None else None for a in (mono(Finish), mono(Pigment), mono(Normal)))
+    return (appearance_key(engine.surface_stack, *texture), extra, uv)
 
 
 def texture_name(engine: Any, uv: bool = False) -> str:
-    """The declared texture for the active attributes (declared once per combination)."""
-    texture = engine.mono(Texture)
-    pigment_attr = engine.mono(Pigment)
-    normal = engine.mono(Normal)
-    key = ("T", uv, _key(*_active(engine), texture, pigment_attr, normal))
+    """The declared texture for the active attributes (declared once per combination).
+
+    ``uv``: the shape has texture coordinates (``uv_mapping``), so textures apply.
+    """
+    key = ("T", _active_key(engine, uv))
     found = engine._declared.get(key)
     if found is not None:
         return found
-    base, transmit, items = surface(engine)
+    app = engine_appearance(engine, texcoords=uv)
+    body = _texture_body(engine, app, uv)
+    return engine.declare(key, "T", "texture { " + body + " }")
+
+
+_CLEAR = "pigment { rgbt 1 } finish { ambient 0 diffuse 0 specular 0 phong 0 reflection 0 emission 0 }"
+
+
+def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
+    pigment_attr = engine.mono(Pigment)
+    if uv and app.alpha_mode == "mask" and app.texture is not None and pigment_attr is None:
+        return _cut_out(engine, app)
+    mr = app.metallic_roughness_texture
+    if uv and mr is not None and app.model == "pbr" and pigment_attr is None:
+        return _metallic_map(engine, app, mr)
+    normal = _normal(engine, app, uv)
+    emissive = uv and app.emissive_texture is not None
+    scale = 2.0 if emissive else 1.0
+    base, items = finish_items(engine, app, scale)
     if pigment_attr is not None:
         pigment = pigment_attr.sdl()
-    elif texture is not None:
-        pigment = _image_pigment(engine, texture, transmit, uv)
+    elif uv and (app.texture is not None or app.layers):
+        pigment = _image_pigment(engine, app, base)
     else:
+        transmit = 1.0 - app.alpha if app.alpha_mode == "blend" else 0.0
         pigment = f"pigment {{ {sdl.color(base, transmit)} }}"
-    parts = [pigment]
-    if normal is not None:
-        parts.append(normal.sdl())
-    parts.append(_finish_text(engine, items))
-    return engine.declare(key, "T", "texture { " + " ".join(parts) + " }")
+    lit = " ".join(p for p in (pigment, normal, _finish_text(engine, items)) if p)
+    if not emissive:
+        return lit
+    glow = _image_file(engine, app.emissive_texture, np.append(_rgb_display(app.emission), 1.0), "emissive")
+    self_lit = (
+        f"pigment {{ uv_mapping image_map {{ png {sdl.file_name(glow)} interpolate 2 }} }} "
+        "finish { ambient 0 diffuse 0 emission 2 }"
+    )
+    return f"average texture_map {{ [1 {lit}] [1 {self_lit}] }}"
+
+
+def _cut_out(engine: Any, app: Appearance) -> str:
+    """A masked surface: nothing at all (no highlight either) where the alpha is below the cutoff.
+
+    POV-Ray still adds highlights on fully transmitting surfaces, so the
+    texture is switched off there with an ``image_pattern`` of the mask.
+    """
+    from dataclasses import replace
+
+    tex = app.texture
+    alpha = tex.image_in("POV-Ray", engine.node_path)[:, :, 3].astype(np.float64) / 255.0 * app.alpha
+    mask = np.where(alpha >= app.alpha_cutoff, 255, 0).astype(np.uint8)
+    name = engine.resource(("mask", id(tex), tex.version, app.alpha_cutoff), np.repeat(mask[:, :, None], 3, 2), ".png")
+    opaque = _texture_body(engine, replace(app, alpha_mode="opaque"), True)
+    once = " once" if tex.wrap == "clamp" else ""
+    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)}{once} }}{_uv_transform(tex)}"
+    return f"{pattern} texture_map {{ [0.5 {_CLEAR}] [0.5 {opaque}] }}"
+
+
+def _metallic_map(engine: Any, app: Appearance, mr: Any) -> str:
+    """Per-texel metallic: a dielectric and a metal texture blended by the texture's blue channel.
+
+    POV-Ray's ``image_pattern`` selects between the two as the image is dark
+    or bright; roughness (green) uses its mean, an approximation.
+    """
+    from dataclasses import replace
+
+    pixels = mr.image_in("POV-Ray", engine.node_path)
+    rough = app.roughness * channel_mean(pixels, 1)
+    dielectric = replace(app, metallic=0.0, roughness=rough, metallic_roughness_texture=None)
+    metal = replace(app, roughness=rough, metallic_roughness_texture=None)
+    blue = np.repeat(pixels[:, :, 2:3], 3, axis=2)
+    name = engine.resource(("metallic", id(mr), mr.version), blue, ".png")
+    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)} interpolate 2 }}{_uv_transform(mr)}"
+    low, high = _texture_body(engine, dielectric, True), _texture_body(engine, metal, True)
+    return f"{pattern} texture_map {{ [0 {low}] [1 {high}] }}"
+
+
+def _rgb_display(linear: Any) -> np.ndarray:
+    from ..attributes.photometry import linear_to_srgb
+
+    return linear_to_srgb(np.asarray(linear, np.float64))
 
 
 def finish_name(engine: Any) -> str:
     """The declared finish of the active attributes (for per-vertex coloured meshes)."""
-    key = ("F", _key(*_active(engine)))
+    key = ("F", _active_key(engine, False))
     found = engine._declared.get(key)
     if found is not None:
         return found
-    _, _, items = surface(engine)
+    app = engine_appearance(engine, texcoords=False)
+    _, items = finish_items(engine, app)
     return engine.declare(key, "F", _finish_text(engine, items))
 
 
-def _image_pigment(engine: Any, texture: Any, transmit: float, uv: bool) -> str:
-    path = texture.path
+def vertex_colors(engine: Any, colors: np.ndarray) -> np.ndarray:
+    """Linear RGBA per-vertex colours as the appearance model applies them (replace or multiply the base)."""
+    lin = np.asarray(colors, dtype=np.float64).copy()
+    lin[:, :3] = srgb_to_linear(lin[:, :3])
+    app = engine_appearance(engine, texcoords=False)
+    if app.vertex_colors == "multiply":
+        lin[:, :3] *= np.asarray(app.base)
+        lin[:, 3] *= app.alpha if app.alpha_mode == "blend" else 1.0
+    return lin
+
+
+def _normal(engine: Any, app: Appearance, uv: bool) -> str:
+    user = engine.mono(Normal)
+    if user is not None:
+        return user.sdl()
+    if not uv or not app.has_normal_map:
+        return ""
+    if app.bump is not None and app.normal_texture is None:
+        tex = app.bump.texture
+        heights, size = luminance(tex.image_in("POV-Ray", engine.node_path)), float(app.bump.scale)
+        key = ("bump", id(tex), tex.version)
+    else:
+        tex = app.normal_texture
+        heights, size = normal_to_height(tex.image_in("POV-Ray", engine.node_path), app.normal_scale)
+        key = ("normal", id(tex), tex.version, app.normal_scale)
+    if size <= 0.0:
+        return ""
+    image = np.repeat(np.round(heights * 255.0).astype(np.uint8)[:, :, None], 3, axis=2)
+    name = engine.resource(key, image, ".png")
+    # POV-Ray's bump_map takes its slopes per pixel and raises the surface where the image is dark: the size
+    # is the height range in texture-coordinate units times the pixels per unit, negated
+    size *= float(np.sqrt(heights.shape[0] * heights.shape[1]))
+    bump = f"png {sdl.file_name(name)} interpolate 2 bump_size {sdl.number(-size)}"
+    return f"normal {{ uv_mapping bump_map {{ {bump} }} }}"
+
+
+def _image_file(
+    engine: Any, texture: Any, factor: Any, role: str, layers: tuple = (), mode: str = "blend", cutoff: float = 0.5
+) -> str:
+    """A PNG of ``texture`` (and layers) times ``factor`` (display RGBA), alpha per ``mode``; its resource name."""
+    path = texture.path if texture is not None else None
     if path is not None and not os.path.isfile(path):
         raise FileNotFoundError(
             f"POV-Ray: the Texture image {path!r} in node {engine.node_path or '/'} does not exist; "
             "check the path or pass an array (om.Texture(numpy_array))"
         )
-    if path is not None and _suffix(path) != "":
-        name = engine.resource(("path", path), path, suffix=_suffix(path))
-    else:  # arrays and files of other formats are written as PNG
-        name = engine.resource(("array", id(texture), texture.version), texture.image_array(), ".png")
+    plain = not layers and mode == "blend" and np.allclose(factor, 1.0, atol=1e-6)
+    if plain and path is not None and _suffix(path) != "":
+        return engine.resource(("path", path), path, suffix=_suffix(path))
+    key = (role, id(texture), getattr(texture, "version", 0), tuple(np.round(factor, 6)), mode, cutoff)
+    key += tuple((id(x.texture), x.texture.version, x.blend, x.opacity) for x in layers)
+    found = engine._resource_names.get(key)
+    if found is not None:
+        return found
+    base = None if texture is None else texture.image_in("POV-Ray", engine.node_path)
+    image = bake_layers(base, layers) if layers else base
+    image = scaled_image(image, factor)
+    if mode != "blend":
+        image = np.array(image)
+        if mode == "mask":
+            image[:, :, 3] = np.where(image[:, :, 3] >= 255 * cutoff, 255, 0)
+        else:
+            image[:, :, 3] = 255
+    return engine.resource(key, image, ".png")
+
+
+def _image_pigment(engine: Any, app: Appearance, base: np.ndarray) -> str:
+    tex = app.texture
+    factor = np.append(_rgb_display(base), app.alpha if app.alpha_mode == "blend" else 1.0)
+    mode = app.alpha_mode if app.model == "pbr" else "blend"
+    name = _image_file(engine, tex, factor, "base", app.layers, mode, app.alpha_cutoff)
     kind = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tga": "tga"}[_suffix(name)]
-    interpolate = " interpolate 2" if texture.filter == "linear" else ""
-    once = " once" if texture.wrap == "clamp" else ""
-    mapping = "uv_mapping " if uv else ""
-    filt = f" filter all {sdl.number(transmit)}" if transmit > 0 else ""
-    return f"pigment {{ {mapping}image_map {{ {kind} {sdl.file_name(name)}{interpolate}{once}{filt} }} }}"
+    filt = tex.filter if tex is not None else "linear"
+    interpolate = " interpolate 2" if filt == "linear" else ""
+    once = " once" if tex is not None and tex.wrap == "clamp" and not app.layers else ""
+    transform = _uv_transform(tex) if tex is not None and not app.layers else ""
+    return f"pigment {{ uv_mapping image_map {{ {kind} {sdl.file_name(name)}{interpolate}{once} }}{transform} }}"
+
+
+def _uv_transform(texture: Any) -> str:
+    """POV-Ray's pattern transform for a texture transform (the pattern maps the looked-up coordinates back)."""
+    if not texture.transformed:
+        return ""
+    m = np.linalg.inv(texture.uv_matrix())
+    full = np.eye(4)
+    full[:2, :2], full[:2, 3] = m[:2, :2], m[:2, 2]
+    return " " + sdl.matrix(full)
 
 
 def _suffix(path: str) -> str:

@@ -91,6 +91,7 @@ class POVRayEngine(Engine):
         on_missing: str = "raise",
         mask: str | Callable[[frozenset[str]], bool] | None = None,
         resource_prefix: str = "om_",
+        resource_dir: str | None = None,
     ) -> None:
         super().__init__(technique=technique, on_missing=on_missing, mask=mask)
         w, h = (int(v) for v in size)
@@ -98,12 +99,16 @@ class POVRayEngine(Engine):
             raise ValueError(f"POVRayEngine: size must be positive, got {size!r}")
         self.size = (w, h)
         self.resource_prefix = sdl.file_name(resource_prefix, "POVRayEngine")[1:-1]
+        #: the folder the resources are written to, named in the SDL (so the file renders from any folder)
+        self.resource_dir = None if resource_dir is None else sdl.file_name(resource_dir, "POVRayEngine")[1:-1]
         self.clear()
 
     # -- output buffers -------------------------------------------------
     def clear(self) -> None:
         """Forget everything written so far."""
         self.objects: list[str | _Object] = []
+        #: Color / Material / PBRMaterial in the order they became active (the one appearance model)
+        self.surface_stack: list[Any] = []
         self.declarations: list[str] = []
         self.lights_sdl: list[str] = []
         self.resources: list[tuple[str, Any]] = []
@@ -141,8 +146,10 @@ class POVRayEngine(Engine):
         name = self._resource_names.get(key)
         if name is None:
             name = f"{self.resource_prefix}tex{len(self._resource_names)}{suffix}"
-            self._resource_names[key] = name
             self.resources.append((name, data))
+            if self.resource_dir is not None:
+                name = f"{self.resource_dir.rstrip('/')}/{name}"
+            self._resource_names[key] = name
         return name
 
     # -- objects --------------------------------------------------------
@@ -221,12 +228,14 @@ class POVRayEngine(Engine):
         return out
 
     # -- the file -------------------------------------------------------
-    def sdl(self, fog: bool = True, depth: bool = False) -> str:
+    def sdl(self, fog: bool = True, depth: bool = False, standalone: bool = False) -> str:
         """The complete scene file for what was evaluated.
 
         ``fog=False`` leaves the fog out; ``depth=True`` writes the depth pass:
         no lights, every object self-lit by a world-space pigment that encodes
-        the eye-space depth (see :func:`depth_texture`).
+        the eye-space depth (see :func:`depth_texture`).  ``standalone=True``
+        writes an opaque background (the scene's, else the shared default), for
+        a file rendered by ``povray`` directly rather than composited by omnirender.
         """
         head = ["// omnirender scene for POV-Ray 3.7\n#version 3.7;\n"]
         settings = "assumed_gamma 1.0 ambient_light " + sdl.color(self.ambient)
@@ -237,6 +246,12 @@ class POVRayEngine(Engine):
         bg = (0.0, 0.0, 0.0) if self.background is None else _rgb(self.background)
         if depth:  # blue marks the background; objects have none
             head.append("background { rgb <0,0,1> }\n")
+        elif standalone:
+            from ..attributes.environment import DEFAULT_BACKGROUND
+            from .appearance import srgb_to_linear
+
+            shown = DEFAULT_BACKGROUND[:3] if self.background is None else bg
+            head.append(f"background {{ {sdl.color(srgb_to_linear(shown))} }}\n")
         else:  # transmit 1: the background stays transparent in the alpha channel (om.Image.mask)
             head.append(f"background {{ {sdl.color(bg, transmit=1.0)} }}\n")
         if depth:

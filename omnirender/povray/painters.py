@@ -27,13 +27,13 @@ from ..attributes import (
     Fog,
     PointLight,
     SpotLight,
-    Texture,
 )
 from ..attributes.environment import is_scene_background
+from ..attributes.surface import engine_appearance, track_surfaces
 from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
 from ..shapes import CSG, Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
 from . import sdl
-from .appearance import finish_name, srgb_to_linear, texture_name
+from .appearance import finish_name, srgb_to_linear, texture_name, vertex_colors
 from .attributes import GlobalSettings, Raw
 from .engine import POVRayEngine
 from .mesh import mesh2_text
@@ -80,7 +80,7 @@ class _Primitive(ShapePainter):
     service = PAINT
 
     def exec(self, shape: Any, engine: POVRayEngine) -> None:
-        if engine.mono(Texture) is not None and _simplify(shape, engine):
+        if engine_appearance(engine).textures and _simplify(shape, engine):
             return
         engine.emit(self.geometry(shape), texture_name(engine))
 
@@ -175,12 +175,11 @@ class TriangleSetPainter(ShapePainter):
             _edges_or_points(shape, engine, style)
             return
         normals = None if style is not None and style.shading == "flat" else shape.normal_array()
-        has_texture = engine.mono(Texture) is not None
+        has_texture = bool(engine_appearance(engine).textures)
         uvs = shape.texcoord_array() if has_texture else None
         colors = None if has_texture else shape.color_array()
         if colors is not None:
-            lin = np.asarray(colors, dtype=np.float64).copy()
-            lin[:, :3] = srgb_to_linear(lin[:, :3])
+            lin = vertex_colors(engine, colors)
             text = mesh2_text(vertices, indices, normals, uvs, lin, finish_name(engine), engine._owner())
             engine.emit(text, None, plain=lambda: mesh2_text(vertices, indices))
         else:
@@ -319,6 +318,9 @@ class CSGPainter(ShapePainter):
                 children.append("sphere { <0,0,0>, 0 }")  # an empty operand: POV-Ray needs an object
         body = "\n".join(children)
         engine.emit(f"{shape.operation} {{\n{body}\n}}", texture_name(engine), matrix=np.eye(4))
+
+
+track_surfaces(POVRayEngine)  # Color / Material / PBRMaterial in activation order (the one appearance model)
 
 
 # -- attributes -------------------------------------------------------------

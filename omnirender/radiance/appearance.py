@@ -35,6 +35,7 @@ import numpy as np
 
 from ..attributes import Material, PBRMaterial, Texture
 from ..attributes.photometry import phong_roughness, srgb_to_linear
+from ..attributes.surface import engine_appearance
 from . import rad
 from .attributes import Material as RadMaterial
 
@@ -149,10 +150,17 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
     if sink is not None:
         engine._sinks[id(sink)] = sink  # alive as long as the engine's caches, so its id stays unique
     user = engine.mono(RadMaterial)
-    texture = engine.mono(Texture) if uv else None
+    resolved = engine_appearance(engine, texcoords=uv)  # the one appearance model: which texture, which alpha
+    texture = resolved.texture if uv else None
     material, color = engine.appearance()
     vertex = None if vertex_rgba is None else tuple(np.round(np.asarray(vertex_rgba, np.float64), 6).tolist())
-    key = ("look", id(sink) if sink is not None else None, _key(user, texture, material, color), vertex)
+    key = (
+        "look",
+        id(sink) if sink is not None else None,
+        _key(user, texture, material, color),
+        vertex,
+        resolved.alpha_mode,
+    )
     found = engine._declared.get(key)
     if found is not None:
         return found
@@ -171,8 +179,9 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
         if engine.coverage:  # black and unlit: only what the surface lets through counts
             look = Look("plastic", (0.0, 0.0, 0.0), 0.0, 0.0, look.opacity, (0.0, 0.0, 0.0))
         ident = _look_chain(engine, look, pattern, key, sink)
-    if texture is not None and _texture_image(engine, texture)[:, :, 3].min() < 255:
-        ident = _alpha_cutout(engine, texture, ident, key, sink)
+    if texture is not None and resolved.alpha_mode != "opaque" and _texture_image(engine, texture)[:, :, 3].min() < 255:
+        cutoff = resolved.alpha_cutoff if resolved.alpha_mode == "mask" else None
+        ident = _alpha_cutout(engine, texture, ident, key, sink, cutoff)
     engine._declared[key] = ident
     return ident
 
@@ -256,15 +265,21 @@ def _texture_pattern(engine: Any, texture: Texture, sink: list[str] | None) -> s
     return engine.declare(key, "p", make, sink)
 
 
-def _alpha_cutout(engine: Any, texture: Texture, inner: str, key: Any, sink: list[str] | None) -> str:
+def _alpha_cutout(
+    engine: Any, texture: Texture, inner: str, key: Any, sink: list[str] | None, cutoff: float | None = None
+) -> str:
+    """A ``mixpict`` of ``inner`` and ``void`` by the texture's alpha (0 or 1 at ``cutoff`` for masked alpha)."""
     engine.transparent = True
     image = _texture_image(engine, texture)
     u, v = _uv_expressions(texture, image)
 
     def make(ident: str) -> str:
         alpha = image[:, :, 3].astype(np.float32) / 255.0
+        if cutoff is not None:
+            alpha = (alpha >= cutoff).astype(np.float32)
         name = engine.add_picture(
-            (id(texture), texture.version, "alpha"), lambda: _picture(texture, np.repeat(alpha[:, :, None], 3, 2))
+            (id(texture), texture.version, "alpha", cutoff),
+            lambda: _picture(texture, np.repeat(alpha[:, :, None], 3, 2)),
         )
         return rad.primitive("void", "mixpict", ident, (inner, "void", "red", name, ".", u, v))
 

@@ -21,10 +21,10 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource, Texture
+from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource
 from ..attributes.environment import is_scene_background
 from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
-from ..attributes.surface import track_surfaces
+from ..attributes.surface import engine_appearance, track_surfaces
 from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..geometry.pixels import pixel_size
@@ -101,7 +101,7 @@ def _fallback(shape: Any, engine: RadianceEngine, needs_similarity: bool) -> tup
     if m is None:
         return None
     scale = similarity_scale(m) if needs_similarity else 1.0
-    if engine.clip_planes() or engine.mono(Texture) is not None or scale is None or _drawn_as_lines(engine):
+    if engine.clip_planes() or _textured(engine) or scale is None or _drawn_as_lines(engine):
         engine.simplify(shape)
         return None
     return m, scale
@@ -267,7 +267,7 @@ class TriangleSetPainter(ShapePainter):
             _edges_or_points(shape, engine, style)
             return
         flat = style is not None and style.shading == "flat"
-        textured = engine.mono(Texture) is not None and shape.texcoord_array() is not None
+        textured = _textured(engine) and shape.texcoord_array() is not None
         colors = shape.color_array()
         m = _model(engine)
         if m is None:
@@ -286,11 +286,16 @@ class TriangleSetPainter(ShapePainter):
             _mesh_surface(engine, name, "void")
 
 
+def _textured(engine: RadianceEngine) -> bool:
+    """Whether the appearance has a base colour texture (an ``om.Texture`` or a PBR material's)."""
+    return engine_appearance(engine).texture is not None
+
+
 def _appearance_key(engine: RadianceEngine) -> tuple:
     from .attributes import Material as RadMaterial
 
     material, color = engine.appearance()
-    items = (engine.mono(RadMaterial), engine.mono(Texture), material, color)
+    items = (engine.mono(RadMaterial), engine_appearance(engine).texture, material, color)
     return tuple((id(a), a.version) if a is not None else None for a in items)
 
 

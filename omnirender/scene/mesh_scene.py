@@ -42,7 +42,7 @@ def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3) -> Nod
     box = bounds(body)
     if box is None:  # pragma: no cover - load() refuses meshes without triangles
         raise ValueError(f"mesh_scene: {mesh!r} has no geometry to look at")
-    camera = Camera.fitted(box[0], box[1], aspect=aspect)
+    camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
     eye_to_world = np.linalg.inv(camera.view_matrix())
     return Node("scene", [camera, *default_lights(eye_to_world), body])
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..geometry.normals import smooth_normals
+from ..geometry.normals import smooth_normals, vertex_tangents
 from ..geometry.triangulate import best_fit_plane, crossing_edges, project_to_plane, triangulate_polygon
 from . import _check
 from .base import DeclaredShape, parameter
@@ -55,19 +55,24 @@ class TriangleSet(_VertexShape):
 
     ``vertices`` (N, 3); ``indices`` (M, 3) or flat, None meaning consecutive
     triples; ``normals`` (N, 3), computed smooth (area-weighted) when None;
-    ``colors`` (N, 3|4) or one RGB(A) colour for all; ``texcoords`` (N, 2).
-    Winding is counter-clockwise seen from the front.  At least one triangle.
-    ``TriangleSet(mesh)`` with a ``trimesh.Trimesh`` takes its vertices, faces,
-    vertex normals (when the mesh has them), colours and texture coordinates.
+    ``colors`` (N, 3|4) or one RGB(A) colour for all; ``texcoords`` (N, 2)
+    (UV set 0) and ``texcoords1`` (N, 2) (UV set 1, for textures with
+    ``uv_set=1``); ``tangents`` (N, 4): xyz along increasing u, w the sign of
+    the bitangent (along increasing v), for normal maps (generated from the
+    texture coordinates when None).  Winding is counter-clockwise seen from the
+    front.  At least one triangle.  ``TriangleSet(mesh)`` with a ``trimesh.Trimesh`` takes its
+    vertices, faces, vertex normals (when the mesh has them), colours and texture coordinates.
     """
 
-    __slots__ = ("_vertices", "_indices", "_normals", "_colors", "_texcoords")
-    _params = ("vertices", "indices", "normals", "colors", "texcoords")
+    __slots__ = ("_vertices", "_indices", "_normals", "_colors", "_texcoords", "_texcoords1", "_tangents")
+    _params = ("vertices", "indices", "normals", "colors", "texcoords", "texcoords1", "tangents")
     vertices = parameter("vertices", "Vertex positions (N, 3).")
     indices = parameter("indices", "Triangle indices (M, 3) or None for consecutive triples.")
     normals = parameter("normals", "Vertex normals (N, 3) or None for smooth normals.")
     colors = parameter("colors", "Vertex colours (N, 3|4) or None.")
     texcoords = parameter("texcoords", "Texture coordinates (N, 2) or None.")
+    texcoords1 = parameter("texcoords1", "Second texture coordinate set (N, 2) or None.")
+    tangents = parameter("tangents", "Tangents (N, 4) or None (generated for normal maps).")
 
     def __init__(
         self,
@@ -76,6 +81,8 @@ class TriangleSet(_VertexShape):
         normals: Any = None,
         colors: Any = None,
         texcoords: Any = None,
+        texcoords1: Any = None,
+        tangents: Any = None,
     ) -> None:
         if is_trimesh(vertices):
             given = {"indices": indices, "normals": normals, "colors": colors, "texcoords": texcoords}
@@ -84,7 +91,15 @@ class TriangleSet(_VertexShape):
             vertices, indices, normals, colors, texcoords = (
                 arrays[k] for k in ("vertices", "indices", "normals", "colors", "texcoords")
             )
-        super().__init__(vertices=vertices, indices=indices, normals=normals, colors=colors, texcoords=texcoords)
+        super().__init__(
+            vertices=vertices,
+            indices=indices,
+            normals=normals,
+            colors=colors,
+            texcoords=texcoords,
+            texcoords1=texcoords1,
+            tangents=tangents,
+        )
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         name = "TriangleSet"
@@ -109,6 +124,12 @@ class TriangleSet(_VertexShape):
             "texcoords": None
             if p["texcoords"] is None
             else _check.float_array(name, "texcoords", p["texcoords"], (2,), count=n),
+            "texcoords1": None
+            if p.get("texcoords1") is None
+            else _check.float_array(name, "texcoords1", p["texcoords1"], (2,), count=n),
+            "tangents": None
+            if p.get("tangents") is None
+            else _check.float_array(name, "tangents", p["tangents"], (4,), count=n),
         }
         if p["normals"] is not None:
             derived["normals"] = _check.normals(name, "normals", p["normals"], n)
@@ -130,9 +151,24 @@ class TriangleSet(_VertexShape):
             return self._cached("normals")
         return self._cached("normals", compute)
 
-    def texcoord_array(self) -> np.ndarray | None:
-        """(N, 2) float32 or None."""
-        return self._cached("texcoords")
+    def texcoord_array(self, uv_set: int = 0) -> np.ndarray | None:
+        """(N, 2) float32 of UV set 0 (``texcoords``) or 1 (``texcoords1``), or None."""
+        return self._cached("texcoords1" if uv_set else "texcoords")
+
+    def tangent_array(self) -> np.ndarray | None:
+        """(N, 4) float32 tangents: the given ones, else generated from UV set 0 (None without texcoords)."""
+        if self._tangents is not None:
+            return self._cached("tangents")
+        uv = self.texcoord_array()
+        if uv is None:
+            return None
+
+        def compute() -> np.ndarray:
+            out = vertex_tangents(self.vertex_array(), self.index_array(), self.normal_array(), uv)
+            out.setflags(write=False)
+            return out
+
+        return self._cached("generated_tangents", compute)
 
     @property
     def triangle_count(self) -> int:

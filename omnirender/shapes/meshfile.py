@@ -38,7 +38,10 @@ class MeshFile(DeclaredShape):
     "base_color", "metallic", "roughness", "emission", "opacity"}`` (glTF),
     colours as RGB tuples in [0, 1]; the simplifier turns them into
     ``om.Material`` / ``om.PBRMaterial``.  A part's texture image, when the
-    file has one, is under ``"texture"`` as an (H, W, 4) uint8 array.
+    file has one, is under ``"texture"`` as an (H, W, 4) uint8 array.  glTF
+    files are read with the full importer (``om.load_gltf``: every material
+    slot, Draco, sparse accessors), flattened to world coordinates; their
+    parts carry ``{"kind": "attributes", "attributes": [...]}``.
     """
 
     __slots__ = ("_path",)
@@ -85,6 +88,8 @@ def _load(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         return _parts(path, "the trimesh object")
     if not os.path.exists(path):
         raise FileNotFoundError(f"MeshFile: no such file {path!r}")
+    if path.lower().endswith((".gltf", ".glb")):
+        return _load_gltf(path)
     if str(path).lower().endswith(".obj"):
         try:
             plain = read_plain_obj(path)
@@ -192,12 +197,16 @@ def _material(mat: Any) -> dict[str, Any] | None:
     elif name == "SimpleMaterial":
         diffuse = getattr(mat, "diffuse", None)
         glossiness = getattr(mat, "glossiness", None)
+        shininess = float(glossiness) if glossiness is not None else 1.0
+        # MTL's Ns 0 (common in exported files with Ks 1) means "no highlight", as importers such as Blender read
+        # it (roughness 1): a Phong lobe that wide would whiten the whole surface
+        specular = _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)) if shininess >= 1.0 else (0.0, 0.0, 0.0)
         out = {
             "kind": "phong",
             "ambient": _rgb(getattr(mat, "ambient", None), (0.2, 0.2, 0.2)),
             "diffuse": _rgb(diffuse, (0.8, 0.8, 0.8)),
-            "specular": _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)),
-            "shininess": float(glossiness) if glossiness is not None else 1.0,
+            "specular": specular,
+            "shininess": max(shininess, 1.0),
             "opacity": _alpha(diffuse),
         }
         tex = _texture(getattr(mat, "image", None))
@@ -206,3 +215,21 @@ def _material(mat: Any) -> dict[str, Any] | None:
     if tex is not None:
         out["texture"] = tex
     return out
+
+
+def _load_gltf(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts.
+
+    Deliberate exception to the dependency rule, as for the simplifiers' lazy
+    attribute imports: the importer builds attributes and nodes.
+    """
+    from ..animation.gltf import GLTFImportError, flatten_gltf
+
+    try:
+        flat = flatten_gltf(path)
+    except GLTFImportError as exc:
+        raise ValueError(f"MeshFile: {exc}") from None
+    parts = [({"kind": "attributes", "attributes": attrs} if attrs else None, ts) for attrs, ts in flat]
+    if not parts:
+        raise ValueError(f"MeshFile: {path!r} contains no triangles (empty or not a mesh file)")
+    return parts

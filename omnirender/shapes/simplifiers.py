@@ -369,6 +369,8 @@ def _material_attributes(material: dict[str, Any] | None, has_texcoords: bool) -
         return []
     params = dict(material)
     kind = params.pop("kind", "phong")
+    if kind == "attributes":  # a glTF part: the importer's attributes as they are
+        return list(params["attributes"])
     texture = params.pop("texture", None)
     out: list[Any] = []
     try:

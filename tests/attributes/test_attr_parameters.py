@@ -17,6 +17,18 @@ def _examples():
         om.PBRMaterial(base_color=(0.9, 0.1, 0.1), metallic=1, roughness=0.2, emission=(0.1, 0, 0)),
         om.Texture("some/file.png", wrap="clamp", filter="nearest", mipmap=False),
         om.Texture(np.zeros((2, 3, 3), np.uint8)),
+        om.Texture(np.zeros((2, 2, 3), np.uint8), uv_set=1, offset=(0.5, 0), scale=(2, 3), rotation=30),
+        om.PBRMaterial(
+            base_color_texture=om.Texture(np.zeros((2, 2, 4), np.uint8)),
+            alpha_mode="mask",
+            alpha_cutoff=0.3,
+            normal_scale=0.5,
+            double_sided=False,
+            emissive_strength=2,
+        ),  # fmt: skip
+        om.BumpMap(om.Texture(np.zeros((2, 2), np.uint8)), scale=0.1),
+        om.TextureLayer(om.Texture(np.zeros((2, 2, 3), np.uint8)), blend="multiply", opacity=0.5),
+        om.MultiTexture([om.TextureLayer(om.Texture(np.zeros((2, 2, 3), np.uint8)), blend="add")]),
         om.DrawStyle(mode="wireframe", line_width=2, point_size=3, cull="back", shading="flat"),
         om.DirectionalLight(direction=(1, -1, 0), color=(1, 0.9, 0.8), intensity=2),
         om.PointLight(position=(1, 2, 3), linear=0.1, quadratic=0.01, diffuse=(0.5, 0.5, 0.5)),

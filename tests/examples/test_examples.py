@@ -191,3 +191,59 @@ def test_09_lighting_analysis(tmp_path):
     assert 500 < low < 5623 < high < 5623 + 5400 + 100
     chart = img[:, img.shape[1] // 2 + 10 :]
     assert (chart[:, :, 0] > 200).any() and (chart[:, :, 2] > 150).any()  # red under the lamp, blue in the corner
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+@pytest.mark.mitsuba
+def test_12_assets(tmp_path):
+    run_example("12_assets.py", tmp_path)
+    img = check_image(tmp_path / "12-assets.png")
+    assert (tmp_path / "12-asset.glb").is_file()
+    w = (img.shape[1] - 8) // 3
+    # the ball's glowing band is bright yellow in the middle of every engine's picture
+    for i in range(3):
+        band = img[110:135, i * (w + 4) + 130 : i * (w + 4) + 190]
+        yellow = (band[..., 0] > 200) & (band[..., 1] > 170) & (band[..., 2] < 150)
+        assert yellow.mean() > 0.3, i
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_13_renderer_tree(tmp_path):
+    out = run_example("13_renderer_tree.py", tmp_path)
+    assert "13-occlusion.png" in out
+    occlusion = check_image(tmp_path / "13-occlusion.png")
+    w = (occlusion.shape[1] - 8) // 3
+    plain, visible, semi = (occlusion[:, i * (w + 4) : i * (w + 4) + w] for i in range(3))
+    vessels = lambda img: ((img[..., 2] > img[..., 0] + 60) | (img[..., 0] > img[..., 1] + 120)).sum()  # noqa: E731
+    assert vessels(plain) < 20 < vessels(semi) < vessels(visible)  # hidden, shown through the organ, shown fully
+    shadows = check_image(tmp_path / "13-shadows.png")
+    w = (shadows.shape[1] - 4) // 2
+    without, with_ = shadows[:, :w].astype(int), shadows[:, w + 4 :].astype(int)
+    darker = with_.sum(axis=2) < 0.7 * without.sum(axis=2)
+    assert darker.sum() > 1000 and darker[: shadows.shape[0] // 3].sum() < 50  # shadows on the floor, not the sky
+    fields = check_image(tmp_path / "13-light-fields.png")
+    right = fields[:, fields.shape[1] // 2 + 80 :]
+    statue = (right.max(axis=2) - right.min(axis=2) < 4) & (right.max(axis=2) > 60) & (right.max(axis=2) < 230)
+    assert statue.sum() > 800  # the grey (luminance-filtered) light field
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_14_user_renderer(tmp_path):
+    out = run_example("14_user_renderer.py", tmp_path)
+    assert "RayTracedSphere follows the four integration rules" in out
+    both = check_image(tmp_path / "14-user-renderer.png")
+    left = both[:, : (both.shape[1] - 4) // 2]
+    red = (left[..., 0] > 150) & (left[..., 1] < 110)
+    blue = (left[..., 2] > 150) & (left[..., 0] < 110)
+    ys, xs = np.nonzero(red)
+    row = int(ys.mean())
+    # the slab cuts through the sphere: along the sphere's middle row, blue shows on both sides of red
+    assert red.sum() > 2000 and blue[row, : xs.min()].any() and blue[row, xs.max() + 1 :].any()
+    lines = [line for line in (EXAMPLES / "14_user_renderer.py").read_text().splitlines()]
+    start = next(i for i, line in enumerate(lines) if line.startswith("class RayTracedSphere"))
+    end = next(i for i, line in enumerate(lines) if line.startswith("LIGHT ="))
+    assert end - start < 42  # the renderer, blank lines included, in about 40 lines

@@ -89,7 +89,7 @@ def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
         counts.append((engine.live_buffers(), live_buffers(engine.ctx), len(engine._transient)))
     assert max(c[0] for c in counts[5:]) <= counts[5][0], counts
     assert max(c[1] for c in counts[5:]) <= counts[5][1], counts
-    assert max(c[2] for c in counts) <= 2, counts
+    assert max(c[2] for c in counts) <= 4, counts  # two shapes, each in the blended pass and the depth pass
 
 
 def test_line_with_an_endpoint_behind_the_camera_is_clipped_not_dropped(engine):

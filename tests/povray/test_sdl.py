@@ -158,6 +158,7 @@ def test_names_and_paths_cannot_inject_directives(tmp_path):
     from PIL import Image as PILImage
 
     PILImage.fromarray(np.zeros((2, 2, 3), np.uint8)).save(img, format="PNG")
+    child.add(om.Color(1, 1, 1))  # a white base colour: the texture's file is used as it is
     child.add(om.Texture(str(img)))
     child.add(om.Sphere())
     text, engine = scene_sdl(s)
@@ -183,8 +184,31 @@ def test_export_writes_sdl_and_texture_images(tmp_path):
     path = om.export(s, tmp_path / "scene.pov")
     text = path.read_text()
     assert text.startswith("// omnirender scene for POV-Ray 3.7\n#version 3.7;")
-    assert '"scene_tex0.png"' in text and (tmp_path / "scene_tex0.png").exists()
+    # named with the export folder, so the file renders from any working folder
+    assert f'"{tmp_path.resolve()}/scene_tex0.png"' in text and (tmp_path / "scene_tex0.png").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.pov", "scene_tex0.png"]  # no temp files left
+
+
+@pytest.mark.povray
+def test_an_exported_pov_file_renders_standalone_from_another_folder(tmp_path):
+    import subprocess
+
+    from omnirender.povray.runner import find_povray
+
+    tex = np.zeros((4, 4, 3), np.uint8)
+    tex[:, :2] = (255, 0, 0)
+    s = _scene(om.Background((0.2, 0.6, 0.3)), om.Color(1, 1, 1), om.Texture(tex, filter="nearest"))
+    s.add(om.Rectangle(size=(0.5, 0.5)))
+    (tmp_path / "out").mkdir()
+    path = om.export(s, tmp_path / "out" / "scene.pov")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    cmd = [find_povray(), f"+I{path}", f"+O{elsewhere / 'image.png'}", "+W64", "+H48", "-D", "-V", "+FN"]
+    subprocess.run(cmd, cwd=elsewhere, capture_output=True, timeout=60, check=True)
+    from PIL import Image as PILImage
+
+    img = np.asarray(PILImage.open(elsewhere / "image.png").convert("RGB"))
+    assert tuple(img[2, 2]) == pytest.approx((51, 153, 77), abs=3)  # the scene's background, opaque
 
 
 def test_clip_planes_and_raw_text():

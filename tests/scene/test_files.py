@@ -56,7 +56,13 @@ def _samples(tmp: Path) -> dict[str, list]:
         "MeshFile": [om.MeshFile(mesh)],
         "Color": [om.Color(0.1, 0.2, 0.3, 0.4)],
         "Material": [om.Material(diffuse=(1, 0.4, 0.6), specular=(1, 1, 1), shininess=40, opacity=0.5)],
-        "PBRMaterial": [om.PBRMaterial(base_color=(0.9, 0.1, 0.1), metallic=1, roughness=0.2)],
+        "PBRMaterial": [
+            om.PBRMaterial(base_color=(0.9, 0.1, 0.1), metallic=1, roughness=0.2),
+            om.PBRMaterial(normal_texture=om.Texture(np.full((2, 2, 3), 0.5), uv_set=1), alpha_mode="blend"),
+        ],
+        "BumpMap": [om.BumpMap(om.Texture(np.full((2, 2, 3), 0.25), scale=(2, 2)), scale=0.1)],
+        "TextureLayer": [om.TextureLayer(om.Texture(np.full((2, 2, 3), 0.25)), blend="multiply", opacity=0.5)],
+        "MultiTexture": [om.MultiTexture([om.TextureLayer(om.Texture(np.full((2, 2, 3), 0.5)), opacity=0.25)])],
         "Texture": [
             om.Texture(str(tmp / "textures" / "wood.png"), wrap="mirror", filter="nearest", mipmap=False),
             om.Texture(np.arange(24, dtype=np.uint8).reshape(2, 3, 4)),
