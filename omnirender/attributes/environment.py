@@ -24,8 +24,17 @@ from ._params import (
     check_rgba,
 )
 
-__all__ = ["ClipPlane", "Fog", "Background", "Tessellation", "Highlight", "PickId", "Collidable", "DEFAULT_BACKGROUND",
-           "is_scene_background"]
+__all__ = [
+    "ClipPlane",
+    "Fog",
+    "Background",
+    "Tessellation",
+    "Highlight",
+    "PickId",
+    "Collidable",
+    "DEFAULT_BACKGROUND",
+    "is_scene_background",
+]
 
 #: The background of a scene without an ``om.Background`` (sRGB display values, opaque), shared by every
 #: engine that must draw one: the GL engine's clear colour, the web page, a stand-alone ``.pov`` file.
