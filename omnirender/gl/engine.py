@@ -443,7 +443,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         with self.current():
             # Mesa's llvmpipe leaks the queued work of a texture deleted before the work ran (0.7 MB for a
             # shadow atlas, every one-shot render): finish the queue before anything is freed
-            self.ctx.finish()
+            if hasattr(self.ctx.mglo, "finish"):  # not when the context (a host engine's) is already gone
+                self.ctx.finish()
             self._release()
         if self._own_context:
             self.ctx.release()
