@@ -39,6 +39,9 @@ def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
     return arr
 
 
+_DIAGONAL = np.arange(4)
+
+
 class Transform(MonoAttribute):
     """Base of all modelling transforms; subclasses share its category.
 
@@ -65,6 +68,16 @@ class Transform(MonoAttribute):
 
     def _build_matrix(self) -> np.ndarray:  # pragma: no cover - every static subclass defines it
         raise NotImplementedError(f"{type(self).__name__} does not build a matrix")
+
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        """The (N, 4, 4) matrices of ``transforms`` (all of this class), for renderers that move many at once.
+
+        Subclasses whose matrices follow from a few numbers build the stack
+        from them directly (:class:`Translation` does), without making and
+        caching one matrix object per transform.
+        """
+        return np.stack([t.matrix for t in transforms]) if transforms else np.empty((0, 4, 4))
 
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
@@ -160,6 +173,14 @@ class Translation(Transform):
         m = np.eye(4)
         m[:3, 3] = self._offset
         return m
+
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, _DIAGONAL, _DIAGONAL] = 1.0
+        if transforms:
+            out[:, :3, 3] = [t._offset for t in transforms]  # type: ignore[attr-defined]
+        return out
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}

@@ -153,7 +153,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
         self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
-        self._dependent_index: dict[int, list[Any]] | None = None
+        self._move_plan: Any = None  # dynamic.MovePlan of the installed items, made on the first move
         self._full_key: Any = None
         self._surface: list[Any] = []
         self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
@@ -343,7 +343,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
                 self._journal.drain()  # nothing compiled to update in place: forget what changed
                 self._install(self._immediate)
-                self._dependent_index = None
+                self._move_plan = None
                 self._immediate = Scope()
                 self._scope = self._immediate
                 self._compiled = None
@@ -382,13 +382,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         for item in self.draw_items:
             if item.state.overlay:
                 continue
-            g = item.geometry
-            b0, b1 = g.bounds
-            corners = np.array([[x, y, z, 1.0] for x in (b0[0], b1[0]) for y in (b0[1], b1[1]) for z in (b0[2], b1[2])])
-            m = item.row[ROW.slice("model")].reshape(4, 4).T.astype(np.float64)
-            w = corners @ m.T
-            lo = np.minimum(lo, w[:, :3].min(axis=0))
-            hi = np.maximum(hi, w[:, :3].max(axis=0))
+            found = item.world_bounds()
+            if found is not None:
+                lo = np.minimum(lo, found[0])
+                hi = np.maximum(hi, found[1])
         if not np.all(np.isfinite(lo)):
             return None
         self._bounds = (lo, hi)

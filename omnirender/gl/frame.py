@@ -93,6 +93,11 @@ class FrameRunner:
         return found
 
     @property
+    def eye_position(self) -> np.ndarray:
+        """World position of the frame's own camera (the same in every pass: shadow maps and mirrors included)."""
+        return np.linalg.inv(self._frame_view)[:3, 3]
+
+    @property
     def frame_view(self) -> np.ndarray:
         """World-to-eye matrix of the pass being drawn (drawers use it)."""
         return self._view
@@ -163,6 +168,8 @@ class FrameRunner:
         camera, view, proj = self._frame_camera(override, size)
         self._camera_used = camera
         self._set_camera(view, proj, camera.is_orthographic)
+        self._frame_view_key = self._view_key  # the frame's own view: the one batches are culled for
+        self._frame_view = self._view
         self._records: list[PassRecord] = []
         self._record_stack: list[PassRecord] = []
         self._open_query = None
@@ -260,7 +267,7 @@ class FrameRunner:
         self._view = view
         self._proj = proj
         self._ortho = ortho
-        self._view_key = view.tobytes()
+        self._view_key = view.tobytes() + proj.tobytes()
         self._frame_uniforms = {
             "u_view": view.T.astype(np.float32).tobytes(),
             "u_proj": proj.T.astype(np.float32).tobytes(),

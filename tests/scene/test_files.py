@@ -93,6 +93,20 @@ def _samples(tmp: Path) -> dict[str, list]:
         "Rotation": [om.Rotation(30, (0, 1, 0)), om.Rotation(45, (1, 1, 0))],
         "Scaling": [om.Scaling(1, 2, 3)],
         "Technique": [om.Technique(service="analysis", passes=2)],
+        "InstanceSet": [
+            om.InstanceSet(om.Box(size=0.5), np.array([(0, 0, 0), (1, 2, 3)], float)),
+            om.InstanceSet(
+                om.Sphere(),
+                np.stack([np.eye(4), np.eye(4)]),
+                colors=[(1, 0, 0), (0, 1, 0)],
+                scales=[1.0, 2.0],
+                visible=[True, False],
+            ),
+        ],
+        "InstanceId": [om.InstanceId(7)],
+        "LevelOfDetail": [
+            om.LevelOfDetail([om.Sphere(), om.Box()], distances=[10], center=(1, 0, 0), offline="distance")
+        ],
     }
 
 
