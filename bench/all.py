@@ -21,6 +21,7 @@ SCRIPTS = {
     "radiance.py": ["--repeat", "1"],
     "gltf_load.py": [],
     "compositing.py": [],
+    "soak.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -30,6 +31,7 @@ QUICK = {
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
+    "soak.py": ["--quick"],
 }
 
 
