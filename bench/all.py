@@ -15,6 +15,7 @@ SCRIPTS = {
     "traversal.py": [],
     "picking.py": [],
     "gl_objects.py": [],
+    "dynamic.py": [],
     "shadows.py": [],
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
@@ -25,6 +26,7 @@ SCRIPTS = {
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
+    "dynamic.py": ["--quick"],
     "shadows.py": ["--frames", "6"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],

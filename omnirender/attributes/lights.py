@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -244,11 +244,22 @@ class AmbientLight(LightSource):
         return {"color": self._color, "intensity": self._intensity}
 
 
-#: The default light set in eye coordinates, ArtiSynth's: (direction of travel, intensity, ambient).
+class EyeLight(NamedTuple):
+    """One light of the default set, in eye coordinates."""
+
+    direction: tuple[float, float, float]  # of travel
+    intensity: float
+    ambient: tuple[float, float, float]
+    casts_shadows: bool
+
+
+#: The default light set in eye coordinates, ArtiSynth's.  Only the key light casts shadows, as in a
+#: photographer's setup (fill and back lights soften, they add no shadows of their own); it also keeps the
+#: GL engine at one shadow map for scenes that bring no lights.
 DEFAULT_EYE_LIGHTS = (
-    ((0.35, -0.45, -1.0), 0.8, (0.12, 0.12, 0.12)),  # key light, from above left of the eye
-    ((-0.7, 0.2, -0.6), 0.35, (0.0, 0.0, 0.0)),  # fill light, from the right
-    ((0.1, -0.3, 1.0), 0.2, (0.0, 0.0, 0.0)),  # back light
+    EyeLight((0.35, -0.45, -1.0), 0.8, (0.12, 0.12, 0.12), True),  # key light, from above left of the eye
+    EyeLight((-0.7, 0.2, -0.6), 0.35, (0.0, 0.0, 0.0), False),  # fill light, from the right
+    EyeLight((0.1, -0.3, 1.0), 0.2, (0.0, 0.0, 0.0), False),  # back light
 )
 
 
@@ -260,6 +271,11 @@ def default_lights(eye_to_world: np.ndarray | None = None) -> list[DirectionalLi
     """
     rotation = np.eye(3) if eye_to_world is None else np.asarray(eye_to_world, dtype=np.float64)[:3, :3]
     return [
-        DirectionalLight(direction=tuple(rotation @ np.asarray(d)), intensity=i, ambient=a)
-        for d, i, a in DEFAULT_EYE_LIGHTS
+        DirectionalLight(
+            direction=tuple(rotation @ np.asarray(light.direction)),
+            intensity=light.intensity,
+            ambient=light.ambient,
+            casts_shadows=light.casts_shadows,
+        )
+        for light in DEFAULT_EYE_LIGHTS
     ]

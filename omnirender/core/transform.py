@@ -224,6 +224,22 @@ class Rotation(Transform):
     def _build_matrix(self) -> np.ndarray:
         return axis_angle_matrix(np.asarray(self._axis), math.radians(self._angle))
 
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        """Rodrigues' formula for all of them at once: ``cos I + sin [a]x + (1 - cos) a a^T``."""
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, 3, 3] = 1.0
+        if not transforms:
+            return out
+        a = np.array([t._axis for t in transforms])  # type: ignore[attr-defined]
+        angle = np.radians([t._angle for t in transforms])  # type: ignore[attr-defined]
+        c, s = np.cos(angle)[:, None, None], np.sin(angle)[:, None, None]
+        x, y, z = a[:, 0], a[:, 1], a[:, 2]
+        zero = np.zeros(len(a))
+        cross = np.stack([zero, -z, y, z, zero, -x, -y, x, zero], axis=1).reshape(-1, 3, 3)
+        out[:, :3, :3] = c * np.eye(3) + s * cross + (1.0 - c) * (a[:, :, None] * a[:, None, :])
+        return out
+
     @property
     def angle(self) -> float:
         """Angle in degrees."""
@@ -231,7 +247,11 @@ class Rotation(Transform):
 
     @angle.setter
     def angle(self, value: float) -> None:
-        self._assign(value, self._axis)
+        if type(value) is float and -MAX_MAGNITUDE <= value <= MAX_MAGNITUDE:  # a simulation loop's case (NaN fails)
+            object.__setattr__(self, "_angle", value)
+            self._changed()
+        else:
+            self._assign(value, self._axis)
 
     @property
     def axis(self) -> tuple[float, float, float]:
@@ -295,6 +315,19 @@ class Scaling(Transform):
 
     @factors.setter
     def factors(self, value: Sequence[float]) -> None:
+        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
+            x, y, z = value
+            if (
+                type(x) is float
+                and type(y) is float
+                and type(z) is float
+                and MIN_MAGNITUDE <= abs(x) <= MAX_MAGNITUDE
+                and MIN_MAGNITUDE <= abs(y) <= MAX_MAGNITUDE
+                and MIN_MAGNITUDE <= abs(z) <= MAX_MAGNITUDE
+            ):
+                object.__setattr__(self, "_factors", value)
+                self._changed()
+                return
         v = finite_vector("Scaling", "factors", value, 3)
         if np.any(v == 0.0):
             raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
@@ -308,6 +341,14 @@ class Scaling(Transform):
 
     def _build_matrix(self) -> np.ndarray:
         return np.diag([*self._factors, 1.0])
+
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, 3, 3] = 1.0
+        if transforms:
+            out[:, _DIAGONAL[:3], _DIAGONAL[:3]] = [t._factors for t in transforms]  # type: ignore[attr-defined]
+        return out
 
     def parameters(self) -> dict:
         return {"factors": list(self.factors)}
