@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from gltf_load import best  # bench/ is the script's folder
 
 import omnirender as om
 
@@ -40,15 +40,6 @@ def scene(n: int, rotated: bool) -> om.Node:
     balls = om.InstanceSet(om.Sphere(radius=0.1), transforms, colors=colors, scales=scales)
     camera = om.Camera.look_at(eye=(0, 0, 40), center=(0, 0, 0))
     return om.Node("simulation", [camera, om.PointLight(position=(20, 20, 20)), balls])
-
-
-def best(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def main() -> None:
