@@ -22,6 +22,7 @@ SCRIPTS = {
     "gltf_load.py": [],
     "gltf_instances.py": [],
     "compositing.py": [],
+    "soak.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -32,6 +33,7 @@ QUICK = {
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
     "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
+    "soak.py": ["--quick"],
 }
 
 

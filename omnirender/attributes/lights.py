@@ -33,7 +33,7 @@ from ._params import (
     optional,
 )
 
-__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight"]
+__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight", "default_lights"]
 
 _nonneg = check_number(0.0)
 
@@ -242,3 +242,24 @@ class AmbientLight(LightSource):
 
     def parameters(self) -> dict[str, Any]:
         return {"color": self._color, "intensity": self._intensity}
+
+
+#: The default light set in eye coordinates, ArtiSynth's: (direction of travel, intensity, ambient).
+DEFAULT_EYE_LIGHTS = (
+    ((0.35, -0.45, -1.0), 0.8, (0.12, 0.12, 0.12)),  # key light, from above left of the eye
+    ((-0.7, 0.2, -0.6), 0.35, (0.0, 0.0, 0.0)),  # fill light, from the right
+    ((0.1, -0.3, 1.0), 0.2, (0.0, 0.0, 0.0)),  # back light
+)
+
+
+def default_lights(eye_to_world: np.ndarray | None = None) -> list[DirectionalLight]:
+    """Key, fill and back light: in eye coordinates, or in world coordinates for a camera's ``eye_to_world``.
+
+    The viewer keeps them in eye space (they move with the eye); a scene made
+    around a mesh file places them for its fitted camera.
+    """
+    rotation = np.eye(3) if eye_to_world is None else np.asarray(eye_to_world, dtype=np.float64)[:3, :3]
+    return [
+        DirectionalLight(direction=tuple(rotation @ np.asarray(d)), intensity=i, ambient=a)
+        for d, i, a in DEFAULT_EYE_LIGHTS
+    ]

@@ -36,6 +36,7 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
+from ..attributes.environment import is_scene_background
 from ..attributes.photometry import intensity_scale, phong_roughness
 from ..attributes.surface import appearance_key, engine_appearance
 from ..attributes.texturing import bake_layers
@@ -607,14 +608,14 @@ class LightExporter(AttributePainter):
 
 @default_for(GLTFEngine)
 class BackgroundRecorder(AttributePainter):
-    """``Background`` -> remembered as ``engine.background`` (the first one met)."""
+    """``Background`` -> remembered as ``engine.background`` (the scene's, see ``is_scene_background``)."""
 
     __slots__ = ()
     service = GLTFEngine.service
     target = Background
 
     def exec(self, background: Background, engine: GLTFEngine) -> None:
-        if engine.background is None:
+        if engine.background is None and is_scene_background(background, engine):
             engine.background = background
 
 

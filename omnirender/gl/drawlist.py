@@ -241,7 +241,7 @@ class Batch:
 
 def uniform_material(rows: np.ndarray) -> bool:
     """Whether all rows share every field but the model matrix and the colour."""
-    if len(rows) == 1:
+    if len(rows) <= 1:
         return True
     tail = rows[:, _MATERIAL]
     return bool((tail == tail[0]).all())

@@ -529,7 +529,10 @@ class FrameRunner:
         return True
 
     def _release_unused_targets(self) -> None:
-        for key in [k for k in self._target_cache if k not in self._targets_used]:
+        unused = [k for k in self._target_cache if k not in self._targets_used]
+        if unused:
+            self.ctx.finish()  # deleting a texture with queued work leaks that work in llvmpipe
+        for key in unused:
             self._target_cache.pop(key).release()
 
     def _clear(self, clear: Any) -> None:

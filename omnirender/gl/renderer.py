@@ -151,7 +151,7 @@ class BatchRenderer:
                             batch.position = None  # sorted and culled again
                         batch.rows = y.instances.copy()
                         batch.dirty = (0, len(batch.rows))
-                        batch.uniform = uniform_material(batch.rows) if len(batch.rows) else True
+                        batch.uniform = uniform_material(batch.rows)
                         changed += 1
                         touched = True
                         continue

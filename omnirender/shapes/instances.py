@@ -154,14 +154,21 @@ class InstanceSet(Shape):
             raise ValueError(
                 f"InstanceSet: transforms must be (N, 4, 4) matrices or (N, 3) positions, got shape {t.shape}"
             )
-        _check_finite(m.reshape(len(m), -1), "transforms")
+        _check_finite(_rows(t), "transforms")  # the application's rows, as it wrote them
+        if t.ndim == 3 and len(m):
+            singular = np.nonzero(np.abs(np.linalg.det(m[:, :3, :3])) < _SINGULAR)[0]
+            if len(singular):
+                raise ValueError(
+                    f"InstanceSet: the transform of instance {int(singular[0])} is singular (it flattens the shape, "
+                    "so its normals are undefined); give invertible matrices, or hide the instance with visible="
+                )
         scales = _array(self._scales)
         if scales is not None:
             s = np.asarray(scales, dtype=np.float64)
             if s.shape not in ((len(m),), (len(m), 3)):
                 raise ValueError(f"InstanceSet: scales must be ({len(m)},) or ({len(m)}, 3), got shape {s.shape}")
-            _check_finite(s.reshape(len(m), -1), "scales")
-            bad = np.nonzero((s.reshape(len(m), -1) == 0).any(axis=1))[0]
+            _check_finite(_rows(s), "scales")
+            bad = np.nonzero((_rows(s) == 0).any(axis=1))[0]
             if len(bad):
                 raise ValueError(f"InstanceSet: scales of instance {int(bad[0])} are zero; give non-zero scales")
             s3 = np.repeat(s[:, None], 3, axis=1) if s.ndim == 1 else s
@@ -208,11 +215,23 @@ class InstanceSet(Shape):
         self._shape.attach_owner(self)
 
 
+#: |det| of an instance matrix's 3x3 part below which it counts as singular (a scale of about 1e-4 per axis).
+_SINGULAR = 1e-12
+
+
+def _rows(a: np.ndarray) -> np.ndarray:
+    """``a`` as one row per instance (also when there are none)."""
+    return a.reshape(a.shape[0], int(np.prod(a.shape[1:], dtype=np.int64)))
+
+
 def _check_finite(values: np.ndarray, name: str) -> None:
     finite = np.isfinite(values).all(axis=1)
     if not finite.all():
         bad = int(np.argmin(finite))
-        raise ValueError(f"InstanceSet: {name} of instance {bad} are not finite: {values[bad].tolist()}")
+        raise ValueError(
+            f"InstanceSet: {name} of instance {bad} are not finite: {values[bad].tolist()}; "
+            "write finite numbers, or hide the instance with visible="
+        )
 
 
 @default_for(Engine)

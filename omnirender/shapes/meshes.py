@@ -18,6 +18,7 @@ from ..geometry.normals import smooth_normals, vertex_tangents
 from ..geometry.triangulate import best_fit_plane, crossing_edges, project_to_plane, triangulate_polygon
 from . import _check
 from .base import DeclaredShape, parameter
+from .trimeshes import is_trimesh, triangle_arrays
 
 __all__ = ["TriangleSet", "Polygon", "LineSet", "Polyline", "PointSet"]
 
@@ -59,7 +60,8 @@ class TriangleSet(_VertexShape):
     ``uv_set=1``); ``tangents`` (N, 4): xyz along increasing u, w the sign of
     the bitangent (along increasing v), for normal maps (generated from the
     texture coordinates when None).  Winding is counter-clockwise seen from the
-    front.  At least one triangle.
+    front.  At least one triangle.  ``TriangleSet(mesh)`` with a ``trimesh.Trimesh`` takes its
+    vertices, faces, vertex normals (when the mesh has them), colours and texture coordinates.
     """
 
     __slots__ = ("_vertices", "_indices", "_normals", "_colors", "_texcoords", "_texcoords1", "_tangents")
@@ -82,6 +84,13 @@ class TriangleSet(_VertexShape):
         texcoords1: Any = None,
         tangents: Any = None,
     ) -> None:
+        if is_trimesh(vertices):
+            given = {"indices": indices, "normals": normals, "colors": colors, "texcoords": texcoords}
+            arrays = triangle_arrays(vertices)
+            arrays.update({k: v for k, v in given.items() if v is not None})  # explicit arguments win
+            vertices, indices, normals, colors, texcoords = (
+                arrays[k] for k in ("vertices", "indices", "normals", "colors", "texcoords")
+            )
         super().__init__(
             vertices=vertices,
             indices=indices,
@@ -123,7 +132,7 @@ class TriangleSet(_VertexShape):
             else _check.float_array(name, "tangents", p["tangents"], (4,), count=n),
         }
         if p["normals"] is not None:
-            derived["normals"] = _check.float_array(name, "normals", p["normals"], (3,), count=n)
+            derived["normals"] = _check.normals(name, "normals", p["normals"], n)
         return p, derived
 
     def index_array(self) -> np.ndarray:
@@ -221,9 +230,7 @@ class Polygon(_VertexShape):
         n = len(v)
         derived: dict[str, Any] = {"vertices": v, "colors": _check.colors(name, "colors", p["colors"], n)}
         if p["normals"] is not None:
-            normals = _check.float_array(
-                name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), (3,), count=n
-            )
+            normals = _check.normals(name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), n)
             derived["normals"] = normals
         _check_polygon_outline(v)
         derived["triangles"] = triangulate_polygon(v, owner=name)
