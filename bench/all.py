@@ -21,6 +21,7 @@ SCRIPTS = {
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
     "gltf_load.py": [],
+    "gltf_instances.py": [],
     "compositing.py": [],
     "soak.py": [],
 }
@@ -32,6 +33,7 @@ QUICK = {
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
+    "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
     "soak.py": ["--quick"],
 }

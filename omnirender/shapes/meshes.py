@@ -174,6 +174,37 @@ class TriangleSet(_VertexShape):
     def triangle_count(self) -> int:
         return len(self.index_array())
 
+    def transformed(self, matrix: Any) -> TriangleSet:
+        """This set with the 4x4 ``matrix`` applied to its vertices, normals and tangents (itself for the identity).
+
+        Normals take the inverse transpose; a mirroring matrix reverses the
+        winding (and the bitangent sign) so fronts stay fronts.  For flattening
+        a hierarchy into one mesh (glTF import, instanced export).
+        """
+        m = np.asarray(matrix, np.float64)
+        if np.array_equal(m, np.eye(4)):
+            return self
+        linear = m[:3, :3]
+        mirrored = np.linalg.det(linear) < 0.0
+        vertices = self.vertex_array() @ linear.T + m[:3, 3]
+        normals = self.normal_array() @ np.linalg.inv(linear)
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+        tangents = self._tangents
+        if tangents is not None:
+            t = np.asarray(self.tangent_array(), np.float64)
+            xyz = t[:, :3] @ linear.T
+            xyz /= np.maximum(np.linalg.norm(xyz, axis=1, keepdims=True), 1e-30)
+            tangents = np.column_stack([xyz, -t[:, 3] if mirrored else t[:, 3]])
+        return TriangleSet(
+            vertices,
+            self.index_array()[:, ::-1] if mirrored else self.index_array(),
+            normals=normals,
+            colors=self._colors,
+            texcoords=self._texcoords,
+            texcoords1=self._texcoords1,
+            tangents=tangents,
+        )
+
 
 class Polygon(_VertexShape):
     """One planar polygon (convex or simple concave) given by its outline ``vertices`` (N >= 3, no repeat of the first).
