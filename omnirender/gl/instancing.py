@@ -16,13 +16,25 @@ import numpy as np
 from ..attributes.photometry import srgb_to_linear
 from .layout import PBR, ROW
 
-__all__ = ["InstanceRows", "instance_rows", "set_arrays"]
+__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours"]
 
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
 _ALPHA = ROW.at("color", "alpha")
 _FOLLOWS_COLOR = ROW.at("ambient", "follows_color")
 _SHADING_MODEL = ROW.at("emission", "model")
+
+
+#: The colour an instance set's shape is captured under when the set has colours.  Parts that show it take
+#: the instances' colours, as an ``om.Color`` before the shape would colour them; parts with their own
+#: material (a mesh file's, a node's ``Material`` after the colour) keep it, as in every other engine.
+PROBE = (0.1234567, 0.7654321, 0.3456789)
+_PROBE_LINEAR = srgb_to_linear(PROBE).astype(np.float32)
+
+
+def takes_instance_colours(row: np.ndarray) -> bool:
+    """Whether a part captured under :data:`PROBE` shows it (its colour follows the context)."""
+    return bool(np.array_equal(row[_COLOR.start : _COLOR.start + 3], _PROBE_LINEAR))
 
 
 class InstanceRows:
@@ -64,7 +76,8 @@ def instance_rows(
     """Rows for ``matrices`` (after ``model``, the chain's matrix) of the template ``row`` and ``local``.
 
     ``colors`` (display RGBA) replace the template's colour as ``om.Color``
-    would (ambient follows it for Phong materials).  Determinants are taken
+    would (ambient follows it for Phong materials) when the template was
+    captured showing :data:`PROBE`; other templates keep their material.  Determinants are taken
     only when ``may_mirror`` (positions and positive scales never mirror).
     """
     n = len(matrices)
@@ -73,7 +86,7 @@ def instance_rows(
     rows = np.empty((n, ROW.stride), np.float32)
     rows[:] = row
     rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(n, 16)
-    if colors is not None:
+    if colors is not None and takes_instance_colours(row):
         rows[:, _COLOR.start : _COLOR.start + 3] = srgb_to_linear(colors[:, :3])
         rows[:, _ALPHA] = colors[:, 3] * row[_ALPHA]
         if int(row[_SHADING_MODEL]) != PBR:

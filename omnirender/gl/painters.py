@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes import Color
 from ..core.handler import ShapePainter, default_for
 from ..core.program import EVAL, NODE
 from ..core.transform import Transform
@@ -35,7 +36,7 @@ from ..shapes import (
 )
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
-from .instancing import set_arrays
+from .instancing import PROBE, set_arrays
 from .passes import Pass
 from .techniques import GLTechnique
 
@@ -231,8 +232,19 @@ class InstanceSetPainter(ShapePainter):
 
     def exec(self, shape: InstanceSet, engine: GLEngine) -> None:
         matrices, colors, may_mirror = set_arrays(shape)
-        for template in engine.capture(shape.shape):
+        if colors is None:
+            templates = engine.capture(shape.shape)
+        else:  # captured under the probe colour: the parts showing it take the instances' colours
+            engine.push(_PROBE)
+            try:
+                templates = engine.capture(shape.shape)
+            finally:
+                engine.pop(Color)
+        for template in templates:
             engine.submit_instances(shape, template, matrices, colors, may_mirror)
+
+
+_PROBE = Color(*PROBE)
 
 
 class _LevelSelect(GLTechnique):

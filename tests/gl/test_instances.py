@@ -28,9 +28,11 @@ def swarm(n: int = 40) -> tuple[np.ndarray, np.ndarray]:
     return positions, colors
 
 
-def stage(*items: object) -> om.Node:
+def stage(*items: object, floor: bool = True) -> om.Node:
     scene = om.Node("scene", [om.Camera.look_at((0, 6, 12), (0, 0, 0), fov=40), om.PointLight(position=(3, 8, 4))])
-    scene.add(om.Node("floor", [om.Material(diffuse=(0.8, 0.8, 0.8)), om.Box(size=(12, 0.1, 12), center=(0, -1, 0))]))
+    if floor:
+        box = om.Box(size=(12, 0.1, 12), center=(0, -1, 0))
+        scene.add(om.Node("floor", [om.Material(diffuse=(0.8, 0.8, 0.8)), box]))
     scene.add(om.Node("swarm", list(items)))
     return scene
 
@@ -238,3 +240,20 @@ def test_picking_reports_the_instance_index():
         hits = om.pick(scene, pixel=(px, size[1] / 2), size=size, camera=camera)
         assert hits and hits[0].instance == index
         assert hits[0].shape is instances and hits[0].path == "/scene/row"
+
+
+def test_parts_with_their_own_material_keep_it_as_in_every_other_engine():
+    """Instance colours act as an om.Color before the shape: a mesh file's own material wins over them."""
+    from pathlib import Path
+
+    mesh = om.MeshFile(Path(__file__).resolve().parents[1] / "data_files" / "cube.obj")
+    positions, colors = swarm(6)
+    instanced = stage(om.InstanceSet(mesh, positions, colors=colors, scales=np.full(6, 0.8)), floor=False)
+    nodes = stage(floor=False)
+    for i, (p, c) in enumerate(zip(positions, colors, strict=True)):
+        nodes["/scene/swarm"].add(om.Node(f"b{i}", [om.Translation(*p), om.Scaling(0.8), om.Color(*c), mesh]))
+    image = fresh(instanced)
+    assert np.array_equal(image, fresh(nodes))
+    lit = image[..., :3][image[..., :3].sum(axis=2) > 0].astype(int)
+    # the file's red plus white highlights (green = blue everywhere), not the instances' colours
+    assert len(lit) > 200 and (lit[:, 1] == lit[:, 2]).all() and (lit[:, 0] > lit[:, 1]).mean() > 0.9
