@@ -34,6 +34,7 @@ import numpy as np
 import omnirender as om
 from omnirender.attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from omnirender.gl import GLEngine
+from omnirender.gl.context import gl_renderer
 
 SIZE = (256, 256)
 
@@ -297,13 +298,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="fewer frames")
     args = parser.parse_args()
     frames = 7 if args.quick else 21
-    renderer = "unknown"
-    try:
-        ctx = moderngl.create_context(standalone=True, backend="egl")
-        renderer = ctx.info.get("GL_RENDERER", renderer)
-        ctx.release()
-    except Exception:  # noqa: BLE001 - the name is only informative
-        pass
+    renderer = gl_renderer()
     print(f"dynamic scenes, {SIZE[0]}x{SIZE[1]}, MSAA and shadows off, median frame = render + read-back ({renderer})")
     print("setting one transform parameter of a node in a graph:", setter_costs())
     r = bench_nodes(10_000, frames)

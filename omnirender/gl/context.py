@@ -10,7 +10,7 @@ import ctypes
 import ctypes.util
 from typing import Any
 
-__all__ = ["create_context", "check_size", "RawGL", "GLError"]
+__all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError"]
 
 
 class GLError(RuntimeError):
@@ -30,6 +30,21 @@ def create_context(require: int = 330) -> Any:
             f"GLEngine: cannot create a headless OpenGL {require // 100}.{require % 100 // 10} context through EGL "
             f"({exc}); install Mesa's EGL (libegl1, libgl1-mesa-dri) or pass context= a moderngl context"
         ) from None
+
+
+def gl_renderer() -> str:
+    """The name of the OpenGL implementation a headless context gets here ("unknown" without one).
+
+    Benchmarks print it next to their figures (llvmpipe and a GPU differ by orders of magnitude).
+    """
+    try:
+        ctx = create_context()
+    except GLError:
+        return "unknown"
+    try:
+        return str(ctx.info.get("GL_RENDERER", "unknown"))
+    finally:
+        ctx.release()
 
 
 def limits(ctx: Any) -> tuple[int, int]:
