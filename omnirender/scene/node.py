@@ -16,6 +16,7 @@ detached), and compiled programs and pre-evaluation caches are rebuilt on use.
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections.abc import Iterable, Iterator
 from typing import Any
@@ -163,13 +164,13 @@ class Node:
     @property
     def version(self) -> int:
         """Counter bumped when this node or anything below it changes."""
-        _EPOCH[0] += 1  # an observation: the next change must reach every ancestor again (see touch)
+        _observe()  # an observation: the next change must reach every ancestor again (see touch)
         return self._version
 
     @property
     def structure_version(self) -> int:
         """Counter bumped when this node's list, or the list of a node below it, changes (not parameters)."""
-        _EPOCH[0] += 1
+        _observe()
         return self._structure
 
     def touch(self) -> None:
@@ -379,7 +380,7 @@ class Node:
         Stale descendants are compiled first, bottom-up with an explicit stack,
         so deep graphs need no deep recursion.
         """
-        _EPOCH[0] += 1
+        _observe()
         if self._program_version == self._structure and self._program is not None:
             return self._program
         order: list[Node] = []
@@ -415,7 +416,7 @@ class Node:
         evaluate each child through :meth:`~omnirender.core.engine.Engine.eval_node`.
         Cached while this node's own list is unchanged.
         """
-        _EPOCH[0] += 1
+        _observe()
         if self._local_version != self._own or self._local is None:
             program: list[tuple[int, Any]] = [(ENTER, self)]
             compile_components(self._items, program, _Where(self), inline=False)
@@ -442,7 +443,7 @@ class Node:
         placements in its own coordinates per version and mask, so after a
         change only the nodes on the changed path are walked again.
         """
-        _EPOCH[0] += 1
+        _observe()
         cached = self._pre
         if cached is not None and cached[0] == self._version and cached[1] is mask_fn:
             return cached[2]
@@ -563,6 +564,14 @@ _INLINE_LIMIT = 64
 
 #: Observation epoch: bumped whenever a version or structure counter is read (see Node.touch).
 _EPOCH = [0]
+_EPOCH_LOCK = threading.Lock()
+
+
+def _observe() -> None:
+    """Start a new observation epoch.  Locked: render threads read versions while the application changes
+    the graph, and a lost increment would let a later change stop below an ancestor an observer already read."""
+    with _EPOCH_LOCK:
+        _EPOCH[0] += 1
 
 
 def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> None:
