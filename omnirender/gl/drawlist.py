@@ -97,9 +97,9 @@ class DrawState:
 
 
 class DrawItem:
-    """One shape occurrence: geometry, state, instance row, transparency, node and group tags on its path."""
+    """One shape occurrence: geometry, state, instance row, transparency, node, tags and techniques of its path."""
 
-    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups", "chain", "local", "slot")
+    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups", "chain", "local", "slot", "techniques")
 
     def __init__(
         self,
@@ -111,6 +111,7 @@ class DrawItem:
         groups: tuple[frozenset[str], ...] = (),
         chain: tuple[Any, ...] = (),
         local: np.ndarray | None = None,
+        techniques: tuple[Any, ...] = (),
     ) -> None:
         self.geometry = geometry
         self.state = state
@@ -125,6 +126,8 @@ class DrawItem:
         self.local = local
         #: (batch, index) of the item's row in its opaque batch, or None
         self.slot: tuple[Batch, int] | None = None
+        #: the techniques whose scopes hold the item (outermost first), for pass predicates
+        self.techniques = techniques
 
     @property
     def item_class(self) -> str:

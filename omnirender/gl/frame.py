@@ -122,8 +122,25 @@ class FrameRunner:
         """Size of the framebuffer being drawn into."""
         return self._target_size
 
+    @property
+    def linear_output(self) -> bool:
+        """Whether the framebuffer being drawn into holds linear light (a float target), not display values."""
+        return self._linear_output
+
+    @property
+    def frame_shadows(self) -> Any:
+        """The frame's shadow maps (a :class:`~.shadows.ShadowPlan`: faces per light, uniforms), or None."""
+        return self._shadow_plan
+
     def forget_gl_state(self) -> None:
         """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
+        self._applier.forget()
+
+    def reset_gl_state(self) -> None:
+        """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
+        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        self._applier.forget()
+        self._applier.apply(self._defaults)
         self._applier.forget()
 
     # -- the frame ---------------------------------------------------------------------
@@ -174,7 +191,7 @@ class FrameRunner:
         self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
-            calls += self._run(self.technique, root, Composed(), item_level=True)
+            calls += self._run(self.frame_technique, root, Composed(), item_level=True)
             calls += self._mirror_passes(root)
         finally:
             self._drawing = False

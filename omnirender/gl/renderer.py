@@ -54,6 +54,7 @@ class BatchRenderer:
         self._bounds = None
         self._caster_bounds = None
         self._mirrors = None
+        self.draw_list_version += 1
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             return

@@ -97,7 +97,8 @@ in vec4 i_spec;
 in vec4 i_amb;
 flat out vec4 v_spec;
 flat out vec4 v_amb;
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
 in vec4 i_pbr;
 flat out vec4 v_pbr;
 #endif
@@ -111,6 +112,14 @@ in vec4 i_point;
 #endif
 #elif defined(POINTS) && !defined(VSIZE)
 uniform vec4 u_point;
+#endif
+#ifdef PASS_SURFACE
+#ifdef INSTANCE_MATERIAL
+#define VERTEX_MATERIAL_ID int(i_pbr.z + 0.5)
+#else
+uniform vec4 u_pbr;
+#define VERTEX_MATERIAL_ID int(u_pbr.z + 0.5)
+#endif
 #endif
 uniform mat4 u_view;
 uniform mat4 u_proj;
@@ -170,7 +179,8 @@ void main() {
     v_emis = i_emis;
 #if MODEL == 0
     v_spec = i_spec; v_amb = i_amb;
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
     v_pbr = i_pbr;
 #endif
 #ifdef HIGHLIGHT
@@ -232,7 +242,8 @@ flat in vec4 v_spec;
 flat in vec4 v_amb;
 #define M_SPEC v_spec
 #define M_AMB v_amb
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
 flat in vec4 v_pbr;
 #define M_PBR v_pbr
 #endif
@@ -271,8 +282,13 @@ uniform mat3 u_uvm_base;
 #ifdef FLAT_COLOR
 uniform vec4 u_flat_color;          // linear
 #endif
-out vec4 f_color;
 const float PI = 3.14159265;
+#ifdef PASS_SURFACE
+SURFACE_STRUCT
+PASS_SURFACE_CODE
+#else
+out vec4 f_color;
+#endif
 STATE_CODE
 PASS_FRAGMENT_CODE
 
@@ -387,15 +403,47 @@ void main() {
 #endif
 #endif
     STATE_MAIN
-#ifdef DEPTH_ONLY
-    f_color = vec4(0.0);
-#else
 #ifdef ORTHO
     vec3 V = vec3(0.0, 0.0, 1.0);
 #else
     float pp = dot(P, P);
     vec3 V = pp > 0.0 ? -P * inversesqrt(pp) : vec3(0.0, 0.0, 1.0);
 #endif
+    float metallic = 0.0;
+    float rough = 1.0;
+#if MODEL == 1
+    metallic = clamp(M_PBR.y, 0.0, 1.0);
+    rough = clamp(M_PBR.x, 0.04, 1.0);
+#ifdef MR_TEXTURE
+    vec4 mr = texture(u_mr_texture, SLOT_UV(UVSET_MR, u_uvm_mr));  // glTF: roughness in green, metallic in blue
+    metallic = clamp(M_PBR.y * mr.b, 0.0, 1.0);
+    rough = clamp(M_PBR.x * mr.g, 0.04, 1.0);
+#endif
+#endif
+#ifdef PASS_SURFACE
+    {   // the pass takes over: the resolved surface goes to its snippet (a G-buffer write), not to the lights
+        Surface s;
+        s.P = P; s.N = N; s.V = V; s.world = (u_eye_to_world * vec4(P, 1.0)).xyz;
+        s.base = base; s.texel = texel; s.emission = emission; s.occlusion = occlusion;
+        s.ambient = u_ambient;
+#if MODEL == 0
+        s.ambient_reflectance = M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel;
+#else
+        s.ambient_reflectance = base.rgb;
+#endif
+        s.metallic = metallic; s.roughness = rough;
+        s.material_id = int(M_PBR.z + 0.5);
+#ifdef UVS
+        s.uv = v_uv0;
+#else
+        s.uv = vec2(0.0);
+#endif
+        s.depth = -1.0;
+        pass_surface(s);
+    }
+#elif defined(DEPTH_ONLY)
+    f_color = vec4(0.0);
+#else
     vec3 color;
 #if defined(FLAT_COLOR)
     color = u_flat_color.rgb;
@@ -403,13 +451,6 @@ void main() {
 #elif defined(UNLIT) || MODEL == 2
     color = base.rgb;
 #elif MODEL == 1
-    float metallic = clamp(M_PBR.y, 0.0, 1.0);
-    float rough = clamp(M_PBR.x, 0.04, 1.0);
-#ifdef MR_TEXTURE
-    vec4 mr = texture(u_mr_texture, SLOT_UV(UVSET_MR, u_uvm_mr));  // glTF: roughness in green, metallic in blue
-    metallic = clamp(M_PBR.y * mr.b, 0.0, 1.0);
-    rough = clamp(M_PBR.x * mr.g, 0.04, 1.0);
-#endif
     float a2 = rough * rough * rough * rough;
     vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
     float k = (rough + 1.0) * (rough + 1.0) / 8.0;
@@ -588,8 +629,8 @@ def instance_fields(kind: str, features: dict[str, Any]) -> tuple[str, ...]:
     model = features.get("MODEL", PHONG)
     if model == PHONG:
         fields += ["specular", "ambient"]
-    elif model == PBR:
-        fields.append("pbr")
+    if model == PBR or "PASS_SURFACE" in features:
+        fields.append("pbr")  # PBR's roughness and metallic; the material id of a surface pass
     if "HIGHLIGHT" in features:
         fields.append("highlight")
     if kind == "points" and "VSIZE" not in features:
@@ -614,7 +655,26 @@ def _light_code(types: str) -> list[str]:
     ]
 
 
-_SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT")
+_SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT", "PASS_SURFACE")
+
+#: The resolved surface a ``Shader(surface=...)`` snippet receives (eye space; colours linear).
+SURFACE_STRUCT = """struct Surface {
+    vec3 P;                    // eye-space position
+    vec3 N;                    // eye-space unit normal (facing the eye on two-sided surfaces; normal map applied)
+    vec3 V;                    // unit vector towards the eye
+    vec3 world;                // world-space position
+    vec4 base;                 // base colour and alpha (texture and vertex colours applied)
+    vec3 texel;                // the texture's colour (1 without a texture)
+    vec3 emission;
+    float occlusion;           // PBR occlusion texture (1 without)
+    vec3 ambient;              // the ambient light: global ambient plus the lights' ambient terms
+    vec3 ambient_reflectance;  // Phong's ambient colour (or the base colour it follows)
+    float metallic;
+    float roughness;
+    int material_id;           // the row of the deferred material table
+    vec2 uv;
+    float depth;               // window depth to write instead of the fragment's (-1: keep)
+};"""
 
 
 def _header(defines: dict[str, Any]) -> str:
@@ -623,7 +683,8 @@ def _header(defines: dict[str, Any]) -> str:
     if types is not None:
         lines += _light_code(types)
     for name in _SNIPPETS:
-        defines.pop(name, None)
+        if defines.pop(name, None) is not None and name == "PASS_SURFACE":
+            lines.append("#define PASS_SURFACE")
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
@@ -673,6 +734,8 @@ def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> s
         .replace("PASS_VERTEX_CALLS", v_calls)
         .replace("PASS_FRAGMENT_CODE", f_code)
         .replace("PASS_FRAGMENT_CALLS", f_calls)
+        .replace("SURFACE_STRUCT", SURFACE_STRUCT)
+        .replace("PASS_SURFACE_CODE", features.get("PASS_SURFACE", ""))
         .replace("STATE_CODE", state_code)
         .replace("STATE_MAIN", state_main)
     )

@@ -1,0 +1,623 @@
+"""Generated GLSL of the deferred pipeline: the models' stages wrapped per model, and the uber-shaders.
+
+Every model's code is placed between ``#define``s that give its generic names (``GBuffer``,
+``LBuffer``, ``material``, the stage functions) the model's prefix (``sm3_...``) and a ``#line``
+directive whose source-string number names the model and the stage, so a compile error is traced
+back to them (:func:`explain`).  From a layout (:class:`~.layout.BufferLayout`) this module makes
+
+* the geometry pass's surface snippet (``Shader(surface=...)`` of the forward mesh shader): the
+  visibility stage of the program's ``MODEL``, then the packed writes of the fixed layer, the model's
+  G-buffer channels and its initial light;
+* its vertex snippet (``Shader(vertex=...)``) when a model has a geometry stage;
+* the lighting programs (one per light kind): read the G-buffer, evaluate the light, switch on the
+  pixel's model and run its lighting stage, add the result into the L-buffer;
+* the shading program: switch on the model, run its shading stage, apply fog, write colour and depth.
+
+Multisampled buffers are read per sample (``gl_SampleID``: the programs run once per sample), so
+edges come out as the forward pipeline's multisampling makes them.
+"""
+
+from __future__ import annotations
+
+import re
+
+from ..shaders import MAX_LIGHTS
+from ..shadow_glsl import MAPS_CORE
+from .layout import BufferLayout, Channel
+from .models import G_TYPES, L_TYPES, PARAM_TYPES, STAGES, ShadingModel, ShadingModelError
+
+__all__ = [
+    "surface_snippet",
+    "vertex_snippet",
+    "lighting_program",
+    "shading_program",
+    "depth_program",
+    "classify_program",
+    "explain",
+    "MODES",
+    "LIGHT_KINDS",
+    "COMMON",
+]
+
+#: Light kinds of the lighting programs (the ``LIGHT_KIND`` define).
+LIGHT_KINDS = {"directional": 0, "point": 1, "spot": 2}
+#: Fog slots of the fixed layer's flags (3 bits; 0 is "no fog").
+FOG_SLOTS = 7
+_STAGE_IDS = {"geometry": 1, "visibility": 2, "lighting": 3, "shading": 4}
+_MACROS = ("GBuffer", "LBuffer", "material", "geometry", "visibility", "lighting", "shading")
+
+_SRGB = """
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+vec3 to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+"""
+#: Octahedral normals in 12 + 12 bits and 8-bit channels (the fixed layer's packing).
+PACKING = """
+vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
+uint oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.z >= 0.0 ? n.xy : oct_wrap(n.xy);
+    uvec2 q = uvec2(round(clamp(e * 0.5 + 0.5, 0.0, 1.0) * 4095.0));
+    return (q.x << 20) | (q.y << 8);
+}
+vec3 oct_decode(uint bits) {
+    vec2 e = vec2(float((bits >> 20) & 4095u), float((bits >> 8) & 4095u)) / 4095.0 * 2.0 - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) n.xy = oct_wrap(n.xy);
+    return normalize(n);
+}
+uint unorm8(float v) { return uint(round(clamp(v, 0.0, 1.0) * 255.0)); }
+"""
+#: What the lighting and shading stages receive.
+STRUCTS = """
+struct Pixel {
+    vec3 P;        // eye-space position
+    vec3 N;        // eye-space unit normal
+    vec3 V;        // unit vector towards the eye
+    vec3 world;    // world-space position
+    int material_id;
+};
+struct Light {
+    vec3 L;        // unit vector towards the light (eye space)
+    vec3 diffuse;  // the light's diffuse colour times attenuation, spot factor and shadow
+    vec3 specular; // the same for its specular colour
+    float distance;
+};
+"""
+#: The sRGB curves, the packing and the stages' structs: the head of the lighting and shading programs.
+COMMON = _SRGB + PACKING + STRUCTS
+
+
+def source_number(model: ShadingModel, stage: str) -> int:
+    """The ``#line`` source-string number of a model's stage (decoded by :func:`explain`)."""
+    return model.number * 10 + _STAGE_IDS[stage]
+
+
+def _structs(layout: BufferLayout, model: ShadingModel) -> str:
+    p = model.prefix
+    g = [f"    {G_TYPES[k][0]} {name};" for name, k in model.gbuffer.items()] or ["    float unused_;"]
+    lb = [f"    {L_TYPES[k][0]} {name};" for name, k in model.lbuffer.items()] or ["    float unused_;"]
+    params = [f"    {PARAM_TYPES[k][0]} {name};" for name, (k, _) in model.parameters.items()] or ["    float unused_;"]
+    zero_g = [f"    g.{name} = {G_TYPES[k][0]}(0.0);" for name, k in model.gbuffer.items()] or ["    g.unused_ = 0.0;"]
+    zero_l = [f"    l.{name} = {L_TYPES[k][0]}(0.0);" for name, k in model.lbuffer.items()] or ["    l.unused_ = 0.0;"]
+    fetch = []
+    for slot, (name, (kind, _)) in enumerate(model.parameters.items()):
+        glsl, size = PARAM_TYPES[kind]
+        swizzle = "xyzw"[:size]
+        fetch.append(f"    m.{name} = texelFetch(u_materials, ivec2({slot + 1}, id), 0).{swizzle};")
+    fetch = fetch or ["    m.unused_ = 0.0;"]
+    return "\n".join(
+        [
+            f"struct {p}G {{", *g, "};",
+            f"struct {p}L {{", *lb, "};",
+            f"struct {p}P {{", *params, "};",
+            f"{p}P {p}material;",
+            f"{p}G {p}G_zero() {{ {p}G g;", *zero_g, "    return g; }",
+            f"{p}L {p}L_zero() {{ {p}L l;", *zero_l, "    return l; }",
+            f"{p}P {p}params(int id) {{ {p}P m;", *fetch, "    return m; }",
+        ]
+    )  # fmt: skip
+
+
+def _stage(model: ShadingModel, stage: str) -> str:
+    """A model's stage code between the defines that give its generic names the model's prefix."""
+    code = model.stages.get(stage)
+    if not code:
+        return ""
+    p = model.prefix
+    head = [
+        f"#define GBuffer {p}G",
+        f"#define LBuffer {p}L",
+        f"#define material {p}material",
+        *(f"#define {name} {p}{name}" for name in STAGES),
+        f"#line 1 {source_number(model, stage)}",
+    ]
+    tail = [*(f"#undef {name}" for name in _MACROS)]
+    return "\n".join([*head, code, *tail, "#line 1 0"])
+
+
+def _model_code(layout: BufferLayout, model: ShadingModel, stages: tuple[str, ...]) -> str:
+    return "\n".join([_structs(layout, model), *(_stage(model, s) for s in stages)])
+
+
+# -- the geometry pass -------------------------------------------------------------------------------------
+def _outputs(layout: BufferLayout) -> str:
+    lines = []
+    for location, (name, fmt) in enumerate(layout.layers):
+        kind = "uvec2" if fmt == "rg32ui" else ("vec3" if fmt == "r11g11b10f" else "vec4")
+        lines.append(f"layout(location = {location}) out {kind} gb_{name};")
+    return "\n".join(lines)
+
+
+def _component(value: str, kind: str, index: int) -> str:
+    """GLSL for component ``index`` of an output ``value`` of G-buffer type ``kind``, as stored."""
+    glsl, size, _, srgb = G_TYPES[kind]
+    if srgb:
+        value = f"to_srgb({value})"
+    return value if size == 1 else f"{value}[{index}]"
+
+
+def _g_writes(layout: BufferLayout, model: ShadingModel) -> list[str]:
+    lines = []
+    for name, kind in model.gbuffer.items():
+        for i, channel in enumerate(layout.channels[model.number][name]):
+            layer, comp = channel.location()
+            value = _component(f"g.{name}", kind, i)
+            if layer == "fixed":
+                lines.append(f"    spare[{comp}] = unorm8({value});")
+            else:
+                lines.append(f"    gb_{layer}[{comp}] = {value};")
+    for name, kind in model.lbuffer.items():
+        for i, channel in enumerate(layout.light[model.number][name]):
+            layer, comp = channel.location()
+            value = f"l.{name}" if L_TYPES[kind][1] == 1 else f"l.{name}[{i}]"
+            lines.append(f"    gb_{layer}[{comp}] = max({value}, 0.0);")
+    return lines
+
+
+def surface_snippet(layout: BufferLayout) -> str:
+    """``Shader(surface=...)`` code of the geometry pass: the visibility stage and the G-buffer writes."""
+    parts = [
+        PACKING,  # the forward shader it goes into has the sRGB curves
+        "uniform sampler2D u_materials;",
+        f"uniform vec4 u_fogs[{FOG_SLOTS}];",
+        f"uniform vec3 u_fog_colors[{FOG_SLOTS}];",
+        _outputs(layout),
+    ]
+    branches = []
+    for model in layout.models:
+        p = model.prefix
+        body = [
+            f"#{'elif' if branches else 'if'} MODEL == {model.number}",
+            _model_code(layout, model, ("visibility",)),
+            "void model_surface(inout Surface s) {",
+            f"    {p}material = {p}params(s.material_id);",
+            f"    {p}G g = {p}G_zero();",
+            f"    {p}L l = {p}L_zero();",
+        ]
+        if "visibility" in model.stages:
+            body.append(f"    {p}visibility(s, g, l);")
+        body += _g_writes(layout, model)
+        if model.depth:
+            body.append("    gl_FragDepth = s.depth >= 0.0 ? clamp(s.depth, 0.0, 1.0) : gl_FragCoord.z;")
+        body.append("}")
+        branches.append("\n".join(body))
+    branches += ["#else", "void model_surface(inout Surface s) { discard; }  // not a model of this layout", "#endif"]
+    parts += ["uint spare[3];", *branches]
+    zeros = {"rg32ui": "uvec2(0u)", "r11g11b10f": "vec3(0.0)"}
+    zero = [f"    gb_{name} = {zeros.get(fmt, 'vec4(0.0)')};" for name, fmt in layout.layers]
+    parts.append(
+        "\n".join(
+            [
+                "void pass_surface(Surface s) {",
+                *zero,
+                "    spare = uint[3](0u, 0u, 0u);",
+                "    model_surface(s);",
+                "    uint flags = 0u;",
+                "#ifdef SHADOW_MAPS",
+                "    flags |= 1u;  // receives shadows",
+                "#endif",
+                "#ifdef FOG",
+                f"    for (int k = 0; k < {FOG_SLOTS}; ++k)",
+                "        if (u_fogs[k] == u_fog && u_fog_colors[k] == u_fog_color) {",
+                "            flags |= uint(k + 1) << 1;",
+                "            break;",
+                "        }",
+                "#endif",
+                "    uint id = uint(clamp(s.material_id, 0, 4095));",
+                "    uint word = (id << 20) | (flags << 16) | (spare[1] << 8) | spare[2];",
+                "    gb_fixed = uvec2(oct_encode(s.N) | spare[0], word);",
+                "}",
+            ]
+        )
+    )
+    return "\n".join(parts)
+
+
+def vertex_snippet(layout: BufferLayout) -> str:
+    """``Shader(vertex=...)`` code running the geometry stage of the program's model ('' when no model has one)."""
+    models = [m for m in layout.models if "geometry" in m.stages]
+    if not models:
+        return ""
+    parts = ["uniform sampler2D u_materials;"]
+    calls = []
+    for model in models:
+        p = model.prefix
+        parts += [f"#if MODEL == {model.number}", _model_code(layout, model, ("geometry",)), "#endif"]
+        calls += [
+            f"#if MODEL == {model.number}",
+            f"    {p}material = {p}params(VERTEX_MATERIAL_ID);",
+            f"    {p}geometry(world, normal);",
+            "#endif",
+        ]
+    parts += ["void pass_vertex(inout vec3 world, inout vec3 normal) {", *calls, "}"]
+    return "\n".join(parts)
+
+
+# -- reading the G-buffer (lighting and shading passes) ----------------------------------------------------
+#: How a full-screen or proxy program reads a multisampled G-buffer: ``"pixel"`` (one sample),
+#: ``"centre"`` (once per pixel whose samples show one surface, at the pixel centre, as forward shading
+#: does) or ``"sample"`` (once per sample: pixels on geometric edges).
+MODES = ("pixel", "centre", "sample")
+
+
+def _header(samples: int, mode: str, defines: dict[str, object]) -> str:
+    lines = ["#version 400" if mode == "sample" else "#version 330"]
+    for name, value in sorted(defines.items()):
+        lines.append(f"#define {name}" if value is True else f"#define {name} {value}")
+    lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
+    lines.append(f"#define SAMPLES {max(samples, 1)}")
+    lines.append(f"#define MODE_{mode.upper()}")
+    lines.append("#define SAMPLE gl_SampleID" if mode == "sample" else "#define SAMPLE 0")
+    return "\n".join(lines) + "\n"
+
+
+def _samplers(layout: BufferLayout, samples: int, light: bool) -> str:
+    ms = "MS" if samples > 1 else ""
+    lines = [f"uniform usampler2D{ms} u_fixed;", f"uniform sampler2D{ms} u_depth;", "uniform sampler2D u_materials;"]
+    for name, fmt in layout.layers[1:]:
+        if fmt != "r11g11b10f" or light:
+            lines.append(f"uniform sampler2D{ms} u_{name};")
+    lines.append("uvec2 px_fixed;")
+    for name, fmt in layout.layers[1:]:
+        if fmt != "r11g11b10f" or light:
+            lines.append(f"vec4 px_{name};")
+    return "\n".join(lines)
+
+
+def _fetch_layers(layout: BufferLayout, light: bool) -> list[str]:
+    lines = []
+    for name, fmt in layout.layers[1:]:
+        if fmt != "r11g11b10f" or light:
+            lines.append(f"    px_{name} = texelFetch(u_{name}, c, SAMPLE);")
+    return lines
+
+
+def _channel_value(channel: Channel) -> str:
+    layer, comp = channel.location()
+    if layer == "fixed":
+        shift = (0, 8, 0)[comp]
+        word = "x" if comp == 0 else "y"
+        return f"float((px_fixed.{word} >> {shift}u) & 255u) / 255.0"
+    return f"px_{layer}[{comp}]"
+
+
+def _g_reads(layout: BufferLayout, model: ShadingModel) -> str:
+    p = model.prefix
+    lines = [f"{p}G {p}G_read() {{", f"    {p}G g = {p}G_zero();"]
+    for name, kind in model.gbuffer.items():
+        glsl, size, _, srgb = G_TYPES[kind]
+        values = [_channel_value(c) for c in layout.channels[model.number][name]]
+        value = values[0] if size == 1 else f"{glsl}({', '.join(values)})"
+        lines.append(f"    g.{name} = {f'to_linear({value})' if srgb else value};")
+    lines += ["    return g;", "}"]
+    return "\n".join(lines)
+
+
+def _l_reads(layout: BufferLayout, model: ShadingModel) -> str:
+    p = model.prefix
+    lines = [f"{p}L {p}L_read() {{", f"    {p}L l = {p}L_zero();"]
+    for name, kind in model.lbuffer.items():
+        glsl, size = L_TYPES[kind]
+        values = [_channel_value(c) for c in layout.light[model.number][name]]
+        value = values[0] if size == 1 else glsl + "(" + ", ".join(values) + ")"
+        lines.append(f"    l.{name} = {value};")
+    lines += ["    return l;", "}"]
+    return "\n".join(lines)
+
+
+_PIXEL = """
+    ivec2 c = ivec2(gl_FragCoord.xy);
+#if defined(MODE_CENTRE)
+    // one surface covers the pixel: its depth at the centre, from the samples' plane (the forward shader
+    // shades at the centre too)
+    if (texelFetch(u_depth, c, 0).r >= 1.0) discard;
+    float z = 0.0;
+    for (int k = 0; k < SAMPLES; ++k) z += u_fit[k].x * texelFetch(u_depth, c, k).r;
+    vec2 xy = gl_FragCoord.xy;
+#elif defined(MODE_SAMPLE)
+    float z = texelFetch(u_depth, c, SAMPLE).r;
+    if (z >= 1.0) discard;  // nothing was drawn here
+    vec2 xy = floor(gl_FragCoord.xy) + gl_SamplePosition;
+#else
+    float z = texelFetch(u_depth, c, 0).r;
+    if (z >= 1.0) discard;  // nothing was drawn here
+    vec2 xy = gl_FragCoord.xy;
+#endif
+    vec4 q = u_inv_proj * vec4((xy - u_origin) / u_size * 2.0 - 1.0, z * 2.0 - 1.0, 1.0);
+    vec3 P = q.xyz / q.w;
+    px_fixed = texelFetch(u_fixed, c, SAMPLE).xy;
+    uint id = px_fixed.y >> 20;
+    uint flags = (px_fixed.y >> 16) & 15u;
+#ifdef ORTHO
+    vec3 V = vec3(0.0, 0.0, 1.0);
+#else
+    vec3 V = -normalize(P);
+#endif
+    Pixel p = Pixel(P, oct_decode(px_fixed.x), V, (u_eye_to_world * vec4(P, 1.0)).xyz, int(id));
+    int model = int(texelFetch(u_materials, ivec2(0, int(id)), 0).x);
+"""
+
+_PIXEL_UNIFORMS = """
+uniform mat4 u_inv_proj;       // clip space -> eye space of the frame's camera
+uniform mat4 u_eye_to_world;
+uniform vec2 u_origin;         // the viewport's lower-left pixel
+uniform vec2 u_size;           // the viewport's size in pixels
+#ifdef MODE_CENTRE
+uniform vec3 u_fit[SAMPLES];   // least-squares plane through the samples' depths: (centre, d/dx, d/dy) weights
+#endif
+"""
+
+
+def _light_outputs(layout: BufferLayout) -> tuple[str, list[str], list[str]]:
+    decl = [f"layout(location = {k}) out vec3 lb_{name};" for k, name in enumerate(layout.light_layers)]
+    init = [f"    vec3 out_{name} = vec3(0.0);" for name in layout.light_layers]
+    final = [f"    lb_{name} = out_{name};" for name in layout.light_layers]
+    return "\n".join(decl), init, final
+
+
+_FULLSCREEN_VERTEX = "in vec3 in_position;\nvoid main() { gl_Position = vec4(in_position.xy, 0.0, 1.0); }\n"
+
+
+def depth_program(samples: int) -> tuple[str, str]:
+    """The G-buffer's depth into the frame, per sample (lighting then tests its proxies against it)."""
+    mode = "sample" if samples > 1 else "pixel"
+    head = _header(samples, mode, {})
+    ms = "MS" if samples > 1 else ""
+    fragment = (
+        head
+        + f"""
+uniform sampler2D{ms} u_depth;
+void main() {{
+    float z = texelFetch(u_depth, ivec2(gl_FragCoord.xy), SAMPLE).r;
+    if (z >= 1.0) discard;
+    gl_FragDepth = z;
+}}
+"""
+    )
+    return head + _FULLSCREEN_VERTEX, fragment
+
+
+def classify_program(samples: int) -> tuple[str, str]:
+    """Keeps (for a stencil mark) the pixels whose samples do not show one plane of one surface: they are
+    lit and shaded per sample, the others once."""
+    head = _header(samples, "pixel", {})
+    fragment = (
+        head
+        + """
+uniform usampler2DMS u_fixed;
+uniform sampler2DMS u_depth;
+uniform vec3 u_fit[SAMPLES];
+uniform vec2 u_offsets[SAMPLES];   // sample position - pixel centre
+void main() {
+    ivec2 c = ivec2(gl_FragCoord.xy);
+    uvec2 first = texelFetch(u_fixed, c, 0).xy;
+    float zs[SAMPLES];
+    vec3 plane = vec3(0.0);
+    bool edge = false;
+    for (int k = 0; k < SAMPLES; ++k) {
+        zs[k] = texelFetch(u_depth, c, k).r;
+        plane += u_fit[k] * zs[k];
+        if (texelFetch(u_fixed, c, k).xy != first) edge = true;
+    }
+    for (int k = 0; k < SAMPLES; ++k)
+        if (abs(zs[k] - (plane.x + dot(plane.yz, u_offsets[k]))) > 1e-6) edge = true;
+    if (!edge) discard;
+}
+"""
+    )
+    return head + _FULLSCREEN_VERTEX, fragment
+
+
+def lighting_program(layout: BufferLayout, kind: str, fullscreen: bool, samples: int, mode: str,
+                     defines: dict[str, object]) -> tuple[str, str]:  # fmt: skip
+    """(vertex, fragment) source of the lighting pass for lights of ``kind`` drawn as proxies or full screen."""
+    defines = {**defines, "LIGHT_KIND": LIGHT_KINDS[kind]}
+    if fullscreen:
+        defines["FULLSCREEN"] = True
+    head = _header(samples, mode, defines)
+    vertex = (
+        head
+        + """
+in vec3 in_position;
+in mat4 i_proxy;    // unit proxy -> eye space
+in vec4 i_lpos;     // eye space: position (w 1) or direction towards the light (w 0)
+in vec4 i_ldiff;    // diffuse colour, reach
+in vec4 i_lspec;    // specular colour
+in vec4 i_latt;     // constant, linear, quadratic attenuation
+in vec4 i_lspot;    // spot axis (eye space), cos(cutoff)
+in vec4 i_lextra;   // spot exponent, first shadow face, shadow face count
+uniform mat4 u_proj;
+flat out vec4 v_lpos; flat out vec4 v_ldiff; flat out vec4 v_lspec; flat out vec4 v_latt;
+flat out vec4 v_lspot; flat out vec4 v_lextra;
+void main() {
+#ifdef FULLSCREEN
+    gl_Position = vec4(in_position.xy, 0.0, 1.0);
+#else
+    gl_Position = u_proj * (i_proxy * vec4(in_position, 1.0));
+#endif
+    v_lpos = i_lpos; v_ldiff = i_ldiff; v_lspec = i_lspec; v_latt = i_latt; v_lspot = i_lspot; v_lextra = i_lextra;
+}
+"""
+    )
+    decl, init, final = _light_outputs(layout)
+    models = [m for m in layout.models if "lighting" in m.stages]
+    branches = []
+    for model in models:
+        p, n = model.prefix, model.number
+        writes = []
+        for name, kind_l in model.lbuffer.items():
+            for i, channel in enumerate(layout.light[n][name]):
+                layer, comp = channel.location()
+                value = f"l.{name}" if L_TYPES[kind_l][1] == 1 else f"l.{name}[{i}]"
+                writes.append(f"        out_{layer}[{comp}] = {value};")
+        branches.append(
+            "\n".join(
+                [
+                    f"    {'else ' if branches else ''}if (model == {n}) {{",
+                    f"        {p}material = {p}params(int(id));",
+                    f"        {p}G g = {p}G_read();",
+                    f"        {p}L l = {p}L_zero();",
+                    f"        {p}lighting(p, g, light, l);",
+                    *writes,
+                    "    }",
+                ]
+            )
+        )
+    shadows = ""
+    shadow_call = ""
+    if "SHADOW_MAPS" in defines:
+        shadows = MAPS_CORE
+        shadow_call = """
+    if ((flags & 1u) != 0u && v_lextra.z > 0.5 && dot(p.N, light.L) > 0.0)
+        att *= face_shadow(int(v_lextra.y), int(v_lextra.z), v_lpos.xyz, P, p.N, light.L);"""
+    fragment = head + "\n".join(
+        [
+            COMMON,
+            _PIXEL_UNIFORMS,
+            _samplers(layout, samples, light=False),
+            "flat in vec4 v_lpos; flat in vec4 v_ldiff; flat in vec4 v_lspec; flat in vec4 v_latt;",
+            "flat in vec4 v_lspot; flat in vec4 v_lextra;",
+            decl,
+            shadows,
+            *(_model_code(layout, m, ("lighting",)) + "\n" + _g_reads(layout, m) for m in models),
+            "void main() {",
+            _PIXEL,
+            *_fetch_layers(layout, light=False),
+            "    Light light;",
+            "    float att = 1.0;",
+            "#if LIGHT_KIND == 0",
+            "    light.L = v_lpos.xyz;",
+            "    light.distance = 0.0;",
+            "#else",
+            "    vec3 d = v_lpos.xyz - P;",
+            "    float dist = length(d);",
+            "    if (dist > v_ldiff.w) discard;  // beyond the light's reach: culled against the G-buffer depth",
+            "    light.L = dist > 1e-20 ? d / dist : vec3(0.0, 0.0, 1.0);",
+            "    light.distance = dist;",
+            "    att = 1.0 / max(v_latt.x + v_latt.y * dist + v_latt.z * dist * dist, 1e-20);",
+            "#if LIGHT_KIND == 2",
+            "    float cs = dot(-light.L, v_lspot.xyz);",
+            "    if (cs < v_lspot.w) discard;  // outside the cone",
+            "    att *= pow(max(cs, 0.0), v_lextra.x);",
+            "#endif",
+            "#endif",
+            shadow_call,
+            "    light.diffuse = v_ldiff.rgb * att;",
+            "    light.specular = v_lspec.rgb * att;",
+            *init,
+            *branches,
+            *final,
+            "}",
+        ]
+    )
+    return vertex, fragment
+
+
+def shading_program(layout: BufferLayout, samples: int, mode: str, defines: dict[str, object]) -> tuple[str, str]:
+    """(vertex, fragment) source of the shading pass (full screen): the colour of every drawn pixel, and its
+    depth with ``FRAG_DEPTH``."""
+    head = _header(samples, mode, defines)
+    vertex = head + _FULLSCREEN_VERTEX
+    branches = []
+    for model in layout.models:
+        p, n = model.prefix, model.number
+        branches.append(
+            "\n".join(
+                [
+                    f"    {'else ' if branches else ''}if (model == {n}) {{",
+                    f"        {p}material = {p}params(int(id));",
+                    f"        color = {p}shading(p, {p}G_read(), {p}L_read());",
+                    "    }",
+                ]
+            )
+        )
+    fragment = head + "\n".join(
+        [
+            COMMON,
+            _PIXEL_UNIFORMS,
+            _samplers(layout, samples, light=True),
+            f"uniform vec4 u_fogs[{FOG_SLOTS}];       // start, end, density, mode (0 linear, 1 exp, 2 exp2)",
+            f"uniform vec3 u_fog_colors[{FOG_SLOTS}];",
+            "out vec4 f_color;",
+            *(
+                _model_code(layout, m, ("shading",)) + "\n" + _g_reads(layout, m) + "\n" + _l_reads(layout, m)
+                for m in layout.models
+            ),
+            "vec3 apply_fog(vec3 c, float dist, int slot) {  // the forward shader's fog",
+            "    vec4 fog = u_fogs[slot];",
+            "    float f;",
+            "    if (fog.w < 0.5) f = (fog.y - dist) / (fog.y - fog.x);",
+            "    else if (fog.w < 1.5) f = exp(-fog.z * dist);",
+            "    else f = exp(-(fog.z * dist) * (fog.z * dist));",
+            "    return mix(u_fog_colors[slot], c, clamp(f, 0.0, 1.0));",
+            "}",
+            "void main() {",
+            _PIXEL,
+            *_fetch_layers(layout, light=True),
+            "    vec3 color = vec3(0.0);",
+            *branches,
+            "    uint slot = flags >> 1;",
+            "    if (slot > 0u) color = apply_fog(color, length(P), int(slot) - 1);",
+            "#ifdef LINEAR_OUTPUT",
+            "    f_color = vec4(max(color, vec3(0.0)), 1.0);",
+            "#else",
+            "    f_color = vec4(to_srgb(color), 1.0);",
+            "#endif",
+            "#ifdef FRAG_DEPTH",
+            "    gl_FragDepth = z;",
+            "#endif",
+            "}",
+        ]
+    )
+    return vertex, fragment
+
+
+_ERROR = re.compile(r"(\d+):(\d+)\((\d+)\):\s*(?:error|ERROR)?:?\s*(.*)")
+
+
+def explain(error: str, models: tuple[ShadingModel, ...], where: str) -> ShadingModelError | None:
+    """A :class:`ShadingModelError` naming model, stage and line for a driver error in a model's code, or None."""
+    by_number = {m.number: m for m in models}
+    for line in str(error).splitlines():
+        found = _ERROR.search(line)
+        if not found:
+            continue
+        source, row, _, message = found.groups()
+        number, stage_id = divmod(int(source), 10)
+        model = by_number.get(number)
+        stage = next((s for s, k in _STAGE_IDS.items() if k == stage_id), None)
+        if model is None or stage is None:
+            continue
+        text = model.stages[stage].splitlines()
+        code = text[int(row) - 1].strip() if 0 < int(row) <= len(text) else ""
+        return ShadingModelError(
+            f"shading model {model.name!r}, {stage} stage, line {row}: {message.strip()}"
+            + (f"\n    {code}" if code else "")
+            + f"\n(compiling the deferred pipeline's {where}; the stage must define {STAGES[stage]})"
+        )
+    return None
