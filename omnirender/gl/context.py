@@ -133,6 +133,7 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "glGetFramebufferAttachmentParameteriv": ([_u, _u, _u, _pi], None),
     "glDrawBuffers": ([_i, _pu], None),
     "glGetMultisamplefv": ([_u, _u, _pf], None),
+    "glSampleMaski": ([_u, _u], None),
 }
 
 
@@ -409,3 +410,12 @@ def sample_positions(raw: RawGL, samples: int) -> list[tuple[float, float]]:
         raw.glGetMultisamplefv(GL_SAMPLE_POSITION, k, value)
         out.append((float(value[0]), float(value[1])))
     return out
+
+
+def frame_has_stencil(raw: RawGL) -> bool:
+    """Whether the framebuffer bound now (not the default one) has a stencil attachment."""
+    if not raw.available:
+        return False
+    bound = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+    return bound.value != 0 and _attachment(raw, GL_STENCIL_ATTACHMENT)[0] != 0

@@ -485,13 +485,18 @@ class FrameRunner:
         key = self._target_key(description, size)
         size = key[1]
         target = self._target_cache.get(key)
+        shared = self.target(description.depth).depth if isinstance(description.depth, str) else None
+        if target is not None and target.shared_depth is not shared:  # the target it shares depth with is new
+            self._target_cache.pop(key).release()
+            target = None
         if target is None:
             if max(size) > self.max_texture_size:
                 raise ValueError(
                     f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
                     f"allows ({self.max_texture_size} per side); lower its size or resolution"
                 )
-            target = self._target_cache[key] = RenderTarget(self.ctx, description, size, self.raw)
+            target = RenderTarget(self.ctx, description, size, self.raw, shared)
+            self._target_cache[key] = target
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
         return target
@@ -559,7 +564,9 @@ class FrameRunner:
                 color = (0.0, 0.0, 0.0, 0.0)
             if clear.depth is None:
                 set_masks(ctx, self.raw, fbo, depth=False)
+                fbo.depth_mask = False  # moderngl applies the framebuffer's own depth mask when it clears
             fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            fbo.depth_mask = True
             set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         if clear.stencil is not None:
             clear_stencil(self.raw, int(clear.stencil))

@@ -51,7 +51,9 @@ vec3 to_linear(vec3 c) {
 class RenderTarget:
     """Textures and framebuffer of one offscreen target (made from a :class:`Target` at a pixel size)."""
 
-    def __init__(self, ctx: Any, description: Target, size: tuple[int, int], raw: Any = None) -> None:
+    def __init__(
+        self, ctx: Any, description: Target, size: tuple[int, int], raw: Any = None, shared_depth: Any = None
+    ) -> None:
         self.ctx = ctx
         self.description = description
         self.size = size
@@ -69,6 +71,8 @@ class RenderTarget:
             self.colors[name] = tex
         self.depth = None
         self._release_raw = None
+        #: the depth texture of another target this one shares (not released with it), or None
+        self.shared_depth = shared_depth
         if description.stencil:
             from .context import depth_stencil_target
 
@@ -79,6 +83,9 @@ class RenderTarget:
                     "techniques that need one (om.gl.ShadowVolumes) cannot run here"
                 )
             self.fbo, self.depth, self._release_raw = made
+            return
+        if shared_depth is not None:
+            self.fbo = ctx.framebuffer(list(self.colors.values()), shared_depth)
             return
         if description.depth:
             self.depth = gpu_call(

@@ -59,12 +59,14 @@ _DTYPES = ("f1", "f2", "f4")
 #: Texel formats of colour attachments (``Target.formats``): components, moderngl dtype, GL internal format
 #: (None: moderngl's default for the dtype) and bytes per texel.  ``f1``/``f2``/``f4`` are RGBA of 8-bit
 #: display values, 16-bit and 32-bit floats; ``rg32ui`` two unsigned integers (packed data, e.g. a G-buffer's
-#: normal and material id); ``r11g11b10f`` three unsigned small floats in 32 bits (additive light).
+#: normal and material id); ``rg32f`` two floats; ``r11g11b10f`` three unsigned small floats in 32 bits
+#: (additive light).
 FORMATS = {
     "f1": (4, "f1", None, 4),
     "f2": (4, "f2", None, 8),
     "f4": (4, "f4", None, 16),
     "rg32ui": (2, "u4", None, 8),
+    "rg32f": (2, "f4", None, 8),
     "r11g11b10f": (3, "f2", 0x8C3A, 4),
 }
 #: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
@@ -137,13 +139,16 @@ class Target:
     colour attachment its own texel format (a key of :data:`FORMATS`; None:
     ``dtype`` for all), ``samples`` makes multisampled textures (0: one
     sample; shaders read them with ``sampler2DMS`` and ``texelFetch``).
+    ``depth`` may also name another target of the frame whose depth texture
+    this one shares (drawn first): a pass then tests against depth that an
+    earlier pass wrote, without sampling what it tests against.
     Later passes sample it through :class:`FullScreen` ``inputs``,
     :class:`Shader` ``inputs`` or ``engine.target(name)``.
     """
 
     name: str
     colors: tuple[str, ...] = ("color",)
-    depth: bool = True
+    depth: bool | str = True
     dtype: str = "f1"
     scale: float = 1.0
     relative: str = "frame"
@@ -181,7 +186,9 @@ class Target:
                     f"Target {self.name!r}: size must be (width, height) in pixels, 1..16384, got {self.size!r}"
                 )
             object.__setattr__(self, "size", (int(w), int(h)))
-        if self.stencil and not self.depth:
+        if isinstance(self.depth, str) and (not self.depth or self.depth == self.name):
+            raise ValueError(f"Target {self.name!r}: depth must be True, False or another target's name")
+        if self.stencil and self.depth is not True:
             raise ValueError(f"Target {self.name!r}: stencil=True needs depth=True (they share one texture)")
         if self.formats is not None:
             formats = (self.formats,) if isinstance(self.formats, str) else tuple(self.formats)
@@ -212,7 +219,7 @@ class Target:
 
     def bytes_per_pixel(self) -> int:
         """GPU memory per pixel of the frame: every attachment and depth (4 bytes) times the samples."""
-        texels = sum(FORMATS[self.format_of(name)][3] for name in self.colors) + (4 if self.depth else 0)
+        texels = sum(FORMATS[self.format_of(name)][3] for name in self.colors) + (4 if self.depth is True else 0)
         return texels * max(self.samples, 1)
 
 

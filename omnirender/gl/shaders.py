@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .layout import PBR, PHONG
+from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
 __all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
@@ -92,7 +92,7 @@ in vec4 i_color;
 #endif
 #ifdef INSTANCE_MATERIAL
 in vec4 i_emis;
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 in vec4 i_spec;
 in vec4 i_amb;
 flat out vec4 v_spec;
@@ -177,7 +177,7 @@ void main() {
 #endif
 #ifdef INSTANCE_MATERIAL
     v_emis = i_emis;
-#if MODEL == 0
+#ifdef PHONG_FIELDS
     v_spec = i_spec; v_amb = i_amb;
 #endif
 #if MODEL == 1 || defined(PASS_SURFACE)
@@ -237,7 +237,7 @@ LAYER_UNIFORMS
 #ifdef INSTANCE_MATERIAL
 flat in vec4 v_emis;
 #define M_EMIS v_emis
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 flat in vec4 v_spec;
 flat in vec4 v_amb;
 #define M_SPEC v_spec
@@ -318,7 +318,7 @@ vec3 half_vector(vec3 L, vec3 V, vec3 N) {
     float hh = dot(h, h);
     return hh > 1e-12 ? h * inversesqrt(hh) : N;  // light exactly opposite the eye: no highlight direction
 }
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 vec3 phong_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 kd) {
     float NdL = dot(N, L);
     if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
@@ -423,10 +423,10 @@ void main() {
 #ifdef PASS_SURFACE
     {   // the pass takes over: the resolved surface goes to its snippet (a G-buffer write), not to the lights
         Surface s;
-        s.P = P; s.N = N; s.V = V; s.world = (u_eye_to_world * vec4(P, 1.0)).xyz;
+        s.P = P; s.N = N; s.V = V; s.world = (u_eye_to_world * vec4(P, 1.0)).xyz; s.eye = u_eye_to_world[3].xyz;
         s.base = base; s.texel = texel; s.emission = emission; s.occlusion = occlusion;
         s.ambient = u_ambient;
-#if MODEL == 0
+#ifdef PHONG_FIELDS
         s.ambient_reflectance = M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel;
 #else
         s.ambient_reflectance = base.rgb;
@@ -627,7 +627,7 @@ def instance_fields(kind: str, features: dict[str, Any]) -> tuple[str, ...]:
         return ("model", "color")
     fields = ["model", "color", "emission"]
     model = features.get("MODEL", PHONG)
-    if model == PHONG:
+    if model not in (PBR, UNLIT):
         fields += ["specular", "ambient"]
     if model == PBR or "PASS_SURFACE" in features:
         fields.append("pbr")  # PBR's roughness and metallic; the material id of a surface pass
@@ -663,6 +663,7 @@ SURFACE_STRUCT = """struct Surface {
     vec3 N;                    // eye-space unit normal (facing the eye on two-sided surfaces; normal map applied)
     vec3 V;                    // unit vector towards the eye
     vec3 world;                // world-space position
+    vec3 eye;                  // world-space position of the eye (of the pass's camera)
     vec4 base;                 // base colour and alpha (texture and vertex colours applied)
     vec3 texel;                // the texture's colour (1 without a texture)
     vec3 emission;
@@ -692,6 +693,10 @@ def _header(defines: dict[str, Any]) -> str:
         lines.append("#define NCLIP 0")
     if "MODEL" not in defines:
         lines.append(f"#define MODEL {PHONG}")
+    if defines.get("MODEL", PHONG) not in (PBR, UNLIT):
+        # Phong's material fields: the Phong model's, and a custom shading model's (the forward pipeline shades
+        # custom models with the Phong model of their appearance; the deferred pipeline runs their stages)
+        lines.append("#define PHONG_FIELDS")
     return "\n".join(lines) + "\n"
 
 

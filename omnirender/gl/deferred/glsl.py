@@ -13,8 +13,12 @@ back to them (:func:`explain`).  From a layout (:class:`~.layout.BufferLayout`) 
   pixel's model and run its lighting stage, add the result into the L-buffer;
 * the shading program: switch on the model, run its shading stage, apply fog, write colour and depth.
 
-Multisampled buffers are read per sample (``gl_SampleID``: the programs run once per sample), so
-edges come out as the forward pipeline's multisampling makes them.
+With multisampling, pixels whose samples show one surface are lit and shaded once, at the pixel
+centre, as forward shading does; on geometric edges every sample is lit and shaded on its own, in the
+same invocation (unrolled loops; the lights go into one target per sample, the shading writes the
+mean of the samples' encoded colours, which is what the resolve of forward multisampling gives).
+Everything runs once per pixel: per-sample shading (``gl_SampleID``) would cost every pixel the
+sample count on a software rasteriser, whatever it shows.
 """
 
 from __future__ import annotations
@@ -32,9 +36,8 @@ __all__ = [
     "lighting_program",
     "shading_program",
     "depth_program",
-    "classify_program",
+    "pixels_program",
     "explain",
-    "MODES",
     "LIGHT_KINDS",
     "COMMON",
 ]
@@ -259,42 +262,46 @@ def vertex_snippet(layout: BufferLayout) -> str:
 
 
 # -- reading the G-buffer (lighting and shading passes) ----------------------------------------------------
-#: How a full-screen or proxy program reads a multisampled G-buffer: ``"pixel"`` (one sample),
-#: ``"centre"`` (once per pixel whose samples show one surface, at the pixel centre, as forward shading
-#: does) or ``"sample"`` (once per sample: pixels on geometric edges).
-MODES = ("pixel", "centre", "sample")
-
-
-def _header(samples: int, mode: str, defines: dict[str, object]) -> str:
-    lines = ["#version 400" if mode == "sample" else "#version 330"]
+def _header(samples: int, defines: dict[str, object]) -> str:
+    lines = ["#version 330"]
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name}" if value is True else f"#define {name} {value}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
     lines.append(f"#define SAMPLES {max(samples, 1)}")
-    lines.append(f"#define MODE_{mode.upper()}")
-    lines.append("#define SAMPLE gl_SampleID" if mode == "sample" else "#define SAMPLE 0")
+    if samples > 1:
+        lines.append("#define MULTI")
     return "\n".join(lines) + "\n"
 
 
-def _samplers(layout: BufferLayout, samples: int, light: bool) -> str:
+def _gbuffer_samplers(layout: BufferLayout, samples: int, ambient: bool) -> list[str]:
+    """Sampler uniforms of the G-buffer layers (the light layers' ambient part with ``ambient``) and globals."""
     ms = "MS" if samples > 1 else ""
     lines = [f"uniform usampler2D{ms} u_fixed;", f"uniform sampler2D{ms} u_depth;", "uniform sampler2D u_materials;"]
-    for name, fmt in layout.layers[1:]:
-        if fmt != "r11g11b10f" or light:
-            lines.append(f"uniform sampler2D{ms} u_{name};")
     lines.append("uvec2 px_fixed;")
     for name, fmt in layout.layers[1:]:
-        if fmt != "r11g11b10f" or light:
-            lines.append(f"vec4 px_{name};")
-    return "\n".join(lines)
-
-
-def _fetch_layers(layout: BufferLayout, light: bool) -> list[str]:
-    lines = []
-    for name, fmt in layout.layers[1:]:
-        if fmt != "r11g11b10f" or light:
-            lines.append(f"    px_{name} = texelFetch(u_{name}, c, SAMPLE);")
+        if fmt != "r11g11b10f" or ambient:
+            lines += [f"uniform sampler2D{ms} u_{name};", f"vec4 px_{name};"]
+    if samples > 1:
+        lines += [
+            "uniform sampler2D u_pixels;              // x: depth at the pixel centre (1: nothing), y: 1 on edges",
+            f"uniform vec2 u_offsets[{samples}];       // sample position - pixel centre",
+        ]
     return lines
+
+
+def _fetch(layout: BufferLayout, samples: int, ambient: bool, direct: bool) -> str:
+    """``fetch(c, s)``: the G-buffer values of sample ``s`` of pixel ``c`` into the ``px_`` globals; with ``direct``
+    the light layers add the lights of the lighting pass (their per-sample targets ``u_<layer>_s<k>``)."""
+    lines = ["void fetch(ivec2 c, int s) {", "    px_fixed = texelFetch(u_fixed, c, s).xy;"]
+    for name, fmt in layout.layers[1:]:
+        if fmt != "r11g11b10f" or ambient:
+            lines.append(f"    px_{name} = texelFetch(u_{name}, c, s);")
+    if direct and samples > 1:
+        for name in layout.light_layers:
+            for k in range(samples):
+                lines.append(f"    {'else ' if k else ''}if (s == {k}) px_{name}.rgb += texelFetch(u_{name}_s{k}, c, 0).rgb;")
+    lines.append("}")
+    return "\n".join(lines)
 
 
 def _channel_value(channel: Channel) -> str:
@@ -330,119 +337,145 @@ def _l_reads(layout: BufferLayout, model: ShadingModel) -> str:
     return "\n".join(lines)
 
 
-_PIXEL = """
-    ivec2 c = ivec2(gl_FragCoord.xy);
-#if defined(MODE_CENTRE)
-    // one surface covers the pixel: its depth at the centre, from the samples' plane (the forward shader
-    // shades at the centre too)
-    if (texelFetch(u_depth, c, 0).r >= 1.0) discard;
-    float z = 0.0;
-    for (int k = 0; k < SAMPLES; ++k) z += u_fit[k].x * texelFetch(u_depth, c, k).r;
-    vec2 xy = gl_FragCoord.xy;
-#elif defined(MODE_SAMPLE)
-    float z = texelFetch(u_depth, c, SAMPLE).r;
-    if (z >= 1.0) discard;  // nothing was drawn here
-    vec2 xy = floor(gl_FragCoord.xy) + gl_SamplePosition;
-#else
-    float z = texelFetch(u_depth, c, 0).r;
-    if (z >= 1.0) discard;  // nothing was drawn here
-    vec2 xy = gl_FragCoord.xy;
-#endif
-    vec4 q = u_inv_proj * vec4((xy - u_origin) / u_size * 2.0 - 1.0, z * 2.0 - 1.0, 1.0);
+_SURFACE_AT = """
+uniform mat4 u_inv_proj;       // clip space -> eye space of the frame's camera
+uniform mat4 u_eye_to_world;
+uniform vec2 u_size;           // the target's size in pixels
+// the surface seen by sample s of the pixel at window position xy (the pixel centre or the sample's), depth z
+Pixel surface_at(vec2 xy, float z, int s, out int model, out uint id, out uint flags) {
+    fetch(ivec2(xy), s);
+    vec4 q = u_inv_proj * vec4(xy / u_size * 2.0 - 1.0, z * 2.0 - 1.0, 1.0);
     vec3 P = q.xyz / q.w;
-    px_fixed = texelFetch(u_fixed, c, SAMPLE).xy;
-    uint id = px_fixed.y >> 20;
-    uint flags = (px_fixed.y >> 16) & 15u;
+    id = px_fixed.y >> 20;
+    flags = (px_fixed.y >> 16) & 15u;
 #ifdef ORTHO
     vec3 V = vec3(0.0, 0.0, 1.0);
 #else
     vec3 V = -normalize(P);
 #endif
-    Pixel p = Pixel(P, oct_decode(px_fixed.x), V, (u_eye_to_world * vec4(P, 1.0)).xyz, int(id));
-    int model = int(texelFetch(u_materials, ivec2(0, int(id)), 0).x);
-"""
-
-_PIXEL_UNIFORMS = """
-uniform mat4 u_inv_proj;       // clip space -> eye space of the frame's camera
-uniform mat4 u_eye_to_world;
-uniform vec2 u_origin;         // the viewport's lower-left pixel
-uniform vec2 u_size;           // the viewport's size in pixels
-#ifdef MODE_CENTRE
-uniform vec3 u_fit[SAMPLES];   // least-squares plane through the samples' depths: (centre, d/dx, d/dy) weights
-#endif
+    model = int(texelFetch(u_materials, ivec2(0, int(id)), 0).x);
+    return Pixel(P, oct_decode(px_fixed.x), V, (u_eye_to_world * vec4(P, 1.0)).xyz, int(id));
+}
 """
 
 
-def _light_outputs(layout: BufferLayout) -> tuple[str, list[str], list[str]]:
-    decl = [f"layout(location = {k}) out vec3 lb_{name};" for k, name in enumerate(layout.light_layers)]
-    init = [f"    vec3 out_{name} = vec3(0.0);" for name in layout.light_layers]
-    final = [f"    lb_{name} = out_{name};" for name in layout.light_layers]
-    return "\n".join(decl), init, final
+def _per_sample(samples: int, body: str, centre: str, background: str) -> list[str]:
+    """``main``'s dispatch: one evaluation at the centre of a pixel showing one surface (``centre``, with ``xy`` and
+    ``z``), else ``body`` once per sample that shows a surface (unrolled: outputs cannot be indexed)."""
+    lines = ["    ivec2 c = ivec2(gl_FragCoord.xy);"]
+    if samples <= 1:
+        return lines + [
+            "    float z = texelFetch(u_depth, c, 0).r;",
+            f"    if (z >= 1.0) {background};",
+            "    vec2 xy = gl_FragCoord.xy;",
+            "    int s = 0;",
+            centre,
+        ]
+    lines += [
+        "    vec2 px = texelFetch(u_pixels, c, 0).xy;",
+        "    if (px.y < 0.5) {  // one surface covers the pixel: evaluated once, at the centre (as forward shading)",
+        f"        if (px.x >= 1.0) {background};",
+        "        float z = px.x;",
+        "        vec2 xy = gl_FragCoord.xy;",
+        "        int s = 0;",
+        centre,
+        "    } else {  // an edge: every sample on its own",
+    ]
+    for k in range(samples):
+        lines += [
+            "        {",
+            f"            int s = {k};",
+            f"            float z = texelFetch(u_depth, c, {k}).r;",
+            f"            vec2 xy = gl_FragCoord.xy + u_offsets[{k}];",
+            "            if (z < 1.0) {",
+            body.replace("{k}", str(k)),
+            "            }",
+            "        }",
+        ]
+    lines.append("    }")
+    return lines
 
 
 _FULLSCREEN_VERTEX = "in vec3 in_position;\nvoid main() { gl_Position = vec4(in_position.xy, 0.0, 1.0); }\n"
 
 
 def depth_program(samples: int) -> tuple[str, str]:
-    """The G-buffer's depth into the frame, per sample (lighting then tests its proxies against it)."""
-    mode = "sample" if samples > 1 else "pixel"
-    head = _header(samples, mode, {})
+    """The G-buffer's depth into the frame: sample ``u_sample`` per draw (drawn once per sample under a mask)."""
+    head = _header(samples, {})
     ms = "MS" if samples > 1 else ""
-    fragment = (
-        head
-        + f"""
+    fragment = head + f"""
 uniform sampler2D{ms} u_depth;
+uniform int u_sample;
 void main() {{
-    float z = texelFetch(u_depth, ivec2(gl_FragCoord.xy), SAMPLE).r;
+    float z = texelFetch(u_depth, ivec2(gl_FragCoord.xy), u_sample).r;
     if (z >= 1.0) discard;
     gl_FragDepth = z;
 }}
 """
-    )
     return head + _FULLSCREEN_VERTEX, fragment
 
 
-def classify_program(samples: int) -> tuple[str, str]:
-    """Keeps (for a stencil mark) the pixels whose samples do not show one plane of one surface: they are
-    lit and shaded per sample, the others once."""
-    head = _header(samples, "pixel", {})
+def pixels_program(samples: int) -> tuple[str, str]:
+    """Per pixel of a multisampled G-buffer: the depth at its centre and whether its samples show one surface.
+
+    One surface: one material and flags, the samples' depths on one plane, normals within 8 degrees and the
+    fixed layer's colour bytes within 2 levels (two triangles of a smooth mesh meeting in the pixel are one
+    surface: forward shading gives them nearly the same colour at the pixel centre).  Such pixels are lit and
+    shaded once at the centre, with the centre's depth from the plane; edges once per sample.
+    """
+    head = _header(samples, {})
     fragment = (
         head
+        + PACKING
         + """
 uniform usampler2DMS u_fixed;
 uniform sampler2DMS u_depth;
-uniform vec3 u_fit[SAMPLES];
+uniform vec3 u_fit[SAMPLES];       // least-squares plane through the samples' depths: (centre, d/dx, d/dy)
 uniform vec2 u_offsets[SAMPLES];   // sample position - pixel centre
+out vec2 f_pixel;
 void main() {
     ivec2 c = ivec2(gl_FragCoord.xy);
     uvec2 first = texelFetch(u_fixed, c, 0).xy;
+    vec3 n0 = oct_decode(first.x);
     float zs[SAMPLES];
     vec3 plane = vec3(0.0);
     bool edge = false;
     for (int k = 0; k < SAMPLES; ++k) {
         zs[k] = texelFetch(u_depth, c, k).r;
         plane += u_fit[k] * zs[k];
-        if (texelFetch(u_fixed, c, k).xy != first) edge = true;
+        uvec2 f = texelFetch(u_fixed, c, k).xy;
+        if ((f.y >> 16) != (first.y >> 16) || dot(oct_decode(f.x), n0) < 0.99) edge = true;
+        ivec3 bytes = abs(ivec3(uvec3(f.x & 255u, (f.y >> 8) & 255u, f.y & 255u))
+                          - ivec3(uvec3(first.x & 255u, (first.y >> 8) & 255u, first.y & 255u)));
+        if (max(bytes.x, max(bytes.y, bytes.z)) > 2) edge = true;
     }
-    for (int k = 0; k < SAMPLES; ++k)
+    bool nothing = true;
+    for (int k = 0; k < SAMPLES; ++k) {
+        if (zs[k] < 1.0) nothing = false;
         if (abs(zs[k] - (plane.x + dot(plane.yz, u_offsets[k]))) > 1e-6) edge = true;
-    if (!edge) discard;
+    }
+    f_pixel = nothing ? vec2(1.0, 0.0) : (edge ? vec2(zs[0], 1.0) : vec2(plane.x, 0.0));
+    float nearest = zs[0];
+    for (int k = 1; k < SAMPLES; ++k) nearest = min(nearest, zs[k]);
+    gl_FragDepth = nearest;  // what the lights' proxies are culled against (the nearest sample: conservative)
 }
 """
     )
     return head + _FULLSCREEN_VERTEX, fragment
 
 
-def lighting_program(layout: BufferLayout, kind: str, fullscreen: bool, samples: int, mode: str,
+def lighting_program(layout: BufferLayout, kind: str, fullscreen: bool, samples: int,
                      defines: dict[str, object]) -> tuple[str, str]:  # fmt: skip
-    """(vertex, fragment) source of the lighting pass for lights of ``kind`` drawn as proxies or full screen."""
+    """(vertex, fragment) source of the lighting pass for lights of ``kind`` drawn as proxies or full screen.
+
+    No ``discard``: fragments that add nothing write zero, so a software rasteriser tests depth before shading.
+    With multisampling the outputs are one target per light layer and sample (``lb_<layer>_s<k>``).
+    """
     defines = {**defines, "LIGHT_KIND": LIGHT_KINDS[kind]}
     if fullscreen:
         defines["FULLSCREEN"] = True
-    head = _header(samples, mode, defines)
-    vertex = (
-        head
-        + """
+    head = _header(samples, defines)
+    vertex = head + """
 in vec3 in_position;
 in mat4 i_proxy;    // unit proxy -> eye space
 in vec4 i_lpos;     // eye space: position (w 1) or direction towards the light (w 0)
@@ -463,8 +496,13 @@ void main() {
     v_lpos = i_lpos; v_ldiff = i_ldiff; v_lspec = i_lspec; v_latt = i_latt; v_lspot = i_lspot; v_lextra = i_lextra;
 }
 """
-    )
-    decl, init, final = _light_outputs(layout)
+    layers = layout.light_layers
+    if samples > 1:
+        outputs = [f"{name}_s{k}" for name in layers for k in range(samples)]
+    else:
+        outputs = list(layers)
+    decl = [f"layout(location = {k}) out vec3 lb_{name};" for k, name in enumerate(outputs)]
+    args = ", ".join(f"inout vec3 o_{name}" for name in layers)
     models = [m for m in layout.models if "lighting" in m.stages]
     branches = []
     for model in models:
@@ -474,7 +512,7 @@ void main() {
             for i, channel in enumerate(layout.light[n][name]):
                 layer, comp = channel.location()
                 value = f"l.{name}" if L_TYPES[kind_l][1] == 1 else f"l.{name}[{i}]"
-                writes.append(f"        out_{layer}[{comp}] = {value};")
+                writes.append(f"        o_{layer}[{comp}] = {value};")
         branches.append(
             "\n".join(
                 [
@@ -488,61 +526,82 @@ void main() {
                 ]
             )
         )
-    shadows = ""
-    shadow_call = ""
+    shadows, shadow_call = "", ""
     if "SHADOW_MAPS" in defines:
         shadows = MAPS_CORE
         shadow_call = """
     if ((flags & 1u) != 0u && v_lextra.z > 0.5 && dot(p.N, light.L) > 0.0)
-        att *= face_shadow(int(v_lextra.y), int(v_lextra.z), v_lpos.xyz, P, p.N, light.L);"""
-    fragment = head + "\n".join(
+        att *= face_shadow(int(v_lextra.y), int(v_lextra.z), v_lpos.xyz, p.P, p.N, light.L);"""
+    light_at = "\n".join(
         [
-            COMMON,
-            _PIXEL_UNIFORMS,
-            _samplers(layout, samples, light=False),
-            "flat in vec4 v_lpos; flat in vec4 v_ldiff; flat in vec4 v_lspec; flat in vec4 v_latt;",
-            "flat in vec4 v_lspot; flat in vec4 v_lextra;",
-            decl,
-            shadows,
-            *(_model_code(layout, m, ("lighting",)) + "\n" + _g_reads(layout, m) for m in models),
-            "void main() {",
-            _PIXEL,
-            *_fetch_layers(layout, light=False),
+            f"void light_at(vec2 xy, float z, int s, {args}) {{",
+            "    int model; uint id; uint flags;",
+            "    Pixel p = surface_at(xy, z, s, model, id, flags);",
             "    Light light;",
             "    float att = 1.0;",
             "#if LIGHT_KIND == 0",
             "    light.L = v_lpos.xyz;",
             "    light.distance = 0.0;",
             "#else",
-            "    vec3 d = v_lpos.xyz - P;",
+            "    vec3 d = v_lpos.xyz - p.P;",
             "    float dist = length(d);",
-            "    if (dist > v_ldiff.w) discard;  // beyond the light's reach: culled against the G-buffer depth",
+            "    if (dist > v_ldiff.w) return;  // beyond the light's reach: culled against the G-buffer depth",
             "    light.L = dist > 1e-20 ? d / dist : vec3(0.0, 0.0, 1.0);",
             "    light.distance = dist;",
             "    att = 1.0 / max(v_latt.x + v_latt.y * dist + v_latt.z * dist * dist, 1e-20);",
             "#if LIGHT_KIND == 2",
             "    float cs = dot(-light.L, v_lspot.xyz);",
-            "    if (cs < v_lspot.w) discard;  // outside the cone",
+            "    if (cs < v_lspot.w) return;  // outside the cone",
             "    att *= pow(max(cs, 0.0), v_lextra.x);",
             "#endif",
             "#endif",
             shadow_call,
             "    light.diffuse = v_ldiff.rgb * att;",
             "    light.specular = v_lspec.rgb * att;",
-            *init,
             *branches,
-            *final,
+            "}",
+        ]
+    )
+    call = ", ".join(f"o_{name}" for name in layers)
+    zero = " ".join(f"vec3 o_{name} = vec3(0.0);" for name in layers)
+    once = "\n".join(
+        [f"    {{ {zero}", f"    light_at(xy, z, s, {call});"]
+        + [f"    lb_{out} = o_{out.rsplit('_s', 1)[0] if samples > 1 else out};" for out in outputs]
+        + ["    }"]
+    )
+    each = "\n".join(
+        [f"                {zero}", f"                light_at(xy, z, s, {call});"]
+        + [f"                lb_{name}_s{{k}} = o_{name};" for name in layers]
+    )
+    fragment = head + "\n".join(
+        [
+            COMMON,
+            *_gbuffer_samplers(layout, samples, ambient=False),
+            "flat in vec4 v_lpos; flat in vec4 v_ldiff; flat in vec4 v_lspec; flat in vec4 v_latt;",
+            "flat in vec4 v_lspot; flat in vec4 v_lextra;",
+            *decl,
+            _fetch(layout, samples, ambient=False, direct=False),
+            _SURFACE_AT,
+            shadows,
+            *(_model_code(layout, m, ("lighting",)) + "\n" + _g_reads(layout, m) for m in models),
+            light_at,
+            "void main() {",
+            *(f"    lb_{name} = vec3(0.0);" for name in outputs),
+            *_per_sample(samples, each, once, "return"),
             "}",
         ]
     )
     return vertex, fragment
 
 
-def shading_program(layout: BufferLayout, samples: int, mode: str, defines: dict[str, object]) -> tuple[str, str]:
-    """(vertex, fragment) source of the shading pass (full screen): the colour of every drawn pixel, and its
-    depth with ``FRAG_DEPTH``."""
-    head = _header(samples, mode, defines)
-    vertex = head + _FULLSCREEN_VERTEX
+def shading_program(layout: BufferLayout, samples: int, defines: dict[str, object]) -> tuple[str, str]:
+    """(vertex, fragment) source of the shading pass (full screen): the colour of every drawn pixel.
+
+    Edge pixels of a multisampled G-buffer get the mean of their samples' encoded colours, written to the
+    samples the G-buffer's surfaces won (``STENCIL_MARKED``) or blended over the others; with ``FRAG_DEPTH``
+    the G-buffer depth is written too (tested equal against the frame's: where the surface is seen).
+    """
+    head = _header(samples, defines)
     branches = []
     for model in layout.models:
         p, n = model.prefix, model.number
@@ -556,11 +615,39 @@ def shading_program(layout: BufferLayout, samples: int, mode: str, defines: dict
                 ]
             )
         )
+    direct = [f"uniform sampler2D u_{name}_s{k};" for name in layout.light_layers for k in range(samples)]
+    centre = "\n".join(
+        [
+            "    f_color = vec4(encode(shade_at(xy, z, s)), 1.0);",
+            "#ifdef FRAG_DEPTH",
+            "    gl_FragDepth = z;",
+            "#endif",
+        ]
+    )
+    each = "                sum += encode(shade_at(xy, z, s));\n                n += 1.0;"
+    main = ["void main() {"]
+    if samples > 1:
+        main += ["    vec3 sum = vec3(0.0);", "    float n = 0.0;"]
+    main += _per_sample(samples, each, centre, "discard")
+    if samples > 1:
+        main += [
+            "    if (px.y > 0.5) {",
+            "        if (n == 0.0) discard;",
+            "#ifdef STENCIL_MARKED",
+            "        f_color = vec4(sum / n, 1.0);  // the samples the surfaces won: their mean (the resolve's)",
+            "#else",
+            "        f_color = vec4(sum / float(SAMPLES), n / float(SAMPLES));  // blended over the others",
+            "#endif",
+            "    }",
+        ]
+    main.append("}")
     fragment = head + "\n".join(
         [
             COMMON,
-            _PIXEL_UNIFORMS,
-            _samplers(layout, samples, light=True),
+            *_gbuffer_samplers(layout, samples, ambient=True),
+            *(direct if samples > 1 else []),
+            _fetch(layout, samples, ambient=True, direct=True),
+            _SURFACE_AT,
             f"uniform vec4 u_fogs[{FOG_SLOTS}];       // start, end, density, mode (0 linear, 1 exp, 2 exp2)",
             f"uniform vec3 u_fog_colors[{FOG_SLOTS}];",
             "out vec4 f_color;",
@@ -576,25 +663,26 @@ def shading_program(layout: BufferLayout, samples: int, mode: str, defines: dict
             "    else f = exp(-(fog.z * dist) * (fog.z * dist));",
             "    return mix(u_fog_colors[slot], c, clamp(f, 0.0, 1.0));",
             "}",
-            "void main() {",
-            _PIXEL,
-            *_fetch_layers(layout, light=True),
+            "vec3 encode(vec3 c) {",
+            "#ifdef LINEAR_OUTPUT",
+            "    return max(c, vec3(0.0));",
+            "#else",
+            "    return to_srgb(c);",
+            "#endif",
+            "}",
+            "vec3 shade_at(vec2 xy, float z, int s) {",
+            "    int model; uint id; uint flags;",
+            "    Pixel p = surface_at(xy, z, s, model, id, flags);",
             "    vec3 color = vec3(0.0);",
             *branches,
             "    uint slot = flags >> 1;",
-            "    if (slot > 0u) color = apply_fog(color, length(P), int(slot) - 1);",
-            "#ifdef LINEAR_OUTPUT",
-            "    f_color = vec4(max(color, vec3(0.0)), 1.0);",
-            "#else",
-            "    f_color = vec4(to_srgb(color), 1.0);",
-            "#endif",
-            "#ifdef FRAG_DEPTH",
-            "    gl_FragDepth = z;",
-            "#endif",
+            "    if (slot > 0u) color = apply_fog(color, length(p.P), int(slot) - 1);",
+            "    return color;",
             "}",
+            *main,
         ]
     )
-    return vertex, fragment
+    return head + _FULLSCREEN_VERTEX, fragment
 
 
 _ERROR = re.compile(r"(\d+):(\d+)\((\d+)\):\s*(?:error|ERROR)?:?\s*(.*)")

@@ -110,11 +110,16 @@ class BufferLayout:
             formats=tuple(fmt for _, fmt in self.layers),
             depth=True,
             samples=samples,
+            relative="enclosing",
         )
 
     def bytes_per_pixel(self, samples: int = 0) -> int:
-        """G-buffer plus L-buffer bytes per pixel (depth included)."""
-        return self.target(samples).bytes_per_pixel()
+        """G-buffer plus L-buffer bytes per pixel (depth included); with multisampling also the per-pixel
+        centre depth, edge flag and nearest depth (12 bytes) and the lights of every sample (one light layer per sample)."""
+        total = self.target(samples).bytes_per_pixel()
+        if samples > 1:
+            total += 12 + 4 * len(self.light_layers) * samples
+        return total
 
     def memory(self, size: tuple[int, int] = (1920, 1080), samples: int = 0) -> int:
         """Bytes of the G-buffer and L-buffer for a frame of ``size`` pixels."""
@@ -129,6 +134,9 @@ class BufferLayout:
             lines.append(f"  {name:<12} {fmt:<12} {FORMATS[fmt][3]:>2} B  {what}")
         if not self.has_lbuffer:
             lines.append("  (no L-buffer: no model adds light)")
+        if samples > 1:
+            lines.append(f"  with {samples} samples: the layers above per sample, a per-pixel centre depth and edge "
+                         f"flag (rg32f, 8 B) and nearest depth (4 B), the lights per sample ({len(self.light_layers) * samples} x r11g11b10f)")  # fmt: skip
         mib = self.memory(size, samples) / 2**20
         lines.append(
             f"  {self.bytes_per_pixel(samples)} B per pixel{f' ({samples} samples)' if samples else ''}: "

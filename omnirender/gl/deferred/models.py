@@ -6,7 +6,7 @@ A :class:`ShadingModel` is GLSL in four stages, each optional but ``shading``:
   world position and normal (displacement) and declare ``out`` variables for the visibility stage;
 * **visibility** (per fragment, before the G-buffer write):
   ``void visibility(inout Surface s, inout GBuffer g, inout LBuffer l)`` gets the resolved surface
-  (``s.P``, ``s.N``, ``s.V`` eye space; ``s.world``; ``s.base`` colour and alpha; ``s.texel``;
+  (``s.P``, ``s.N``, ``s.V`` eye space; ``s.world``, ``s.eye`` world space; ``s.base`` colour and alpha; ``s.texel``;
   ``s.emission``; ``s.occlusion``; ``s.ambient`` the ambient light; ``s.ambient_reflectance``;
   ``s.metallic``; ``s.roughness``; ``s.uv``), may change ``s.N``, set ``s.depth`` (window depth,
   with ``depth=True``) or ``discard``, and fills the model's G-buffer outputs ``g`` and the light that

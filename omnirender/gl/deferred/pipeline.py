@@ -31,19 +31,19 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
-from ..context import clear_stencil_bits, sample_positions, set_masks, sharing_depth
+from ..context import clear_stencil_bits, frame_has_stencil, sample_positions, set_masks, sharing_depth
 from ..drawlist import DrawItem
 from ..layout import ROW
-from ..passes import Clear, Pass, Shader
+from ..passes import Clear, Pass, Shader, Target
 from ..shadows import ATLAS
 from ..state import FillMode, MirrorState
 from ..techniques import Forward, GLTechnique
 from .glsl import (
     FOG_SLOTS,
-    classify_program,
     depth_program,
     explain,
     lighting_program,
+    pixels_program,
     shading_program,
     surface_snippet,
     vertex_snippet,
@@ -138,7 +138,7 @@ class DeferredRenderer:
         self._instances: dict[tuple, Any] = {}
         self._light_fbos: dict[Any, Any] = {}
         self._fits: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._frame_path: tuple[bool, bool, int] = (False, False, 0)
+        self._frame_path: tuple[bool, int] = (False, 0)
         self._lights: tuple[Any, LightTable] | None = None
         self._passes: dict[tuple, Pass] = {}
         self.stats: dict[str, Any] = {}
@@ -247,9 +247,8 @@ class DeferredRenderer:
                 continue
             single = BufferLayout([model])
             try:
-                self._program(engine, ("check-light", model.number),
-                              *lighting_program(single, "point", False, 0, "pixel", {}))  # fmt: skip
-                self._program(engine, ("check-shade", model.number), *shading_program(single, 0, "pixel", {}))
+                self._program(engine, ("check-light", model.number), *lighting_program(single, "point", False, 0, {}))
+                self._program(engine, ("check-shade", model.number), *shading_program(single, 0, {}))
                 probe = engine.programs  # the geometry pass's mesh program, with the visibility stage
                 from ..passes import Composed
 
@@ -322,13 +321,16 @@ class DeferredRenderer:
             defines["ORTHO"] = True
         return defines
 
-    def _bind_buffers(self, engine: Any, prog: Any, gbuffer: Any, light: bool) -> None:
+    def _bind_buffers(self, engine: Any, prog: Any, gbuffer: Any, ambient: bool, extra: dict | None = None) -> None:
+        """Bind the G-buffer layers (the light layers with ``ambient``), the material table, ``extra`` textures,
+        and set the camera and sample uniforms ``prog`` reads."""
         unit = 0
         textures = [("u_fixed", gbuffer.texture("fixed")), ("u_depth", gbuffer.depth)]
         for name, fmt in self.layout.layers[1:]:  # type: ignore[union-attr]
-            if fmt != "r11g11b10f" or light:
+            if fmt != "r11g11b10f" or ambient:
                 textures.append((f"u_{name}", gbuffer.texture(name)))
         textures.append(("u_materials", engine.material_table.texture(engine.ctx)))
+        textures += list((extra or {}).items())
         for uniform, texture in textures:
             u = prog.get(uniform, None)
             if u is not None:
@@ -336,7 +338,6 @@ class DeferredRenderer:
                 u.value = unit
                 unit += 1
         view, proj = engine.frame_view, engine.frame_projection
-        w, h = gbuffer.size
         for name, value in (
             ("u_inv_proj", np.linalg.inv(proj)),
             ("u_eye_to_world", np.linalg.inv(view)),
@@ -345,49 +346,68 @@ class DeferredRenderer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(value.T.astype(np.float32).tobytes())
-        for name, value in (("u_origin", (0.0, 0.0)), ("u_size", (float(w), float(h)))):
-            u = prog.get(name, None)
-            if u is not None:
-                u.value = value
-        if prog.get("u_fit", None) is not None:  # centre and edge programs: the plane through the samples
+        u = prog.get("u_size", None)
+        if u is not None:
+            u.value = tuple(float(v) for v in gbuffer.size)
+        fit_u, offsets_u = prog.get("u_fit", None), prog.get("u_offsets", None)
+        if fit_u is not None or offsets_u is not None:  # the samples' positions, the plane through their depths
             fit, offsets = self._fit(engine, gbuffer.description.samples)
-            prog["u_fit"].write(fit.tobytes())
-            u = prog.get("u_offsets", None)
-            if u is not None:
-                u.write(offsets.tobytes())
+            if fit_u is not None:
+                fit_u.write(fit.tobytes())
+            if offsets_u is not None:
+                offsets_u.write(offsets.tobytes())
 
     # -- the lighting pass ---------------------------------------------------------------------------
     def lighting(self, engine: Any, draw: Any) -> int:
         """The G-buffer depth into the frame, then every light's proxy into the L-buffer (additive).
 
-        Where the frame's depth can be shared (not the default framebuffer), proxies are depth tested
-        against it in hardware; with multisampling and a stencil, pixels whose samples show one surface
-        are marked apart from edge pixels, so interiors are lit once at the pixel centre (as forward
-        shading does) and only edges per sample.
+        Without multisampling the proxies are depth tested against the frame's depth in hardware (the
+        L-buffer layers share it); with it, a per-pixel pass first finds the pixels that show one surface
+        (lit once at the centre) and the edges (lit per sample into one target per sample).
         """
+        layout = self.layout
+        assert layout is not None
+        gbuffer = engine.target(GBUFFER)
+        samples = gbuffer.description.samples
+        engine.reset_gl_state()
+        stencil = frame_has_stencil(engine.raw)
+        if samples > 1:
+            self._fit(engine, samples)  # the sample positions are those of the frame bound now
+        calls = self._depth_pass(engine, gbuffer, stencil)
+        self._frame_path = (stencil, samples)
+        if samples > 1:
+            calls += draw(Pass("pixels", target=_PIXELS, custom=self._pixels_pass))
+        if not layout.has_lbuffer:
+            return calls
+        if samples > 1:
+            names = tuple(f"{name}_s{k}" for name in layout.light_layers for k in range(samples))
+            target = Target(_LIGHTS, colors=names, formats=("r11g11b10f",) * len(names), depth=_PIXELS.name,
+                            relative="enclosing")  # fmt: skip
+            calls += draw(Pass("lights", target=target, clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=None),
+                               custom=self._lights_pass))  # fmt: skip
+            return calls
+        frame = engine.current_framebuffer
+        shared = self._shared(engine, gbuffer, frame)
+        fbo = shared[0] if shared is not None else self._plain_light_fbo(engine, gbuffer)
+        fbo.use()
+        engine.ctx.viewport = (0, 0, *gbuffer.size)
+        try:
+            calls += self._draw_lights(engine, fbo, depth_test=shared is not None)
+        finally:
+            frame.use()
+        return calls
+
+    def _lights_pass(self, engine: Any, draw: Any) -> int:
+        return self._draw_lights(engine, engine.current_framebuffer, depth_test=True)
+
+    def _draw_lights(self, engine: Any, fbo: Any, depth_test: bool) -> int:
+        """Every light's proxy into the bound light targets, instanced per kind (one draw per kind and proxy)."""
         layout = self.layout
         assert layout is not None
         ctx = engine.ctx
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
-        frame = engine.current_framebuffer
         engine.reset_gl_state()
-        shared = self._shared(engine, gbuffer, frame)
-        stencil = shared is not None and shared[2]
-        calls = 0
-        if shared is not None:
-            calls += self._fullscreen(engine, ("depth", samples), depth_program(samples), gbuffer, stencil_mark=_WON
-                                      if stencil else None, depth=True)  # fmt: skip
-            if samples > 1 and stencil:
-                calls += self._fullscreen(engine, ("classify", samples), classify_program(samples), gbuffer,
-                                          stencil_mark=_EDGE)  # fmt: skip
-        self._frame_path = (shared is not None, stencil, samples)
-        if not layout.has_lbuffer:
-            engine.count(calls, 0)
-            return calls
-        fbo = shared[0] if shared is not None else self._plain_light_fbo(engine, gbuffer)
-        fbo.use()
-        ctx.viewport = (0, 0, *gbuffer.size)
         set_masks(ctx, engine.raw, fbo, color=(True, True, True, True), depth=False)
         ctx.enable(ctx.BLEND)
         ctx.blend_func = (ctx.ONE, ctx.ONE)
@@ -399,42 +419,72 @@ class DeferredRenderer:
         plan = engine.frame_shadows
         if plan is not None:
             defines.update(dict(plan.features()))
+        extra = {"u_pixels": engine.target(_PIXELS.name).texture("pixel")} if samples > 1 else {}
         table = self._light_table(engine)
-        lights = 0
+        calls = lights = 0
         try:
             for kind, proxy, rows in table.instances(engine.frame_view):
                 fullscreen = proxy == FULLSCREEN
                 (ctx.disable if fullscreen else ctx.enable)(ctx.CULL_FACE)
-                (ctx.disable if fullscreen or shared is None else ctx.enable)(ctx.DEPTH_TEST)
-                for mode, test in self._modes(samples, stencil):
-                    key = ("lighting", layout.key, kind, fullscreen, samples, mode, tuple(sorted(defines.items())))
-                    prog = self._program(engine, key, *lighting_program(layout, kind, fullscreen, samples, mode,
-                                                                        defines))  # fmt: skip
-                    self._bind_buffers(engine, prog, gbuffer, light=False)
-                    if plan is not None and prog.get("u_shadow_atlas", None) is not None:
-                        plan.apply(prog, engine.target(ATLAS).depth, [])
-                    vao, buf = self._vao(engine, prog, proxy, len(rows))
-                    buf.write(rows.tobytes())
-                    engine.raw.stencil_test(ctx, test)
-                    vao.render(ctx.TRIANGLES, instances=len(rows))
-                    calls += 1
+                (ctx.enable if depth_test and not fullscreen else ctx.disable)(ctx.DEPTH_TEST)
+                key = ("lighting", layout.key, kind, fullscreen, samples, tuple(sorted(defines.items())))
+                prog = self._program(engine, key, *lighting_program(layout, kind, fullscreen, samples, defines))
+                self._bind_buffers(engine, prog, gbuffer, ambient=False, extra=extra)
+                if plan is not None and prog.get("u_shadow_atlas", None) is not None:
+                    plan.apply(prog, engine.target(ATLAS).depth, [])
+                vao, buf = self._vao(engine, prog, proxy, len(rows))
+                buf.write(rows.tobytes())
+                vao.render(ctx.TRIANGLES, instances=len(rows))
+                calls += 1
                 lights += len(rows)
         finally:
-            engine.raw.stencil_test(ctx, None)
             ctx.disable_direct(_GL_DEPTH_CLAMP)
             engine.reset_gl_state()
-            frame.use()
         engine.count(calls, lights)
         self.stats["lights"] = lights
         return calls
 
-    def _modes(self, samples: int, stencil: bool) -> list[tuple[str, tuple | None]]:
-        """(program mode, stencil test) of the draws that cover the pixels once: edges apart when marked."""
-        if samples <= 1:
-            return [("pixel", None)]
-        if not stencil:
-            return [("sample", None)]
-        return [("centre", ("equal", 0, _EDGE)), ("sample", ("equal", _EDGE, _EDGE))]
+    def _pixels_pass(self, engine: Any, draw: Any) -> int:
+        """Per pixel of the multisampled G-buffer: the centre's depth and whether it is an edge (:func:`pixels_program`)."""
+        gbuffer = engine.target(GBUFFER)
+        samples = gbuffer.description.samples
+        engine.reset_gl_state()
+        ctx = engine.ctx
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "1"  # always: the pass writes every pixel's nearest depth
+        set_masks(ctx, engine.raw, engine.current_framebuffer, depth=True)
+        prog = self._program(engine, ("pixels", samples), *pixels_program(samples))
+        self._bind_buffers(engine, prog, gbuffer, ambient=False)
+        vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
+        vao.render(engine.ctx.TRIANGLES, instances=1)
+        engine.count(1, 0)
+        return 1
+
+    def _depth_pass(self, engine: Any, gbuffer: Any, stencil: bool) -> int:
+        """The G-buffer's depth into the frame (depth test less: a scope below the top keeps nearer content),
+        sample by sample under a sample mask; with a stencil, the samples where it won get the mark ``_WON``."""
+        ctx = engine.ctx
+        samples = gbuffer.description.samples
+        prog = self._program(engine, ("depth", samples), *depth_program(samples))
+        self._bind_buffers(engine, prog, gbuffer, ambient=False)
+        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(False, False, False, False), depth=True)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        if stencil:
+            engine.raw.stencil_test(ctx, ("always", _WON, _WON))
+            engine.raw.stencil_op("keep", "keep", "replace", _WON)
+        vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
+        draws = range(samples) if samples > 1 else (None,)
+        for k in draws:
+            _mask_sample(engine, prog, k)
+            vao.render(ctx.TRIANGLES, instances=1)
+        _mask_sample(engine, prog, None)
+        engine.raw.stencil_test(ctx, None)
+        engine.raw.stencil_op("keep", "keep", "keep", 0xFF)
+        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(True, True, True, True), depth=True)
+        engine.reset_gl_state()
+        engine.count(len(draws), 0)
+        return len(draws)
 
     def _shared(self, engine: Any, gbuffer: Any, frame: Any) -> tuple[Any, Any, bool] | None:
         """The L-buffer layers with the frame's depth (and stencil), or None when the frame's cannot be shared."""
@@ -474,28 +524,6 @@ class DeferredRenderer:
             found = self._fits[samples] = (np.linalg.pinv(design).T.astype(np.float32), offsets.astype(np.float32))
         return found
 
-    def _fullscreen(self, engine: Any, key: tuple, sources: tuple[str, str], gbuffer: Any, stencil_mark: int | None,
-                    depth: bool = False) -> int:  # fmt: skip
-        """One full-screen triangle into the bound frame writing depth and/or a stencil mark (no colour)."""
-        ctx = engine.ctx
-        prog = self._program(engine, key, *sources)
-        self._bind_buffers(engine, prog, gbuffer, light=False)
-        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(False, False, False, False), depth=depth)
-        if depth:
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "<"  # a deferred scope below the top keeps what the frame already shows nearer
-        else:
-            ctx.disable(ctx.DEPTH_TEST)
-        if stencil_mark is not None:
-            engine.raw.stencil_test(ctx, ("always", stencil_mark, stencil_mark))
-            engine.raw.stencil_op("keep", "keep", "replace", stencil_mark)
-        vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
-        vao.render(ctx.TRIANGLES, instances=1)
-        engine.raw.stencil_test(ctx, None)
-        engine.raw.stencil_op("keep", "keep", "keep", 0xFF)
-        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(True, True, True, True), depth=True)
-        return 1
-
     # -- the shading pass ----------------------------------------------------------------------------
     def shading(self, engine: Any, draw: Any) -> int:
         """Each model's shading stage and fog into the frame, where the G-buffer's surface is the one seen."""
@@ -503,45 +531,48 @@ class DeferredRenderer:
         assert layout is not None
         ctx = engine.ctx
         gbuffer = engine.target(GBUFFER)
-        shared, stencil, samples = self._frame_path
+        stencil, samples = self._frame_path
         defines = self._frame_defines(engine)
         if engine.linear_output:
             defines["LINEAR_OUTPUT"] = True
         engine.reset_gl_state()
-        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(True, True, True, True), depth=False)
-        if stencil:
-            ctx.disable(ctx.DEPTH_TEST)  # the depth pass marked where the G-buffer's surface won
-            modes = []
-            for mode, test in self._modes(samples, True):
-                func, ref, mask = test if test is not None else ("equal", 0, 0)
-                modes.append((mode, (func, ref | _WON, mask | _WON)))
-        else:
+        fbo = engine.current_framebuffer
+        set_masks(ctx, engine.raw, fbo, color=(True, True, True, True), depth=False)
+        if stencil:  # the depth pass marked the samples where the G-buffer's surface won
+            defines["STENCIL_MARKED"] = True
+            engine.raw.stencil_test(ctx, ("equal", _WON, _WON))
+        elif samples <= 1:  # where the G-buffer's depth is the frame's
             defines["FRAG_DEPTH"] = True
-            set_masks(ctx, engine.raw, engine.current_framebuffer, depth=not shared)
             ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "==" if shared else "<"
-            modes = self._modes(samples, False)
-        calls = 0
+            ctx.depth_func = "=="
+        else:  # edges blend their samples' mean over the samples no surface covers
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = (ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
+        extra: dict[str, Any] = {}
+        if samples > 1:
+            extra["u_pixels"] = engine.target(_PIXELS.name).texture("pixel")
+            if layout.has_lbuffer:
+                lights = engine.target(_LIGHTS)
+                for name in layout.light_layers:
+                    for k in range(samples):
+                        extra[f"u_{name}_s{k}"] = lights.texture(f"{name}_s{k}")
+        key = ("shading", layout.key, samples, tuple(sorted(defines.items())))
+        prog = self._program(engine, key, *shading_program(layout, samples, defines))
         try:
-            for mode, test in modes:
-                key = ("shading", layout.key, samples, mode, tuple(sorted(defines.items())))
-                prog = self._program(engine, key, *shading_program(layout, samples, mode, defines))
-                self._bind_buffers(engine, prog, gbuffer, light=True)
-                for name, value in self._fog_uniforms.items():
-                    u = prog.get(name, None)
-                    if u is not None:
-                        u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
-                engine.raw.stencil_test(ctx, test)
-                vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
-                vao.render(ctx.TRIANGLES, instances=1)
-                calls += 1
+            self._bind_buffers(engine, prog, gbuffer, ambient=True, extra=extra)
+            for name, value in self._fog_uniforms.items():
+                u = prog.get(name, None)
+                if u is not None:
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+            vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
+            vao.render(ctx.TRIANGLES, instances=1)
         finally:
             engine.raw.stencil_test(ctx, None)
             if stencil:  # the marks go again: the stencil is as the frame had it
-                clear_stencil_bits(engine.raw, _WON | _EDGE)
+                clear_stencil_bits(engine.raw, _WON)
             engine.reset_gl_state()
-        engine.count(calls, 0)
-        return calls
+        engine.count(1, 0)
+        return 1
 
     # -- reporting -----------------------------------------------------------------------------------
     def describe(self, size: tuple[int, int] | None = None) -> str:
@@ -573,6 +604,25 @@ class DeferredRenderer:
         for prog in self._programs.values():
             prog.release()
         self._programs.clear()
+
+
+_GL_SAMPLE_MASK = 0x8E51
+#: The per-pixel centre depth and edge flag of a multisampled G-buffer, and the lights of its edge samples.
+_PIXELS = Target("deferred.pixels", colors=("pixel",), formats=("rg32f",), depth=True, relative="enclosing")
+_LIGHTS = "deferred.lights"
+
+
+def _mask_sample(engine: Any, prog: Any, k: int | None) -> None:
+    """Let only sample ``k`` be written and tell ``prog`` which sample it reads (None: one draw, every sample)."""
+    if k is None:
+        engine.ctx.disable_direct(_GL_SAMPLE_MASK)
+        u = prog.get("u_sample", None)
+        if u is not None:
+            u.value = 0
+        return
+    engine.ctx.enable_direct(_GL_SAMPLE_MASK)
+    engine.raw.glSampleMaski(0, 1 << k)
+    prog["u_sample"].value = k
 
 
 def current_samples(engine: Any) -> int:
