@@ -55,7 +55,7 @@ def scene(lights: int, seed: int = 7) -> om.Node:
                                                                                      shininess=30),
                                              shapes[(i + j) % 3]]))  # fmt: skip
     group = root.add(om.Node("lights"))
-    for k in range(lights):
+    for _k in range(lights):
         x, z = rng.uniform(-half, half, 2)
         color = tuple(float(c) for c in rng.uniform(0.3, 1.0, 3))
         group.add(om.PointLight(position=(x, 0.6, z), color=color, intensity=1.0, quadratic=60.0, threshold=1 / 128,

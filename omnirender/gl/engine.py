@@ -68,7 +68,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     nested technique pass draws items with); ``timing=True`` measures each
     pass's GPU time with timer queries (``engine.stats["passes"]``);
     ``shadows=False`` turns shadow maps off (they are on by default, see
-    :class:`~.shadows.ShadowMaps`).
+    :class:`~.shadows.ShadowMaps`); ``pipeline="deferred"`` (or an
+    ``om.gl.Deferred(...)``) shades every frame with the deferred pipeline.
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -105,19 +106,23 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         mask: Any = None,
         timing: bool = False,
         shadows: bool = True,
-        pipeline: str = "forward",
+        pipeline: Any = "forward",
     ) -> None:
         from . import _load
 
         _load()  # painters register on first use
         if technique is not None and not isinstance(technique, Technique):
             raise TypeError(f"GLEngine: technique must be an om.Technique (e.g. om.gl.Forward()), got {technique!r}")
-        if pipeline not in PIPELINES:
-            raise ValueError(f"GLEngine: pipeline must be one of {PIPELINES}, got {pipeline!r}")
+        if not isinstance(pipeline, Deferred) and pipeline not in PIPELINES:
+            raise ValueError(
+                f"GLEngine: pipeline must be one of {PIPELINES} or an om.gl.Deferred(...), got {pipeline!r:.60}"
+            )
         super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
         #: "forward" or "deferred" (om.gl.Deferred runs every frame; nested techniques still draw forward)
-        self._pipeline = pipeline
-        self._pipeline_technique = Deferred() if pipeline == "deferred" else None
+        self._pipeline = "deferred" if isinstance(pipeline, Deferred) else pipeline
+        self._pipeline_technique = (
+            pipeline if isinstance(pipeline, Deferred) else (Deferred() if pipeline == "deferred" else None)
+        )
         self._deferred: Any = None
         #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
         self.draw_list_version = 0

@@ -255,7 +255,8 @@ class BatchRenderer:
         if state.kind in ("mesh", "points"):
             lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
             if lit:
-                features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+                if not any(name == "PASS_SURFACE" for name, _ in shading):  # a surface pass lights nothing itself
+                    features = features + (("LIGHTS", self._lights_for(state.switch).types),)
                 plan = self._shadow_plan
                 if plan is not None and state.raster[ShadowingState.index][1]:
                     if not any(name == "SHADOWS_OFF" for name, _ in shading):

@@ -95,9 +95,13 @@ struct Light {
 COMMON = _SRGB + PACKING + STRUCTS
 
 
-def source_number(model: ShadingModel, stage: str) -> int:
-    """The ``#line`` source-string number of a model's stage (decoded by :func:`explain`)."""
-    return model.number * 10 + _STAGE_IDS[stage]
+def first_line(model: ShadingModel, stage: str) -> int:
+    """The ``#line`` number a model's stage starts at: ``(model + 1) * 10000 + stage * 1000 + 1``.
+
+    The model and stage are in the line number itself (drivers differ in reporting source-string
+    numbers); :func:`explain` decodes it.
+    """
+    return (model.number + 1) * 10000 + _STAGE_IDS[stage] * 1000 + 1
 
 
 def _structs(layout: BufferLayout, model: ShadingModel) -> str:
@@ -137,10 +141,10 @@ def _stage(model: ShadingModel, stage: str) -> str:
         f"#define LBuffer {p}L",
         f"#define material {p}material",
         *(f"#define {name} {p}{name}" for name in STAGES),
-        f"#line 1 {source_number(model, stage)}",
+        f"#line {first_line(model, stage)}",
     ]
     tail = [*(f"#undef {name}" for name in _MACROS)]
-    return "\n".join([*head, code, *tail, "#line 1 0"])
+    return "\n".join([*head, code, *tail, "#line 1"])
 
 
 def _model_code(layout: BufferLayout, model: ShadingModel, stages: tuple[str, ...]) -> str:
@@ -151,7 +155,7 @@ def _model_code(layout: BufferLayout, model: ShadingModel, stages: tuple[str, ..
 def _outputs(layout: BufferLayout) -> str:
     lines = []
     for location, (name, fmt) in enumerate(layout.layers):
-        kind = "uvec2" if fmt == "rg32ui" else ("vec3" if fmt == "r11g11b10f" else "vec4")
+        kind = "uvec2" if fmt == "rg32ui" else ("vec3" if name in layout.light_layers else "vec4")
         lines.append(f"layout(location = {location}) out {kind} gb_{name};")
     return "\n".join(lines)
 
@@ -211,8 +215,8 @@ def surface_snippet(layout: BufferLayout) -> str:
         branches.append("\n".join(body))
     branches += ["#else", "void model_surface(inout Surface s) { discard; }  // not a model of this layout", "#endif"]
     parts += ["uint spare[3];", *branches]
-    zeros = {"rg32ui": "uvec2(0u)", "r11g11b10f": "vec3(0.0)"}
-    zero = [f"    gb_{name} = {zeros.get(fmt, 'vec4(0.0)')};" for name, fmt in layout.layers]
+    zeros = {name: "vec3(0.0)" for name in layout.light_layers} | {"fixed": "uvec2(0u)"}
+    zero = [f"    gb_{name} = {zeros.get(name, 'vec4(0.0)')};" for name, _ in layout.layers]
     parts.append(
         "\n".join(
             [
@@ -278,8 +282,8 @@ def _gbuffer_samplers(layout: BufferLayout, samples: int, ambient: bool) -> list
     ms = "MS" if samples > 1 else ""
     lines = [f"uniform usampler2D{ms} u_fixed;", f"uniform sampler2D{ms} u_depth;", "uniform sampler2D u_materials;"]
     lines.append("uvec2 px_fixed;")
-    for name, fmt in layout.layers[1:]:
-        if fmt != "r11g11b10f" or ambient:
+    for name, _fmt in layout.layers[1:]:
+        if name not in layout.light_layers or ambient:
             lines += [f"uniform sampler2D{ms} u_{name};", f"vec4 px_{name};"]
     if samples > 1:
         lines += [
@@ -293,13 +297,15 @@ def _fetch(layout: BufferLayout, samples: int, ambient: bool, direct: bool) -> s
     """``fetch(c, s)``: the G-buffer values of sample ``s`` of pixel ``c`` into the ``px_`` globals; with ``direct``
     the light layers add the lights of the lighting pass (their per-sample targets ``u_<layer>_s<k>``)."""
     lines = ["void fetch(ivec2 c, int s) {", "    px_fixed = texelFetch(u_fixed, c, s).xy;"]
-    for name, fmt in layout.layers[1:]:
-        if fmt != "r11g11b10f" or ambient:
+    for name, _fmt in layout.layers[1:]:
+        if name not in layout.light_layers or ambient:
             lines.append(f"    px_{name} = texelFetch(u_{name}, c, s);")
     if direct and samples > 1:
         for name in layout.light_layers:
             for k in range(samples):
-                lines.append(f"    {'else ' if k else ''}if (s == {k}) px_{name}.rgb += texelFetch(u_{name}_s{k}, c, 0).rgb;")
+                lines.append(
+                    f"    {'else ' if k else ''}if (s == {k}) px_{name}.rgb += texelFetch(u_{name}_s{k}, c, 0).rgb;"
+                )
     lines.append("}")
     return "\n".join(lines)
 
@@ -403,7 +409,9 @@ def depth_program(samples: int) -> tuple[str, str]:
     """The G-buffer's depth into the frame: sample ``u_sample`` per draw (drawn once per sample under a mask)."""
     head = _header(samples, {})
     ms = "MS" if samples > 1 else ""
-    fragment = head + f"""
+    fragment = (
+        head
+        + f"""
 uniform sampler2D{ms} u_depth;
 uniform int u_sample;
 void main() {{
@@ -412,6 +420,7 @@ void main() {{
     gl_FragDepth = z;
 }}
 """
+    )
     return head + _FULLSCREEN_VERTEX, fragment
 
 
@@ -475,7 +484,9 @@ def lighting_program(layout: BufferLayout, kind: str, fullscreen: bool, samples:
     if fullscreen:
         defines["FULLSCREEN"] = True
     head = _header(samples, defines)
-    vertex = head + """
+    vertex = (
+        head
+        + """
 in vec3 in_position;
 in mat4 i_proxy;    // unit proxy -> eye space
 in vec4 i_lpos;     // eye space: position (w 1) or direction towards the light (w 0)
@@ -496,6 +507,7 @@ void main() {
     v_lpos = i_lpos; v_ldiff = i_ldiff; v_lspec = i_lspec; v_latt = i_latt; v_lspot = i_lspot; v_lextra = i_lextra;
 }
 """
+    )
     layers = layout.light_layers
     if samples > 1:
         outputs = [f"{name}_s{k}" for name in layers for k in range(samples)]
@@ -534,7 +546,7 @@ void main() {
         att *= face_shadow(int(v_lextra.y), int(v_lextra.z), v_lpos.xyz, p.P, p.N, light.L);"""
     light_at = "\n".join(
         [
-            f"void light_at(vec2 xy, float z, int s, {args}) {{",
+            f"void light_at({', '.join(['vec2 xy', 'float z', 'int s'] + ([args] if args else []))}) {{",
             "    int model; uint id; uint flags;",
             "    Pixel p = surface_at(xy, z, s, model, id, flags);",
             "    Light light;",
@@ -565,12 +577,15 @@ void main() {
     call = ", ".join(f"o_{name}" for name in layers)
     zero = " ".join(f"vec3 o_{name} = vec3(0.0);" for name in layers)
     once = "\n".join(
-        [f"    {{ {zero}", f"    light_at(xy, z, s, {call});"]
+        [f"    {{ {zero}", f"    light_at({', '.join(['xy', 'z', 's'] + ([call] if call else []))});"]
         + [f"    lb_{out} = o_{out.rsplit('_s', 1)[0] if samples > 1 else out};" for out in outputs]
         + ["    }"]
     )
     each = "\n".join(
-        [f"                {zero}", f"                light_at(xy, z, s, {call});"]
+        [
+            f"                {zero}",
+            f"                light_at({', '.join(['xy', 'z', 's'] + ([call] if call else []))});",
+        ]
         + [f"                lb_{name}_s{{k}} = o_{name};" for name in layers]
     )
     fragment = head + "\n".join(
@@ -695,14 +710,15 @@ def explain(error: str, models: tuple[ShadingModel, ...], where: str) -> Shading
         found = _ERROR.search(line)
         if not found:
             continue
-        source, row, _, message = found.groups()
-        number, stage_id = divmod(int(source), 10)
-        model = by_number.get(number)
+        _, line, _, message = found.groups()
+        number, rest = divmod(int(line), 10000)
+        stage_id, row = divmod(rest, 1000)
+        model = by_number.get(number - 1)
         stage = next((s for s, k in _STAGE_IDS.items() if k == stage_id), None)
-        if model is None or stage is None:
+        if model is None or stage is None or stage not in model.stages:
             continue
         text = model.stages[stage].splitlines()
-        code = text[int(row) - 1].strip() if 0 < int(row) <= len(text) else ""
+        code = text[row - 1].strip() if 0 < row <= len(text) else ""
         return ShadingModelError(
             f"shading model {model.name!r}, {stage} stage, line {row}: {message.strip()}"
             + (f"\n    {code}" if code else "")

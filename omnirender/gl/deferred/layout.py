@@ -10,20 +10,30 @@ Fixed for every model: the depth texture and one ``rg32ui`` layer (64 bits) pack
 The models' outputs are packed into channels that all models share, since a pixel shows one
 material: 8-bit channels (``unorm`` and ``color`` outputs; the first three go into the fixed layer,
 the rest into ``f1`` RGBA layers), 16-bit float channels (``half``, ``rgb16``: ``f2`` layers) and
-light channels (the L-buffer: ``r11g11b10f`` layers of three unsigned floats, added up over the
-lights).  The width of each kind is the *maximum* over the models, not the sum.  A Phong-only frame
-needs the fixed layer, depth and one light layer: 16 bytes per pixel, 31.6 MiB at 1920x1080.
+light channels (the L-buffer: layers of three channels, added up over the lights).  The width of
+each kind is the *maximum* over the models, not the sum.
+
+The light layers are ``f2`` (half floats) by default, or ``r11g11b10f`` (three unsigned small floats
+in 32 bits: half the memory).  A Phong-only frame needs the fixed layer, depth and one light layer:
+20 bytes per pixel (39.6 MiB at 1920x1080), or 16 with the compact light layer (31.6 MiB).  The
+compact format has 6 and 5 mantissa bits: GPUs round each blend to the nearest value, but software
+rasterisers (Mesa's llvmpipe) truncate it, which darkens a pixel by about 0.2 of 255 sRGB levels
+per light that reaches it; so it is the choice for memory, not the default.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable
+from typing import Any
 
 from ..passes import FORMATS, Target
 from .models import G_TYPES, L_TYPES, ShadingModel
 
-__all__ = ["BufferLayout", "FIXED_SPARE", "GBUFFER", "Channel"]
+__all__ = ["BufferLayout", "FIXED_SPARE", "GBUFFER", "Channel", "LIGHT_FORMATS"]
+
+#: Formats of the light layers: half floats (the default), or 11/11/10-bit unsigned floats (half the memory).
+LIGHT_FORMATS = ("f2", "r11g11b10f")
 
 #: 8-bit channels of the fixed layer free for model outputs.
 FIXED_SPARE = 3
@@ -56,7 +66,10 @@ class Channel:
 class BufferLayout:
     """G-buffer and L-buffer layers for a set of shading models, and where each model's outputs lie."""
 
-    def __init__(self, models: Iterable[ShadingModel]) -> None:
+    def __init__(self, models: Iterable[ShadingModel], light_format: str = "f2") -> None:
+        if light_format not in LIGHT_FORMATS:
+            raise ValueError(f"deferred pipeline: light_format must be one of {LIGHT_FORMATS}, got {light_format!r}")
+        self.light_format = light_format
         self.models = tuple(sorted(set(models), key=lambda m: m.number))
         self.width8 = max((m.channels("8") for m in self.models), default=0)
         self.width16 = max((m.channels("16") for m in self.models), default=0)
@@ -65,7 +78,7 @@ class BufferLayout:
         layers += [(f"g8_{k}", "f1") for k in range(math.ceil(max(self.width8 - FIXED_SPARE, 0) / 4))]
         layers += [(f"g16_{k}", "f2") for k in range(math.ceil(self.width16 / 4))]
         self.light_layers = tuple(f"light_{k}" for k in range(math.ceil(self.width_light / 3)))
-        layers += [(name, "r11g11b10f") for name in self.light_layers]
+        layers += [(name, light_format) for name in self.light_layers]
         if len(layers) > MAX_ATTACHMENTS:
             names = ", ".join(m.name for m in self.models)
             raise ValueError(
@@ -93,9 +106,9 @@ class BufferLayout:
             self.light[m.number] = light
 
     @property
-    def key(self) -> tuple[int, ...]:
-        """The model numbers: layouts (and the shaders made for them) are rebuilt when this changes."""
-        return tuple(m.number for m in self.models)
+    def key(self) -> tuple[Any, ...]:
+        """The model numbers and light format: layouts (and the shaders made for them) are rebuilt when it changes."""
+        return (*(m.number for m in self.models), self.light_format)
 
     @property
     def has_lbuffer(self) -> bool:
@@ -115,10 +128,10 @@ class BufferLayout:
 
     def bytes_per_pixel(self, samples: int = 0) -> int:
         """G-buffer plus L-buffer bytes per pixel (depth included); with multisampling also the per-pixel
-        centre depth, edge flag and nearest depth (12 bytes) and the lights of every sample (one light layer per sample)."""
+        centre depth, edge flag and nearest depth (12 bytes) and the lights of every sample (a layer each)."""
         total = self.target(samples).bytes_per_pixel()
         if samples > 1:
-            total += 12 + 4 * len(self.light_layers) * samples
+            total += 12 + FORMATS[self.light_format][3] * len(self.light_layers) * samples
         return total
 
     def memory(self, size: tuple[int, int] = (1920, 1080), samples: int = 0) -> int:
@@ -135,8 +148,11 @@ class BufferLayout:
         if not self.has_lbuffer:
             lines.append("  (no L-buffer: no model adds light)")
         if samples > 1:
-            lines.append(f"  with {samples} samples: the layers above per sample, a per-pixel centre depth and edge "
-                         f"flag (rg32f, 8 B) and nearest depth (4 B), the lights per sample ({len(self.light_layers) * samples} x r11g11b10f)")  # fmt: skip
+            lights = f"{len(self.light_layers) * samples} x {self.light_format}"
+            lines.append(
+                f"  with {samples} samples: the layers above per sample, a per-pixel centre depth and edge flag "
+                f"(rg32f, 8 B) and nearest depth (4 B), the lights per sample ({lights})"
+            )
         mib = self.memory(size, samples) / 2**20
         lines.append(
             f"  {self.bytes_per_pixel(samples)} B per pixel{f' ({samples} samples)' if samples else ''}: "

@@ -52,6 +52,7 @@ __all__ = [
     "PBR",
     "UNLIT",
     "model_by_number",
+    "model_by_name",
     "G_TYPES",
     "L_TYPES",
     "PARAM_TYPES",
@@ -96,6 +97,12 @@ _REGISTRY: dict[int, ShadingModel] = {}
 def model_by_number(number: int) -> ShadingModel | None:
     """The shading model with the forward shader's ``MODEL`` number ``number``, or None."""
     return _REGISTRY.get(int(number))
+
+
+def model_by_name(name: str) -> ShadingModel | None:
+    """The most recently made shading model called ``name`` (scene files name models), or None."""
+    found = [m for m in _REGISTRY.values() if m.name == name]
+    return found[-1] if found else None
 
 
 def _declarations(owner: str, what: str, values: Any, types: Mapping[str, tuple]) -> dict[str, Any]:
@@ -251,8 +258,16 @@ class MaterialDescription(MonoAttribute):
 
     __slots__ = ("model", "values", "_packed")
 
-    def __init__(self, model: ShadingModel, **values: Any) -> None:
+    def __init__(self, model: ShadingModel | str, **values: Any) -> None:
         super().__init__()
+        if isinstance(model, str):  # a scene file names the model: it must be made (registered) in this process
+            found = model_by_name(model)
+            if found is None:
+                raise ValueError(
+                    f"MaterialDescription: no shading model called {model!r}; make it (om.gl.ShadingModel({model!r}, "
+                    "...)) before loading a scene that uses it"
+                )
+            model = found
         if not isinstance(model, ShadingModel):
             raise ValueError(f"MaterialDescription: model must be an om.gl.ShadingModel, got {model!r:.60}")
         if model.number in (_PHONG_NUMBER, _PBR_NUMBER):
@@ -277,7 +292,8 @@ class MaterialDescription(MonoAttribute):
         return self._packed
 
     def parameters(self) -> dict[str, Any]:
-        return {"model": self.model, **self.values}
+        """The model's name and the values (scene files store the name: models are GLSL made by programs)."""
+        return {"model": self.model.name, **self.values}
 
     def __repr__(self) -> str:
         return f"MaterialDescription({self.model.name!r}, {self.values})"

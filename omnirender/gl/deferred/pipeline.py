@@ -48,7 +48,7 @@ from .glsl import (
     surface_snippet,
     vertex_snippet,
 )
-from .layout import GBUFFER, BufferLayout
+from .layout import GBUFFER, LIGHT_FORMATS, BufferLayout
 from .models import PHONG, ShadingModelError, model_by_number
 from .proxies import ATTRIBUTES, FULLSCREEN, STRIDE, LightTable, proxy_meshes
 
@@ -110,14 +110,20 @@ class Deferred(GLTechnique):
     other engines ignore it.
     """
 
-    __slots__ = ()
+    __slots__ = ("light_format",)
     PASS_NAMES = ("geometry", "lighting", "shading", "opaque", "transparent", "transparent depth", "overlay")
 
-    def __init__(self) -> None:
+    def __init__(self, light_format: str = "f2") -> None:
         super().__init__(passes=len(self.PASS_NAMES))
+        if light_format not in LIGHT_FORMATS:
+            raise ValueError(f"Deferred: light_format must be one of {LIGHT_FORMATS}, got {light_format!r}")
+        #: the L-buffer's texel format: "f2" (half floats) or "r11g11b10f" (compact: 16 bytes per Phong pixel)
+        self.light_format = light_format
 
     def prepare_pass(self, engine: Any) -> None:
         renderer = DeferredRenderer.of(engine)
+        if engine.current_pass == 0:
+            renderer.update(engine, self)
         engine.set_pass(renderer.describe_pass(self, engine, engine.current_pass))
 
 
@@ -152,9 +158,9 @@ class DeferredRenderer:
         return found
 
     # -- what the frame holds ----------------------------------------------------------------------
-    def _update(self, engine: Any) -> None:
+    def update(self, engine: Any, technique: Deferred) -> None:
         """Models, fogs and whether selections are needed: recomputed when the draw list changed."""
-        key = (id(engine._root), engine.draw_list_version)
+        key = (id(engine._root), engine.draw_list_version, technique.light_format)
         if key == self._frame_key:
             return
         self._frame_key = key
@@ -173,8 +179,9 @@ class DeferredRenderer:
             if fog is not None and fog not in fogs:
                 fogs.append(fog)
         models = [model_by_number(n) or PHONG for n in sorted(numbers)] or [PHONG]
-        if self.layout is None or self.layout.key != tuple(sorted({m.number for m in models})):
-            self.layout = BufferLayout(models)  # rebuilt (with its programs) only when the set of models changes
+        layout = BufferLayout(models, technique.light_format)
+        if self.layout is None or self.layout.key != layout.key:
+            self.layout = layout  # rebuilt (with its programs) only when the set of models changes
             self._passes.clear()
         self._summary = (not others, others)
         if len(fogs) > FOG_SLOTS:
@@ -198,7 +205,6 @@ class DeferredRenderer:
         """The description of pass ``index`` of ``technique`` in this frame."""
         frame_level = len(engine.technique_frames) == 1
         if index == 0:
-            self._update(engine)
             self._check_models(engine)
             engine.material_table.texture(engine.ctx).use(TABLE_UNIT)
         samples = current_samples(engine)
@@ -247,7 +253,9 @@ class DeferredRenderer:
                 continue
             single = BufferLayout([model])
             try:
-                self._program(engine, ("check-light", model.number), *lighting_program(single, "point", False, 0, {}))
+                if "lighting" in model.stages:
+                    self._program(engine, ("check-light", model.number),
+                                  *lighting_program(single, "point", False, 0, {}))  # fmt: skip
                 self._program(engine, ("check-shade", model.number), *shading_program(single, 0, {}))
                 probe = engine.programs  # the geometry pass's mesh program, with the visibility stage
                 from ..passes import Composed
@@ -326,8 +334,8 @@ class DeferredRenderer:
         and set the camera and sample uniforms ``prog`` reads."""
         unit = 0
         textures = [("u_fixed", gbuffer.texture("fixed")), ("u_depth", gbuffer.depth)]
-        for name, fmt in self.layout.layers[1:]:  # type: ignore[union-attr]
-            if fmt != "r11g11b10f" or ambient:
+        for name, _fmt in self.layout.layers[1:]:  # type: ignore[union-attr]
+            if name not in self.layout.light_layers or ambient:  # type: ignore[union-attr]
                 textures.append((f"u_{name}", gbuffer.texture(name)))
         textures.append(("u_materials", engine.material_table.texture(engine.ctx)))
         textures += list((extra or {}).items())
@@ -381,7 +389,7 @@ class DeferredRenderer:
             return calls
         if samples > 1:
             names = tuple(f"{name}_s{k}" for name in layout.light_layers for k in range(samples))
-            target = Target(_LIGHTS, colors=names, formats=("r11g11b10f",) * len(names), depth=_PIXELS.name,
+            target = Target(_LIGHTS, colors=names, formats=(layout.light_format,) * len(names), depth=_PIXELS.name,
                             relative="enclosing")  # fmt: skip
             calls += draw(Pass("lights", target=target, clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=None),
                                custom=self._lights_pass))  # fmt: skip
@@ -445,7 +453,7 @@ class DeferredRenderer:
         return calls
 
     def _pixels_pass(self, engine: Any, draw: Any) -> int:
-        """Per pixel of the multisampled G-buffer: the centre's depth and whether it is an edge (:func:`pixels_program`)."""
+        """Per pixel of a multisampled G-buffer: the centre's depth, whether it is an edge (:func:`pixels_program`)."""
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
         engine.reset_gl_state()
