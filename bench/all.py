@@ -15,21 +15,27 @@ SCRIPTS = {
     "traversal.py": [],
     "picking.py": [],
     "gl_objects.py": [],
+    "dynamic.py": [],
     "shadows.py": [],
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
     "radiance.py": ["--repeat", "1"],
     "gltf_load.py": [],
+    "gltf_instances.py": [],
     "compositing.py": [],
+    "soak.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
+    "dynamic.py": ["--quick"],
     "shadows.py": ["--frames", "6"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],
     "radiance.py": ["--repeat", "1", "--triangles", "200000"],
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
+    "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
+    "soak.py": ["--quick"],
 }
 
 

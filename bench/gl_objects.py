@@ -36,6 +36,7 @@ import numpy as np
 
 import omnirender as om
 from omnirender.gl import GLEngine
+from omnirender.gl.context import gl_renderer
 
 VS = """
 #version 330
@@ -359,13 +360,7 @@ def main() -> None:
         "targets at N=10,000: omni/inst <= 1.25, naive/omni >= 5, changed/steady <= 2, users/inst <= 1.5 "
         "(users: a shared om.TriangleSet, an om.Material per cube); mesh ratio <= 1.1"
     )
-    renderer = "unknown"
-    try:
-        ctx = moderngl.create_context(standalone=True, backend="egl")
-        renderer = ctx.info.get("GL_RENDERER", renderer)
-        ctx.release()
-    except Exception:  # noqa: BLE001 - the name is only informative
-        pass
+    renderer = gl_renderer()
     ratios = ", ".join(f"N={r['n']}: {r['naive'] / r['instanced']:.1f}x" for r in results)
     print(f"measured naive/instanced (hand-written, both culling back faces) on {renderer}: {ratios}")
     print(

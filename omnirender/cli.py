@@ -3,9 +3,17 @@
 Sub-commands: ``render`` a scene file with an engine, ``animate`` it (frames
 on local processes or a Dask cluster, then a video), ``view`` it in an
 interactive window, ``export`` it to another format, print ``info`` about it,
-list the ``engines`` available here, and render the ``demo`` scene with every
-engine.  Exit codes: 0 success, 1 a rendering (or loading) error reported in
-one line (``--debug`` shows the traceback), 2 a usage error.
+print the scene files' JSON ``schema``, list the ``engines`` available here,
+and render the ``demo`` scene with every engine.  ``render``, ``view``,
+``export`` and ``info`` also take a mesh file (OBJ, PLY, STL, OFF, glTF/GLB):
+a scene is made around it with a fitted camera and default lights.
+
+Exit codes (:data:`EXIT_CODES`): 0 success; 1 the work failed (the scene
+file is malformed or refused, an engine is missing or fails, an output
+cannot be written), reported in one line (``--debug`` shows the traceback);
+2 the command line is wrong (unknown command or option, a bad value, a
+scene file that does not exist or has an unknown extension, an output
+extension nothing writes); 130 interrupted (Ctrl-C).
 """
 
 from __future__ import annotations
@@ -29,11 +37,25 @@ examples:
   omnirender view scene.yaml                     interactive window (mouse: orbit/pan/zoom, h: help)
   omnirender export scene.yaml scene.glb         also .pov and .rib
   omnirender info scene.yaml                     tree, statistics, bounds, engines
+  omnirender view bunny.obj                      a mesh file: fitted camera, default lights
+  omnirender render scene.yaml --trusted         the file may use raw renderer text / files outside its folder
+
+exit codes: 0 success, 1 the work failed (bad scene file, engine missing or failing), 2 bad command line,
+  130 interrupted
 """
 
 
 #: Extensions ``om.Image.save`` writes (checked before rendering).
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+#: Scene-file extensions (mesh files are read too, see :func:`_load`).
+SCENE_EXTENSIONS = (".json", ".yaml", ".yml")
+#: What the exit codes mean (also in ``omnirender --help``).
+EXIT_CODES = {
+    0: "success",
+    1: "the work failed: a malformed or refused scene file, a missing or failing engine, an unwritable output",
+    2: "the command line is wrong: a bad option or value, a missing scene file, an unknown file extension",
+    130: "interrupted",
+}
 
 
 class UsageError(Exception):
@@ -71,10 +93,25 @@ _positive_float = _number(float, 0.0, True, "a positive number")
 _count = _number(int, 0, False, "a whole number >= 0")
 
 
-def _load(path: str, trusted: bool = False) -> Any:
+def _load(path: str, trusted: bool = False, size: tuple[int, int] = (4, 3)) -> Any:
+    """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``)."""
+    from .scene.mesh_scene import MESH_SUFFIXES
+
     p = Path(path)
-    if not p.is_file():
+    suffix = p.suffix.lower()
+    if suffix not in SCENE_EXTENSIONS + MESH_SUFFIXES:
+        raise UsageError(
+            f"{path}: unknown extension {p.suffix!r}; give a scene file ({', '.join(SCENE_EXTENSIONS)}) "
+            f"or a mesh file ({', '.join(MESH_SUFFIXES)})"
+        )
+    if not p.exists():
         raise UsageError(f"scene file not found: {path}")
+    if not p.is_file():
+        raise UsageError(f"{path} is a folder, not a scene file")
+    if suffix in MESH_SUFFIXES:
+        from .scene.mesh_scene import mesh_scene
+
+        return mesh_scene(p, aspect=size[0] / size[1])
     from .scene.files import load
 
     return load(p, trusted=trusted)
@@ -84,8 +121,8 @@ def _load(path: str, trusted: bool = False) -> Any:
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    run_demo(Path(args.output), size=args.size)
-    return 0
+    written = run_demo(Path(args.output), size=args.size)
+    return 0 if written else 1
 
 
 def _engines(args: argparse.Namespace) -> int:
@@ -99,20 +136,18 @@ def _engines(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from .render import _engines, engines, render
+    from .render import _engines, engine_status, render
 
     if args.engine not in _engines:
         raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
-    if not Path(args.scene).is_file():
-        raise UsageError(f"scene file not found: {args.scene}")
     options = _render_options(args)
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
     if output.suffix.lower() not in IMAGE_EXTENSIONS:
         raise UsageError(f"cannot write an image to {str(output)!r}: use one of {', '.join(IMAGE_EXTENSIONS)}")
-    ok, why = engines()[args.engine]
+    ok, why = engine_status(args.engine, check=False)  # its packages; the engine itself says what else fails
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, getattr(args, "trusted", False), args.size)
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -145,6 +180,11 @@ def _animate(args: argparse.Namespace) -> int:
         raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
     if not Path(args.scene).is_file():
         raise UsageError(f"scene file not found: {args.scene}")
+    if Path(args.scene).suffix.lower() not in SCENE_EXTENSIONS + (".glb", ".gltf"):
+        raise UsageError(
+            f"{args.scene}: unknown extension {Path(args.scene).suffix!r}; give a scene file "
+            f"({', '.join(SCENE_EXTENSIONS)}) or an animated glTF file (.glb, .gltf)"
+        )
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("give either --workers (local processes) or --scheduler (a Dask cluster), not both")
     options = _render_options(args)
@@ -211,7 +251,7 @@ def _msaa_samples(spp: int) -> int:
 
 
 def _view(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, getattr(args, "trusted", False), args.size)
     from .viewer import view
 
     view(scene, size=args.size, title=f"omnirender - {Path(args.scene).name}", duration=args.duration)
@@ -236,6 +276,23 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _schema(args: argparse.Namespace) -> int:
+    import json
+
+    from .scene.files import json_schema
+
+    text = json.dumps(json_schema(), indent=2) + "\n"
+    if args.output:
+        from .fileio import atomic_write
+
+        with atomic_write(args.output) as fh:
+            fh.write(text)
+        print(args.output)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 def scene_report(scene: Any, engines: bool = True) -> str:
     """The text of ``omnirender info``: tree with paths, statistics, bounds, capable engines."""
     lines = ["tree:"]
@@ -253,20 +310,34 @@ def scene_report(scene: Any, engines: bool = True) -> str:
     return "\n".join(lines)
 
 
-def _tree(node: Any, lines: list[str], indent: str, seen: set[int], path: str) -> None:
-    """List ``node`` at ``path`` (built on the way down: a shared node shows each of its paths)."""
-    groups = f"  groups={sorted(node.groups)}" if node.groups else ""
-    shared = "  (shared, listed above)" if id(node) in seen else ""
-    lines.append(f"{indent}{path}{groups}{shared}")
-    if shared:
-        return
-    seen.add(id(node))
-    for item in node:
-        if hasattr(item, "_compile_node"):
-            _tree(item, lines, indent + "  ", seen, f"{path}/{item.name}")
-        else:
-            text = repr(item)
-            lines.append(f"{indent}  - {text if len(text) <= 100 else text[:97] + '...'}")
+#: Nesting shown by ``omnirender info`` before deeper nodes are summarised (a 100,000-level chain stays readable).
+TREE_DEPTH = 40
+
+
+def _tree(root: Any, lines: list[str], indent: str, seen: set[int], path: str) -> None:
+    """List ``root`` at ``path`` (built on the way down: a shared node shows each of its paths); no recursion."""
+    stack: list[tuple[Any, str, int]] = [(root, path, 0)]
+    while stack:
+        node, where, depth = stack.pop()
+        pad = indent + "  " * depth
+        if depth >= TREE_DEPTH:
+            below = sum(1 for _ in node.walk())
+            lines.append(f"{pad}{where}  ({below} node(s) from here down, not listed)")
+            continue
+        groups = f"  groups={sorted(node.groups)}" if node.groups else ""
+        shared = "  (shared, listed above)" if id(node) in seen else ""
+        lines.append(f"{pad}{where}{groups}{shared}")
+        if shared:
+            continue
+        seen.add(id(node))
+        children = []
+        for item in node:
+            if hasattr(item, "_compile_node"):
+                children.append((item, f"{where}/{item.name}", depth + 1))
+            else:
+                text = repr(item)
+                lines.append(f"{pad}  - {text if len(text) <= 100 else text[:97] + '...'}")
+        stack.extend(reversed(children))
 
 
 def _bounds_text(scene: Any) -> str:
@@ -357,7 +428,7 @@ def build_parser() -> argparse.ArgumentParser:
     common.add_argument(
         "--trusted",
         action="store_true",
-        help="allow trusted-only components such as povray.Raw (raw SDL) in the scene file",
+        help="trust the scene file: allow raw renderer text (povray.Raw, radiance.Raw) and files outside its folder",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -365,7 +436,7 @@ def build_parser() -> argparse.ArgumentParser:
         return sub.add_parser(name, help=help, parents=[common])
 
     p = command("render", help="render a scene file to an image")
-    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
     p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
     p.add_argument("-o", "--output", help="image file (.png, .jpg...; default SCENE-ENGINE.png)")
     p.add_argument("--size", type=_size, default=(800, 600), help="image size WxH (default 800x600)")
@@ -391,20 +462,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_animate)
 
     p = command("view", help="open a scene file in an interactive window")
-    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
     p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
     p.add_argument("--duration", type=float, help="close the window after this many seconds (demos, tests)")
     p.set_defaults(func=_view)
 
     p = command("export", help="write a scene file in another format (.glb, .pov, .rib)")
-    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
     p.add_argument("output", help="output file; the extension chooses the format")
     p.set_defaults(func=_export)
 
     p = command("info", help="print the node tree with paths, statistics, bounds and capable engines")
-    p.add_argument("scene", help="scene file (.json, .yaml)")
+    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
     p.add_argument("--no-engines", action="store_true", help="skip checking which engines can render it")
     p.set_defaults(func=_info)
+
+    p = command("schema", help="print the JSON Schema of scene files (every registered type)")
+    p.add_argument("-o", "--output", help="write it to this file instead of printing it")
+    p.set_defaults(func=_schema)
 
     p = command("engines", help="list engines and exporters and whether they work here")
     p.set_defaults(func=_engines)
@@ -435,7 +510,8 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        message = " ".join(str(exc).split()) or type(exc).__name__
+        text = getattr(exc, "cli_message", None) or str(exc)  # e.g. "--trusted" rather than "trusted=True"
+        message = " ".join(text.split()) or type(exc).__name__
         print(f"omnirender {args.command}: error: {message}", file=sys.stderr)
         return 1
 

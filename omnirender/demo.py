@@ -45,20 +45,37 @@ def demo_scene() -> om.Node:
 
 
 def run_demo(output: Path, size: tuple[int, int] = (640, 480)) -> list[Path]:
-    """Render the demo scene with each available engine into ``output``; returns the files."""
+    """Render the demo scene with each available engine into ``output``; returns the files.
+
+    What cannot run here is said first, with the command(s) that install it;
+    an engine that fails is reported and the others go on.
+    """
+    from .render import install_commands
+
+    status = om.engines()
+    usable = [name for name, (ok, _) in status.items() if ok]
+    skipped = [name for name, (ok, _) in status.items() if not ok]
+    print(f"omnirender demo: rendering with {', '.join(usable) or 'no engine'}", end="")
+    print(f"; skipped {len(skipped)} of {len(status)} engines:" if skipped else " (every engine)")
+    for name in skipped:
+        print(f"  {name:8s} {status[name][1]}")
+    commands = install_commands(skipped)
+    if commands:
+        print("  install them with: " + " && ".join(commands))
     output.mkdir(parents=True, exist_ok=True)
     scene = demo_scene()
     stats = om.statistics(scene)
     print(f"demo scene: {stats['nodes']} nodes, {stats['shapes']} shapes, {stats['attributes']} attributes", end="")
     print(f", {stats['triangles']} triangles" if "triangles" in stats else "")
     written: list[Path] = []
-    for name, (ok, why) in om.engines().items():
-        if not ok:
-            print(f"{name:8s} skipped: {why}")
-            continue
+    for name in usable:
         path = output / f"demo-{name}.png"
         start = time.perf_counter()
-        om.render(scene, engine=name, size=size).save(path)
+        try:
+            om.render(scene, engine=name, size=size).save(path)
+        except Exception as exc:  # one engine failing must not hide the others' pictures
+            print(f"{name:8s} failed: {' '.join(str(exc).split()) or type(exc).__name__}")
+            continue
         written.append(path)
         print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s)")
     print(f"{len(written)} image(s) in {output.resolve()}")

@@ -19,7 +19,7 @@ import threading
 from collections.abc import Callable, Sequence
 from typing import IO, Any
 
-__all__ = ["ProgramTimeout", "run_watched", "progress_reporter"]
+__all__ = ["ProgramTimeout", "run_watched", "progress_reporter", "killed_by", "exit_description"]
 
 #: How much of the latest output ``watch`` sees (progress lines are short).
 TAIL = 512
@@ -95,6 +95,37 @@ def run_watched(
     if failures:
         raise failures[0]
     return proc.returncode, b"".join(chunks)
+
+
+#: What a signal that ended a program usually means.
+_SIGNAL_HINTS = {
+    "SIGKILL": "usually the system's out-of-memory killer: render a smaller image or a simpler scene",
+    "SIGSEGV": "the program crashed",
+    "SIGABRT": "the program aborted",
+    "SIGTERM": "it was asked to stop",
+    "SIGINT": "it was interrupted",
+    "SIGXCPU": "it ran out of its CPU-time limit",
+}
+
+
+def killed_by(returncode: int) -> str | None:
+    """``"killed by signal 9 (SIGKILL: ...)"`` when ``returncode`` says a signal ended the program, else None."""
+    if returncode >= 0:
+        return None
+    import signal
+
+    number = -returncode
+    try:
+        name = signal.Signals(number).name
+    except ValueError:
+        return f"killed by signal {number}"
+    hint = _SIGNAL_HINTS.get(name)
+    return f"killed by signal {number} ({name}{': ' + hint if hint else ''})"
+
+
+def exit_description(returncode: int) -> str:
+    """``"exit status 2"`` or ``"killed by signal 9 (SIGKILL: ...)"``."""
+    return killed_by(returncode) or f"exit status {returncode}"
 
 
 def progress_reporter(

@@ -4,12 +4,16 @@ Adapters register themselves by name (engines) or file extension (exporters).
 Built-in entries are named lazily as ``"module:function"`` so that nothing is
 imported until it is used; third-party packages call :func:`register_engine`
 or :func:`register_exporter` with callables.  ``om.engines()`` reports which
-engines work on this machine and why the others do not.
+engines work on this machine and why the others do not: an engine declares
+the Python packages it needs (found without importing them) with the pip
+extra that installs them, and the Debian package of an external program, so
+a missing piece is named together with the command that installs it.
 """
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import os
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -20,6 +24,8 @@ __all__ = [
     "render",
     "export",
     "engines",
+    "engine_status",
+    "install_commands",
     "register_engine",
     "unregister_engine",
     "register_exporter",
@@ -30,13 +36,21 @@ __all__ = [
 
 @dataclass
 class EngineEntry:
-    """A named engine: its render function, availability check and origin."""
+    """A named engine: its render function, availability check, origin and what it needs installed.
+
+    ``needs`` lists ``(module, pip package)`` pairs, ``extra`` the pip extra of
+    omnirender that installs them, ``debian`` the Debian package of an
+    external program it runs (its availability check finds the program).
+    """
 
     name: str
     render: str | Callable[..., Any]
     available: str | Callable[[], tuple[bool, str]] | None
     description: str
     origin: str
+    needs: tuple[tuple[str, str], ...] = ()
+    extra: str | None = None
+    debian: str | None = None
 
 
 _engines: dict[str, EngineEntry] = {}
@@ -57,14 +71,23 @@ def register_engine(
     description: str = "",
     *,
     override: bool = False,
+    needs: tuple[tuple[str, str], ...] = (),
+    extra: str | None = None,
+    debian: str | None = None,
 ) -> None:
-    """Make ``om.render(scene, engine=name)`` call ``render_fn(scene, size=..., **options)``."""
+    """Make ``om.render(scene, engine=name)`` call ``render_fn(scene, size=..., **options)``.
+
+    ``needs`` names the Python modules the engine imports as ``(module, pip
+    package)`` pairs and ``extra`` the pip extra installing them (reported
+    with ``pip install 'omnirender[extra]'`` when one is missing); ``debian``
+    the Debian package of an external program it runs.
+    """
     if name in _engines and not override:
         raise ValueError(
             f"an engine named {name!r} is already registered (from {_engines[name].origin}); pass override=True"
         )
     origin = render_fn if isinstance(render_fn, str) else getattr(render_fn, "__module__", "?")
-    _engines[name] = EngineEntry(name, render_fn, available, description, str(origin))
+    _engines[name] = EngineEntry(name, render_fn, available, description, str(origin), tuple(needs), extra, debian)
 
 
 def unregister_engine(name: str) -> None:
@@ -83,18 +106,67 @@ def register_exporter(
 
 
 def engines() -> dict[str, tuple[bool, str]]:
-    """Every registered engine name -> (available here, reason or description)."""
-    out = {}
-    for name, entry in _engines.items():
-        if entry.available is None:
-            out[name] = (True, entry.description)
-            continue
+    """Every registered engine name -> (available here, reason or description).
+
+    A missing Python package is reported with the pip command that installs it.
+    """
+    return {name: engine_status(name) for name in _engines}
+
+
+def missing_packages(entry: EngineEntry) -> list[str]:
+    """The pip packages of ``entry.needs`` whose module cannot be found here (nothing is imported)."""
+    missing = []
+    for module, package in entry.needs:
         try:
-            ok, why = _resolve(entry.available)()
-        except Exception as exc:  # an adapter that cannot even be imported is unavailable
-            ok, why = False, f"{type(exc).__name__}: {exc}"
-        out[name] = (ok, why or entry.description)
-    return out
+            spec = importlib.util.find_spec(module)
+        except (ImportError, ValueError):
+            spec = None
+        # a folder named like the module (a namespace package, e.g. a test folder) is not the package
+        if spec is None or spec.origin in (None, "namespace"):
+            missing.append(package)
+    return missing
+
+
+def engine_status(name: str, check: bool = True) -> tuple[bool, str]:
+    """(available, reason) of one engine: its Python packages, then (``check``) the adapter's own check.
+
+    ``check=False`` looks for the packages only (fast: nothing is imported or
+    started); the adapter's check may create a GL context or run a program.
+    """
+    entry = _engines.get(name)
+    if entry is None:
+        raise ValueError(f"unknown engine {name!r}; registered engines: {sorted(_engines)}")
+    missing = missing_packages(entry)
+    if missing:
+        fix = f"pip install 'omnirender[{entry.extra}]'" if entry.extra else f"pip install {' '.join(missing)}"
+        return False, f"needs the Python package{'s' if len(missing) > 1 else ''} {', '.join(missing)}: {fix}"
+    if entry.available is None or not check:
+        return True, entry.description
+    try:
+        ok, why = _resolve(entry.available)()
+    except Exception as exc:  # an adapter that cannot even be imported is unavailable
+        ok, why = False, f"{type(exc).__name__}: {exc}"
+    return ok, why or entry.description
+
+
+def install_commands(names: Iterable[str]) -> list[str]:
+    """The commands that install what the engines ``names`` lack: one pip command, one apt-get command."""
+    extras: list[str] = []
+    debian: list[str] = []
+    for name in names:
+        entry = _engines.get(name)
+        if entry is None:
+            continue
+        if missing_packages(entry) and entry.extra and entry.extra not in extras:
+            extras.append(entry.extra)
+        elif entry.debian and entry.debian not in debian:
+            debian.append(entry.debian)
+    commands = []
+    if extras:
+        commands.append(f"pip install 'omnirender[{','.join(extras)}]'")
+    if debian:
+        commands.append(f"sudo apt-get install {' '.join(debian)}")
+    return commands
 
 
 def exporters() -> dict[str, str]:
@@ -213,24 +285,28 @@ def _check_scene(function: str, scene: Any) -> None:
 
 
 def _check_size(size: Any) -> tuple[int, int]:
-    try:
-        values = [float(v) for v in size]
-    except (TypeError, ValueError):
-        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}") from None
-    if len(values) != 2 or any(v != int(v) for v in values):
-        raise ValueError(f"size must be (width, height) in whole pixels, got {size!r}")
-    w, h = int(values[0]), int(values[1])
-    if w <= 0 or h <= 0:
-        raise ValueError(f"size must be positive, got {w}x{h}")
-    return w, h
+    from .options import check_image_size
+
+    return check_image_size("om.render", size)
 
 
-register_engine("gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)")
-register_engine("povray", "omnirender.povray:render", "omnirender.povray:available", "POV-Ray 3.7 ray tracer")
-register_engine("mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:available", "Mitsuba 3 path tracer")
+_PILLOW = ("PIL", "pillow")  # images are read and written with Pillow
 register_engine(
-    "radiance", "omnirender.radiance:render", "omnirender.radiance:available", "Radiance (rpict, from pyradiance)"
-)
+    "gl", "omnirender.gl:render", "omnirender.gl:available", "OpenGL through moderngl (real time)",
+    needs=(("moderngl", "moderngl"), _PILLOW), extra="gl",
+)  # fmt: skip
+register_engine(
+    "povray", "omnirender.povray:render", "omnirender.povray:available", "POV-Ray 3.7 ray tracer",
+    needs=(_PILLOW,), extra="povray", debian="povray",
+)  # fmt: skip
+register_engine(
+    "mitsuba", "omnirender.mitsuba:render", "omnirender.mitsuba:available", "Mitsuba 3 path tracer",
+    needs=(("mitsuba", "mitsuba"), _PILLOW), extra="mitsuba",
+)  # fmt: skip
+register_engine(
+    "radiance", "omnirender.radiance:render", "omnirender.radiance:available", "Radiance (rpict, from pyradiance)",
+    needs=(("pyradiance", "pyradiance"), _PILLOW), extra="radiance",
+)  # fmt: skip
 register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
 register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
 register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")

@@ -36,11 +36,12 @@ def _povray() -> tuple[bool, str]:
 
 def _mitsuba() -> tuple[bool, str]:
     try:
-        import mitsuba  # noqa: F401
-
-        return True, ""
+        import mitsuba
     except Exception as exc:  # pragma: no cover
         return False, f"mitsuba is not importable: {exc}"
+    if getattr(mitsuba, "__file__", None) is None:  # a folder named mitsuba on sys.path, not the package
+        return False, f"'mitsuba' is a namespace package ({list(getattr(mitsuba, '__path__', []))}), not Mitsuba 3"
+    return True, ""
 
 
 def _radiance() -> tuple[bool, str]:

@@ -33,6 +33,16 @@ def gltf_validator() -> list[str] | None:
     return [node, str(tool / "validate.js")]
 
 
+def validator_reports(files: list[Any]) -> list[dict[str, Any]]:
+    """The Khronos validator's report of each file (``{"file": ..., "issues": {...}}``); asserts that it ran."""
+    import json
+    import subprocess
+
+    out = subprocess.run([*gltf_validator(), *map(str, files)], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    return [json.loads(line) for line in out.stdout.splitlines()]
+
+
 def png(rgba: np.ndarray) -> bytes:
     from PIL import Image
 

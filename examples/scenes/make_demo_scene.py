@@ -1,22 +1,40 @@
-"""Build the demo scene with the Python API and write it as demo.json and demo.yaml.
+"""Write the example scene files: the demo scene (demo.json, demo.yaml) and a tour of the format (features.yaml).
 
-Run ``python examples/scenes/make_demo_scene.py``; then ``omnirender render
-examples/scenes/demo.yaml -e gl -o demo.png`` renders the file.  The scene shows
-what the format holds: a camera, lights, materials, an engine-specific
-attribute (``povray.Finish``), a mesh file by relative path, a node shared by
-two parents (written once with ``$id``, then as ``$ref``) and a group tag.
+Run ``python examples/scenes/make_demo_scene.py``.  ``demo.json`` and
+``demo.yaml`` hold exactly the scene ``omnirender demo`` renders
+(``omnirender.demo.demo_scene``), with its mesh file copied next to them
+(``meshes/knot.obj``: scene files name files inside their own folder), so
+``omnirender render examples/scenes/demo.yaml -e povray`` renders the demo.
+``features.yaml`` shows what the format holds: an engine-specific attribute
+(``povray.Finish``), a mesh file by relative path, a node shared by two
+parents (written once with ``$id``, then as ``$ref``) and a group tag hidden
+by the camera's mask (a wireframe debug sphere around the torus, left out of
+pictures and of clicks in ``omnirender view``).
 """
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import omnirender as om
+from omnirender.demo import KNOT_PATH, demo_scene
 
 HERE = Path(__file__).resolve().parent
 
 
-def demo_scene() -> om.Node:
+def demo_file_scene() -> om.Node:
+    """The demo scene with its mesh file in ``meshes/`` next to the scene files."""
+    scene = demo_scene()
+    knot = HERE / "meshes" / KNOT_PATH.name
+    for node in scene.walk():
+        for item in node.items:
+            if isinstance(item, om.MeshFile) and Path(item.path) == KNOT_PATH:
+                item.path = str(knot)
+    return scene
+
+
+def features_scene() -> om.Node:
     scene = om.Node("demo")
     # the debug sphere (group "debug") is for interactive views, not for this camera's pictures
     scene.add(om.Camera.look_at(eye=(5, 3.5, 7), center=(0, 0.8, 0), up=(0, 1, 0), fov=35, mask="!debug"))
@@ -56,6 +74,8 @@ def demo_scene() -> om.Node:
 
 
 if __name__ == "__main__":
-    scene = demo_scene()
+    shutil.copyfile(KNOT_PATH, HERE / "meshes" / KNOT_PATH.name)
+    demo = demo_file_scene()
     for name in ("demo.json", "demo.yaml"):
-        print(om.save(scene, HERE / name))
+        print(om.save(demo, HERE / name))
+    print(om.save(features_scene(), HERE / "features.yaml"))

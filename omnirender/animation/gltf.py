@@ -14,7 +14,10 @@ Materials keep everything the metallic-roughness model has: base colour,
 metallic-roughness, normal (with its scale), occlusion (with its strength) and
 emissive textures, each with its texture coordinate set (``TEXCOORD_0``/``_1``)
 and ``KHR_texture_transform``; ``alphaMode``/``alphaCutoff``, ``doubleSided``
-and ``KHR_materials_emissive_strength``.  Vertex colours (``COLOR_0``) and
+and ``KHR_materials_emissive_strength``.  A node with ``EXT_mesh_gpu_instancing``
+becomes one ``om.InstanceSet`` per primitive (matrices composed from the
+instances' translation, rotation and scale; the ``_COLOR_0`` instance colours
+three.js reads, times the material's base colour, as its colours).  Vertex colours (``COLOR_0``) and
 tangents are kept.  Sparse accessors, ``KHR_mesh_quantization`` and
 ``KHR_draco_mesh_compression`` (through DracoPy) are read.  Cameras become
 ``om.Camera``; ``KHR_lights_punctual`` lights become lights whose OpenGL
@@ -43,10 +46,12 @@ from typing import Any
 import numpy as np
 
 from ..attributes import DirectionalLight, PBRMaterial, PointLight, SpotLight, Texture
+from ..attributes.photometry import srgb_to_linear
 from ..core.camera import Camera
 from ..core.transform import Matrix, Rotation, Scaling, Translation
+from ..geometry.trs import compose_trs
 from ..scene.node import Node
-from ..shapes import LineSet, PointSet, TriangleSet
+from ..shapes import InstanceSet, LineSet, PointSet, TriangleSet
 from .animation import Animation
 from .tracks import Keyframes
 
@@ -60,6 +65,7 @@ SUPPORTED_EXTENSIONS = frozenset(
         "KHR_materials_emissive_strength",
         "KHR_mesh_quantization",
         "KHR_draco_mesh_compression",
+        "EXT_mesh_gpu_instancing",
     }
 )
 _ALPHA_MODES = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
@@ -75,10 +81,14 @@ class GLTFImportError(ValueError):
     """A malformed or unsupported glTF file (the message names the file and the element)."""
 
 
-def _linear_to_srgb(c: Any) -> tuple[float, ...]:
+def _linear_to_srgb_array(c: Any) -> np.ndarray:
+    """glTF's linear colour values (any shape) as the display values omnirender's colours hold."""
     c = np.clip(np.asarray(c, np.float64), 0.0, 1.0)
-    out = np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
-    return tuple(float(x) for x in np.clip(out, 0.0, 1.0))
+    return np.clip(np.where(c <= 0.0031308, c * 12.92, 1.055 * np.power(c, 1.0 / 2.4) - 0.055), 0.0, 1.0)
+
+
+def _linear_to_srgb(c: Any) -> tuple[float, ...]:
+    return tuple(float(x) for x in _linear_to_srgb_array(c).reshape(-1))
 
 
 class _Reader:
@@ -394,7 +404,7 @@ class _Reader:
         colors = None
         if "COLOR_0" in attrs:
             c = read("COLOR_0").astype(np.float64)
-            rgb = np.array([_linear_to_srgb(row) for row in c[:, :3]]) if len(c) else c[:, :3]
+            rgb = _linear_to_srgb_array(c[:, :3])
             colors = rgb if c.shape[1] == 3 else np.concatenate([rgb, c[:, 3:4]], axis=1)
         uv = uv1 = tangents = None
         if "TEXCOORD_0" in attrs:
@@ -455,7 +465,11 @@ class _Reader:
         if "skin" in spec:
             warnings.warn(f"load_gltf {self.path.name}: skin of nodes[{index}] ignored (bind pose)", stacklevel=3)
         if "mesh" in spec:
-            for child in self.mesh(spec["mesh"]):
+            parts = self.mesh(spec["mesh"])
+            instancing = spec.get("extensions", {}).get("EXT_mesh_gpu_instancing")
+            if instancing is not None:
+                parts = self.instanced(parts, instancing, f"nodes[{index}]")
+            for child in parts:
                 node.add(child)
         for child in spec.get("children", []):
             node.add(self.node(child, names, built, transforms, active))
@@ -477,6 +491,48 @@ class _Reader:
                 self.primitives[index, p] = child
             if self.primitives[index, p] is not None:
                 out.append(self.primitives[index, p])
+        return out
+
+    def instanced(self, parts: list[Node], spec: Any, where: str) -> list[Node]:
+        """A mesh's primitive nodes as ``InstanceSet``s of the node's ``EXT_mesh_gpu_instancing`` attributes."""
+        attrs = spec.get("attributes") if isinstance(spec, dict) else None
+        if not isinstance(attrs, dict):
+            raise self.error(f"{where}: EXT_mesh_gpu_instancing needs an attributes object")
+        arrays: dict[str, np.ndarray] = {}
+        for name, widths in (("TRANSLATION", (3,)), ("ROTATION", (4,)), ("SCALE", (3,)), ("_COLOR_0", (3, 4))):
+            if name in attrs:
+                arrays[name] = self.accessor(attrs[name]).astype(np.float64)
+                if arrays[name].shape[1] not in widths:
+                    raise self.error(
+                        f"{where}: EXT_mesh_gpu_instancing {name} must be VEC{' or VEC'.join(map(str, widths))}"
+                    )
+        counts = {name: len(a) for name, a in arrays.items()}
+        if len(set(counts.values())) > 1:
+            raise self.error(f"{where}: EXT_mesh_gpu_instancing attributes have different counts {counts}")
+        if not counts:
+            return parts  # nothing to instance: the mesh once
+        n = next(iter(counts.values()))
+        rotation = arrays.get("ROTATION", np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)))
+        zero = np.nonzero(np.linalg.norm(rotation, axis=1) == 0.0)[0]
+        if len(zero):
+            raise self.error(f"{where}: EXT_mesh_gpu_instancing ROTATION of instance {int(zero[0])} is zero")
+        matrices = compose_trs(
+            arrays.get("TRANSLATION", np.zeros((n, 3))), rotation, arrays.get("SCALE", np.ones((n, 3)))
+        )
+        colors = arrays.get("_COLOR_0")
+        out = []
+        for part in parts:
+            *attributes, shape = part.items
+            tint = None
+            if colors is not None:  # three.js multiplies the material's base colour by the instance's
+                base = next((a.base_color for a in attributes if isinstance(a, PBRMaterial)), (1.0, 1.0, 1.0))
+                linear = srgb_to_linear(base)
+                tint = _linear_to_srgb_array(colors[:, :3] * linear)
+            try:
+                instances = InstanceSet(shape, matrices, colors=tint)
+            except ValueError as exc:
+                raise self.error(f"{where}: {exc}") from None
+            out.append(Node(part.name, [*attributes, instances]))
         return out
 
     def camera(self, index: int) -> Camera:
@@ -697,38 +753,9 @@ def flatten_gltf(path: str | os.PathLike[str]) -> list[tuple[list[Any], Any]]:
             elif isinstance(item, Node):
                 walk(item, matrix)
             elif isinstance(item, TriangleSet):
-                out.append((list(attrs), _placed(item, matrix)))
+                out.append((list(attrs), item.transformed(matrix)))
             elif isinstance(item, (PBRMaterial, Texture)):
                 attrs.append(item)
 
     walk(root, np.eye(4))
     return out
-
-
-def _placed(shape: TriangleSet, matrix: np.ndarray) -> TriangleSet:
-    """``shape`` with ``matrix`` applied to its vertices, normals and tangents (winding kept outward)."""
-    if np.array_equal(matrix, np.eye(4)):
-        return shape
-    linear = matrix[:3, :3]
-    vertices = shape.vertex_array() @ linear.T + matrix[:3, 3]
-    normals = shape.normal_array() @ np.linalg.inv(linear)
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
-    faces = shape.index_array()
-    if np.linalg.det(linear) < 0.0:
-        faces = faces[:, ::-1]
-    tangents = shape.tangents
-    if tangents is not None:
-        t = np.asarray(shape.tangent_array(), np.float64)
-        xyz = t[:, :3] @ linear.T
-        xyz /= np.maximum(np.linalg.norm(xyz, axis=1, keepdims=True), 1e-30)
-        w = t[:, 3] * (-1.0 if np.linalg.det(linear) < 0.0 else 1.0)
-        tangents = np.column_stack([xyz, w])
-    return TriangleSet(
-        vertices,
-        faces,
-        normals=normals,
-        colors=shape.colors,
-        texcoords=shape.texcoords,
-        texcoords1=shape.texcoords1,
-        tangents=tangents,
-    )

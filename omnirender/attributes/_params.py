@@ -14,11 +14,12 @@ The ``check_*`` functions raise ValueError naming the class and the parameter
 from __future__ import annotations
 
 import inspect
-import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+
+from ..core.limits import MAX_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = [
     "Param",
@@ -102,14 +103,16 @@ class Parameterised:
 # -- checks -------------------------------------------------------------------
 def _numbers(owner: str, name: str, value: Any) -> np.ndarray:
     if isinstance(value, (str, bytes)):
-        raise ValueError(f"{owner}: {name} must be numbers, got {value!r}")
+        raise ValueError(f"{owner}: {name} must be numbers, got {value!r:.60}")
     try:
         arr = np.asarray(value, dtype=np.float64).reshape(-1)
+    except OverflowError:
+        raise ValueError(f"{owner}: {name} must be numbers of at most {MAX_MAGNITUDE:.0e} in magnitude") from None
     except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be numbers, got {value!r}") from None
+        raise ValueError(f"{owner}: {name} must be numbers, got {value!r:.60}") from None
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
-    return arr
+        raise ValueError(f"{owner}: {name} must be finite, got {value!r:.60}")
+    return check_array_magnitude(owner, name, arr)
 
 
 def check_color(owner: str, name: str, value: Any) -> tuple[float, ...]:
@@ -153,14 +156,7 @@ def check_number(
     """A finite number in the given range (open or closed ends)."""
 
     def run(owner: str, name: str, value: Any) -> float | int:
-        if isinstance(value, bool) or isinstance(value, (str, bytes)):
-            raise ValueError(f"{owner}: {name} must be a number, got {value!r}")
-        try:
-            x = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{owner}: {name} must be a number, got {value!r}") from None
-        if not math.isfinite(x):
-            raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+        x = as_float(owner, name, value)
         if integer:
             if x != int(x):
                 raise ValueError(f"{owner}: {name} must be an integer, got {value!r}")

@@ -266,13 +266,26 @@ class PBRMaterial(Parameterised, MonoAttribute):
         return out
 
 
+#: The largest texture image accepted (per side, and in all): GPUs stop at 16384 or 32768 per side.
+MAX_TEXTURE_SIDE = 32768
+MAX_TEXTURE_PIXELS = 1 << 28
+
+
 def _check_image(owner: str, name: str, value: Any) -> str | np.ndarray:
     if isinstance(value, os.PathLike):
         value = os.fspath(value)
     if isinstance(value, str):
-        if not value:
-            raise ValueError(f"{owner}: {name} must be a non-empty path or an image array")
+        if not value or "\x00" in value:
+            raise ValueError(f"{owner}: {name} must be a non-empty path (without NUL) or an image array")
         return value
+    shape = getattr(value, "shape", None)  # refuse a huge image before copying it
+    if isinstance(shape, tuple) and len(shape) >= 2 and all(isinstance(n, int) for n in shape[:2]):
+        h, w = shape[:2]
+        if h > MAX_TEXTURE_SIDE or w > MAX_TEXTURE_SIDE or h * w > MAX_TEXTURE_PIXELS:
+            raise ValueError(
+                f"{owner}: {name} is {w}x{h} pixels; textures are at most {MAX_TEXTURE_SIDE} per side and "
+                f"{MAX_TEXTURE_PIXELS:,} pixels in all (GPUs cannot hold more); scale the image down"
+            )
     try:
         arr = np.array(value)
     except Exception:

@@ -24,7 +24,17 @@ from ._params import (
     check_rgba,
 )
 
-__all__ = ["ClipPlane", "Fog", "Background", "Tessellation", "Highlight", "PickId", "Collidable", "DEFAULT_BACKGROUND"]
+__all__ = [
+    "ClipPlane",
+    "Fog",
+    "Background",
+    "Tessellation",
+    "Highlight",
+    "PickId",
+    "Collidable",
+    "DEFAULT_BACKGROUND",
+    "is_scene_background",
+]
 
 #: The background of a scene without an ``om.Background`` (sRGB display values, opaque), shared by every
 #: engine that must draw one: the GL engine's clear colour, the web page, a stand-alone ``.pov`` file.
@@ -128,12 +138,25 @@ class Background(Parameterised, MonoAttribute):
     """
 
     __slots__ = ("_color",)
-    declared = "first"  # the first Background met is the scene's (declarative pre-evaluation)
+    declared = "first"  # the scene's Background is found by the declarative pre-evaluation
     color = Param(check_rgba, "background colour (RGB or RGBA)")
 
     def __init__(self, color: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
         super().__init__()
         self.color = color
+
+
+def is_scene_background(background: Background, engine: Any) -> bool:
+    """Whether ``background`` is the scene's, for an engine that meets it during its traversal.
+
+    The one rule every engine follows: the Background the engine's last
+    pre-evaluation declared (the first in traversal order; of two in one node,
+    the later, as on a stack).  Without a pre-evaluation (components evaluated
+    by hand) every Background met counts.
+    """
+    declared = getattr(engine, "declared", None)
+    found = declared.first(Background) if declared is not None else None
+    return found is None or found[0] is background
 
 
 class Tessellation(Parameterised, MonoAttribute):

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from ._params import (
     optional,
 )
 
-__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight"]
+__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight", "default_lights"]
 
 _nonneg = check_number(0.0)
 #: Default ``threshold`` of point and spot lights: a light's reach ends where it adds less than 1/1024 of its
@@ -271,3 +271,40 @@ class AmbientLight(LightSource):
 
     def parameters(self) -> dict[str, Any]:
         return {"color": self._color, "intensity": self._intensity}
+
+
+class EyeLight(NamedTuple):
+    """One light of the default set, in eye coordinates."""
+
+    direction: tuple[float, float, float]  # of travel
+    intensity: float
+    ambient: tuple[float, float, float]
+    casts_shadows: bool
+
+
+#: The default light set in eye coordinates, ArtiSynth's.  Only the key light casts shadows, as in a
+#: photographer's setup (fill and back lights soften, they add no shadows of their own); it also keeps the
+#: GL engine at one shadow map for scenes that bring no lights.
+DEFAULT_EYE_LIGHTS = (
+    EyeLight((0.35, -0.45, -1.0), 0.8, (0.12, 0.12, 0.12), True),  # key light, from above left of the eye
+    EyeLight((-0.7, 0.2, -0.6), 0.35, (0.0, 0.0, 0.0), False),  # fill light, from the right
+    EyeLight((0.1, -0.3, 1.0), 0.2, (0.0, 0.0, 0.0), False),  # back light
+)
+
+
+def default_lights(eye_to_world: np.ndarray | None = None) -> list[DirectionalLight]:
+    """Key, fill and back light: in eye coordinates, or in world coordinates for a camera's ``eye_to_world``.
+
+    The viewer keeps them in eye space (they move with the eye); a scene made
+    around a mesh file places them for its fitted camera.
+    """
+    rotation = np.eye(3) if eye_to_world is None else np.asarray(eye_to_world, dtype=np.float64)[:3, :3]
+    return [
+        DirectionalLight(
+            direction=tuple(rotation @ np.asarray(light.direction)),
+            intensity=light.intensity,
+            ambient=light.ambient,
+            casts_shadows=light.casts_shadows,
+        )
+        for light in DEFAULT_EYE_LIGHTS
+    ]

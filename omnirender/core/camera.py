@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .component import MonoAttribute
+from .limits import MIN_MAGNITUDE, as_float
 from .transform import finite_vector
 
 __all__ = ["Camera", "look_at_matrix", "perspective_matrix", "orthographic_matrix"]
@@ -83,15 +84,9 @@ class Camera(MonoAttribute):
             raise ValueError("Camera: center must differ from eye")
         if np.linalg.norm(np.cross(d, u)) < 1e-12 * np.linalg.norm(d) * max(np.linalg.norm(u), 1e-300):
             raise ValueError("Camera: up must not be parallel to the viewing direction center - eye")
-        try:
-            fov = None if fov is None else float(fov)
-            height = None if height is None else float(height)
-            near, far = float(near), float(far)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"Camera: fov, height, near and far must be numbers, got fov={fov!r}, height={height!r}, "
-                f"near={near!r}, far={far!r}"
-            ) from None
+        fov = None if fov is None else as_float("Camera", "fov", fov)
+        height = None if height is None else as_float("Camera", "height", height)
+        near, far = as_float("Camera", "near", near), as_float("Camera", "far", far)
         if mask is not None:
             from .mask import MaskError, compile_mask
 
@@ -107,6 +102,10 @@ class Camera(MonoAttribute):
             raise ValueError(f"Camera: height must be > 0, got {height}")
         if not (0.0 < near < far and math.isfinite(far)):
             raise ValueError(f"Camera: need 0 < near < far, got near={near}, far={far}")
+        if near < MIN_MAGNITUDE or (height is not None and height < MIN_MAGNITUDE):
+            raise ValueError(
+                f"Camera: near and height must be at least {MIN_MAGNITUDE:.0e}, got near={near}, height={height}"
+            )
         self.eye = tuple(float(x) for x in e)
         self.center = tuple(float(x) for x in c)
         self.up = tuple(float(x) for x in u)
@@ -158,21 +157,34 @@ class Camera(MonoAttribute):
         return cls.fit(bounds, w / h, fov)
 
     @classmethod
-    def fit(cls, bounds: tuple[Sequence[float], Sequence[float]], aspect: float, fov: float = 35.0) -> Camera:
-        """A perspective camera on +z looking at the box ``bounds = (lo, hi)``: its bounding sphere fills the view.
+    def fit(
+        cls,
+        bounds: tuple[Sequence[float], Sequence[float]],
+        aspect: float,
+        fov: float = 35.0,
+        direction: Sequence[float] = (0.0, 0.0, 1.0),
+        margin: float = 1.02,
+    ) -> Camera:
+        """A perspective camera looking at the box ``bounds = (lo, hi)`` along ``-direction`` (from +z by default):
+        its bounding sphere fills the view, with ``margin``.
 
         Near and far enclose the sphere with room to spare; ``aspect`` is the image's width/height.
         """
-        lo, hi = (np.asarray(b, dtype=np.float64) for b in bounds)
+        lo, hi = (finite_vector("Camera.fit", "bounds", b, 3) for b in bounds)
+        d = finite_vector("Camera.fit", "direction", direction, 3)
+        if float(np.linalg.norm(d)) == 0.0:
+            raise ValueError("Camera.fit: direction must not be the zero vector")
+        d = d / np.linalg.norm(d)
         center = (lo + hi) / 2.0
         radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
         half = math.radians(fov) / 2.0
         if aspect < 1.0:
             half = math.atan(math.tan(half) * aspect)
-        dist = radius / math.sin(half) * 1.02
+        dist = radius / math.sin(half) * margin
         near = max(dist - radius * 1.5, dist * 1e-3)
         far = dist + radius * 1.5
-        return cls.look_at(tuple(center + (0.0, 0.0, dist)), tuple(center), (0, 1, 0), fov=fov, near=near, far=far)
+        up = (0.0, 1.0, 0.0) if abs(d[1]) < 0.99 else (0.0, 0.0, -1.0)
+        return cls.look_at(tuple(center + d * dist), tuple(center), up, fov=fov, near=near, far=far)
 
     @property
     def is_orthographic(self) -> bool:

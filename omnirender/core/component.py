@@ -112,6 +112,14 @@ class RenderingComponent:
             for node in owners:
                 node.touch()
 
+    def attach_owner(self, owner: Any) -> None:
+        """Make ``owner`` (anything with ``touch()``: a node, a shape built from this one) hear of changes."""
+        self._attach(owner)
+
+    def detach_owner(self, owner: Any) -> None:
+        """Undo :meth:`attach_owner`."""
+        self._detach(owner)
+
     def _attach(self, owner: Any) -> None:
         owners = self._owners
         if owners is None:

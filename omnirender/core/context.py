@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .limits import MAX_MAGNITUDE
 from .transform import Transform
 
 __all__ = ["RenderingContext"]
@@ -79,6 +80,11 @@ class RenderingContext:
         for i in range(valid - 1, n):
             t = transforms[i]
             current = current @ t.matrix
+            if not np.abs(current).max() <= MAX_MAGNITUDE:  # NaN fails too
+                raise ValueError(
+                    f"{type(t).__name__}: the accumulated model matrix exceeds {MAX_MAGNITUDE:.0e} here ({i + 1} "
+                    "transforms deep), which overflows the engines' float32 arithmetic; rescale the scene"
+                )
             current.setflags(write=False)
             matrices.append((t, current, t._version))
         return current

@@ -6,7 +6,10 @@ components: the first ``Background``, for example.  A component class takes
 part by setting ``declared`` (a class attribute of
 :class:`~omnirender.core.component.RenderingComponent`): ``"all"`` collects
 every placement (lights), ``"first"`` only the first in traversal order
-(camera, background).  Graphs compute a :class:`Declarations` once per
+(camera, background).  Within one node's list the stack semantics of mono
+attributes hold: a later declaration of the same category replaces an earlier
+one (it is on top for the rest of the node), so of two Backgrounds in
+one node the later one is the scene's, in every engine.  Graphs compute a :class:`Declarations` once per
 version and mask (nodes cache theirs per node, so a change re-walks only the
 changed path) and every engine uses that one result.
 """

@@ -14,21 +14,32 @@ from math import isfinite
 import numpy as np
 
 from .component import MonoAttribute
+from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = ["Transform", "Matrix", "Translation", "Rotation", "Scaling", "finite_vector", "axis_angle_matrix"]
 
 
 def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
-    """``value`` as a float64 vector of ``size`` finite numbers, or ValueError naming it."""
+    """``value`` as a float64 vector of ``size`` finite numbers within the magnitude limit, or ValueError naming it."""
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}")
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
+    except OverflowError:
+        raise ValueError(
+            f"{owner}: {name} must be {size} numbers of at most {MAX_MAGNITUDE:.0e}, got {value!r:.60}"
+        ) from None
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}") from None
     if arr.shape != (size,):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+    check_array_magnitude(owner, name, arr)
     return arr
+
+
+_DIAGONAL = np.arange(4)
 
 
 class Transform(MonoAttribute):
@@ -58,6 +69,16 @@ class Transform(MonoAttribute):
     def _build_matrix(self) -> np.ndarray:  # pragma: no cover - every static subclass defines it
         raise NotImplementedError(f"{type(self).__name__} does not build a matrix")
 
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        """The (N, 4, 4) matrices of ``transforms`` (all of this class), for renderers that move many at once.
+
+        Subclasses whose matrices follow from a few numbers build the stack
+        from them directly (:class:`Translation` does), without making and
+        caching one matrix object per transform.
+        """
+        return np.stack([t.matrix for t in transforms]) if transforms else np.empty((0, 4, 4))
+
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
         object.__setattr__(self, "_matrix", None)
@@ -69,17 +90,43 @@ class Transform(MonoAttribute):
 
 
 class Matrix(Transform):
-    """An arbitrary 4x4 matrix (column vectors)."""
+    """An affine 4x4 matrix (column vectors): invertible linear part, bottom row (0, 0, 0, 1).
+
+    Like ``Scaling`` refusing a zero factor, a matrix that flattens space
+    (singular, e.g. all zeros) is refused: normals, picking and every engine's
+    inverse transforms need the inverse.  Projective matrices are refused too,
+    since not every engine can express them (POV-Ray's ``matrix`` is affine).
+    """
 
     __slots__ = ()
 
     def __init__(self, matrix: Sequence[Sequence[float]] | np.ndarray) -> None:
         super().__init__()
-        m = np.array(matrix, dtype=np.float64)
+        if isinstance(matrix, (str, bytes)):
+            raise ValueError(f"Matrix: matrix must be 4x4 numbers, got {matrix!r:.60}")
+        try:
+            m = np.array(matrix, dtype=np.float64)
+        except OverflowError:
+            raise ValueError(f"Matrix: entries must be at most {MAX_MAGNITUDE:.0e} in magnitude") from None
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"Matrix: matrix must be 4x4 numbers (a nested list or an array), got {matrix!r:.80}"
+            ) from None
         if m.shape != (4, 4):
             raise ValueError(f"Matrix: matrix must be 4x4, got shape {m.shape}")
         if not np.all(np.isfinite(m)):
             raise ValueError("Matrix: matrix must be finite")
+        check_array_magnitude("Matrix", "matrix", m)
+        if np.linalg.matrix_rank(m[:3, :3]) < 3:
+            raise ValueError(
+                "Matrix: the upper-left 3x3 part is singular (it flattens space, e.g. all zeros); give an "
+                "invertible matrix (hide a subgraph with a group mask instead of scaling it to nothing)"
+            )
+        if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+            raise ValueError(
+                f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(m[3].tolist())}; "
+                "projective matrices are not supported by every engine"
+            )
         self._set_matrix(m)
 
     def parameters(self) -> dict:
@@ -115,7 +162,8 @@ class Translation(Transform):
         if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
             x, y, z = value
             if type(x) is float and type(y) is float and type(z) is float and isfinite(x + y + z):
-                offset = value
+                if abs(x) <= MAX_MAGNITUDE and abs(y) <= MAX_MAGNITUDE and abs(z) <= MAX_MAGNITUDE:
+                    offset = value
         if offset is None:
             offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
         object.__setattr__(self, "_offset", offset)
@@ -125,6 +173,14 @@ class Translation(Transform):
         m = np.eye(4)
         m[:3, 3] = self._offset
         return m
+
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, _DIAGONAL, _DIAGONAL] = 1.0
+        if transforms:
+            out[:, :3, 3] = [t._offset for t in transforms]  # type: ignore[attr-defined]
+        return out
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}
@@ -158,12 +214,7 @@ class Rotation(Transform):
         n = float(np.linalg.norm(a))
         if n == 0.0:
             raise ValueError("Rotation: axis must not be the zero vector")
-        try:
-            angle = float(angle)
-        except (TypeError, ValueError):
-            raise ValueError(f"Rotation: angle must be a number of degrees, got {angle!r}") from None
-        if not math.isfinite(angle):
-            raise ValueError(f"Rotation: angle must be finite, got {angle!r}")
+        angle = as_float("Rotation", "angle (degrees)", angle)
         if n != 1.0:
             a = a / n
         object.__setattr__(self, "_angle", angle)
@@ -173,6 +224,22 @@ class Rotation(Transform):
     def _build_matrix(self) -> np.ndarray:
         return axis_angle_matrix(np.asarray(self._axis), math.radians(self._angle))
 
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        """Rodrigues' formula for all of them at once: ``cos I + sin [a]x + (1 - cos) a a^T``."""
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, 3, 3] = 1.0
+        if not transforms:
+            return out
+        a = np.array([t._axis for t in transforms])  # type: ignore[attr-defined]
+        angle = np.radians([t._angle for t in transforms])  # type: ignore[attr-defined]
+        c, s = np.cos(angle)[:, None, None], np.sin(angle)[:, None, None]
+        x, y, z = a[:, 0], a[:, 1], a[:, 2]
+        zero = np.zeros(len(a))
+        cross = np.stack([zero, -z, y, z, zero, -x, -y, x, zero], axis=1).reshape(-1, 3, 3)
+        out[:, :3, :3] = c * np.eye(3) + s * cross + (1.0 - c) * (a[:, :, None] * a[:, None, :])
+        return out
+
     @property
     def angle(self) -> float:
         """Angle in degrees."""
@@ -180,7 +247,11 @@ class Rotation(Transform):
 
     @angle.setter
     def angle(self, value: float) -> None:
-        self._assign(value, self._axis)
+        if type(value) is float and -MAX_MAGNITUDE <= value <= MAX_MAGNITUDE:  # a simulation loop's case (NaN fails)
+            object.__setattr__(self, "_angle", value)
+            self._changed()
+        else:
+            self._assign(value, self._axis)
 
     @property
     def axis(self) -> tuple[float, float, float]:
@@ -244,14 +315,40 @@ class Scaling(Transform):
 
     @factors.setter
     def factors(self, value: Sequence[float]) -> None:
+        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
+            x, y, z = value
+            if (
+                type(x) is float
+                and type(y) is float
+                and type(z) is float
+                and MIN_MAGNITUDE <= abs(x) <= MAX_MAGNITUDE
+                and MIN_MAGNITUDE <= abs(y) <= MAX_MAGNITUDE
+                and MIN_MAGNITUDE <= abs(z) <= MAX_MAGNITUDE
+            ):
+                object.__setattr__(self, "_factors", value)
+                self._changed()
+                return
         v = finite_vector("Scaling", "factors", value, 3)
         if np.any(v == 0.0):
             raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
+        if np.any(np.abs(v) < MIN_MAGNITUDE):
+            raise ValueError(
+                f"Scaling: factors must be at least {MIN_MAGNITUDE:.0e} in magnitude (their inverse must stay "
+                f"below {MAX_MAGNITUDE:.0e}), got {tuple(float(c) for c in v)}"
+            )
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
         self._changed()
 
     def _build_matrix(self) -> np.ndarray:
         return np.diag([*self._factors, 1.0])
+
+    @classmethod
+    def stack_matrices(cls, transforms: Sequence[Transform]) -> np.ndarray:
+        out = np.zeros((len(transforms), 4, 4))
+        out[:, 3, 3] = 1.0
+        if transforms:
+            out[:, _DIAGONAL[:3], _DIAGONAL[:3]] = [t._factors for t in transforms]  # type: ignore[attr-defined]
+        return out
 
     def parameters(self) -> dict:
         return {"factors": list(self.factors)}

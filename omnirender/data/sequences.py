@@ -65,8 +65,11 @@ def _convert(x: Any, where: str) -> np.ndarray:
         return np.array(list(x), dtype="<U1")
     try:
         a = np.asarray(x)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{where} is not a regular array (ragged vectors or mixed element types?): {exc}") from None
+    except (ValueError, TypeError):
+        raise ValueError(
+            f"{where} is not a regular array: its rows have different lengths or mix numbers with other "
+            "things; give every element the same shape"
+        ) from None
     if a.dtype == object:
         raise ValueError(
             f"{where} is not a regular array of numbers or strings (ragged "

@@ -7,6 +7,7 @@ requires for positions; :meth:`GLBBuilder.to_bytes` packs the GLB.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import struct
 from typing import Any
@@ -35,6 +36,8 @@ class GLBBuilder:
         self.doc: dict[str, Any] = {"asset": {"version": "2.0", "generator": generator}}
         self._chunks: list[bytes] = []
         self._length = 0
+        #: while a dict (set by the writer for a while): accessors of equal arrays are written once, keyed by content
+        self.shared: dict[tuple, int] | None = None
 
     def _list(self, key: str) -> list[Any]:
         return self.doc.setdefault(key, [])
@@ -64,7 +67,14 @@ class GLBBuilder:
         if a.dtype not in _COMPONENT:
             raise ValueError(f"glTF export: unsupported array type {a.dtype}")
         width = 1 if a.ndim == 1 else a.shape[1]
-        view = self.buffer_view(a.tobytes(), target)
+        data = a.tobytes()
+        key = None
+        if self.shared is not None:
+            key = (hashlib.blake2b(data, digest_size=16).digest(), a.dtype.str, a.shape, target, bounds, normalized)
+            found = self.shared.get(key)
+            if found is not None:
+                return found
+        view = self.buffer_view(data, target)
         acc: dict[str, Any] = {
             "bufferView": view,
             "componentType": _COMPONENT[a.dtype],
@@ -77,7 +87,28 @@ class GLBBuilder:
             flat = a.reshape(len(a), width)
             acc["min"] = [_num(v) for v in flat.min(axis=0)]
             acc["max"] = [_num(v) for v in flat.max(axis=0)]
-        return self.append("accessors", acc)
+        index = self.append("accessors", acc)
+        if key is not None:
+            self.shared[key] = index  # type: ignore[index]
+        return index
+
+    def checkpoint(self) -> tuple[Any, ...]:
+        """The document's state now, for :meth:`rollback` (an attempt that may be abandoned)."""
+        lists = {k: len(v) for k, v in self.doc.items() if isinstance(v, list)}
+        shared = None if self.shared is None else dict(self.shared)
+        return len(self._chunks), self._length, lists, shared
+
+    def rollback(self, mark: tuple[Any, ...]) -> None:
+        """Forget everything added since :meth:`checkpoint` returned ``mark``."""
+        chunks, length, lists, shared = mark
+        del self._chunks[chunks:]
+        self._length = length
+        for key in [k for k, v in self.doc.items() if isinstance(v, list)]:
+            if key in lists:
+                del self.doc[key][lists[key] :]
+            else:
+                del self.doc[key]
+        self.shared = shared
 
     def use_extension(self, name: str) -> None:
         used = self._list("extensionsUsed")

@@ -4,7 +4,9 @@
 any engine: every scene-graph node becomes a glTF node with its name and the
 transform accumulated since its parent (a ``matrix``); every shape is
 simplified down to triangle sets (line and point sets), which become meshes
-under a child node carrying the transforms met inside the node.  Materials are
+under a child node carrying the transforms met inside the node.  An
+``InstanceSet`` becomes one mesh instanced with ``EXT_mesh_gpu_instancing``
+(:mod:`.gltf_instancing`).  Materials are
 converted to metallic-roughness (``Material``'s Phong parameters approximated,
 colours made linear), textures are embedded as PNG, the camera becomes a glTF
 camera and lights use ``KHR_lights_punctual``.  Texture coordinates follow
@@ -17,6 +19,7 @@ from __future__ import annotations
 import io
 import math
 import os
+import warnings
 from typing import Any
 
 import numpy as np
@@ -33,18 +36,22 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
+from ..attributes.environment import is_scene_background
 from ..attributes.photometry import intensity_scale, phong_roughness
 from ..attributes.surface import appearance_key, engine_appearance
 from ..attributes.texturing import bake_layers
 from ..core import AttributePainter, ShapePainter, default_for
 from ..fileio import atomic_write
+from ..geometry.matrix import transform_points
+from ..geometry.trs import decomposable
 from ..scene import Node
-from ..shapes import LineSet, PointSet, TriangleSet
+from ..shapes import InstanceSet, LineSet, PointSet, TriangleSet
 from .colors import srgb_to_linear
 from .glb import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GLBBuilder
+from .gltf_instancing import INSTANCING_EXTENSION, Capture, write_instance_set
 from .walk import NodeTrackingEngine, track_surfaces
 
-__all__ = ["export", "to_bytes", "build", "GLTFEngine", "LIGHTS_EXTENSION"]
+__all__ = ["export", "to_bytes", "build", "GLTFEngine", "LIGHTS_EXTENSION", "INSTANCING_EXTENSION"]
 
 LIGHTS_EXTENSION = "KHR_lights_punctual"
 TRANSFORM_EXTENSION = "KHR_texture_transform"
@@ -80,6 +87,13 @@ def _is_identity(m: np.ndarray) -> bool:
     return bool(np.allclose(m, np.eye(4), atol=1e-12))
 
 
+def _transformed(shape: Any, matrix: np.ndarray) -> Any:
+    """A triangle, line or point set with ``matrix`` applied to its vertices (and normals)."""
+    if isinstance(shape, TriangleSet):
+        return shape.transformed(matrix)
+    return type(shape)(**{**shape.parameters(), "vertices": transform_points(matrix, shape.vertex_array())})
+
+
 def _frame_looking(direction: np.ndarray, position: np.ndarray) -> np.ndarray:
     """A node matrix whose -z axis points along ``direction`` (glTF lights and cameras look down -z)."""
     z = -np.asarray(direction, np.float64)
@@ -111,10 +125,14 @@ class GLTFEngine(NodeTrackingEngine):
         self._lights: list[tuple[Any, np.ndarray]] = []
         self.triangle_count = 0
         self._origin: str | None = None
+        #: while an instance set's shape is evaluated: where its primitives go (no nodes are written)
+        self._capture: Capture | None = None
         #: The scene's first ``om.Background`` (glTF has none; the HTML page uses it), or None.
         self.background: Any = None
         #: lights in physical units (glTF's); False keeps omnirender's (the web page converts them itself)
         self.physical_lights = True
+        #: instance sets through EXT_mesh_gpu_instancing; False writes one node per instance
+        self.instancing = True
 
     def eval(self, shape: Any) -> None:
         """Evaluate ``shape``, remembering the class of the outermost shape for the mesh names."""
@@ -135,18 +153,33 @@ class GLTFEngine(NodeTrackingEngine):
         else:
             self.roots.append(index)
 
+    def _parent_world(self) -> np.ndarray:
+        """The world matrix of the enclosing glTF node as written (a matrix it cannot hold is not written)."""
+        return self._stack[-1][1] if self._stack else np.eye(4)
+
+    def local_matrix(self) -> np.ndarray:
+        """The model matrix relative to the enclosing glTF node."""
+        return np.linalg.solve(self._parent_world(), self.model_matrix())
+
     def enter_node(self, node: Any, world: np.ndarray) -> None:
+        if self._capture is not None:
+            return  # a node inside an instance set's shape: its primitives are baked into the set's frame
         entry: dict[str, Any] = {"name": node.name}
-        parent_world = self._stack[-1][1] if self._stack else np.eye(4)
+        parent_world = self._parent_world()
         local = np.linalg.solve(parent_world, world)
+        written = np.array(world)
         if not _is_identity(local):
-            entry["matrix"] = _column_major(local)
+            if decomposable(local):
+                entry["matrix"] = _column_major(local)
+            else:  # sheared: the meshes below carry it in their vertices (see placed)
+                written = parent_world
         index = self.gltf.append("nodes", entry)
         self._attach(index)
-        self._stack.append((index, np.array(world)))
+        self._stack.append((index, written))
 
     def leave_node(self, node: Any) -> None:
-        self._stack.pop()
+        if self._capture is None:
+            self._stack.pop()
 
     def add_primitive(self, kind: str, primitive: dict[str, Any]) -> int:
         """Add a one-primitive mesh under a node placed by the current model matrix.
@@ -154,16 +187,69 @@ class GLTFEngine(NodeTrackingEngine):
         Mesh and node are named after the shape the scene holds (``Torus``), not the
         triangle set it was simplified to.
         """
+        if self._capture is not None:
+            self._capture.add(primitive, self.surface())
+            return -1
         kind = self._origin or kind
         mesh = self.gltf.append("meshes", {"name": kind, "primitives": [primitive]})
-        entry: dict[str, Any] = {"name": kind, "mesh": mesh}
-        parent_world = self._stack[-1][1] if self._stack else np.eye(4)
-        local = np.linalg.solve(parent_world, self.model_matrix())
-        if not _is_identity(local):
+        return self.mesh_node(kind, mesh)
+
+    def mesh_node(self, name: str, mesh: int, extensions: dict[str, Any] | None = None) -> int:
+        """A node showing ``mesh``, placed by the current model matrix (relative to the enclosing node).
+
+        A matrix a node cannot hold (:func:`holds`) is left out: the exporter
+        wrote the mesh's vertices through :meth:`placed`, which applied it.
+        """
+        entry: dict[str, Any] = {"name": name, "mesh": mesh}
+        local = self.local_matrix()
+        if not _is_identity(local) and decomposable(local):
             entry["matrix"] = _column_major(local)
+        if extensions:
+            entry["extensions"] = extensions
         index = self.gltf.append("nodes", entry)
         self._attach(index)
         return index
+
+    # -- instance sets ------------------------------------------------------------
+    def capture(self, shape: Any, color: Any = None) -> Capture:
+        """Evaluate ``shape`` (with ``color`` pushed) collecting its primitives in the current frame."""
+        capture = self._capture = Capture(self.model_matrix(), color)
+        if color is not None:
+            self.push(color)
+        try:
+            self.eval(shape)
+        finally:
+            if color is not None:
+                self.pop(color.category)
+            self._capture = None
+        return capture
+
+    def placed(self, shape: Any) -> Any:
+        """``shape`` (a triangle, line or point set) as its mesh is written: exporters call it before writing.
+
+        Inside an instance set's shape, in the set's frame (the transforms met
+        inside the shape applied to the vertices); elsewhere with a local
+        matrix its node cannot hold (sheared) applied, else ``shape`` itself.
+        """
+        if self._capture is not None:
+            matrix = self._capture.relative(self.model_matrix())
+        else:
+            matrix = self.local_matrix()
+            if decomposable(matrix):
+                return shape
+        return shape if _is_identity(matrix) else _transformed(shape, matrix)
+
+    def checkpoint(self) -> tuple[Any, ...]:
+        """The document's state, to abandon what an attempt wrote with :meth:`rollback`."""
+        return self.gltf.checkpoint(), self.triangle_count
+
+    def rollback(self, mark: tuple[Any, ...]) -> None:
+        document, self.triangle_count = mark
+        self.gltf.rollback(document)
+        for cache, key in ((self._materials, "materials"), (self._textures, "textures")):
+            count = len(self.gltf.doc.get(key, ()))
+            for stale in [k for k, index in cache.items() if index >= count]:
+                del cache[stale]
 
     def vertex_attributes(self, shape: Any) -> dict[str, int]:
         """POSITION (with bounds) and COLOR_0 (linear) accessors of a shape with vertices."""
@@ -414,9 +500,10 @@ class TriangleSetExporter(ShapePainter):
     target = TriangleSet
 
     def exec(self, shape: TriangleSet, engine: GLTFEngine) -> None:
-        faces = shape.index_array()
-        if len(faces) == 0:
+        if len(shape.index_array()) == 0:
             return
+        shape = engine.placed(shape)
+        faces = shape.index_array()
         g = engine.gltf
         attrs = engine.vertex_attributes(shape)
         attrs["NORMAL"] = g.accessor(unit_normals(shape.normal_array()), ARRAY_BUFFER)
@@ -449,6 +536,7 @@ class LineSetExporter(ShapePainter):
         segments = shape.index_array()
         if len(segments) == 0:
             return
+        shape = engine.placed(shape)
         indices = engine.gltf.accessor(segments.astype(np.uint32).reshape(-1), ELEMENT_ARRAY_BUFFER)
         primitive = {
             "attributes": engine.vertex_attributes(shape),
@@ -470,12 +558,40 @@ class PointSetExporter(ShapePainter):
     def exec(self, shape: PointSet, engine: GLTFEngine) -> None:
         if len(shape.vertex_array()) == 0:
             return
+        shape = engine.placed(shape)
         primitive = {
             "attributes": engine.vertex_attributes(shape),
             "mode": _POINTS,
             "material": engine.material_index(False),
         }
         engine.add_primitive("PointSet", primitive)
+
+
+@default_for(GLTFEngine)
+class InstanceSetExporter(ShapePainter):
+    """``InstanceSet`` -> its shape's mesh once, instanced with ``EXT_mesh_gpu_instancing`` (see
+    :mod:`.gltf_instancing`); one node per instance (with a warning saying why) where that cannot hold it."""
+
+    __slots__ = ()
+    service = GLTFEngine.service
+    target = InstanceSet
+
+    def exec(self, shape: InstanceSet, engine: GLTFEngine) -> None:
+        if engine._capture is not None:  # inside another instance set's shape: that one falls back
+            engine._capture.fail("its shape holds another instance set")
+            return
+        if not engine.instancing:
+            engine.simplify(shape)
+            return
+        problem = write_instance_set(engine, shape)
+        if problem is None:
+            return
+        warnings.warn(
+            f"glTF export: the InstanceSet in node {engine.node_path or '/'} is written as one node per instance: "
+            f"{problem}",
+            stacklevel=2,
+        )
+        engine.simplify(shape)
 
 
 @default_for(GLTFEngine)
@@ -492,14 +608,14 @@ class LightExporter(AttributePainter):
 
 @default_for(GLTFEngine)
 class BackgroundRecorder(AttributePainter):
-    """``Background`` -> remembered as ``engine.background`` (the first one met)."""
+    """``Background`` -> remembered as ``engine.background`` (the scene's, see ``is_scene_background``)."""
 
     __slots__ = ()
     service = GLTFEngine.service
     target = Background
 
     def exec(self, background: Background, engine: GLTFEngine) -> None:
-        if engine.background is None:
+        if engine.background is None and is_scene_background(background, engine):
             engine.background = background
 
 
@@ -510,26 +626,34 @@ def build(
     on_missing: str = "raise",
     mask: str | None = None,
     physical_lights: bool = True,
+    instancing: bool = True,
 ) -> tuple[bytes, GLTFEngine]:
     """The GLB bytes of ``scene`` and the engine that wrote them (its camera, lights and background)."""
     if not isinstance(scene, Node):
         scene = Node("scene", scene)
     engine = GLTFEngine(size, on_missing=on_missing, mask=mask)
     engine.physical_lights = physical_lights
+    engine.instancing = instancing
     engine.run(scene)
     return engine.finish(scene.name), engine
 
 
 def to_bytes(
-    scene: Any, *, size: tuple[int, int] = (640, 480), on_missing: str = "raise", mask: str | None = None
+    scene: Any,
+    *,
+    size: tuple[int, int] = (640, 480),
+    on_missing: str = "raise",
+    mask: str | None = None,
+    instancing: bool = True,
 ) -> bytes:
     """The GLB file of ``scene`` as bytes (``size`` gives the camera's aspect ratio).
 
     ``on_missing``: what a shape without a handler does — ``"raise"`` (the
     default, as in every engine: an export must not silently lose geometry),
-    ``"warn"`` or ``"skip"``.
+    ``"warn"`` or ``"skip"``.  ``instancing=False`` writes every ``InstanceSet``
+    as one node per instance, for viewers without ``EXT_mesh_gpu_instancing``.
     """
-    return build(scene, size=size, on_missing=on_missing, mask=mask)[0]
+    return build(scene, size=size, on_missing=on_missing, mask=mask, instancing=instancing)[0]
 
 
 def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:

@@ -38,6 +38,7 @@ from .attributes import CullFace, GLState
 from .deferred.models import MaterialDescription
 from .drawlist import DrawItem, DrawState, Scope
 from .geometry import Geometry
+from .instancing import instance_rows
 from .layout import PBR, PHONG, ROW
 from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, defaults, kinds
@@ -222,13 +223,15 @@ class DrawListCompiler:
             if c[1] == scene.version:
                 self.stats["compiled"] = False
                 return self._root
-            if c[3] == scene.structure_version and self._moved_only(changed):
-                # only transforms moved: rewrite the rows below them, no traversal (see dynamic.py)
-                self.stats["incremental"] = self._apply_moves(changed)
-                self._refresh_declarations(scene)
-                self._compiled = (c[0], scene.version, mask_key, c[3])
-                self.stats["compiled"] = False
-                return self._root
+            if c[3] == scene.structure_version:
+                # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
+                count = self._apply_changes(changed)
+                if count is not None:
+                    self.stats["incremental"] = count
+                    self._refresh_declarations(scene)
+                    self._compiled = (c[0], scene.version, mask_key, c[3])
+                    self.stats["compiled"] = False
+                    return self._root
         self.sync_registry()
         camera = scene.declarations(self.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
@@ -261,7 +264,7 @@ class DrawListCompiler:
         self._compiled = (weakref.ref(scene), scene.version, mask_key, scene.structure_version)
         self._prune_caches()
         self._install(root)
-        self._dependent_index = None
+        self._move_plan = None
         self.stats["compiled"] = True
         return root
 
@@ -340,6 +343,58 @@ class DrawListCompiler:
         )
         self._scope.entries.append(item)
         return item
+
+    def capture(self, shape: Any) -> list[DrawItem]:
+        """The draw items ``shape`` makes in the current state, without drawing them (instance sets use it)."""
+        scope = Scope()
+        outer = self._scope
+        self._scope = scope
+        try:
+            self.eval(shape)
+        finally:
+            self._scope = outer
+        return scope.all_items()
+
+    def submit_instances(
+        self, source: Any, template: DrawItem, matrices: np.ndarray, colors: np.ndarray | None, may_mirror: bool
+    ) -> DrawItem:
+        """An item drawing ``template`` once per matrix (``(N, 4, 4)``, after the current model matrix).
+
+        ``source`` is the instance set; ``colors`` (``(N, 4)`` display RGBA or
+        None) replace the template's colour as ``om.Color`` would.  The rows
+        are made with numpy in one go (:func:`~.instancing.instance_rows`);
+        the item is drawn as one instanced batch.
+        """
+        made = instance_rows(
+            template.row, template.local, template.transparent, self.model_matrix(), matrices, colors, may_mirror
+        )
+        item = DrawItem(
+            template.geometry,
+            self.instance_state(template, made.mirrored),
+            template.row,
+            made.transparent,
+            template.node,
+            template.groups,
+            template.chain,
+            None,
+            template.techniques,
+        )
+        item.instances = made.rows
+        item.instance_models = made.models
+        item.source = source
+        item.template = template
+        self._scope.entries.append(item)
+        return item
+
+    def instance_state(self, template: DrawItem, mirrored: bool) -> DrawState:
+        """The template's state, or the same without face culling when some instance mirrors."""
+        state = template.state
+        if mirrored and not template.transparent and state.value(CullFace) in ("back", "front"):
+            # mirrored instances: cull nothing rather than the wrong faces of some
+            state = self._state_for(
+                state.kind, template.geometry, state.extra, "none", int(template.row[_SHADING_MODEL])
+            )
+        return state
 
     def _resolve_state(self) -> None:
         mono = self.mono

@@ -10,7 +10,7 @@ import ctypes
 import ctypes.util
 from typing import Any
 
-__all__ = ["create_context", "check_size", "RawGL", "GLError"]
+__all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError"]
 
 
 class GLError(RuntimeError):
@@ -32,6 +32,21 @@ def create_context(require: int = 330) -> Any:
         ) from None
 
 
+def gl_renderer() -> str:
+    """The name of the OpenGL implementation a headless context gets here ("unknown" without one).
+
+    Benchmarks print it next to their figures (llvmpipe and a GPU differ by orders of magnitude).
+    """
+    try:
+        ctx = create_context()
+    except GLError:
+        return "unknown"
+    try:
+        return str(ctx.info.get("GL_RENDERER", "unknown"))
+    finally:
+        ctx.release()
+
+
 def limits(ctx: Any) -> tuple[int, int]:
     """(max renderbuffer size, max viewport dimension) of the context."""
     info = ctx.info
@@ -40,14 +55,28 @@ def limits(ctx: Any) -> tuple[int, int]:
     return rb, int(min(vp))
 
 
-def check_size(size: Any, ctx: Any) -> tuple[int, int]:
-    """``size`` as (w, h) ints, or ValueError when zero, negative or above the driver's maximum."""
-    try:
-        w, h = (int(v) for v in size)
-    except (TypeError, ValueError):
-        raise ValueError(f"GLEngine: size must be (width, height), got {size!r}") from None
-    if w <= 0 or h <= 0:
-        raise ValueError(f"GLEngine: size must be positive, got {w}x{h}")
+#: Most samples (pixels times the multisampling count) a GL engine's framebuffers hold: 8 bytes each.
+MAX_SAMPLES_TOTAL = 1 << 28
+
+
+def check_samples_total(size: Any, samples: int = 0) -> tuple[int, int]:
+    """``size`` as (w, h) ints, or ValueError when zero, negative or (with ``samples`` multisampling)
+    above :data:`MAX_SAMPLES_TOTAL` samples in all; needs no context (checked before creating one)."""
+    from ..options import check_image_size
+
+    w, h = check_image_size("GLEngine", size)
+    if w * h * max(1, samples) > MAX_SAMPLES_TOTAL:
+        raise ValueError(
+            f"GLEngine: size {w}x{h} with {max(1, samples)} sample(s) per pixel needs {w * h * max(1, samples):,} "
+            f"samples, more than the {MAX_SAMPLES_TOTAL:,} (2 GiB of colour and depth) this engine allocates; "
+            "render a smaller image, with fewer samples=, or tiles"
+        )
+    return w, h
+
+
+def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
+    """:func:`check_samples_total`, and ValueError above the driver's maximum framebuffer size."""
+    w, h = check_samples_total(size, samples)
     rb, vp = limits(ctx)
     top = min(rb, vp)
     if w > top or h > top:
@@ -229,6 +258,13 @@ def depth_stencil_framebuffer(ctx: Any, raw: RawGL, color: Any, size: tuple[int,
         return wrapped, rbo.value
     except Exception:  # pragma: no cover - depends on the driver
         return None
+
+
+def delete_renderbuffer(raw: RawGL, rbo: int) -> None:
+    """Delete a renderbuffer made by :func:`depth_stencil_framebuffer`."""
+    if raw.available:
+        name = ctypes.c_uint(rbo)
+        raw.glDeleteRenderbuffers(1, ctypes.byref(name))
 
 
 GL_TEXTURE_2D = 0x0DE1

@@ -21,6 +21,7 @@ from .layout import ROW
 
 __all__ = ["DrawItem", "DrawState", "Batch", "Scope", "Segment", "plan_batches", "uniform_material"]
 
+_MODEL = ROW.slice("model")
 _MATERIAL = np.concatenate(
     [
         np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
@@ -99,7 +100,22 @@ class DrawState:
 class DrawItem:
     """One shape occurrence: geometry, state, instance row, transparency, node, tags and techniques of its path."""
 
-    __slots__ = ("geometry", "state", "row", "transparent", "node", "groups", "chain", "local", "slot", "techniques")
+    __slots__ = (
+        "geometry",
+        "state",
+        "row",
+        "transparent",
+        "node",
+        "groups",
+        "chain",
+        "local",
+        "slot",
+        "techniques",
+        "instances",
+        "instance_models",
+        "source",
+        "template",
+    )
 
     def __init__(
         self,
@@ -128,6 +144,28 @@ class DrawItem:
         self.slot: tuple[Batch, int] | None = None
         #: the techniques whose scopes hold the item (outermost first), for pass predicates
         self.techniques = techniques
+        #: for an instance set: its rows (N, ROW.stride), one per instance, drawn as one batch; else None
+        self.instances: np.ndarray | None = None
+        #: for an instance set: (N, 4, 4) matrices after the chain (instance transform @ local)
+        self.instance_models: np.ndarray | None = None
+        #: for an instance set: the InstanceSet and the item of its shape that each instance repeats
+        self.source: Any = None
+        self.template: DrawItem | None = None
+
+    def rows(self) -> np.ndarray:
+        """The rows this item draws: its instances', or its own as a (1, stride) array."""
+        return self.instances if self.instances is not None else self.row[None, :]
+
+    def world_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """World-space (min, max) of what the item draws (every instance), or None when it draws nothing."""
+        rows = self.rows()
+        if not len(rows):
+            return None
+        b0, b1 = self.geometry.bounds
+        corners = np.array([[x, y, z, 1.0] for x in (b0[0], b1[0]) for y in (b0[1], b1[1]) for z in (b0[2], b1[2])])
+        models = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
+        world = corners @ models  # (n, 8, 4): corners times M^T is (M @ corners^T)^T
+        return world[:, :, :3].min(axis=(0, 1)), world[:, :, :3].max(axis=(0, 1))
 
     @property
     def item_class(self) -> str:
@@ -167,6 +205,7 @@ class Batch:
         "uniform",
         "sorted_for",
         "position",
+        "drawn",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -186,6 +225,8 @@ class Batch:
         self.sorted_for: bytes | None = None
         #: when sorted: the GPU buffer position of each row (so changed rows are rewritten where they lie)
         self.position: np.ndarray | None = None
+        #: how many instances (from the start of the buffer) the frame's own view sees (the rest are culled)
+        self.drawn = 0
 
     def mark(self, index: int) -> None:
         d = self.dirty
@@ -204,7 +245,7 @@ class Batch:
 
 def uniform_material(rows: np.ndarray) -> bool:
     """Whether all rows share every field but the model matrix and the colour."""
-    if len(rows) == 1:
+    if len(rows) <= 1:
         return True
     tail = rows[:, _MATERIAL]
     return bool((tail == tail[0]).all())
@@ -233,7 +274,8 @@ def plan_batches(items: list[DrawItem]) -> tuple[dict[tuple, list[DrawItem]], li
         if state is not previous and (state.special or (previous is not None and previous.special)):
             segment += 1
         previous = state
-        key = (item.geometry, state, segment)
+        # an instance set is its own batch (its rows are the application's array); plain items merge
+        key = (item.geometry, state, segment) if item.instances is None else (item.geometry, state, segment, id(item))
         group = groups.get(key)
         if group is None:
             group = groups[key] = []
@@ -280,8 +322,9 @@ class Scope:
         return [e for e in self.entries if isinstance(e, DrawItem)]
 
     def scopes(self) -> list[Scope]:
-        """The nested scopes, in order."""
-        return [e for e in self.entries if isinstance(e, Scope)]
+        """The nested scopes, in order (from the plan when there is one: a few parts, not every item)."""
+        source = self.entries if self.parts is None else self.parts
+        return [e for e in source if isinstance(e, Scope)]
 
     def walk(self) -> list[Scope]:
         """This scope and every scope below it, depth first."""

@@ -34,8 +34,10 @@ from .compiler import DrawListCompiler
 from .context import (
     GLError,
     RawGL,
+    check_samples_total,
     check_size,
     create_context,
+    delete_renderbuffer,
     depth_stencil_framebuffer,
 )
 from .deferred.materials import MaterialTable
@@ -105,6 +107,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         on_missing: str = "raise",
         mask: Any = None,
         timing: bool = False,
+        programs: ProgramCache | None = None,
         shadows: bool = True,
         pipeline: Any = "forward",
     ) -> None:
@@ -128,6 +131,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self.draw_list_version = 0
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
         self.timing = bool(timing)
+        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
+        check_samples_total(size, int(samples))  # before a context exists: a bad size costs nothing
         #: draw shadow maps for lights that cast shadows (om.gl.ShadowMaps in a scene refines this)
         self.shadows = bool(shadows)
         self._shadow_plan: Any = None
@@ -138,14 +144,14 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
-        self._size = check_size(size, self.ctx)
-        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
-            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
         if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
             raise ValueError(f"GLEngine: samples must be 0 or a power of two (1, 2, 4, 8, 16), got {samples}")
         self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
+        self._size = check_size(size, self.ctx, self._samples)
         self.background = background
-        self.programs = ProgramCache(self.ctx)
+        # compiled shader programs; a cache given by the caller (for its context) outlives this engine
+        self._own_programs = programs is None
+        self.programs = ProgramCache(self.ctx) if programs is None else programs
         self.geometry_cache = GeometryCache()
         self.raw = RawGL()
         self._units: dict[tuple[str, int], Geometry] = {}
@@ -167,7 +173,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
         self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
-        self._dependent_index: dict[int, list[Any]] | None = None
+        self._move_plan: Any = None  # dynamic.MovePlan of the installed items, made on the first move
         self._full_key: Any = None
         self._surface: list[Any] = []
         self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
@@ -268,7 +274,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
 
     @size.setter
     def size(self, value: tuple[int, int]) -> None:
-        value = check_size(value, self.ctx)
+        value = check_size(value, self.ctx, self._samples)
         if value != self._size:
             self._size = value
             self._make_targets()
@@ -304,13 +310,20 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
             if "OUT_OF_MEMORY" in err:
                 raise GLError(f"GLEngine: out of memory creating {self._size[0]}x{self._size[1]} framebuffers")
 
-    def _create_targets(self) -> None:
+    def _release_targets(self) -> None:
         seen = set()
         for obj in self._targets.values():
             if id(obj) not in seen:
                 seen.add(id(obj))
                 obj.release()
         self._targets.clear()
+        rbo = getattr(self, "_stencil_rbo", None)
+        if rbo is not None:  # made with raw GL calls: moderngl does not know it (each one leaked its pixels)
+            delete_renderbuffer(self.raw, rbo)
+            self._stencil_rbo = None
+
+    def _create_targets(self) -> None:
+        self._release_targets()
         ctx, size = self.ctx, self._size
         t = self._targets
         t["color"] = gpu_call(ctx.renderbuffer, size, 4, what="the colour buffer")
@@ -370,7 +383,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
                 self._journal.drain()  # nothing compiled to update in place: forget what changed
                 self._install(self._immediate)
-                self._dependent_index = None
+                self._move_plan = None
                 self._immediate = Scope()
                 self._scope = self._immediate
                 self._compiled = None
@@ -409,13 +422,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         for item in self.draw_items:
             if item.state.overlay:
                 continue
-            g = item.geometry
-            b0, b1 = g.bounds
-            corners = np.array([[x, y, z, 1.0] for x in (b0[0], b1[0]) for y in (b0[1], b1[1]) for z in (b0[2], b1[2])])
-            m = item.row[ROW.slice("model")].reshape(4, 4).T.astype(np.float64)
-            w = corners @ m.T
-            lo = np.minimum(lo, w[:, :3].min(axis=0))
-            hi = np.maximum(hi, w[:, :3].max(axis=0))
+            found = item.world_bounds()
+            if found is not None:
+                lo = np.minimum(lo, found[0])
+                hi = np.maximum(hi, found[1])
         if not np.all(np.isfinite(lo)):
             return None
         self._bounds = (lo, hi)
@@ -468,6 +478,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         if getattr(self, "_released", False):
             return
         with self.current():
+            # Mesa's llvmpipe leaks the queued work of a texture deleted before the work ran (0.7 MB for a
+            # shadow atlas, every one-shot render): finish the queue before anything is freed
+            if hasattr(self.ctx.mglo, "finish"):  # not when the context (a host engine's) is already gone
+                self.ctx.finish()
             self._release()
         if self._own_context:
             self.ctx.release()
@@ -502,13 +516,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         for query in self._query_pool:
             query.mglo.release() if hasattr(query.mglo, "release") else None
         self._query_pool.clear()
-        self.programs.release()
-        seen = set()
-        for obj in self._targets.values():
-            if id(obj) not in seen:
-                seen.add(id(obj))
-                obj.release()
-        self._targets.clear()
+        if self._own_programs:
+            self.programs.release()
+        self._release_targets()
         self._root = None
         self._node_cache.clear()
         self._compiled = None
@@ -527,6 +537,6 @@ def _background_color(value: Any) -> tuple[float, ...]:
         color = tuple(float(c) for c in value)
     except (TypeError, ValueError):
         raise ValueError(f"GLEngine: background must be an RGB(A) colour, got {value!r:.60}; {fix}") from None
-    if len(color) not in (3, 4) or not all(np.isfinite(color)):
-        raise ValueError(f"GLEngine: background must be 3 or 4 finite numbers, got {value!r:.60}; {fix}")
+    if len(color) not in (3, 4) or not all(0.0 <= c <= 1.0 for c in color):  # NaN fails too
+        raise ValueError(f"GLEngine: background must be 3 or 4 numbers in [0, 1], got {value!r:.60}; {fix}")
     return color

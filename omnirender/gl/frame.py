@@ -93,6 +93,11 @@ class FrameRunner:
         return found
 
     @property
+    def eye_position(self) -> np.ndarray:
+        """World position of the frame's own camera (the same in every pass: shadow maps and mirrors included)."""
+        return np.linalg.inv(self._frame_view)[:3, 3]
+
+    @property
     def frame_view(self) -> np.ndarray:
         """World-to-eye matrix of the pass being drawn (drawers use it)."""
         return self._view
@@ -180,6 +185,8 @@ class FrameRunner:
         camera, view, proj = self._frame_camera(override, size)
         self._camera_used = camera
         self._set_camera(view, proj, camera.is_orthographic)
+        self._frame_view_key = self._view_key  # the frame's own view: the one batches are culled for
+        self._frame_view = self._view
         self._records: list[PassRecord] = []
         self._record_stack: list[PassRecord] = []
         self._open_query = None
@@ -277,7 +284,7 @@ class FrameRunner:
         self._view = view
         self._proj = proj
         self._ortho = ortho
-        self._view_key = view.tobytes()
+        self._view_key = view.tobytes() + proj.tobytes()
         self._frame_uniforms = {
             "u_view": view.T.astype(np.float32).tobytes(),
             "u_proj": proj.T.astype(np.float32).tobytes(),
@@ -544,7 +551,10 @@ class FrameRunner:
         return True
 
     def _release_unused_targets(self) -> None:
-        for key in [k for k in self._target_cache if k not in self._targets_used]:
+        unused = [k for k in self._target_cache if k not in self._targets_used]
+        if unused:
+            self.ctx.finish()  # deleting a texture with queued work leaks that work in llvmpipe
+        for key in unused:
             self._target_cache.pop(key).release()
 
     def _clear(self, clear: Any) -> None:

@@ -15,11 +15,30 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes import Color
 from ..core.handler import ShapePainter, default_for
+from ..core.program import EVAL, NODE
+from ..core.transform import Transform
 from ..geometry.topology import is_closed_outward
-from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
+from ..shapes import (
+    Box,
+    Cone,
+    Cylinder,
+    Disk,
+    InstanceSet,
+    LevelOfDetail,
+    LineSet,
+    PointSet,
+    Polyline,
+    Rectangle,
+    Sphere,
+    TriangleSet,
+)
 from .engine import GLEngine
 from .geometry import Geometry, validate_mesh
+from .instancing import PROBE, set_arrays
+from .passes import Pass
+from .techniques import GLTechnique
 
 __all__ = [
     "TriangleSetPainter",
@@ -201,6 +220,75 @@ class PolylinePainter(_LinePainter):
 
     __slots__ = ()
     target = Polyline
+
+
+@default_for(GLEngine)
+class InstanceSetPainter(ShapePainter):
+    """An instance set: its shape's draw items, each drawn once per visible instance in one instanced call."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = InstanceSet
+
+    def exec(self, shape: InstanceSet, engine: GLEngine) -> None:
+        matrices, colors, may_mirror = set_arrays(shape)
+        if colors is None:
+            templates = engine.capture(shape.shape)
+        else:  # captured under the probe colour: the parts showing it take the instances' colours
+            engine.push(_PROBE)
+            try:
+                templates = engine.capture(shape.shape)
+            finally:
+                engine.pop(Color)
+        for template in templates:
+            engine.submit_instances(shape, template, matrices, colors, may_mirror)
+
+
+_PROBE = Color(*PROBE)
+
+
+class _LevelSelect(GLTechnique):
+    """One level of a LevelOfDetail in the GL frame: drawn only in frames whose eye is at its distance.
+
+    Made by the painter for each compiled occurrence (not a scene component):
+    it keeps the transforms above the level of detail, so the distance follows
+    them when they move.
+    """
+
+    __slots__ = ("lod", "index", "chain")
+
+    def __init__(self, lod: LevelOfDetail, index: int, chain: tuple[Any, ...]) -> None:
+        super().__init__(passes=1)
+        object.__setattr__(self, "lod", lod)
+        object.__setattr__(self, "index", index)
+        object.__setattr__(self, "chain", chain)
+
+    def needs_pass(self, engine: Any) -> bool:
+        if engine.current_pass >= 1:
+            return False
+        m = np.eye(4)
+        for t in self.chain:
+            m = m @ t.matrix
+        center = (m @ np.array([*self.lod.center, 1.0]))[:3]
+        return self.lod.level_at(float(np.linalg.norm(engine.eye_position - center))) == self.index
+
+    def prepare_pass(self, engine: Any) -> None:
+        engine.set_pass(Pass(f"level {self.index}"))
+
+
+@default_for(GLEngine)
+class LevelOfDetailPainter(ShapePainter):
+    """Every level compiled once, in its own scope; the frame draws the one its eye's distance selects."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = LevelOfDetail
+
+    def exec(self, shape: LevelOfDetail, engine: GLEngine) -> None:
+        chain = tuple(engine.context.mono_stack(Transform))
+        for index, level in enumerate(shape.levels):
+            op = (NODE, level) if hasattr(level, "local_program") else (EVAL, level)
+            engine.run_technique(_LevelSelect(shape, index, chain), [op])
 
 
 @default_for(GLEngine)

@@ -102,7 +102,7 @@ class BatchRenderer:
             if batch is None:
                 batch = Batch(key[0], key[1])
             batch.items = group
-            batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].row[None, :].copy()
+            batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].rows().copy()
             batch.dirty = (0, len(group))
             batch.uniform = uniform_material(batch.rows)
             batch.sorted_for = None
@@ -114,6 +114,9 @@ class BatchRenderer:
         if not where or where[0] != "filtered":
             for item, slot in zip(items, segment.slots, strict=True):
                 item.slot = slot
+                if slot is not None and item.instances is None:
+                    # the item's row becomes its batch row: a moved transform writes the row once (dynamic.py)
+                    item.row = slot[0].rows[slot[1]]
         return segment
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
@@ -144,7 +147,18 @@ class BatchRenderer:
                     batch, index = slot
                     batch.items[index] = y
                     y.slot = slot
+                    if y.instances is not None:  # an instance set's array: the whole batch, maybe another length
+                        if len(batch.rows) != len(y.instances):
+                            batch.position = None  # sorted and culled again
+                        batch.rows = y.instances.copy()
+                        batch.dirty = (0, len(batch.rows))
+                        batch.uniform = uniform_material(batch.rows)
+                        changed += 1
+                        touched = True
+                        continue
+                    x.row = x.row.copy()  # the replaced item keeps its values; its batch row is y's now
                     batch.rows[index] = y.row
+                    y.row = batch.rows[index]
                     batch.mark(index)
                     if batch.uniform and not uniform_material(batch.rows[[0, index]]):
                         batch.uniform = False
@@ -281,7 +295,9 @@ class BatchRenderer:
             self._applier.forget()
             self.count(calls, len(batch.items))
             return calls
-        n = len(batch.items)
+        n = len(batch.rows)
+        if not n:
+            return 0  # an instance set with no visible instance
         highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
         single = n == 1 and batch.uniform and state.kind == "mesh"
         features = self._features(state, batch.uniform, highlight, composed, single)
@@ -304,15 +320,26 @@ class BatchRenderer:
         if fields:
             columns = self._columns(batch.layout)
             if n >= SORT_MIN and not state.special:
-                # opaque instances front to back: early depth tests then skip hidden fragments; the order is
-                # made again when the view changes, and rows that changed are rewritten where they lie
-                if batch.sorted_for != self._view_key or batch.position is None or len(batch.position) != n:
+                # big batches: opaque instances front to back (early depth tests skip hidden fragments) and
+                # culled to the frame's view: the buffer holds the visible ones first, then the rest, so
+                # passes from other cameras (shadow maps, mirrors) draw them all from the same buffer; changed
+                # rows are rewritten where they lie unless culling has to be done again
+                own_view = self._view_key == self._frame_view_key
+                stale = batch.position is None or len(batch.position) != n
+                if stale or (own_view and (batch.sorted_for != self._view_key or (batch.dirty and batch.drawn < n))):
+                    visible = self._cull(batch) if own_view else None
                     z = batch.rows[:, _TRANSLATION] @ self._view[2, :3]
-                    order = np.argsort(-z, kind="stable")
+                    if visible is None:
+                        order = np.argsort(-z, kind="stable")
+                        batch.drawn = n
+                    else:
+                        seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
+                        order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
+                        batch.drawn = len(seen)
                     batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
                     batch.position = np.empty(n, np.int64)
                     batch.position[order] = np.arange(n)
-                    batch.sorted_for = self._view_key
+                    batch.sorted_for = self._view_key if own_view else None
                     batch.dirty = None
                 elif batch.dirty is not None:
                     lo, hi = batch.dirty
@@ -323,6 +350,10 @@ class BatchRenderer:
                     data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
                     batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
                     batch.dirty = None
+                if own_view:
+                    n = batch.drawn
+                    if not n:
+                        return 0
             elif batch.dirty is not None:
                 lo, hi = batch.dirty
                 data = np.ascontiguousarray(batch.rows[lo:hi][:, columns])
@@ -341,6 +372,23 @@ class BatchRenderer:
         vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
         self.count(1, n)
         return 1
+
+    def _cull(self, batch: Batch) -> np.ndarray | None:
+        """Which instances' bounding spheres meet the view frustum (None: all of them)."""
+        rows = batch.rows
+        b0, b1 = batch.geometry.bounds
+        center = np.append((b0 + b1) / 2.0, 1.0)
+        radius = float(np.linalg.norm(b1 - b0)) / 2.0
+        mt = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
+        centers = center @ mt  # (n, 4): M @ center
+        scale = np.sqrt((mt[:, :3, :3] ** 2).sum(axis=2)).max(axis=1)
+        clip = self._proj @ self._view
+        planes = np.array([clip[3] + clip[0], clip[3] - clip[0], clip[3] + clip[1], clip[3] - clip[1],
+                           clip[3] + clip[2], clip[3] - clip[2]])  # fmt: skip
+        planes /= np.linalg.norm(planes[:, :3], axis=1)[:, None]
+        distance = centers @ planes.T  # (n, 6) signed distances of the centres
+        visible = (distance > -(radius * scale)[:, None]).all(axis=1)
+        return None if visible.all() else visible
 
     def _columns(self, layout: Any) -> np.ndarray:
         key = layout.names()
@@ -490,7 +538,15 @@ class BatchRenderer:
         """Back to front (blending on where nothing else is set, depth writes off); closed shapes back faces first."""
         if not items:
             return 0
-        rows = np.stack([it.row for it in items])
+        if any(it.instances is not None for it in items):  # an instance set's instances sort one by one
+            parts = [it.rows() for it in items]
+            owners = [it for it, part in zip(items, parts, strict=True) for _ in range(len(part))]
+            rows = np.concatenate(parts)
+            items = owners
+        else:
+            rows = np.stack([it.row for it in items])
+        if not len(rows):
+            return 0
         centers = np.array([(it.geometry.bounds[0] + it.geometry.bounds[1]) / 2.0 for it in items])
         mats = rows[:, _MODEL].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
         world = np.einsum("nij,nj->ni", mats[:, :3, :3], centers) + mats[:, :3, 3]

@@ -265,20 +265,15 @@ _DEFAULT = ShadowMaps()
 
 def caster_bounds(root: Scope) -> tuple[np.ndarray, np.ndarray] | None:
     """World (min, max) of the items that cast shadows, or None when there are none."""
-    from .layout import ROW
-
-    model = ROW.slice("model")
     lo = np.full(3, np.inf)
     hi = np.full(3, -np.inf)
     for item in root.all_items():
         if item.transparent or not casts_shadows(item):
             continue
-        b0, b1 = item.geometry.bounds
-        corners = np.array([[x, y, z] for x in (b0[0], b1[0]) for y in (b0[1], b1[1]) for z in (b0[2], b1[2])])
-        m = item.row[model].reshape(4, 4).T.astype(np.float64)
-        w = corners @ m[:3, :3].T + m[:3, 3]
-        lo = np.minimum(lo, w.min(axis=0))
-        hi = np.maximum(hi, w.max(axis=0))
+        found = item.world_bounds()
+        if found is not None:
+            lo = np.minimum(lo, found[0])
+            hi = np.maximum(hi, found[1])
     if not np.all(np.isfinite(lo)):
         return None
     return lo, hi

@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, LightSource
+from ..attributes.environment import is_scene_background
 from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
 from ..attributes.surface import track_surfaces
 from ..core import AttributePainter, ShapePainter, default_for
@@ -432,14 +433,14 @@ class IntegratorPainter(AttributePainter):
 
 @default_for(MitsubaEngine)
 class BackgroundPainter(AttributePainter):
-    """``Background``: the first one met (the root's) is composited behind the image."""
+    """``Background``: the scene's (see ``is_scene_background``) is composited behind the image."""
 
     __slots__ = ()
     service = SERVICE
     target = Background
 
     def exec(self, background: Background, engine: MitsubaEngine) -> None:
-        if engine.background is None:
+        if engine.background is None and is_scene_background(background, engine):
             engine.background = tuple(float(c) for c in background.color)
 
 

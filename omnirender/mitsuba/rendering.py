@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import numbers
 import sys
 import time
 from typing import Any
@@ -12,12 +11,18 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..image import Image, develop
+from ..options import SizeLimits, check_image_size, check_integer, check_real
 from ..scene import Node
 from . import convert, painters  # noqa: F401  (painters registers the default handlers)
 from ._mi import VARIANT, mitsuba
 from .engine import MitsubaEngine
 
-__all__ = ["render", "develop", "eye_depth"]
+__all__ = ["render", "develop", "eye_depth", "SIZE_LIMITS", "MAX_SPP"]
+
+#: Mitsuba's film keeps several float channels per pixel, twice over while developing.
+SIZE_LIMITS = SizeLimits(16384, 1 << 25, "the film needs about 40 bytes per pixel")
+#: Samples per pixel accepted (Mitsuba's sampler counts them in 32 bits).
+MAX_SPP = 1 << 20
 
 
 def render(
@@ -48,11 +53,10 @@ def render(
     scenes without lights) light the scene like the GL engine.  The image has tone-mapped (clamped)
     sRGB with straight alpha in ``.array``, linear radiance RGBA in ``.hdr``.
     """
-    if isinstance(spp, bool) or not isinstance(spp, numbers.Real) or spp != int(spp) or spp < 1:
-        raise ValueError(f"mitsuba.render: spp must be a whole number >= 1, got {spp!r}")
-    spp = int(spp)
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0:
-        raise ValueError(f"mitsuba.render: seed must be an integer >= 0, got {seed!r}")
+    size = check_image_size("mitsuba.render", size, SIZE_LIMITS)
+    spp = check_integer("mitsuba.render", "spp", spp, 1, MAX_SPP)
+    seed = check_integer("mitsuba.render", "seed", seed, 0, 2**32 - 1)
+    global_ambient = check_real("mitsuba.render", "global_ambient", global_ambient, 0.0, 1e6)
     if integrator is not None and not (isinstance(integrator, dict) and isinstance(integrator.get("type"), str)):
         raise ValueError(
             f"mitsuba.render: integrator must be a Mitsuba plugin dict such as {{'type': 'path', 'max_depth': 8}}, "

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..fileio import atomic_path
 from ..image import Image
+from ..options import SizeLimits, check_image_size, check_timeout
 from . import painters as _painters  # noqa: F401  (registers the default handlers)
 from .engine import POVRayEngine, coverage, decode_depth
 from .runner import POVRayError, find_povray, read_png, read_ppm, run_povray
@@ -23,6 +24,8 @@ from .runner import POVRayError, find_povray, read_png, read_ppm, run_povray
 __all__ = ["render", "export", "available", "scene_sdl", "node_at_line"]
 
 _ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix", "resource_dir"}
+#: POV-Ray holds the image in memory as floats (and we read it back as RGBA bytes).
+SIZE_LIMITS = SizeLimits(32768, 1 << 26, "POV-Ray keeps about 20 bytes per pixel in memory")
 
 
 def available() -> tuple[bool, str]:
@@ -163,7 +166,8 @@ def render(
     ``image.mask`` marks the objects) unless an ``om.Background`` with alpha
     sets it.
     """
-    w, h = (int(v) for v in size)
+    w, h = check_image_size("POV-Ray", size, SIZE_LIMITS)
+    timeout = check_timeout("POV-Ray", timeout)
     if isinstance(quality, bool) or not isinstance(quality, (int, np.integer)) or not 0 <= quality <= 11:
         raise ValueError(f"POV-Ray: quality must be a whole number 0..11 (9 = full quality), got {quality!r}")
     if antialias is None or (not isinstance(antialias, bool) and antialias == 0):

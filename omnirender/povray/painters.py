@@ -28,6 +28,7 @@ from ..attributes import (
     PointLight,
     SpotLight,
 )
+from ..attributes.environment import is_scene_background
 from ..attributes.surface import engine_appearance, track_surfaces
 from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
 from ..shapes import CSG, Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
@@ -398,7 +399,8 @@ class BackgroundPainter(AttributePainter):
     target = Background
 
     def exec(self, attribute: Background, engine: POVRayEngine) -> None:
-        engine.background = attribute
+        if is_scene_background(attribute, engine):
+            engine.background = attribute
 
 
 @default_for(POVRayEngine)

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core import OmnirenderError
-from ..process import ProgramTimeout, progress_reporter, run_watched
+from ..process import ProgramTimeout, killed_by, progress_reporter, run_watched
 
 __all__ = ["POVRayError", "find_povray", "run_povray", "error_lines"]
 
@@ -97,6 +97,9 @@ def run_povray(
     finally:
         close()
     output = raw.decode("latin-1")
+    signal = killed_by(returncode)
+    if signal is not None:  # its console output holds no error of its own (configuration notes at most)
+        raise POVRayError(f"POV-Ray was {signal}", output)
     if returncode != 0:
         lines = error_lines(output)
         detail = "\n  ".join(lines) if lines else output[-2000:]

@@ -18,6 +18,7 @@ import numpy as np
 from ..attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from ..fileio import atomic_path
 from ..image import Image, develop
+from ..options import SizeLimits, check_image_size
 from . import rad, runner
 from .attributes import Options
 from .build import Deadline, as_node, compile_octree, evaluate, locate, write_scene
@@ -31,6 +32,8 @@ __all__ = ["render", "export", "available", "scene_description", "MAX_OVERSAMPLE
 MAX_OVERSAMPLE = 8
 #: The most rays (pixels times oversample squared) one picture may take: memory stays below a few GB.
 MAX_RAYS = 1 << 25
+#: The largest picture (before oversampling multiplies the rays).
+SIZE_LIMITS = SizeLimits(32768, MAX_RAYS, "one ray per pixel at least, and at most MAX_RAYS rays")
 
 
 def available() -> tuple[bool, str]:
@@ -162,6 +165,7 @@ def render(
     ):
         raise ValueError(f"Radiance: oversample must be a whole number 1..{MAX_OVERSAMPLE}, got {oversample!r}")
     _check_options(options)
+    size = check_image_size("Radiance", size, SIZE_LIMITS)
     if isinstance(exposure, bool) or not isinstance(exposure, numbers.Real) or not (0 < exposure < math.inf):
         raise ValueError(f"Radiance: exposure must be a positive finite number, got {exposure!r}")
     deadline = Deadline(timeout)

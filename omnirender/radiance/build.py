@@ -10,12 +10,12 @@ render or analysis respects its ``timeout``.
 
 from __future__ import annotations
 
-import math
 import re
 import time
 from pathlib import Path
 from typing import Any
 
+from ..options import check_timeout
 from . import painters as _painters  # noqa: F401  (registers the default handlers)
 from .engine import RadianceEngine
 from .picture import write_picture
@@ -31,14 +31,8 @@ class Deadline:
     """The time left of one overall ``timeout`` (None: no limit), handed to each program in turn."""
 
     def __init__(self, timeout: float | None) -> None:
-        if timeout is not None:
-            try:
-                ok = float(timeout) > 0.0 and math.isfinite(float(timeout))
-            except (TypeError, ValueError):
-                ok = False
-            if not ok or isinstance(timeout, bool):
-                raise ValueError(f"Radiance: timeout must be a positive number of seconds or None, got {timeout!r}")
-        self.timeout = None if timeout is None else float(timeout)
+        timeout = check_timeout("Radiance", timeout)
+        self.timeout = timeout
         self.end = None if timeout is None else time.monotonic() + float(timeout)
 
     def left(self) -> float | None:

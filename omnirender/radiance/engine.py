@@ -25,6 +25,7 @@ from ..attributes import photometry
 from ..attributes.clipping import ClipRecords
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
+from ..options import check_real
 from . import rad
 from .attributes import Options
 
@@ -124,10 +125,7 @@ class RadianceEngine(Engine):
             raise ValueError(f"RadianceEngine: size must be positive, got {size!r}")
         self.size = (w, h)
         self.resource_prefix = rad.identifier(resource_prefix, "RadianceEngine resource_prefix")
-        g = float(global_ambient)
-        if not (math.isfinite(g) and g >= 0.0):
-            raise ValueError(f"RadianceEngine: global_ambient must be a finite number >= 0, got {global_ambient!r}")
-        self.global_ambient = g
+        self.global_ambient = check_real("RadianceEngine", "global_ambient", global_ambient, 0.0, 1e6)
         self.headlight = bool(headlight)
         self.coverage = bool(coverage)
         self._shared_resources = shared._resources if shared is not None else None

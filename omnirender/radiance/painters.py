@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource
+from ..attributes.environment import is_scene_background
 from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
 from ..attributes.surface import engine_appearance, track_surfaces
 from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
@@ -326,12 +327,24 @@ def _mesh_obj(
         )
         if len(faces) == 0:
             return None
+    faces = _with_area(vertices, faces)
+    if len(faces) == 0:
+        return None  # only degenerate triangles: obj2mesh would refuse a mesh without polygons
     if not with_colors:
         return obj_text(vertices, faces, normals, texcoords, owner=engine.owner()), None
     materials: list[str] = []
     unique, groups = face_colors(colors, faces)
     names = [modifier(engine, uv=textured, vertex_rgba=c, sink=materials) for c in unique]
     return obj_text(vertices, faces, normals, texcoords, groups, names, engine.owner()), "".join(materials)
+
+
+def _with_area(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``faces`` without the triangles of zero area (collinear or repeated corners), which draw nothing."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces)
+    cross = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    scale = np.abs(v).max(initial=1.0)
+    return f[np.einsum("ij,ij->i", cross, cross) > (1e-12 * scale * scale) ** 2]
 
 
 def _pixel(engine: RadianceEngine, world_points: np.ndarray) -> float:
@@ -450,9 +463,9 @@ default_for(RadianceEngine)(type("SkyPainter", (LightPainter,), {"__slots__": ()
 register_shadowing_warnings(RadianceEngine, "Radiance", mirror=False)
 
 
-def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
+def _recorder(target: type, attribute: str, accept: Any = None) -> type:
     def exec(self: Any, value: Any, engine: RadianceEngine) -> None:
-        if not first_only or getattr(engine, attribute) is None:
+        if accept is None or (getattr(engine, attribute) is None and accept(value, engine)):
             setattr(engine, attribute, value)
 
     cls = type(
@@ -463,7 +476,7 @@ def _recorder(target: type, attribute: str, first_only: bool = False) -> type:
     return default_for(RadianceEngine)(cls)
 
 
-BackgroundPainter = _recorder(Background, "background", first_only=True)  # the root's background
+BackgroundPainter = _recorder(Background, "background", is_scene_background)  # the scene's background
 FogPainter = _recorder(Fog, "fog")
 OptionsPainter = _recorder(Options, "options")  # the last one met applies
 

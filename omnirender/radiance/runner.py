@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core import OmnirenderError
-from ..process import ProgramTimeout, progress_reporter, run_watched
+from ..process import ProgramTimeout, killed_by, progress_reporter, run_watched
 
 __all__ = ["RadianceError", "radiance_paths", "program", "run", "error_lines", "INSTALL"]
 
@@ -135,6 +135,9 @@ def run(
     finally:
         close()
     output = raw.decode("latin-1")
+    signal = killed_by(returncode)
+    if signal is not None:
+        raise RadianceError(f"Radiance: {label} was {signal}", output)
     if returncode != 0:
         lines = error_lines(output) or [output[-2000:].strip() or "(no message)"]
         detail = "\n  ".join(lines)

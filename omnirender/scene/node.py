@@ -24,7 +24,7 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..core.component import RenderingComponent
-from ..core.declarations import Declarations
+from ..core.declarations import FIRST, Declarations
 from ..core.engine import Engine
 from ..core.light import Light
 from ..core.program import ENTER, LEAVE, NODE, compile_components
@@ -264,7 +264,12 @@ class Node:
             self.remove(item)
 
     def __iter__(self) -> Iterator[Any]:
-        return iter(self._items)
+        """The items in order, as they were when iteration began.
+
+        Iterating a snapshot means ``for item in node: node.remove(item)``
+        removes every item (iterating the live list would skip every other one).
+        """
+        return iter(tuple(self._items))
 
     def __len__(self) -> int:
         return len(self._items)
@@ -511,30 +516,7 @@ class Node:
             else:
                 item._attach(self)
 
-    # -- the viewer's IsRenderable protocol (ArtiSynth style) -----------------
-    def prerender(self, render_list: Any) -> None:
-        """Cache what :meth:`render` needs and file this node into ``render_list``."""
-        from ..viewer.renderable import node_prerender
-
-        node_prerender(self, render_list)
-
-    def render(self, renderer: Any, flags: int = 0) -> None:
-        """Send this node's components to ``renderer`` (an engine)."""
-        from ..viewer.renderable import node_render
-
-        node_render(self, renderer, flags)
-
-    def update_bounds(self, pmin: Any, pmax: Any) -> None:
-        """Grow ``pmin``/``pmax`` (numpy arrays, updated in place) by this node's world bounds."""
-        from ..viewer.renderable import node_update_bounds
-
-        node_update_bounds(self, pmin, pmax)
-
-    def render_hints(self) -> int:
-        """TRANSPARENT / TWO_DIMENSIONAL flags derived from the node's components."""
-        from ..viewer.renderable import node_render_hints
-
-        return node_render_hints(self)
+    # Viewers draw nodes through their own adapter (om.viewer.NodeRenderable): the graph knows no viewer.
 
     #: Size of the picture a node shows of itself in a notebook.
     repr_size: tuple[int, int] = (480, 360)
@@ -598,12 +580,33 @@ def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> 
 class _Local:
     """A node's declared placements in its own coordinates, valid for one version and mask."""
 
-    __slots__ = ("version", "mask_fn", "placements")
+    __slots__ = ("version", "structure", "mask_fn", "placements")
 
-    def __init__(self, version: int, mask_fn: Any, placements: list[tuple[Any, np.ndarray | None]]) -> None:
+    def __init__(
+        self, version: int, structure: int, mask_fn: Any, placements: list[tuple[Any, np.ndarray | None]]
+    ) -> None:
         self.version = version
+        self.structure = structure
         self.mask_fn = mask_fn
         self.placements = placements  # matrix None: the node's own coordinates (identity)
+
+    def valid(self, node: Node, mask_fn: Any) -> bool:
+        """Whether this result still holds for ``node``.
+
+        A subtree that declared nothing declares nothing after any change
+        that leaves every list below it alone (a moved transform, a new
+        colour): what is declared depends on the lists, where only on the
+        parameters.  So a simulation moving thousands of plain objects does
+        not walk them again.
+        """
+        if self.mask_fn is not mask_fn:
+            return False
+        if self.version == node._version:
+            return True
+        if not self.placements and self.structure == node._structure:
+            self.version = node._version
+            return True
+        return False
 
 
 def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
@@ -624,19 +627,21 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
         node, expanded = stack.pop()
         if not expanded:
             entry = node._declared
-            if entry is not None and entry.version == node._version and entry.mask_fn is mask_fn:
+            if entry is not None and entry.valid(node, mask_fn):
                 continue
             stack.append((node, True))
             for item in node._items:
                 if item.__class__ is Node or isinstance(item, Node):
                     e = item._declared
-                    if (e is None or e.version != item._version or e.mask_fn is not mask_fn) and not (
+                    if (e is None or not e.valid(item, mask_fn)) and not (
                         item._groups and mask_fn is not None and not mask_fn(item._groups)
                     ):
                         stack.append((item, False))
             continue
         out: list[tuple[Any, np.ndarray | None]] = []
         m: np.ndarray | None = None
+        pending: list[Transform] = []  # transforms met since the last placement: multiplied only when needed
+        firsts: dict[Any, int] = {}  # category -> index in out of this node's own "first" declaration
         for item in node._items:
             if item.__class__ is Node or isinstance(item, Node):
                 if item._groups and mask_fn is not None and not mask_fn(item._groups):
@@ -644,33 +649,59 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
                 found = item._declared.placements  # type: ignore[union-attr]
                 if not found:
                     continue
+                if pending:
+                    m = _fold(m, pending)
                 if m is None:
                     out.extend(found)
                 else:
                     out.extend((c, m if cm is None else m @ cm) for c, cm in found)
             elif isinstance(item, Transform):
-                matrix = getattr(item, "matrix", None)  # engine-dependent transforms (Billboard) have none
-                if matrix is not None:
-                    m = matrix if m is None else m @ matrix
+                pending.append(item)
             elif item.declared is not None:
+                if pending:
+                    m = _fold(m, pending)
+                if item.declared == FIRST:
+                    # stack semantics: a later one in the same node replaces the earlier for the rest of the node
+                    category = getattr(item, "category", type(item))
+                    at = firsts.get(category)
+                    if at is not None:
+                        out[at] = (item, m)
+                        continue
+                    firsts[category] = len(out)
                 out.append((item, m))
-        node._declared = _Local(node._version, mask_fn, out)
+        node._declared = _Local(node._version, node._structure, mask_fn, out)
     return root._declared.placements  # type: ignore[union-attr]
 
 
+def _fold(m: np.ndarray | None, pending: list[Transform]) -> np.ndarray | None:
+    """``m`` times the matrices of ``pending`` (emptied); engine-dependent transforms (Billboard) have none."""
+    for t in pending:
+        matrix = getattr(t, "matrix", None)
+        if matrix is not None:
+            m = matrix if m is None else m @ matrix
+    pending.clear()
+    return m
+
+
 def _check_name(name: str) -> str:
-    if not isinstance(name, str) or not name or "/" in name:
-        raise ValueError(f"Node: name must be a non-empty string without '/', got {name!r}")
+    if not isinstance(name, str) or not name or "/" in name or not name.isprintable():
+        raise ValueError(
+            f"Node: name must be a non-empty string without '/' or control characters (NUL, newline...), got {name!r}"
+        )
     return name
 
 
 def _group_set(groups: Iterable[str] | str) -> frozenset[str]:
     if isinstance(groups, str):  # one group, not its characters
         groups = [groups]
+    elif not isinstance(groups, Iterable):
+        raise ValueError(f"Node: groups must be a group name or a list of them, got {groups!r}")
     return frozenset(_check_group(g) for g in groups)
 
 
 def _check_group(group: str) -> str:
-    if not isinstance(group, str) or not group or any(ch in group for ch in " !&|()"):
-        raise ValueError(f"Node: group names must be non-empty and free of spaces and !&|(), got {group!r}")
+    if not isinstance(group, str) or not group or any(ch in group for ch in " !&|()") or not group.isprintable():
+        raise ValueError(
+            f"Node: group names must be non-empty and free of spaces, control characters and !&|(), got {group!r}"
+        )
     return group

@@ -9,6 +9,8 @@ from . import simplifiers  # noqa: E402,F401  (registers the default simplifiers
 from .base import DeclaredShape
 from .csg import CSG
 from .grids import Heightfield, TransferFunction, Volume
+from .instances import InstanceId, InstanceSet
+from .lod import LevelOfDetail
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
 from .meshfile import MeshFile
 from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
@@ -34,6 +36,9 @@ __all__ = [
     "Text",
     "MeshFile",
     "CSG",
+    "InstanceId",
+    "InstanceSet",
+    "LevelOfDetail",
     "DeclaredShape",
 ]
 

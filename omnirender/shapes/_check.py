@@ -7,27 +7,22 @@ when an engine first draws the shape.
 
 from __future__ import annotations
 
-import math
 import operator
 from typing import Any
 
 import numpy as np
 
+from ..core.limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 from ..data import as_array
 
 
 def scalar(owner: str, name: str, value: Any, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """``value`` as a finite float; optionally > 0 or >= 0."""
-    if isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
+    """``value`` as a finite float within the magnitude limit (``omnirender.core.limits``); optionally > 0 or >= 0."""
+    v = as_float(owner, name, value)
     if positive and v <= 0.0:
         raise ValueError(f"{owner}: {name} must be > 0, got {v}")
+    if positive and v < MIN_MAGNITUDE:
+        raise ValueError(f"{owner}: {name} must be at least {MIN_MAGNITUDE:.0e}, got {v}")
     if nonnegative and v < 0.0:
         raise ValueError(f"{owner}: {name} must be >= 0, got {v}")
     return v
@@ -48,18 +43,25 @@ def integer(owner: str, name: str, value: Any, minimum: int = 0) -> int:
 
 def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = False) -> tuple[float, ...]:
     """``value`` as a tuple of ``size`` finite floats (a single number is broadcast when ``positive``)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}")
     try:
         arr = np.array(value, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r} ({exc})") from None
+    except OverflowError:
+        raise ValueError(f"{owner}: {name} must be {size} numbers of at most {MAX_MAGNITUDE:.0e}") from None
+    except (TypeError, ValueError):
+        raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}") from None
     if positive and arr.size == 1:
         arr = np.repeat(arr, size)
     if arr.shape != (size,):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {arr.size}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
-    if positive and np.any(arr <= 0.0):
-        raise ValueError(f"{owner}: {name} must be > 0 in every component, got {tuple(arr.tolist())}")
+    check_array_magnitude(owner, name, arr)
+    if positive and np.any(arr < MIN_MAGNITUDE):
+        raise ValueError(
+            f"{owner}: {name} must be > 0 (at least {MIN_MAGNITUDE:.0e}) in every component, got {tuple(arr.tolist())}"
+        )
     return tuple(float(c) for c in arr)
 
 
@@ -93,10 +95,11 @@ def float_array(
         )
     if a.shape[0] < minimum:
         raise ValueError(f"{owner}: {name} needs at least {minimum} rows, got {a.shape[0]}; add rows")
-    out = np.ascontiguousarray(a, dtype=np.float32)
-    if not np.all(np.isfinite(out)):
-        bad = int(np.argwhere(~np.isfinite(out))[0][0])
+    if a.dtype.kind == "f" and a.size and not np.all(np.isfinite(a)):
+        bad = int(np.argwhere(~np.isfinite(a))[0][0])
         raise ValueError(f"{owner}: {name} must be finite (row {bad} is {a[bad].tolist()}); fix or drop that row")
+    check_array_magnitude(owner, name, a if a.dtype.kind == "f" else a.astype(np.float64))
+    out = np.ascontiguousarray(a, dtype=np.float32)
     if out is a:
         out = out.copy()
     out.setflags(write=False)
@@ -138,14 +141,35 @@ def index_array(owner: str, name: str, value: Any, width: int, vertex_count: int
 
 
 def colors(owner: str, name: str, value: Any, count: int) -> np.ndarray | None:
-    """Per-vertex colours as (count, 4) float32 RGBA; a single RGB(A) colour is broadcast."""
+    """Per-vertex colours as (count, 4) float32 RGBA in [0, 1]; a single RGB(A) colour is broadcast."""
     if value is None:
         return None
     a = as_array(value, None, name=f"{owner}: {name}")
     if a.ndim == 1 and a.shape[0] in (3, 4):
         a = np.broadcast_to(a, (count, a.shape[0]))
     c = float_array(owner, name, a, (3, 4), count=count)
+    if c.size and (c.min() < 0.0 or c.max() > 1.0):
+        bad = int(np.argwhere((c < 0.0) | (c > 1.0))[0][0])
+        raise ValueError(
+            f"{owner}: {name} must be in [0, 1] (row {bad} is {c[bad].tolist()}); colours are fractions, "
+            "divide 0-255 values by 255"
+        )
     if c.shape[1] == 3:
         c = np.concatenate([c, np.ones((count, 1), np.float32)], axis=1)
         c.setflags(write=False)
     return c
+
+
+def normals(owner: str, name: str, value: Any, count: int) -> np.ndarray:
+    """Per-vertex normals as a read-only (count, 3) float32 array of unit vectors; zero-length ones are refused."""
+    n = float_array(owner, name, value, (3,), count=count)
+    length = np.sqrt(np.einsum("ij,ij->i", n.astype(np.float64), n.astype(np.float64)))
+    if length.size and length.min() < 1e-12:
+        bad = int(np.argmin(length))
+        raise ValueError(
+            f"{owner}: {name} must have non-zero length (row {bad} is {n[bad].tolist()}); give a direction, "
+            "or normals=None to compute smooth normals"
+        )
+    out = (n / length[:, None]).astype(np.float32)
+    out.setflags(write=False)
+    return out

@@ -49,7 +49,7 @@ class CSG(Shape):
         object.__setattr__(self, "_b", b)
         for operand in (a, b):
             if isinstance(operand, Shape):
-                operand._attach(self)  # a changed operand shape changes the CSG (its owners recompile)
+                operand.attach_owner(self)  # a changed operand shape changes the CSG (its owners recompile)
 
     @property
     def operation(self) -> str:
@@ -77,4 +77,4 @@ class CSG(Shape):
         super().__setstate__(state)
         for operand in (self._a, self._b):
             if isinstance(operand, Shape):
-                operand._attach(self)
+                operand.attach_owner(self)

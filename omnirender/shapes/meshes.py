@@ -18,6 +18,7 @@ from ..geometry.normals import smooth_normals, vertex_tangents
 from ..geometry.triangulate import best_fit_plane, crossing_edges, project_to_plane, triangulate_polygon
 from . import _check
 from .base import DeclaredShape, parameter
+from .trimeshes import is_trimesh, triangle_arrays
 
 __all__ = ["TriangleSet", "Polygon", "LineSet", "Polyline", "PointSet"]
 
@@ -59,7 +60,8 @@ class TriangleSet(_VertexShape):
     ``uv_set=1``); ``tangents`` (N, 4): xyz along increasing u, w the sign of
     the bitangent (along increasing v), for normal maps (generated from the
     texture coordinates when None).  Winding is counter-clockwise seen from the
-    front.  At least one triangle.
+    front.  At least one triangle.  ``TriangleSet(mesh)`` with a ``trimesh.Trimesh`` takes its
+    vertices, faces, vertex normals (when the mesh has them), colours and texture coordinates.
     """
 
     __slots__ = ("_vertices", "_indices", "_normals", "_colors", "_texcoords", "_texcoords1", "_tangents")
@@ -82,6 +84,13 @@ class TriangleSet(_VertexShape):
         texcoords1: Any = None,
         tangents: Any = None,
     ) -> None:
+        if is_trimesh(vertices):
+            given = {"indices": indices, "normals": normals, "colors": colors, "texcoords": texcoords}
+            arrays = triangle_arrays(vertices)
+            arrays.update({k: v for k, v in given.items() if v is not None})  # explicit arguments win
+            vertices, indices, normals, colors, texcoords = (
+                arrays[k] for k in ("vertices", "indices", "normals", "colors", "texcoords")
+            )
         super().__init__(
             vertices=vertices,
             indices=indices,
@@ -123,7 +132,7 @@ class TriangleSet(_VertexShape):
             else _check.float_array(name, "tangents", p["tangents"], (4,), count=n),
         }
         if p["normals"] is not None:
-            derived["normals"] = _check.float_array(name, "normals", p["normals"], (3,), count=n)
+            derived["normals"] = _check.normals(name, "normals", p["normals"], n)
         return p, derived
 
     def index_array(self) -> np.ndarray:
@@ -165,6 +174,37 @@ class TriangleSet(_VertexShape):
     def triangle_count(self) -> int:
         return len(self.index_array())
 
+    def transformed(self, matrix: Any) -> TriangleSet:
+        """This set with the 4x4 ``matrix`` applied to its vertices, normals and tangents (itself for the identity).
+
+        Normals take the inverse transpose; a mirroring matrix reverses the
+        winding (and the bitangent sign) so fronts stay fronts.  For flattening
+        a hierarchy into one mesh (glTF import, instanced export).
+        """
+        m = np.asarray(matrix, np.float64)
+        if np.array_equal(m, np.eye(4)):
+            return self
+        linear = m[:3, :3]
+        mirrored = np.linalg.det(linear) < 0.0
+        vertices = self.vertex_array() @ linear.T + m[:3, 3]
+        normals = self.normal_array() @ np.linalg.inv(linear)
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-30)
+        tangents = self._tangents
+        if tangents is not None:
+            t = np.asarray(self.tangent_array(), np.float64)
+            xyz = t[:, :3] @ linear.T
+            xyz /= np.maximum(np.linalg.norm(xyz, axis=1, keepdims=True), 1e-30)
+            tangents = np.column_stack([xyz, -t[:, 3] if mirrored else t[:, 3]])
+        return TriangleSet(
+            vertices,
+            self.index_array()[:, ::-1] if mirrored else self.index_array(),
+            normals=normals,
+            colors=self._colors,
+            texcoords=self._texcoords,
+            texcoords1=self._texcoords1,
+            tangents=tangents,
+        )
+
 
 class Polygon(_VertexShape):
     """One planar polygon (convex or simple concave) given by its outline ``vertices`` (N >= 3, no repeat of the first).
@@ -190,9 +230,7 @@ class Polygon(_VertexShape):
         n = len(v)
         derived: dict[str, Any] = {"vertices": v, "colors": _check.colors(name, "colors", p["colors"], n)}
         if p["normals"] is not None:
-            normals = _check.float_array(
-                name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), (3,), count=n
-            )
+            normals = _check.normals(name, "normals", _broadcast_row(p["normals"], 3, n, name, "normals"), n)
             derived["normals"] = normals
         _check_polygon_outline(v)
         derived["triangles"] = triangulate_polygon(v, owner=name)

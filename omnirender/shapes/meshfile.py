@@ -14,6 +14,8 @@ import numpy as np
 
 from .base import DeclaredShape, parameter
 from .meshes import TriangleSet
+from .objreader import read_plain_obj
+from .trimeshes import is_trimesh, is_trimesh_scene, triangle_arrays
 
 __all__ = ["MeshFile"]
 
@@ -26,7 +28,10 @@ class MeshFile(DeclaredShape):
     Supported: OBJ (+MTL), PLY, STL, OFF, glTF/GLB (node transforms applied).
     A missing file raises FileNotFoundError at construction; an unreadable or
     malformed one raises ValueError naming the path and the loader's reason
-    when first used (``parts()``/``load()``).
+    when first used (``parts()``/``load()``).  ``path`` may also be a mesh
+    trimesh already made (a ``trimesh.Trimesh`` or ``trimesh.Scene``): it is
+    used as it is (scene files cannot hold it; ``om.embed_files`` turns it into
+    triangle sets).
 
     Material parameters are dicts: ``{"kind": "phong", "ambient", "diffuse",
     "specular", "shininess", "opacity"}`` (OBJ/MTL) or ``{"kind": "pbr",
@@ -43,13 +48,19 @@ class MeshFile(DeclaredShape):
     _params = ("path",)
     path = parameter("path", "Path of the mesh file.")
 
-    def __init__(self, path: str | os.PathLike) -> None:
+    def __init__(self, path: str | os.PathLike | Any) -> None:
         super().__init__(path=path)
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         path = p["path"]
+        if is_trimesh(path) or is_trimesh_scene(path):
+            return {"path": path}, {}
         if not isinstance(path, (str, os.PathLike)):
-            raise ValueError(f"MeshFile: path must be a str or os.PathLike, got {type(path).__name__}")
+            raise ValueError(
+                f"MeshFile: path must be a file name (str or os.PathLike) or a trimesh mesh, got {type(path).__name__}"
+            )
+        if "\x00" in os.fspath(path):
+            raise ValueError("MeshFile: path must not contain a NUL character")
         path = os.fspath(path)
         if not os.path.exists(path):
             raise FileNotFoundError(f"MeshFile: no such file {path!r}")
@@ -72,11 +83,23 @@ class MeshFile(DeclaredShape):
         return sum(ts.triangle_count for _, ts in self.parts())
 
 
-def _load(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+def _load(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    if is_trimesh(path) or is_trimesh_scene(path):
+        return _parts(path, "the trimesh object")
     if not os.path.exists(path):
         raise FileNotFoundError(f"MeshFile: no such file {path!r}")
     if path.lower().endswith((".gltf", ".glb")):
         return _load_gltf(path)
+    if str(path).lower().endswith(".obj"):
+        try:
+            plain = read_plain_obj(path)
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: cannot load {path!r}: {exc}") from None
+        if plain is not None:  # a plain OBJ file: no trimesh import needed
+            try:
+                return [(None, TriangleSet(**plain))]
+            except ValueError as exc:
+                raise ValueError(f"MeshFile: {path!r} holds invalid geometry: {exc}") from None
     try:
         import trimesh
     except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
@@ -85,59 +108,46 @@ def _load(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         loaded = trimesh.load(path, process=False)
     except Exception as exc:
         raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
-    if isinstance(loaded, trimesh.Scene):
+    return _parts(loaded, repr(path))
+
+
+def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a loaded trimesh object (a Trimesh, or a Scene's meshes with their transforms)."""
+    if is_trimesh_scene(loaded):
         try:
             meshes = loaded.dump(concatenate=False)
         except Exception as exc:
-            raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
+            raise ValueError(f"MeshFile: cannot load {path}: {type(exc).__name__}: {exc}") from None
     else:
         meshes = [loaded]
     parts = []
     for mesh in meshes:
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        if not is_trimesh(mesh) or len(mesh.faces) == 0:
             continue  # point clouds, paths and empty geometry carry no triangles
         try:
             parts.append(_part(mesh))
         except ValueError as exc:
-            raise ValueError(f"MeshFile: {path!r} holds invalid geometry: {exc}") from None
+            raise ValueError(f"MeshFile: {path} holds invalid geometry: {exc}") from None
     if not parts:
-        raise ValueError(f"MeshFile: {path!r} contains no triangles (empty or not a mesh file)")
+        raise ValueError(f"MeshFile: {path} contains no triangles (empty or not a mesh file)")
     return parts
 
 
 def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
-    vertices = np.asarray(mesh.vertices, dtype=np.float32)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
-    normals = None
-    if "vertex_normals" in mesh._cache:  # given by the file (OBJ vn, glTF NORMAL); else computed smooth
-        vn = np.asarray(mesh.vertex_normals, dtype=np.float32)
-        if vn.shape == vertices.shape and np.all(np.isfinite(vn)):
-            normals = vn
-    colors = texcoords = None
+    arrays = triangle_arrays(mesh)
     material = None
     visual = mesh.visual
     kind = getattr(visual, "kind", None)
-    if kind == "vertex":
-        colors = np.asarray(visual.vertex_colors, dtype=np.float32) / 255.0
-    elif kind == "face":
+    if kind == "face":
         fc = np.asarray(visual.face_colors, dtype=np.float32) / 255.0
         if len(np.unique(fc, axis=0)) == 1:  # one colour for all: a material, shared vertices kept
             material = {"kind": "phong", "diffuse": tuple(float(c) for c in fc[0, :3]), "opacity": float(fc[0, 3])}
-        else:  # faces keep their colours: every face gets its own three vertices
-            flat = faces.reshape(-1)
-            vertices = vertices[flat]
-            normals = None if normals is None else normals[flat]
-            colors = np.repeat(fc, 3, axis=0)
-            faces = np.arange(len(flat)).reshape(-1, 3)
-    elif kind == "texture" or hasattr(visual, "material"):
-        uv = getattr(visual, "uv", None)
-        if uv is not None and len(uv) == len(vertices):
-            texcoords = np.asarray(uv, dtype=np.float32)
+            arrays["colors"] = None
+    elif kind != "vertex" and (kind == "texture" or hasattr(visual, "material")):
         material = _material(getattr(visual, "material", None))
-        if material is not None and texcoords is None:
+        if material is not None and arrays["texcoords"] is None:
             material.pop("texture", None)
-    ts = TriangleSet(vertices, faces, normals=normals, colors=colors, texcoords=texcoords)
-    return material, ts
+    return material, TriangleSet(**arrays)
 
 
 def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:

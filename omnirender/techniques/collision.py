@@ -23,7 +23,7 @@ from ..attributes import Collidable
 from ..core.handler import ShapePainter, default_for
 from ..geometry import intersect as gi
 from ..geometry.bvh import BVH
-from ..shapes import LineSet, PointSet, Polyline, TriangleSet
+from ..shapes import InstanceId, LineSet, PointSet, Polyline, TriangleSet
 from .base import AnalysisEngine, run_analysis
 
 __all__ = ["CollisionEngine", "collisions", "bodies_collide"]
@@ -34,16 +34,17 @@ COLLIDE = "collide"
 class CollisionEngine(AnalysisEngine):
     """Collects world triangles of collidable shapes in ``bodies``, one body per outermost shape.
 
-    A body's key is ``(node path, index)``: the index of the shape among the
-    shapes evaluated directly in that node (0-based, in the node's order,
-    counting untagged shapes too), so it stays the same whatever else is tagged.
+    A body's key is ``(node path, index, instance)``: the index of the shape
+    among the shapes evaluated directly in that node (0-based, in the node's
+    order, counting untagged shapes too), so it stays the same whatever else is
+    tagged, and the instance of an ``om.InstanceSet`` (-1 outside one).
     """
 
     service = COLLIDE
 
     def __init__(self, *, mask: Any = None, on_missing: str = "warn") -> None:
         super().__init__(mask=mask, on_missing=on_missing)
-        self.bodies: dict[tuple[str, int], list[np.ndarray]] = {}
+        self.bodies: dict[tuple[str, int, int], list[np.ndarray]] = {}
         self.skipped = 0
         self._counts: dict[str, int] = {}
         self._key: tuple[str, int] = ("", 0)
@@ -60,16 +61,27 @@ class CollisionEngine(AnalysisEngine):
         return True
 
     def collect(self, triangles: np.ndarray) -> None:
-        """Add world-space triangles (K, 3, 3) to the body of the outermost shape being evaluated."""
-        if len(triangles):
-            self.bodies.setdefault(self._key, []).append(triangles)
+        """Add world-space triangles (K, 3, 3) to the body of the outermost shape being evaluated.
 
-    def labels(self) -> dict[tuple[str, int], str]:
-        """Report names of the bodies: the node path, plus ``#index`` when several bodies share the path."""
-        per_path: dict[str, int] = {}
-        for path, _ in self.bodies:
-            per_path[path] = per_path.get(path, 0) + 1
-        return {(p, i): (p if per_path[p] == 1 else f"{p}#{i}") for p, i in self.bodies}
+        Each instance of an ``om.InstanceSet`` is a body of its own (its
+        simplifier marks the instances with ``InstanceId``).
+        """
+        if len(triangles):
+            ids = self.poly(InstanceId)
+            key = (*self._key, ids[-1].index if ids else -1)
+            self.bodies.setdefault(key, []).append(triangles)
+
+    def labels(self) -> dict[tuple[str, int, int], str]:
+        """Report names of the bodies: the node path, plus ``#index`` when several shapes of one node are
+        bodies, plus ``[instance]`` for the instances of an instance set."""
+        per_path: dict[str, set[int]] = {}
+        for path, index, _ in self.bodies:
+            per_path.setdefault(path, set()).add(index)
+        out = {}
+        for p, i, k in self.bodies:
+            name = p if len(per_path[p]) == 1 else f"{p}#{i}"
+            out[(p, i, k)] = name if k < 0 else f"{name}[{k}]"
+        return out
 
 
 @default_for(CollisionEngine)
@@ -150,8 +162,9 @@ def collisions(scene: Any, mask: str | None = None) -> list[tuple[str, str]]:
     Each outermost shape tagged ``Collidable`` is one body, named by its node
     path; when several collidable shapes sit in the same node their names get
     the suffix ``#i``, the shape's 0-based index among the node's shapes
-    (``"/scene/a#1"``).  The parts of one simplified shape (an Arrow's shaft
-    and head) never collide with each other.  A subgraph is tested where it
+    (``"/scene/a#1"``); the instances of an ``om.InstanceSet`` are bodies of
+    their own, named with their index (``"/scene/swarm[3]"``).  The parts of one
+    simplified shape (an Arrow's shaft and head) never collide with each other.  A subgraph is tested where it
     sits in its graph.
     """
     engine = CollisionEngine(mask=mask)

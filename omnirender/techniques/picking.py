@@ -30,6 +30,7 @@ from ..core.mask import compile_mask
 from ..geometry import intersect as gi
 from ..geometry.bvh import bvh_for, embree_available
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
+from ..shapes.instances import InstanceId
 from .base import AnalysisEngine, check_scene, root_of, run_analysis
 from .bounds import analytic_bounds
 
@@ -58,6 +59,8 @@ class Hit:
     path: str
     primitive: int = -1
     part: Any = field(default=None, repr=False)
+    #: the index of the instance hit when ``shape`` is an ``om.InstanceSet``, else -1
+    instance: int = -1
 
 
 class PickEngine(AnalysisEngine):
@@ -149,8 +152,12 @@ class PickEngine(AnalysisEngine):
             keep &= points @ plane[:3] + plane[3] >= -1e-12
         prims = np.broadcast_to(np.asarray(primitives), t.shape)
         shape = self.scene_shape
+        ids = self.poly(InstanceId)
+        instance = ids[-1].index if ids else -1
         for i in np.nonzero(keep)[0]:
-            self.hits.append(Hit(float(t[i]), points[i], normals[i], shape, self.scene_path, int(prims[i]), part))
+            self.hits.append(
+                Hit(float(t[i]), points[i], normals[i], shape, self.scene_path, int(prims[i]), part, instance)
+            )
         if self.nearest and self.hits:
             best = min(self.hits, key=lambda h: h.distance)
             self.hits = [best]

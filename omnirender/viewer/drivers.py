@@ -28,6 +28,9 @@ class EngineDriver:
         self.viewer = viewer
 
     def draw(self, root: Any) -> Any:
+        mask = getattr(self.viewer, "mask", None)
+        if self.engine.mask != mask:
+            self.engine.mask = mask
         begin = getattr(self.engine, "begin_frame", None)
         if begin is not None:
             begin(self.viewer)

@@ -7,11 +7,20 @@ draw items), then ``engine.render(None)`` installs and draws those items.  A
 repaint whose render lists (their prerender generations), highlights and overrides are
 unchanged skips the traversal: only the camera and lights are re-evaluated and
 the installed list is drawn again (orbiting a big scene costs one draw).
+
+The replay is for node renderables only, whose ``render`` draws the snapshot
+their prerender took.  The viewer contract (ArtiSynth's) is that every repaint
+calls ``render(renderer, flags)`` of every renderable: a custom renderable may
+draw something different each time (an animated marker, a simulation state it
+reads under the render list's lock), so a frame holding one is always
+traversed again.
 """
 
 from __future__ import annotations
 
 from typing import Any
+
+from .renderable import replays
 
 __all__ = ["GLDriver"]
 
@@ -45,11 +54,15 @@ class GLDriver:
         shape = root._shape
         lists = shape._lists
         # No node versions: nodes draw the snapshot their prerender took, so a node changed since then
-        # shows only after the next prerender (which bumps the list's generation).
+        # shows only after the next prerender (which bumps the list's generation).  A custom renderable's
+        # render() runs on every repaint: the frame number makes every such frame new.
+        custom = any(not replays(r) for rl in lists for r in rl)
         return (
+            root._version if custom else None,
             tuple((id(rl), rl.generation) for rl in lists),
             frozenset(shape._highlighted),
             tuple(type(a).__name__ + repr(a.parameters()) for a in shape._overrides),
+            self.viewer.mask,
         )
 
     def draw(self, root: Any) -> Any:
@@ -58,6 +71,8 @@ class GLDriver:
             engine.size = self.viewer.size
             self._key = None
         background = self.viewer.background
+        if engine.mask != self.viewer.mask:
+            engine.mask = self.viewer.mask
         key = self.frame_key(root)
         with engine.ctx:  # make the engine's context current (several contexts may live in one thread)
             if key == self._key:

@@ -23,7 +23,8 @@ def viewer_camera(viewer: Any) -> ViewCamera:
 def pick_in_viewer(viewer: Any, scene: Any, x: int, y: int) -> Any:
     """The nearest ``om.Hit`` at pixel (x, y) (top-left origin) of ``viewer``, or None.
 
-    ``scene`` None picks among every Node the viewer draws.
+    ``scene`` None picks among every Node the viewer draws.  The viewer's
+    group mask applies (what is not drawn is not picked).
     """
     from ..techniques import pick
 
@@ -31,7 +32,7 @@ def pick_in_viewer(viewer: Any, scene: Any, x: int, y: int) -> Any:
     camera = viewer_camera(viewer)
     best = None
     for root in roots:
-        hits = pick(root, pixel=(x, y), size=viewer.size, camera=camera, nearest=True)
+        hits = pick(root, pixel=(x, y), size=viewer.size, camera=camera, nearest=True, mask=viewer.mask)
         if hits and (best is None or hits[0].distance < best[1].distance):
             best = (root, hits[0])
     if best is None:

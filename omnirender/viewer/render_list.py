@@ -15,7 +15,7 @@ import threading
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-from .renderable import TRANSPARENT, TWO_DIMENSIONAL
+from .renderable import TRANSPARENT, TWO_DIMENSIONAL, renderable_of
 
 __all__ = ["RenderList", "PASSES"]
 
@@ -54,8 +54,10 @@ class RenderList:
     def add_if_visible(self, renderable: Any) -> bool:
         """Prerender ``renderable`` and file it by its hints if visible; returns whether it was added.
 
-        Call it from a renderable's ``prerender`` to add sub-renderables.
+        Call it from a renderable's ``prerender`` to add sub-renderables.  An
+        ``om.Node`` is filed as its :class:`~omnirender.viewer.NodeRenderable`.
         """
+        renderable = renderable_of(renderable)
         if not getattr(renderable, "visible", True):
             return False
         renderable.prerender(self)

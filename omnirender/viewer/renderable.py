@@ -6,8 +6,9 @@ draw, and may file sub-renderables into the render list) and rendered on every
 ``renderer.push(...)``, ``renderer.eval(shape)``, ``renderer.pop(...)``.
 ``render_hints()`` tells the viewer which sublist it belongs to.
 
-Scene-graph nodes become renderables through :class:`NodeRenderable`, which the
-viewer applies automatically when a Node is added.
+Scene-graph nodes become renderables through :class:`NodeRenderable`, which
+viewers and render lists apply automatically when a Node is added
+(:func:`renderable_of`): the scene graph itself knows nothing of viewers.
 """
 
 from __future__ import annotations
@@ -29,11 +30,10 @@ __all__ = [
     "NodePart",
     "split_program",
     "as_renderable",
+    "renderable_of",
+    "replays",
     "node_render_hints",
     "node_bounds",
-    "node_prerender",
-    "node_render",
-    "node_update_bounds",
 ]
 
 #: Hint/flag: drawn after opaque renderables, back to front, with blending.
@@ -325,6 +325,15 @@ def split_program(program: list[tuple[int, Any]]) -> tuple[dict[int, list[tuple[
     return splitter._outputs[0], splitter.used
 
 
+def replays(renderable: Any) -> bool:
+    """Whether a viewer may replay what ``renderable`` drew last time instead of calling its ``render``.
+
+    Only node renderables (whose ``render`` draws the snapshot of their last
+    prerender); every other renderable's ``render`` runs on every repaint.
+    """
+    return type(renderable) in (NodeRenderable, NodePart)
+
+
 def as_renderable(obj: Any) -> Any:
     """``obj`` itself if it is renderable, a :class:`NodeRenderable` for a Node, else TypeError."""
     from ..scene.node import Node
@@ -340,30 +349,20 @@ def as_renderable(obj: Any) -> Any:
     )
 
 
-# -- the IsRenderable methods of om.Node delegate to these -----------------------------------
+# -- nodes given to render lists directly -----------------------------------------------------
 _node_cache: weakref.WeakKeyDictionary[Any, NodeRenderable] = weakref.WeakKeyDictionary()
 
 
-def _adapter(node: Any) -> NodeRenderable:
-    adapter = _node_cache.get(node)
+def renderable_of(obj: Any) -> Any:
+    """What a render list files for ``obj``: one lasting :class:`NodeRenderable` per Node, else ``obj``."""
+    from ..scene.node import Node
+
+    if not isinstance(obj, Node):
+        return obj
+    adapter = _node_cache.get(obj)
     if adapter is None:
-        adapter = _node_cache[node] = NodeRenderable(node)
+        adapter = _node_cache[obj] = NodeRenderable(obj)
     return adapter
-
-
-def node_prerender(node: Any, render_list: Any) -> None:
-    """``Node.prerender``: what :meth:`NodeRenderable.prerender` does."""
-    _adapter(node).prerender(render_list)
-
-
-def node_render(node: Any, renderer: Any, flags: int = 0) -> None:
-    """``Node.render``: evaluate the node with ``renderer`` (highlighted with the HIGHLIGHT flag)."""
-    _adapter(node).render(renderer, flags)
-
-
-def node_update_bounds(node: Any, pmin: np.ndarray, pmax: np.ndarray) -> None:
-    """``Node.update_bounds``: grow ``pmin``/``pmax`` by the node's world box (cached per version)."""
-    _adapter(node).update_bounds(pmin, pmax)
 
 
 def node_render_hints(node: Any) -> int:

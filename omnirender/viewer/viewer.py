@@ -30,13 +30,9 @@ _SPACES = ("camera", "world")
 
 def default_lights() -> list[Any]:
     """The default light set (eye coordinates): key, fill and back light, like ArtiSynth's."""
-    from ..attributes import DirectionalLight
+    from ..attributes.lights import default_lights as lights
 
-    return [
-        DirectionalLight(direction=(0.35, -0.45, -1.0), intensity=0.8, ambient=(0.12, 0.12, 0.12)),
-        DirectionalLight(direction=(-0.7, 0.2, -0.6), intensity=0.35),
-        DirectionalLight(direction=(0.1, -0.3, 1.0), intensity=0.2),
-    ]
+    return lights()
 
 
 class Viewer:
@@ -75,6 +71,7 @@ class Viewer:
         self._samples = samples
         self.background = background
         self.wireframe = False
+        self._mask: str | None = None
         self.window: Any = None
         if isinstance(engine, Engine):
             from .drivers import driver_for
@@ -127,6 +124,23 @@ class Viewer:
         if len(values) != 4 or not all(0.0 <= c <= 1.0 for c in values):
             raise ValueError(f"Viewer.background: need 3 or 4 values in [0, 1], got {color!r}")
         self._background = tuple(values)  # type: ignore[assignment]
+
+    @property
+    def mask(self) -> str | None:
+        """The group-mask expression the viewer draws and picks with (None: everything).
+
+        ``om.view`` sets it to the scene camera's own mask, so what a click
+        picks is what the camera shows.
+        """
+        return self._mask
+
+    @mask.setter
+    def mask(self, expression: str | None) -> None:
+        if expression is not None:
+            from ..core.mask import compile_mask
+
+            compile_mask(expression)  # MaskError (a ValueError) names what is wrong
+        self._mask = expression
 
     def set_background_color(self, color: Sequence[float]) -> None:
         self.background = color

@@ -403,7 +403,8 @@ def view(
 ) -> Any:
     """Open a window on ``scene`` and loop until it is closed (or ``duration`` seconds pass).
 
-    The scene's camera (if any) is the initial view, else the view fits the
+    The scene's camera (if any) is the initial view, and its group mask the
+    window's (hidden subgraphs are neither drawn nor picked), else the view fits the
     scene; scenes with their own lights replace the viewer's default lights,
     and the scene's ``om.Background`` colour (if any) is the window's.
     ``update(t)`` runs in a worker thread (see the module docs).  Returns the viewer.
@@ -436,6 +437,7 @@ def open_scene(viewer: Any, scene: Any) -> None:
             viewer.clear_lights()
         if camera is not None:
             viewer.set_camera(*camera)
+            viewer.mask = camera[0].mask  # what the scene's camera shows, the window shows and picks
         else:
             viewer.set_eye_to_world((3, 2, 4), (0, 0, 0), (0, 1, 0))
             viewer.auto_fit()
@@ -447,22 +449,10 @@ def open_scene(viewer: Any, scene: Any) -> None:
 
 
 def _scene_background(scene: Any) -> Any:
-    """The first ``om.Background`` in ``scene`` (evaluation order), or None."""
-    if not hasattr(scene, "inspect"):
+    """The scene's ``om.Background`` (what its pre-evaluation declares, as in every engine), or None."""
+    if not hasattr(scene, "declarations"):
         return None
     from ..attributes import Background
-    from ..scene.node import Visitor
 
-    class _Find(Visitor):
-        found: Any = None
-
-        def enter_node(self, node: Any) -> bool:
-            return self.found is None
-
-        def visit(self, component: Any, node: Any) -> None:
-            if self.found is None and isinstance(component, Background):
-                self.found = component
-
-    finder = _Find()
-    scene.inspect(finder)
-    return finder.found
+    found = scene.declarations().first(Background)
+    return None if found is None else found[0]

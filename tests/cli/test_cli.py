@@ -171,7 +171,8 @@ def test_rendering_error_exits_1_without_traceback(capsys, tmp_path, monkeypatch
     monkeypatch.setenv("PATH", str(tmp_path))  # no povray program on the PATH
     code, _, err = run(capsys, "render", str(path), "-e", "povray", "--size", "20x20", "-o", str(tmp_path / "x.png"))
     assert code == 1
-    assert err.count("\n") == 1 and "Traceback" not in err and "not available" in err and "not installed" in err
+    assert err.count("\n") == 1 and "Traceback" not in err and "povray program was not found" in err
+    assert "apt-get install povray" in err
     assert not (tmp_path / "x.png").exists()
 
 
@@ -246,7 +247,10 @@ def test_engines_and_demo_explain_a_missing_radiance(capsys, tmp_path, monkeypat
     only_radiance = {"radiance": om.engines()["radiance"]}
     monkeypatch.setattr(omnirender.demo.om, "engines", lambda: only_radiance)
     code, out, _ = run(capsys, "demo", "-o", str(tmp_path / "demo"), "--size", "16x12")
-    assert code == 0 and "radiance skipped: the pyradiance package is not installed" in out
+    assert code == 1  # nothing could be rendered
+    first, second = out.splitlines()[:2]  # said first, before any work
+    assert first == "omnirender demo: rendering with no engine; skipped 1 of 1 engines:"
+    assert second.split()[0] == "radiance" and "pip install 'omnirender[radiance]'" in second
     assert list((tmp_path / "demo").iterdir()) == []
 
 

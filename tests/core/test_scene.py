@@ -362,15 +362,18 @@ def test_a_string_is_one_group():
     assert om.Node("n", groups="debug").groups == frozenset({"debug"})
 
 
-def test_node_is_a_renderable():
-    from omnirender.viewer import TRANSPARENT, IsRenderable, RenderList
+def test_a_node_is_adapted_to_a_renderable_by_the_viewer_package():
+    from omnirender.viewer import TRANSPARENT, IsRenderable, RenderList, as_renderable
 
     solid = om.Node("solid", [om.Sphere(radius=2)])
     glass = om.Node("glass", [om.Material(opacity=0.5), om.Sphere(radius=1)])
-    assert isinstance(solid, IsRenderable)
-    assert solid.render_hints() & TRANSPARENT == 0 and glass.render_hints() & TRANSPARENT
+    assert not isinstance(solid, IsRenderable)  # the scene graph knows nothing of viewers
+    assert not hasattr(solid, "prerender")
+    solid_r, glass_r = as_renderable(solid), as_renderable(glass)
+    assert isinstance(solid_r, IsRenderable)
+    assert solid_r.render_hints() & TRANSPARENT == 0 and glass_r.render_hints() & TRANSPARENT
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    solid.update_bounds(lo, hi)
+    solid_r.update_bounds(lo, hi)
     np.testing.assert_allclose([lo, hi], [[-2, -2, -2], [2, 2, 2]])
     rl = RenderList()
     rl.prerender([solid, glass])

@@ -100,29 +100,38 @@ def test_05_picking(tmp_path):
     assert "nothing (background)" in out
 
 
-@pytest.mark.parametrize("name", ["demo.json", "demo.yaml"])
-def test_demo_scene_camera_skips_the_debug_group(name):
+def test_features_scene_camera_skips_the_debug_group():
     import omnirender as om
 
-    scene = om.load(EXAMPLES / "scenes" / name)
+    scene = om.load(EXAMPLES / "scenes" / "features.yaml")
     lights, (camera, _) = scene.preevaluate()
     assert camera.mask == "!debug"  # POV-Ray and Mitsuba pictures leave out the wireframe debug sphere
     assert "debug" in scene["/demo/debug"].groups
     sys.path.insert(0, str(EXAMPLES / "scenes"))
     try:
-        from make_demo_scene import demo_scene
+        from make_demo_scene import features_scene
     finally:
         sys.path.pop(0)
-    built = demo_scene()
+    built = features_scene()
     built_camera = built.preevaluate()[1][0]
-    assert built_camera.parameters() == camera.parameters()  # the files are what the script writes
+    assert built_camera.parameters() == camera.parameters()  # the file is what the script writes
 
 
 @pytest.mark.gl
-def test_demo_scene_renders_without_the_debug_sphere():
+def test_demo_file_renders_what_omnirender_demo_renders():
+    import omnirender as om
+    from omnirender.demo import demo_scene
+
+    from_file = om.render(om.load(EXAMPLES / "scenes" / "demo.yaml"), engine="gl", size=(160, 120)).array
+    built = om.render(demo_scene(), engine="gl", size=(160, 120)).array
+    assert np.array_equal(from_file, built)
+
+
+@pytest.mark.gl
+def test_features_scene_renders_without_the_debug_sphere():
     import omnirender as om
 
-    scene = om.load(EXAMPLES / "scenes" / "demo.json")
+    scene = om.load(EXAMPLES / "scenes" / "features.yaml")
     shown = om.render(scene, engine="gl", size=(96, 72), samples=0).array
     scene.remove(scene["/demo/debug"])
     without = om.render(scene, engine="gl", size=(96, 72), samples=0).array

@@ -291,3 +291,25 @@ def test_a_write_failing_midway_leaves_the_existing_file_unchanged(tmp_path, mon
         om.export(_scene(), target)
     assert target.read_bytes() == b"old file"
     assert [p.name for p in tmp_path.iterdir()] == ["scene.glb"]
+
+
+def test_node_matrices_gltf_cannot_hold_are_applied_to_the_meshes_below(tmp_path):
+    """glTF node matrices must be translation x rotation x scale: a sheared one goes into the vertices below it
+    (a mirroring one stays: a negative scale is allowed)."""
+    shear = np.eye(4)
+    shear[0, 1] = 0.5
+    inner = om.Node("inner", [om.Translation(2, 0, 0), om.Sphere(), om.Polyline([(0, 0, 0), (1, 1, 1)])])
+    scene = om.Node("s", [om.Node("sheared", [om.Matrix(shear), om.Box(), inner])])
+    scene.add(om.Node("mirrored", [om.Scaling(-1, 1, 1), om.Translation(3, 0, 0), om.Torus()]))
+    path = om.export(scene, tmp_path / "shear.glb")
+    doc, binary = _parse(path.read_bytes())
+    _check_structure(doc, binary)
+    nodes = doc["nodes"]
+    by_name = {n["name"]: n for n in nodes}
+    assert not any("matrix" in nodes[c] for c in by_name["sheared"]["children"])  # the box's and "inner"'s
+    (torus,) = (nodes[c] for c in by_name["mirrored"]["children"])
+    assert np.linalg.det(np.array(torus["matrix"]).reshape(4, 4)) < 0
+    from omnirender.geometry.trs import decomposable
+
+    assert all(decomposable(np.array(n["matrix"]).reshape(4, 4).T) for n in doc["nodes"] if "matrix" in n)
+    np.testing.assert_allclose(np.array(om.bounds(om.load_gltf(path))), np.array(om.bounds(scene)), atol=1e-6)

@@ -118,3 +118,48 @@ def test_chromium_shows_what_gl_renders(tmp_path):
     # shading agrees roughly too: the mean colour of the pixels both cover
     both = a & b
     assert np.abs(gl[both].mean(axis=0) - shot[both].mean(axis=0)).max() < 40
+
+
+def _pixels(camera: om.Camera, points: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """(N, 2) integer pixel coordinates (x right, y down) of world points seen by ``camera``."""
+    homogeneous = np.column_stack([points, np.ones(len(points))])
+    clip = homogeneous @ (camera.projection_matrix(size[0] / size[1]) @ camera.view_matrix()).T
+    ndc = clip[:, :2] / clip[:, 3:]
+    return np.column_stack([(ndc[:, 0] + 1) / 2 * size[0], (1 - ndc[:, 1]) / 2 * size[1]]).astype(int)
+
+
+@pytest.mark.gl
+@pytest.mark.chromium
+@pytest.mark.slow
+def test_chromium_shows_instance_sets_as_gl_does(tmp_path):
+    """The page's three.js draws EXT_mesh_gpu_instancing: a ramp of 24 colours (``_COLOR_0``) and two colours
+    (one material each) under a rotated node, where GL draws them."""
+    from omnirender.colorimetry import cielab, delta_e2000
+
+    n, size = 24, (480, 240)
+    x = np.linspace(-4, 4, n)
+    ramp = np.column_stack([np.linspace(1, 0, n), np.full(n, 0.3), np.linspace(0, 1, n)])
+    balls = np.column_stack([x, np.full(n, 0.8), np.zeros(n)])
+    boxes = np.column_stack([x, np.full(n, -0.8), np.zeros(n)])
+    two = np.array([(1, 0.8, 0.1), (0.1, 0.8, 0.3)])[np.arange(n) % 2]
+    camera = om.Camera.look_at(eye=(0, 0, 10), center=(0, 0, 0), fov=30)
+    turn = om.Rotation(10, (0, 0, 1))
+    scene = om.Node("scene", [camera, om.Background(BACKGROUND), om.DirectionalLight(direction=(0, 0, -1))])
+    scene.add(om.Node("ramp", [om.InstanceSet(om.Sphere(radius=0.15), balls, colors=ramp)]))
+    scene.add(om.Node("two", [turn, om.InstanceSet(om.Box(size=0.2), boxes, colors=two)]))
+    gl = om.render(scene, engine="gl", size=size).array[:, :, :3].astype(int)
+    page = tmp_path / "instances.html"
+    om.export(scene, page)
+    assert '"EXT_mesh_gpu_instancing"' in json.dumps(_glb_json(_settings(page.read_text())["glb"]))
+    shot = _chromium_screenshot(page, tmp_path / "page.png", size)
+    a, b = _silhouette(gl, BACKGROUND), _silhouette(shot, BACKGROUND)
+    assert a.mean() > 0.04 and (a & b).sum() / (a | b).sum() > 0.9  # every instance drawn, not one copy
+    agreement = float((a == b).mean())
+    assert agreement >= 0.99, f"silhouettes agree on {agreement:.1%} of the pixels"
+    # each instance has its own colour in both (three.js's physical light against GL's Phong: a few dE)
+    for points, world in ((balls, np.eye(4)), (boxes, turn.matrix)):
+        centres = _pixels(camera, (np.column_stack([points, np.ones(n)]) @ world.T)[:, :3], size)
+        rows, cols = centres[:, 1], centres[:, 0]
+        delta = delta_e2000(cielab(gl[rows, cols]), cielab(shot[rows, cols]))
+        print(f"instance colours GL vs Chromium: dE max {delta.max():.1f}")
+        assert delta.max() < 10

@@ -202,12 +202,14 @@ def test_color_after_material_replaces_its_colour():
 
 
 def test_odd_node_names_are_sanitised_not_refused():
-    scene = om.Node('scene"\nWorldEnd', [om.Node('a"b\\c\td\x7f', [om.Sphere()])])
+    scene = om.Node('scene"\\WorldEnd', [om.Node('a"b\\c"d\\', [om.Sphere()])])
     text = rib.to_text(scene)
     requests = [name for name, _ in parse(text)]
     assert requests.count("WorldEnd") == 1 and requests[-1] == "WorldEnd"  # nothing injected
     names = [args[2] for name, args in parse(text) if name == "Attribute" and args[:2] == ["identifier", "name"]]
     assert names == [["scene__WorldEnd"], ["a_b_c_d_"]]
+    with pytest.raises(ValueError, match="control characters"):  # newlines and NULs never reach an exporter
+        om.Node("scene\nWorldEnd")
     assert 'Display "scene__WorldEnd.tif"' in text
     assert "# scene__WorldEnd: written by omnirender" in text
 

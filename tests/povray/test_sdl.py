@@ -148,10 +148,12 @@ def test_triangle_set_with_vertex_colours_and_flat_shading():
 
 
 def test_names_and_paths_cannot_inject_directives(tmp_path):
-    evil = 'x"\n#include "passwd"\n#declare A = 1;'
+    with pytest.raises(ValueError, match="control characters"):  # newlines never reach the SDL
+        om.Node('x"\n#include "passwd"\n#declare A = 1;')
+    evil = 'x" #include "passwd" #declare A = 1;'
     s = om.Node(evil)
     s.add(om.Camera.look_at(eye=(0, 0, 5)))
-    child = s.add(om.Node('b"#\nc'))
+    child = s.add(om.Node('b"#c'))
     img = tmp_path / 'bad"name\n#x.png'
     from PIL import Image as PILImage
 

@@ -114,7 +114,7 @@ def test_bad_options_are_refused_before_anything_runs():
     for kw, message in [
         ({"oversample": 0}, "oversample must be a whole number 1..8"),
         ({"oversample": 2.5}, "oversample"),
-        ({"timeout": -1}, "timeout must be a positive number"),
+        ({"timeout": -1}, "timeout must be a finite number of seconds > 0"),
         ({"timeout": float("nan")}, "timeout"),
         ({"options": "ab=2"}, "om.radiance.Options"),
         ({"exposure": 0}, "exposure must be a positive finite number"),

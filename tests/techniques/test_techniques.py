@@ -429,3 +429,16 @@ def test_technique_bad_input_and_empty_results():
     with pytest.raises(TypeError, match="Camera"):
         om.pick(s, pixel=(1, 1), size=(10, 10), camera="front")
     assert om.collisions(s) == []  # nothing is tagged Collidable
+
+
+def test_instances_of_an_instance_set_are_bodies_and_picks_of_their_own():
+    positions = np.array([(0.0, 0.0, 0.0), (0.5, 0.0, 0.0), (5.0, 0.0, 0.0)])
+    swarm = om.InstanceSet(om.Box(size=1.0), positions)
+    wall = om.Node("wall", [om.Translation(5.6, 0, 0), om.Box(size=1.0)])
+    scene = om.Node("s", [om.Collidable(True), om.Node("set", [swarm]), wall])
+    assert om.collisions(scene) == [("/s/set[0]", "/s/set[1]"), ("/s/set[2]", "/s/wall")]
+    positions[1] = (-3.0, 0.0, 0.0)  # moved apart in place
+    swarm.touch()
+    assert om.collisions(scene) == [("/s/set[2]", "/s/wall")]
+    hits = om.pick(scene, ray=((-10.0, 0.0, 0.0), (1.0, 0.0, 0.0)))
+    assert [h.instance for h in hits[:3]] == [1, 1, 0]  # entering and leaving instance 1, then instance 0

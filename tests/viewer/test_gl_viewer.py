@@ -98,22 +98,59 @@ def test_viewer_matches_om_render_with_the_same_camera_and_lights(viewer):
     assert np.abs(mine - ref).max() <= 2
 
 
-def test_repaint_reuses_the_draw_list_until_something_changes(viewer):
+def test_repaint_calls_render_of_every_custom_renderable(viewer):
+    """The ArtiSynth contract: prerender caches state, every repaint redraws it with render()."""
     ball = Ball((0, 0, 0), (0.9, 0.1, 0.1))
     viewer.add_renderable(ball)
     viewer.auto_fit()
-    first = viewer.rerender()
+    viewer.rerender()
     assert ball.renders == 1
     viewer.camera.orbit(40, 10)
     moved = viewer.repaint()
-    assert ball.renders == 1  # camera moves redraw the installed list
+    assert ball.renders == 2  # repaint calls render() again
     assert red(moved).sum() > 100
     ball.position = np.array([0.6, 0.0, 0.0])
-    same = viewer.repaint()  # no prerender: the cached position is still drawn
-    assert np.array_equal(same.array, moved.array)
+    same = viewer.repaint()  # no prerender: render() draws the cached position
+    assert ball.renders == 3 and np.array_equal(same.array, moved.array)
     after = viewer.rerender()
-    assert ball.renders == 2 and not np.array_equal(after.array, moved.array)
-    assert first.size == after.size
+    assert ball.renders == 4 and not np.array_equal(after.array, moved.array)
+
+
+class Blinker(Ball):
+    """A renderable whose render() draws something else every time (what a replayed cache would miss)."""
+
+    def render(self, renderer, flags):
+        self._cached = np.array([0.0, 0.0, 0.0]) if self.renders % 2 == 0 else np.array([0.0, 5.0, 0.0])
+        super().render(renderer, flags)
+
+
+def test_repaint_shows_what_render_draws_each_time_beside_replayed_nodes(viewer):
+    blinker = Blinker((0, 0, 0), (0.9, 0.1, 0.1))
+    viewer.add_renderable(blinker)
+    viewer.add_renderable(om.Node("floor", [om.Material(diffuse=(0.1, 0.1, 0.9)), om.Box(size=(4, 0.1, 4))]))
+    viewer.set_eye_to_world((0, 1, 8), (0, 0, 0), (0, 1, 0))
+    shown = [red(viewer.rerender()).sum()] + [red(viewer.repaint()).sum() for _ in range(3)]
+    assert blinker.renders == 4
+    assert shown[0] > 100 and shown[2] > 100  # at the origin
+    assert shown[1] < shown[0] and shown[3] < shown[0]  # moved up, mostly out of the picture
+
+
+def test_node_renderables_replay_their_draw_list(viewer):
+    import omnirender.viewer.renderable as rmod
+
+    viewer.add_renderable(scene_with_sphere())
+    viewer.auto_fit()
+    viewer.rerender()
+    runs = []
+    original = rmod._draw
+    rmod._draw = lambda *a: (runs.append(1), original(*a))
+    try:
+        viewer.camera.orbit(40, 10)
+        moved = viewer.repaint()
+    finally:
+        rmod._draw = original
+    assert runs == []  # the installed list is drawn again, nodes are not traversed
+    assert red(moved).sum() > 100
 
 
 def test_two_dimensional_pass_draws_over_nearer_geometry(viewer):

@@ -235,16 +235,18 @@ def test_simulation_thread_prerenders_while_viewers_repaint_without_tearing():
     thread = threading.Thread(target=simulate)
     thread.start()
     try:
-        deadline = time.monotonic() + 0.5
-        while time.monotonic() < deadline:
+        # count-based: repaint until enough frames and simulation states were seen, however loaded the
+        # machine is (the deadline is only a guard against a simulation thread that never runs)
+        deadline = time.monotonic() + 60.0
+        while (len(body.seen) < 40 or len({x for x, _ in body.seen}) < 5) and time.monotonic() < deadline:
             for v in viewers:
                 v.repaint()
     finally:
         stop.set()
         thread.join()
-    assert len(body.seen) > 20
+    assert len(body.seen) >= 40
     assert all(x == y for x, y in body.seen), [p for p in body.seen if p[0] != p[1]][:5]
-    assert len({x for x, _ in body.seen}) > 3  # the viewers did see the simulation advance
+    assert len({x for x, _ in body.seen}) >= 5  # the viewers did see the simulation advance
 
 
 def test_bad_renderables_and_sizes_are_rejected(recorder):
@@ -261,7 +263,7 @@ def test_bad_renderables_and_sizes_are_rejected(recorder):
     assert v.get_background_color() == (1.0, 0.0, 0.0, 1.0)
 
 
-def test_node_renderable_functions_for_node_methods(recorder):
+def test_render_lists_adapt_nodes_given_directly(recorder):
     from omnirender.viewer import renderable as rmod
 
     scene = om.Node("scene")
@@ -269,15 +271,15 @@ def test_node_renderable_functions_for_node_methods(recorder):
     scene.add(om.Box(size=(2, 2, 2), center=(1, 0, 0)))
     assert rmod.node_render_hints(scene) == TRANSPARENT
     pmin, pmax = np.full(3, np.inf), np.full(3, -np.inf)
-    rmod.node_update_bounds(scene, pmin, pmax)
+    rmod.renderable_of(scene).update_bounds(pmin, pmax)
     assert np.allclose(pmin, (0, -1, -1)) and np.allclose(pmax, (2, 1, 1))
     scene.add(om.Text("label", (0, 0, 0), 12))
     assert rmod.node_render_hints(scene) == TRANSPARENT | TWO_DIMENSIONAL
     rl = RenderList()
-    rmod.node_prerender(scene, rl)
-    seen = []
+    rl.prerender([scene])
+    assert rl.transparent_2d[0].node is scene and rmod.renderable_of(scene) in list(rl)
     probe = om.Node("probe", [Dot("d")])
-    rmod.node_render(probe, recorder, 0)
+    rmod.renderable_of(probe).render(recorder, 0)
     seen = recorder.drawn()
     assert seen == ["d"]
     # a node drawn by a viewer lands in the sublist its hints say

@@ -13,13 +13,17 @@ import omnirender as om
     [
         ({"spp": "x"}, "spp must be a whole number"),
         ({"spp": 0}, "spp must be a whole number"),
-        ({"seed": "a"}, "seed must be an integer"),
+        ({"seed": "a"}, "seed must be a whole number"),
+        ({"spp": float("nan")}, "spp must be a whole number"),
+        ({"seed": 2**64}, r"seed must be a whole number in 0\.\.4294967295"),
+        ({"global_ambient": float("nan")}, "global_ambient must be a finite number"),
+        ({"size": (100000, 100000)}, "at most 16384 pixels per side"),
         ({"integrator": "magic"}, "integrator must be a Mitsuba plugin dict"),
     ],
 )
 def test_bad_values_are_explained(options, message):
     with pytest.raises(ValueError, match=message):
-        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", size=(8, 6), **options)
+        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", **{"size": (8, 6), **options})
 
 
 @pytest.mark.mitsuba
