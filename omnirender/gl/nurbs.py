@@ -7,11 +7,16 @@ textures, clip planes, fog, shadows, the deferred pipeline's G-buffer), with thr
 of the fragment shader instead of the vertex shader:
 
 * a vertex stage that passes control points and the instance's row through;
-* a tessellation control stage choosing the levels from a screen-space error bound: a degree-``d``
-  Bézier curve is within ``d (d - 1) max|Δ² P| / (8 n²)`` of its ``n``-segment polyline (the second
-  differences of its control points projected to pixels), so ``n = ceil(sqrt(d (d - 1) max|Δ² P| /
-  (8 ε)))``; edge levels use only the edge's control points, so neighbouring patches agree (no
-  cracks);
+* a tessellation control stage choosing the levels from a screen-space error bound ``ε``: linear
+  interpolation of a degree-``d`` Bézier curve by ``n`` segments is within ``d (d - 1) max|Δ² P| /
+  (8 n²)`` of it, and on the triangles of an ``nu x nv`` grid a tensor-product patch is within
+  ``a / nu² + 2 c / (nu nv) + b / nv²`` (``a``, ``b`` those curve terms, ``c = p q max|twist| / 8``);
+  the differences are taken of the control points in clip space and turned into pixels with the
+  patch's least ``w`` and pixel extent, which bounds the error under perspective too.  Edge levels
+  get half the budget and use only the edge's control points, so neighbouring patches agree (no
+  cracks); inner levels ``sqrt(2 (a + c) / ε)``, ``sqrt(2 (b + c) / ε)`` keep the inside under ``ε``.
+  GL caps a level at 64: finer bounds than a patch can reach are not met (Tessellation levels 6+ on
+  large patches);
 * a tessellation evaluation stage evaluating the rational patch, its normal and its ``(u, v)``,
   then running the mesh vertex shader's body on them.
 
@@ -162,16 +167,34 @@ def tessellation_sources(vertex: str, fields: tuple[str, ...]) -> tuple[str, str
         "#else",
         "#define TC_MODEL tc_i_model[0]",
         "#endif",
-        "vec2 pixel[NCTRL];",
-        "// segments so that a degree-d curve through control points k0, k0 + step, ... deviates < NURBS_ERROR px",
-        "float level(int k0, int step, int d) {",
-        "    if (d < 2) return 1.0;",
-        "    float m = 0.0;",
-        "    for (int i = 0; i + 2 <= d; ++i)",
-        "        m = max(m, length(pixel[k0 + (i + 2) * step] - 2.0 * pixel[k0 + (i + 1) * step]",
-        "                          + pixel[k0 + i * step]));",
-        "    return clamp(ceil(sqrt(float(d * (d - 1)) * m / (8.0 * float(NURBS_ERROR)))), 1.0, 64.0);",
+        "// Screen-space error of linear interpolation, bounded in clip space (exact under perspective): a clip",
+        "// point c's pixel is s = c.xy / c.w * viewport; an error e of c moves it by (e.xy viewport - s e.w) / c.w,",
+        "// which is the same with s measured from any centre: |e.xy viewport - centre e.w| + r |e.w| over w_min",
+        "// (r: how far the control points' pixels reach from the centre, w_min: their least w).  The errors come",
+        "// from second differences of the control points (d (d - 1) / 8 max|second difference| / n^2).",
+        "vec4 clip[NCTRL];",
+        "vec2 pixel_of(int k) { return clip[k].xy / clip[k].w * u_viewport; }",
+        "// (max |e.xy viewport - centre e.w|, max |e.w|) over the differences e seen so far",
+        "vec2 widest(vec2 m, vec4 e, vec2 centre) {",
+        "    return max(m, vec2(length(e.xy * u_viewport - centre * e.w), abs(e.w)));",
         "}",
+        "// the curve term of the degree-d curve through control points k0, k0 + step, ...: its n-segment",
+        "// polyline is within curve_term / n^2 pixels of it",
+        "float curve_term(int k0, int step, int d) {",
+        "    if (d < 2) return 0.0;",
+        "    vec2 centre = vec2(0.0), m = vec2(0.0);",
+        "    for (int i = 0; i <= d; ++i) centre += pixel_of(k0 + i * step) / float(d + 1);",
+        "    float r = 0.0, wmin = 1e30;",
+        "    for (int i = 0; i <= d; ++i) {",
+        "        r = max(r, length(pixel_of(k0 + i * step) - centre));",
+        "        wmin = min(wmin, clip[k0 + i * step].w);",
+        "    }",
+        "    for (int i = 0; i + 2 <= d; ++i)",
+        "        m = widest(m, clip[k0 + (i + 2) * step] - 2.0 * clip[k0 + (i + 1) * step] + clip[k0 + i * step],",
+        "                   centre);",
+        "    return float(d * (d - 1)) * (m.x + r * m.y) / (8.0 * wmin);",
+        "}",
+        "float segments(float term) { return clamp(ceil(sqrt(term / float(NURBS_ERROR))), 1.0, 64.0); }",
         "void main() {",
         "    te_point[gl_InvocationID] = tc_point[gl_InvocationID];",
         "    te_domain[gl_InvocationID] = tc_domain[gl_InvocationID];",
@@ -179,19 +202,41 @@ def tessellation_sources(vertex: str, fields: tuple[str, ...]) -> tuple[str, str
         *(f"    te_{a} = tc_{a}[0];" for _, a in attrs),
         "    mat4 mvp = u_proj * u_view * TC_MODEL;",
         "    bool behind = false;",
+        "    vec2 centre = vec2(0.0);",
         "    for (int k = 0; k < NCTRL; ++k) {",
-        "        vec4 c = mvp * vec4(tc_point[k].xyz / tc_point[k].w, 1.0);",
-        "        if (c.w <= 1e-6) behind = true;",
-        "        pixel[k] = c.xy / max(c.w, 1e-6) * u_viewport;",
+        "        clip[k] = mvp * vec4(tc_point[k].xyz / tc_point[k].w, 1.0);",
+        "        if (clip[k].w <= 1e-6) behind = true;",
+        "        clip[k].w = max(clip[k].w, 1e-6);",
+        "        centre += pixel_of(k) / float(NCTRL);",
         "    }",
-        "    // control point (i, j) is k = i * (Q + 1) + j: i along u, j along v",
-        "    float u0 = level(0, NURBS_Q + 1, NURBS_P);                 // the edge v = 0 (a curve in u)",
-        "    float u1 = level(NURBS_Q, NURBS_Q + 1, NURBS_P);           // v = 1",
-        "    float v0 = level(0, 1, NURBS_Q);                           // u = 0 (a curve in v)",
-        "    float v1 = level(NURBS_P * (NURBS_Q + 1), 1, NURBS_Q);     // u = 1",
-        "    float iu = max(u0, u1), iv = max(v0, v1);",
-        "    for (int j = 1; j < NURBS_Q; ++j) iu = max(iu, level(j, NURBS_Q + 1, NURBS_P));",
-        "    for (int i = 1; i < NURBS_P; ++i) iv = max(iv, level(i * (NURBS_Q + 1), 1, NURBS_Q));",
+        "    float r = 0.0, wmin = 1e30;",
+        "    for (int k = 0; k < NCTRL; ++k) {",
+        "        r = max(r, length(pixel_of(k) - centre));",
+        "        wmin = min(wmin, clip[k].w);",
+        "    }",
+        "    // control point (i, j) is k = i * (Q + 1) + j: i along u, j along v.  Edges are curves: half the",
+        "    // budget (the other half is for the triangles next to them); only the edge's own control points, so",
+        "    // neighbouring patches agree (no cracks)",
+        "    float u0 = segments(2.0 * curve_term(0, NURBS_Q + 1, NURBS_P));              // v = 0 (a curve in u)",
+        "    float u1 = segments(2.0 * curve_term(NURBS_Q, NURBS_Q + 1, NURBS_P));        // v = 1",
+        "    float v0 = segments(2.0 * curve_term(0, 1, NURBS_Q));                        // u = 0 (a curve in v)",
+        "    float v1 = segments(2.0 * curve_term(NURBS_P * (NURBS_Q + 1), 1, NURBS_Q));  // u = 1",
+        "    // inside: linear interpolation on the triangles of an nu x nv grid is within",
+        "    // a / nu^2 + 2 c / (nu nv) + b / nv^2 (a, b: the u and v curve terms, c = p q max|twist| / 8);",
+        "    // nu = sqrt(2 (a + c) / e), nv = sqrt(2 (b + c) / e) keep that under e",
+        "    float a = 0.0, b = 0.0;",
+        "    vec2 twist = vec2(0.0);",
+        "    for (int j = 0; j <= NURBS_Q; ++j) a = max(a, curve_term(j, NURBS_Q + 1, NURBS_P));",
+        "    for (int i = 0; i <= NURBS_P; ++i) b = max(b, curve_term(i * (NURBS_Q + 1), 1, NURBS_Q));",
+        "    for (int i = 0; i < NURBS_P; ++i)",
+        "        for (int j = 0; j < NURBS_Q; ++j) {",
+        "            int k = i * (NURBS_Q + 1) + j;",
+        "            vec4 e = clip[k + NURBS_Q + 2] - clip[k + NURBS_Q + 1] - clip[k + 1] + clip[k];",
+        "            twist = widest(twist, e, centre);",
+        "        }",
+        "    float c = float(NURBS_P * NURBS_Q) * (twist.x + r * twist.y) / (8.0 * wmin);",
+        "    float iu = max(max(u0, u1), segments(2.0 * (a + c)));",
+        "    float iv = max(max(v0, v1), segments(2.0 * (b + c)));",
         "    if (behind) { u0 = u1 = v0 = v1 = iu = iv = 64.0; }  // part of it behind the eye: the finest",
         "    gl_TessLevelOuter[0] = v0;",
         "    gl_TessLevelOuter[1] = u0;",
