@@ -28,11 +28,12 @@ from typing import Any
 from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
-__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
+__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields", "SRGB_GLSL"]
 
 MAX_LIGHTS = 32
 
-_COMMON = """
+#: GLSL sRGB encoding and decoding (every program that writes or reads display values).
+SRGB_GLSL = """
 vec3 to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
     return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -40,6 +41,10 @@ vec3 to_srgb(vec3 c) {
 vec3 to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
 }
+"""
+_COMMON = (
+    SRGB_GLSL
+    + """
 vec3 encode_output(vec3 c) {
 #ifdef LINEAR_OUTPUT
     return max(c, vec3(0.0));
@@ -59,6 +64,7 @@ vec3 apply_fog(vec3 c, float d) {
 }
 #endif
 """
+)
 
 VERTEX = """
 in vec3 in_position;
