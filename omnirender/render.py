@@ -194,7 +194,8 @@ def render(
     engine, which refuses the ones it does not know (see ``help()`` of
     ``om.gl.render``, ``om.povray.render``, ``om.mitsuba.render``, ``om.radiance.render``):
 
-    - gl: ``samples`` (MSAA, 0/1/2/4/8/16), ``background``, ``read_depth``, ``shadows`` (default True);
+    - gl: ``samples`` (MSAA, 0/1/2/4/8/16), ``background``, ``read_depth``, ``shadows`` (default True),
+      ``pipeline`` (``"forward"`` or ``"deferred"``);
     - povray: ``quality`` (0..11), ``antialias``, ``timeout``, ``threads``, ``keep``, ``depth``;
     - mitsuba: ``spp`` (samples per pixel), ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
       ``depth``, ``headlight``, ``global_ambient``;

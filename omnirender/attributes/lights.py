@@ -10,7 +10,9 @@ that ``engine.lights()`` reports.
 
 Attenuation is OpenGL's: ``f(d) = 1 / (C + L d + Q d^2)``; a spot light
 multiplies it by ``spot_factor(cos_angle) = cos_angle ** exponent`` inside the
-cone (angle to the spot axis <= ``cutoff`` degrees) and 0 outside.
+cone (angle to the spot axis <= ``cutoff`` degrees) and 0 outside.  A point or
+spot light's ``reach()`` is where its contribution falls below ``threshold``
+(the GL deferred pipeline draws the light only that far).
 """
 
 from __future__ import annotations
@@ -36,6 +38,9 @@ from ._params import (
 __all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight", "default_lights"]
 
 _nonneg = check_number(0.0)
+#: Default ``threshold`` of point and spot lights: a light's reach ends where it adds less than 1/1024 of its
+#: brightest channel (under 2 of 255 sRGB levels on black, and less on lit surfaces).
+DEFAULT_THRESHOLD = 1.0 / 1024.0
 
 
 def _scaled(color: tuple[float, ...], intensity: float) -> tuple[float, float, float]:
@@ -96,19 +101,41 @@ class LightSource(Parameterised, Light):
 class _Attenuated(LightSource):
     """A light at a position, attenuated with distance (OpenGL's C, L, Q)."""
 
-    __slots__ = ("_position", "_constant", "_linear", "_quadratic")
+    __slots__ = ("_position", "_constant", "_linear", "_quadratic", "_threshold")
     position = Param(check_vector(3), "position in the light's coordinates")
     constant = Param(_nonneg, "constant attenuation C")
     linear = Param(_nonneg, "linear attenuation L")
     quadratic = Param(_nonneg, "quadratic attenuation Q")
+    threshold = Param(
+        check_number(0.0, 1.0, min_open=True),
+        "contribution (relative to the brightest colour channel) below which the light counts as out of reach: "
+        "where the GL deferred pipeline's light proxy ends",
+    )
 
-    def _init_attenuation(self, position: Sequence[float], constant: float, linear: float, quadratic: float) -> None:
+    def _init_attenuation(
+        self, position: Sequence[float], constant: float, linear: float, quadratic: float, threshold: float
+    ) -> None:
         self.position = position
         self.constant = constant
         self.linear = linear
         self.quadratic = quadratic
+        self.threshold = threshold
         if self._constant == 0.0 and self._linear == 0.0 and self._quadratic == 0.0:
             raise ValueError(f"{type(self).__name__}: constant, linear and quadratic must not all be 0")
+
+    def reach(self) -> float:
+        """The distance beyond which the light adds less than ``threshold`` of its brightest colour channel.
+
+        ``inf`` for a light without linear or quadratic attenuation, 0 for one too faint everywhere.
+        """
+        brightest = max(max(self.diffuse), max(self.specular))
+        need = brightest / self._threshold  # C + L d + Q d^2 must exceed this for the light to fade out
+        c, lin, q = self._constant, self._linear, self._quadratic
+        if c >= need:
+            return 0.0
+        if q > 0.0:
+            return float((-lin + math.sqrt(lin * lin + 4.0 * q * (need - c))) / (2.0 * q))
+        return float((need - c) / lin) if lin > 0.0 else math.inf
 
     def attenuation(self, distance: float | np.ndarray) -> float | np.ndarray:
         """``1 / (C + L d + Q d^2)`` for distance(s) ``d`` >= 0."""
@@ -163,9 +190,10 @@ class PointLight(_Attenuated):
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
+        threshold: float = DEFAULT_THRESHOLD,
     ) -> None:
         super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
-        self._init_attenuation(position, constant, linear, quadratic)
+        self._init_attenuation(position, constant, linear, quadratic, threshold)
 
 
 class SpotLight(_Attenuated):
@@ -195,9 +223,10 @@ class SpotLight(_Attenuated):
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
+        threshold: float = DEFAULT_THRESHOLD,
     ) -> None:
         super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
-        self._init_attenuation(position, constant, linear, quadratic)
+        self._init_attenuation(position, constant, linear, quadratic, threshold)
         self.direction = direction
         self.cutoff = cutoff
         self.exponent = exponent

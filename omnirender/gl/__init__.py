@@ -4,8 +4,9 @@
 frame after frame with ``engine.render(scene)``.  GL-specific attributes
 (``DepthTest``, ``DepthMask``, ``Blend``, ``CullFace``, ``PolygonOffset``,
 ``ColorMask``, ``StencilTest``, ``StencilOp``, ``ScissorTest``,
-``AlphaTest``) and GL techniques (``GLTechnique`` and the default
-``Forward``, described pass by pass with ``Pass``, ``Target``, ``Clear``,
+``AlphaTest``) and GL techniques (``GLTechnique``, the default
+``Forward`` and the deferred pipeline ``Deferred`` with its ``ShadingModel`` and
+``MaterialDescription`` materials, described pass by pass with ``Pass``, ``Target``, ``Clear``,
 ``Shader``, ``FullScreen`` and ``PingPong``; ``Pass(custom=...)`` runs
 Python drawing code in a pass) live here; other engines ignore them.
 ``capture_state`` / ``preserved_state`` snapshot and restore the GL raster
@@ -48,6 +49,11 @@ __all__ = [
     "SurfaceStyle",
     "PhongHighlight",
     "Supersample",
+    "Deferred",
+    "ShadingModel",
+    "MaterialDescription",
+    "ShadingModelError",
+    "BufferLayout",
     "Pass",
     "Target",
     "Clear",
@@ -80,6 +86,11 @@ _LAZY = {
     "SurfaceStyle": "surface_style",
     "PhongHighlight": "highlight",
     "Supersample": "supersample",
+    "Deferred": "deferred",
+    "ShadingModel": "deferred",
+    "MaterialDescription": "deferred",
+    "ShadingModelError": "deferred",
+    "BufferLayout": "deferred",
     "GLTechnique": "techniques",
     "Forward": "techniques",
     "FramebufferStack": "framebuffer",
@@ -97,7 +108,7 @@ def _load() -> None:
     if not _loaded:
         from . import attribute_painters, painters  # noqa: F401
 
-        for name in ("text", "volume"):
+        for name in ("text", "volume", "nurbs"):
             try:
                 importlib.import_module(f".{name}", __name__)
             except ModuleNotFoundError as exc:  # optional painters not written yet
@@ -171,7 +182,8 @@ def render(
     ``read_depth`` (default True: ``image.depth`` holds eye-space distances),
     ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes without a
     handler), ``technique`` (an ``om.Technique`` replacing the default one)
-    and ``shadows`` (default True: shadow maps for lights that cast shadows).
+    ``shadows`` (default True: shadow maps for lights that cast shadows) and
+    ``pipeline`` (``"forward"``, the default, or ``"deferred"``: ``om.gl.Deferred``).
     For many frames keep a ``GLEngine`` (or an ``om.Viewer``) instead: this
     function compiles the scene and its shaders on every call.  Calls share one
     hidden GL context per thread (see :func:`one_shot_context`); the engine's
@@ -181,11 +193,13 @@ def render(
     from .engine import GLEngine
 
     read_depth = options.pop("read_depth", True)
-    engine_options = {key: options.pop(key) for key in ("on_missing", "technique", "shadows") if key in options}
+    names = ("on_missing", "technique", "shadows", "pipeline")
+    engine_options = {key: options.pop(key) for key in names if key in options}
     if options:
         raise TypeError(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
-            "read_depth, on_missing, technique and shadows (spp/quality are options of the mitsuba/povray engines)"
+            "read_depth, on_missing, technique, shadows and pipeline (spp/quality are options of the mitsuba/povray "
+            "engines)"
         )
     from .context import check_samples_total
 

@@ -115,6 +115,11 @@ def _register() -> None:
         cls = type(f"StatePainter_{target.__name__}", (StatePainter,), {"__slots__": (), "target": target})
         registry.register(cls(), [GLEngine])
     registry.register(HighlightPainter(), [GLEngine])
+    from .deferred.models import MaterialDescription
+
+    registry.register(type("MaterialDescriptionPainter", (HighlightPainter,), {"__slots__": (),
+                                                                                "target": MaterialDescription})(),
+                      [GLEngine])  # fmt: skip
     registry.register(ClipPlanePainter(), [GLEngine])
 
 

@@ -35,6 +35,7 @@ from ..core.light import LightSwitch
 from ..core.transform import Transform
 from ..scene.node import Node
 from .attributes import CullFace, GLState
+from .deferred.models import MaterialDescription
 from .drawlist import DrawItem, DrawState, Scope
 from .geometry import Geometry
 from .instancing import instance_rows
@@ -48,6 +49,7 @@ _DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, poin
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
 _SHADING_MODEL = ROW.at("emission", "model")
+_MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 _FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
@@ -188,11 +190,14 @@ class DrawListCompiler:
         self._scope = scope
         previous = self.technique
         self.technique = technique  # its service and handler overrides apply to what it scopes
+        path = self._technique_path
+        self._technique_path = (*path, technique)
         try:
             self.run_program(program)
         finally:
             self.technique = previous
             self._scope = outer
+            self._technique_path = path
 
     def begin(self, root: Any) -> None:
         """The core's pre-evaluation; a following ``render(None)`` uses its camera and lights (the viewer's way)."""
@@ -237,8 +242,16 @@ class DrawListCompiler:
         root = Scope(None)
         self._scope = root
         self._compile_frames = [[0, 0, False]]
+        generation = self.material_table.generation
         try:
             self.run(scene)
+            if self.material_table.generation != generation:  # the material table started again: every id anew
+                self._node_cache.clear()
+                self._surface_memo.clear()
+                self._state_dirty = self._surface_dirty = True
+                root = self._scope = Scope(None)
+                self._compile_frames = [[0, 0, False]]
+                self.run(scene)
         except BaseException:
             self._surface.clear()
             self._clips.clear()
@@ -326,6 +339,7 @@ class DrawListCompiler:
             self._group_path[-1],
             tuple(self.context.mono_stack(Transform)),
             local,
+            self._technique_path,
         )
         self._scope.entries.append(item)
         return item
@@ -363,6 +377,7 @@ class DrawListCompiler:
             template.groups,
             template.chain,
             None,
+            template.techniques,
         )
         item.instances = made.rows
         item.instance_models = made.models
@@ -498,6 +513,9 @@ class DrawListCompiler:
         if kind in ("mesh", "points"):
             features.append(("MODEL", model))
             features.extend(state_features)
+        if geometry.program_features:  # geometry drawn by a program of its own (GPU-tessellated NURBS patches)
+            features.extend(geometry.program_features)
+            uniforms = uniforms + geometry.program_uniforms
         if cull_override is not None:
             raster = raster[: CullFace.index] + (cull_override,) + raster[CullFace.index + 1 :]
         key = (kind, tuple(features), extra, raster, bound, clip, fog, switch, uniforms, code)
@@ -527,9 +545,11 @@ class DrawListCompiler:
         mono = self.mono
         texture, layers, bump = mono(Texture), mono(MultiTexture), mono(BumpMap)
         highlight = mono(Highlight)
+        description = mono(MaterialDescription)
         key = (
             appearance_key(self._surface, texture, layers, bump),
             None if highlight is None else (id(highlight), highlight.version),
+            None if description is None else (id(description), description.version),
         )
         memo = self._surface_memo
         entry = memo.get(key)
@@ -538,7 +558,12 @@ class DrawListCompiler:
             for tex in app.textures:
                 self._check_texture(tex)
             # the attributes are kept alive with the entry, so the ids in its key stay theirs
-            entry = (app, self._material_row(app, highlight), TextureSet(app), (texture, layers, bump, highlight))
+            row = self._material_row(app, highlight)
+            # the shading model and the id of the material description (the deferred pipeline's material table)
+            if description is not None:
+                row[_SHADING_MODEL] = description.model.number
+            row[_MATERIAL_ID] = self.material_table.for_appearance(app, description)
+            entry = (app, row, TextureSet(app), (texture, layers, bump, highlight, description))
             if len(memo) > 256:
                 memo.clear()
             memo[key] = entry

@@ -160,6 +160,9 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "glTexImage2D": ([_u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p], None),
     "glFramebufferTexture2D": ([_u, _u, _u, _u, _i], None),
     "glGetFramebufferAttachmentParameteriv": ([_u, _u, _u, _pi], None),
+    "glDrawBuffers": ([_i, _pu], None),
+    "glGetMultisamplefv": ([_u, _u, _pf], None),
+    "glSampleMaski": ([_u, _u], None),
 }
 
 
@@ -326,6 +329,16 @@ def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth:
         fbo.depth_mask = bool(depth)
 
 
+def clear_stencil_bits(raw: RawGL, bits: int) -> None:
+    """Set the stencil ``bits`` of the bound framebuffer to 0, keeping the others (scissor test off)."""
+    if raw.available:
+        raw.glDisable(0x0C11)
+        raw._mask(int(bits) & 0xFF)
+        raw.glClearStencil(0)
+        raw.glClear(GL_STENCIL_BUFFER_BIT)
+        raw._mask(0xFF)
+
+
 def clear_stencil(raw: RawGL, value: int = 0) -> None:
     """Clear the stencil buffer of the bound framebuffer (every bit: glClear obeys the stencil write mask)."""
     if raw.available:
@@ -359,3 +372,86 @@ def blit(raw: RawGL, source: Any, target: Any, size: tuple[int, int], color: boo
     raw.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, bits, GL_NEAREST)
     raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, previous_draw.value)
     raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, previous_read.value)
+
+
+GL_DEPTH_ATTACHMENT = 0x8D00
+GL_STENCIL_ATTACHMENT = 0x8D20
+GL_ATTACHMENT_OBJECT_TYPE = 0x8CD0
+GL_ATTACHMENT_OBJECT_NAME = 0x8CD1
+GL_TEXTURE = 0x1702
+GL_TEXTURE_2D_MULTISAMPLE = 0x9100
+GL_SAMPLE_POSITION = 0x8E50
+
+
+def _attachment(raw: RawGL, point: int) -> tuple[int, int]:
+    """(object type, name) attached at ``point`` of the bound draw framebuffer (type 0: nothing)."""
+    kind, name = ctypes.c_int(0), ctypes.c_int(0)
+    raw.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, point, GL_ATTACHMENT_OBJECT_TYPE, ctypes.byref(kind))
+    if kind.value:
+        raw.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, point, GL_ATTACHMENT_OBJECT_NAME,
+                                                  ctypes.byref(name))  # fmt: skip
+    return kind.value, name.value
+
+
+def sharing_depth(ctx: Any, raw: RawGL, colors: list[Any], samples: int) -> tuple[Any, Any, bool] | None:
+    """A framebuffer of moderngl colour textures sharing the depth (and stencil) of the framebuffer bound now.
+
+    Returns (framebuffer, release function, whether it has a stencil), or None when the bound
+    framebuffer is the default one or has no depth attachment (its buffers cannot be shared).
+    Passes that test against another pass's depth without sampling it use it (no feedback loop).
+    """
+    if not raw.available:
+        return None
+    bound = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+    if bound.value == 0:
+        return None
+    depth = _attachment(raw, GL_DEPTH_ATTACHMENT)
+    if not depth[0]:
+        return None
+    stencil = _attachment(raw, GL_STENCIL_ATTACHMENT)
+    target = GL_TEXTURE_2D_MULTISAMPLE if samples > 1 else GL_TEXTURE_2D
+    fbo = ctypes.c_uint(0)
+    raw.glGenFramebuffers(1, ctypes.byref(fbo))
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+    for i, color in enumerate(colors):
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, target, color.glo, 0)
+    shared = stencil == depth
+    point = GL_DEPTH_STENCIL_ATTACHMENT if shared else GL_DEPTH_ATTACHMENT
+    if depth[0] == GL_RENDERBUFFER:
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, point, GL_RENDERBUFFER, depth[1])
+    else:
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, point, target, depth[1], 0)
+    buffers = (ctypes.c_uint * max(len(colors), 1))(*(GL_COLOR_ATTACHMENT0 + i for i in range(len(colors))))
+    raw.glDrawBuffers(len(colors), buffers)
+    ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, bound.value)
+
+    def release() -> None:
+        raw.glDeleteFramebuffers(1, ctypes.byref(fbo))
+
+    if not ok:
+        release()
+        return None
+    wrapped = ctx.detect_framebuffer(fbo.value)
+    _ = ctx.error  # moderngl's detection queries attachments that are not there: a harmless error to drop
+    return wrapped, release, shared
+
+
+def sample_positions(raw: RawGL, samples: int) -> list[tuple[float, float]]:
+    """The sample positions (in [0, 1] within a pixel) of the multisampled framebuffer bound now."""
+    out = []
+    value = (ctypes.c_float * 2)()
+    for k in range(samples):
+        raw.glGetMultisamplefv(GL_SAMPLE_POSITION, k, value)
+        out.append((float(value[0]), float(value[1])))
+    return out
+
+
+def frame_has_stencil(raw: RawGL) -> bool:
+    """Whether the framebuffer bound now (not the default one) has a stencil attachment."""
+    if not raw.available:
+        return False
+    bound = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+    return bound.value != 0 and _attachment(raw, GL_STENCIL_ATTACHMENT)[0] != 0

@@ -98,7 +98,7 @@ class DrawState:
 
 
 class DrawItem:
-    """One shape occurrence: geometry, state, instance row, transparency, node and group tags on its path."""
+    """One shape occurrence: geometry, state, instance row, transparency, node, tags and techniques of its path."""
 
     __slots__ = (
         "geometry",
@@ -110,6 +110,7 @@ class DrawItem:
         "chain",
         "local",
         "slot",
+        "techniques",
         "instances",
         "instance_models",
         "source",
@@ -126,6 +127,7 @@ class DrawItem:
         groups: tuple[frozenset[str], ...] = (),
         chain: tuple[Any, ...] = (),
         local: np.ndarray | None = None,
+        techniques: tuple[Any, ...] = (),
     ) -> None:
         self.geometry = geometry
         self.state = state
@@ -140,6 +142,8 @@ class DrawItem:
         self.local = local
         #: (batch, index) of the item's row in its opaque batch, or None
         self.slot: tuple[Batch, int] | None = None
+        #: the techniques whose scopes hold the item (outermost first), for pass predicates
+        self.techniques = techniques
         #: for an instance set: its rows (N, ROW.stride), one per instance, drawn as one batch; else None
         self.instances: np.ndarray | None = None
         #: for an instance set: (N, 4, 4) matrices after the chain (instance transform @ local)

@@ -40,6 +40,8 @@ from .context import (
     delete_renderbuffer,
     depth_stencil_framebuffer,
 )
+from .deferred.materials import MaterialTable
+from .deferred.pipeline import Deferred
 from .drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
 from .dynamic import TransformUpdater
 from .frame import FrameRunner
@@ -52,7 +54,10 @@ from .shaders import ProgramCache
 from .state import defaults, kinds
 from .techniques import Forward, GLTechnique
 
-__all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND"]
+__all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
+
+#: The frame pipelines of ``GLEngine(pipeline=...)``.
+PIPELINES = ("forward", "deferred")
 
 
 class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, Engine):
@@ -65,7 +70,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     nested technique pass draws items with); ``timing=True`` measures each
     pass's GPU time with timer queries (``engine.stats["passes"]``);
     ``shadows=False`` turns shadow maps off (they are on by default, see
-    :class:`~.shadows.ShadowMaps`).
+    :class:`~.shadows.ShadowMaps`); ``pipeline="deferred"`` (or an
+    ``om.gl.Deferred(...)``) shades every frame with the deferred pipeline.
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -103,13 +109,26 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         timing: bool = False,
         programs: ProgramCache | None = None,
         shadows: bool = True,
+        pipeline: Any = "forward",
     ) -> None:
         from . import _load
 
         _load()  # painters register on first use
         if technique is not None and not isinstance(technique, Technique):
             raise TypeError(f"GLEngine: technique must be an om.Technique (e.g. om.gl.Forward()), got {technique!r}")
+        if not isinstance(pipeline, Deferred) and pipeline not in PIPELINES:
+            raise ValueError(
+                f"GLEngine: pipeline must be one of {PIPELINES} or an om.gl.Deferred(...), got {pipeline!r:.60}"
+            )
         super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
+        #: "forward" or "deferred" (om.gl.Deferred runs every frame; nested techniques still draw forward)
+        self._pipeline = "deferred" if isinstance(pipeline, Deferred) else pipeline
+        self._pipeline_technique = (
+            pipeline if isinstance(pipeline, Deferred) else (Deferred() if pipeline == "deferred" else None)
+        )
+        self._deferred: Any = None
+        #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
+        self.draw_list_version = 0
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
         self.timing = bool(timing)
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
@@ -146,6 +165,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._root: Scope | None = None
         self._compile_frames: list[list[Any]] = []
         self._group_path: list[tuple[frozenset[str], ...]] = [()]
+        self._technique_path: tuple[Any, ...] = ()
         self._node_cache: dict[int, Any] = {}
         #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
         self._occurrences: dict[tuple[int, int], int] = {}
@@ -163,6 +183,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._states: dict[tuple, DrawState] = {}
         self._surface_row = np.zeros(ROW.stride, np.float32)
         self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        #: the material descriptions of compiled items by id (the deferred pipeline's material table)
+        self.material_table = MaterialTable()
         self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
         self._texset: Any = None
         self._point_size = 1.0
@@ -261,6 +283,24 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     def samples(self) -> int:
         """Multisample count (0: off)."""
         return self._samples
+
+    @property
+    def frame_technique(self) -> Technique:
+        """The technique a frame runs over the whole scene: the deferred pipeline's, or :attr:`technique`.
+
+        Nested techniques' passes always draw their items with :attr:`technique` (forward).
+        """
+        return self._pipeline_technique or self.technique
+
+    @property
+    def pipeline(self) -> Any:
+        """``"forward"``, or the engine's :class:`~.deferred.DeferredRenderer` (``describe()``, ``memory()``)
+        once a deferred frame was drawn or the engine was made with ``pipeline="deferred"``."""
+        if self._pipeline == "deferred" or self._deferred is not None:
+            from .deferred.pipeline import DeferredRenderer
+
+            return DeferredRenderer.of(self)
+        return "forward"
 
     def _make_targets(self) -> None:
         with self.current():
@@ -437,6 +477,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._released = True
 
     def _release(self) -> None:
+        if self._deferred is not None:
+            self._deferred.release()
+            self._deferred = None
+        self.material_table.release()
         for batch in self._batch_pool.values():
             batch.release()
         self._batch_pool.clear()

@@ -127,8 +127,25 @@ class FrameRunner:
         """Size of the framebuffer being drawn into."""
         return self._target_size
 
+    @property
+    def linear_output(self) -> bool:
+        """Whether the framebuffer being drawn into holds linear light (a float target), not display values."""
+        return self._linear_output
+
+    @property
+    def frame_shadows(self) -> Any:
+        """The frame's shadow maps (a :class:`~.shadows.ShadowPlan`: faces per light, uniforms), or None."""
+        return self._shadow_plan
+
     def forget_gl_state(self) -> None:
         """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
+        self._applier.forget()
+
+    def reset_gl_state(self) -> None:
+        """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
+        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        self._applier.forget()
+        self._applier.apply(self._defaults)
         self._applier.forget()
 
     # -- the frame ---------------------------------------------------------------------
@@ -181,7 +198,7 @@ class FrameRunner:
         self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
-            calls += self._run(self.technique, root, Composed(), item_level=True)
+            calls += self._run(self.frame_technique, root, Composed(), item_level=True)
             calls += self._mirror_passes(root)
         finally:
             self._drawing = False
@@ -475,13 +492,18 @@ class FrameRunner:
         key = self._target_key(description, size)
         size = key[1]
         target = self._target_cache.get(key)
+        shared = self.target(description.depth).depth if isinstance(description.depth, str) else None
+        if target is not None and target.shared_depth is not shared:  # the target it shares depth with is new
+            self._target_cache.pop(key).release()
+            target = None
         if target is None:
             if max(size) > self.max_texture_size:
                 raise ValueError(
                     f"GLEngine: target {description.name!r} of {size[0]}x{size[1]} pixels is larger than this GPU "
                     f"allows ({self.max_texture_size} per side); lower its size or resolution"
                 )
-            target = self._target_cache[key] = RenderTarget(self.ctx, description, size, self.raw)
+            target = RenderTarget(self.ctx, description, size, self.raw, shared)
+            self._target_cache[key] = target
         self._targets_used.add(key)
         self._frame_targets[description.name] = target
         return target
@@ -552,7 +574,9 @@ class FrameRunner:
                 color = (0.0, 0.0, 0.0, 0.0)
             if clear.depth is None:
                 set_masks(ctx, self.raw, fbo, depth=False)
+                fbo.depth_mask = False  # moderngl applies the framebuffer's own depth mask when it clears
             fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            fbo.depth_mask = True
             set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         if clear.stencil is not None:
             clear_stencil(self.raw, int(clear.stencil))

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .passes import FullScreen, Target
+from .passes import FORMATS, FullScreen, Target
 from .resources import gpu_call
 
 __all__ = ["RenderTarget", "FullScreenPrograms", "PingPong", "RESOLVE", "resolve"]
@@ -51,19 +51,28 @@ vec3 to_linear(vec3 c) {
 class RenderTarget:
     """Textures and framebuffer of one offscreen target (made from a :class:`Target` at a pixel size)."""
 
-    def __init__(self, ctx: Any, description: Target, size: tuple[int, int], raw: Any = None) -> None:
+    def __init__(
+        self, ctx: Any, description: Target, size: tuple[int, int], raw: Any = None, shared_depth: Any = None
+    ) -> None:
         self.ctx = ctx
         self.description = description
         self.size = size
         self.colors: dict[str, Any] = {}
-        dtype = description.dtype
+        samples = description.samples
+        what = f"target {description.name!r}"
         for name in description.colors:
-            tex = gpu_call(ctx.texture, size, 4, dtype=dtype, what=f"target {description.name!r}")
-            tex.filter = (ctx.LINEAR, ctx.LINEAR)
-            tex.repeat_x = tex.repeat_y = False
+            components, dtype, internal, _ = FORMATS[description.format_of(name)]
+            options = {"internal_format": internal} if internal is not None else {}
+            tex = gpu_call(ctx.texture, size, components, dtype=dtype, samples=samples, what=what, **options)
+            if not samples:  # multisampled textures have no sampler state (texelFetch only)
+                exact = dtype[0] in "iu"  # integer textures are never filtered
+                tex.filter = (ctx.NEAREST, ctx.NEAREST) if exact else (ctx.LINEAR, ctx.LINEAR)
+                tex.repeat_x = tex.repeat_y = False
             self.colors[name] = tex
         self.depth = None
         self._release_raw = None
+        #: the depth texture of another target this one shares (not released with it), or None
+        self.shared_depth = shared_depth
         if description.stencil:
             from .context import depth_stencil_target
 
@@ -75,11 +84,17 @@ class RenderTarget:
                 )
             self.fbo, self.depth, self._release_raw = made
             return
+        if shared_depth is not None:
+            self.fbo = ctx.framebuffer(list(self.colors.values()), shared_depth)
+            return
         if description.depth:
-            self.depth = gpu_call(ctx.depth_texture, size, what=f"depth of target {description.name!r}")
-            self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
-            self.depth.repeat_x = self.depth.repeat_y = False
-            self.depth.compare_func = ""  # sample depth values, not comparisons
+            self.depth = gpu_call(
+                ctx.depth_texture, size, samples=samples, what=f"depth of target {description.name!r}"
+            )
+            if not samples:
+                self.depth.filter = (ctx.NEAREST, ctx.NEAREST)
+                self.depth.repeat_x = self.depth.repeat_y = False
+                self.depth.compare_func = ""  # sample depth values, not comparisons
         self.fbo = ctx.framebuffer(list(self.colors.values()), self.depth)
 
     def texture(self, name: str) -> Any:
@@ -97,7 +112,9 @@ class RenderTarget:
     def color_array(self, name: str | None = None) -> np.ndarray:
         """(H, W, 4) array of a colour attachment, top row first (uint8 or float32 by the target's dtype)."""
         name = name or next(iter(self.colors))
-        dtype = self.description.dtype
+        dtype = self.description.format_of(name)
+        if dtype not in ("f1", "f2", "f4") or self.description.samples:
+            raise ValueError(f"target {self.description.name!r}: attachment {name!r} ({dtype}) is not an RGBA image")
         w, h = self.size
         data = self.texture(name).read(alignment=1)
         np_dtype = {"f1": np.uint8, "f2": np.float16, "f4": np.float32}[dtype]

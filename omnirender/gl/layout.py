@@ -95,7 +95,7 @@ ROW = InstanceLayout(
         Field("specular", 4, "i_spec", ("r", "g", "b", "shininess")),  # Phong
         Field("emission", 4, "i_emis", ("r", "g", "b", "model")),  # model: PHONG, PBR or UNLIT
         Field("ambient", 4, "i_amb", ("r", "g", "b", "follows_color")),  # Phong; 1: ambient = base colour
-        Field("pbr", 4, "i_pbr", ("roughness", "metallic", "unused", "unused")),
+        Field("pbr", 4, "i_pbr", ("roughness", "metallic", "material", "unused")),  # material: deferred table id
         Field("highlight", 4, "i_hl", ("r", "g", "b", "on")),
         Field("point", 4, "i_point", ("size", "unused", "unused", "unused")),
     )

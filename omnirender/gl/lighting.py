@@ -33,6 +33,7 @@ class LightUniforms:
         "spot",
         "exponent",
         "ambient",
+        "dropped",
         "_bytes",
     )
 
@@ -52,6 +53,8 @@ class LightUniforms:
         n = 0
         types = []
         order: list[Any] = []  # the light of each index
+        #: lights beyond MAX_LIGHTS (their ambient terms still count); warned about where a program lights with them
+        self.dropped = 0
         for light, matrix in lights:
             amb = getattr(light, "ambient", None)
             if amb is not None:
@@ -59,8 +62,8 @@ class LightUniforms:
             if isinstance(light, AmbientLight):
                 continue
             if n == MAX_LIGHTS:
-                warnings.warn(f"GLEngine: more than {MAX_LIGHTS} lights; the rest are ignored", stacklevel=3)
-                break
+                self.dropped += 1
+                continue
             diffuse[n] = getattr(light, "diffuse", (1.0, 1.0, 1.0))
             specular[n] = getattr(light, "specular", (1.0, 1.0, 1.0))
             if isinstance(light, DirectionalLight):
@@ -104,7 +107,14 @@ class LightUniforms:
         }
 
     def apply(self, program: Any) -> None:
-        """Write the arrays into ``program``'s uniforms (those it has)."""
+        """Write the arrays into ``program``'s uniforms (those it has); warn once when it lights with a subset."""
+        if self.dropped and program.get("u_ldiff", None) is not None:
+            warnings.warn(
+                f"GLEngine: more than {MAX_LIGHTS} lights; the rest are ignored (GLEngine(pipeline='deferred') "
+                "draws any number)",
+                stacklevel=4,
+            )
+            self.dropped = 0
         for name, data in self._bytes.items():
             u = program.get(name, None)
             if u is not None:

@@ -39,12 +39,36 @@ import numpy as np
 
 from .attributes import _DEPTH_FUNCS
 
-__all__ = ["Pass", "Target", "Clear", "Shader", "FullScreen", "Composed", "ITEM_CLASSES", "FRAME", "DEPTH_FUNCS"]
+__all__ = [
+    "Pass",
+    "Target",
+    "Clear",
+    "Shader",
+    "FullScreen",
+    "Composed",
+    "ITEM_CLASSES",
+    "FRAME",
+    "DEPTH_FUNCS",
+    "FORMATS",
+]
 
 #: The classes of draw items: drawn in this order when a pass selects several.
 ITEM_CLASSES = ("opaque", "transparent", "overlay")
 _ALL = frozenset(ITEM_CLASSES)
 _DTYPES = ("f1", "f2", "f4")
+#: Texel formats of colour attachments (``Target.formats``): components, moderngl dtype, GL internal format
+#: (None: moderngl's default for the dtype) and bytes per texel.  ``f1``/``f2``/``f4`` are RGBA of 8-bit
+#: display values, 16-bit and 32-bit floats; ``rg32ui`` two unsigned integers (packed data, e.g. a G-buffer's
+#: normal and material id); ``rg32f`` two floats; ``r11g11b10f`` three unsigned small floats in 32 bits
+#: (additive light).
+FORMATS = {
+    "f1": (4, "f1", None, 4),
+    "f2": (4, "f2", None, 8),
+    "f4": (4, "f4", None, 16),
+    "rg32ui": (2, "u4", None, 8),
+    "rg32f": (2, "f4", None, 8),
+    "r11g11b10f": (3, "f2", 0x8C3A, 4),
+}
 #: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
 DEPTH_FUNCS = _DEPTH_FUNCS
 
@@ -111,19 +135,27 @@ class Target:
     (an offscreen pass inside another offscreen pass, e.g. inside a shadow map,
     gets that target's size); ``size = (width, height)`` fixes it in pixels
     instead (a square shadow map).  ``stencil`` gives the depth texture a
-    stencil buffer (stencil techniques offscreen).  Later passes sample it
-    through :class:`FullScreen` ``inputs``, :class:`Shader` ``inputs`` or
-    ``engine.target(name)``.
+    stencil buffer (stencil techniques offscreen).  ``formats`` gives each
+    colour attachment its own texel format (a key of :data:`FORMATS`; None:
+    ``dtype`` for all), ``samples`` makes multisampled textures (0: one
+    sample; shaders read them with ``sampler2DMS`` and ``texelFetch``).
+    ``depth`` may also name another target of the frame whose depth texture
+    this one shares (drawn first): a pass then tests against depth that an
+    earlier pass wrote, without sampling what it tests against.
+    Later passes sample it through :class:`FullScreen` ``inputs``,
+    :class:`Shader` ``inputs`` or ``engine.target(name)``.
     """
 
     name: str
     colors: tuple[str, ...] = ("color",)
-    depth: bool = True
+    depth: bool | str = True
     dtype: str = "f1"
     scale: float = 1.0
     relative: str = "frame"
     size: tuple[int, int] | None = None
     stencil: bool = False
+    formats: tuple[str, ...] | None = None
+    samples: int = 0
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -154,8 +186,22 @@ class Target:
                     f"Target {self.name!r}: size must be (width, height) in pixels, 1..16384, got {self.size!r}"
                 )
             object.__setattr__(self, "size", (int(w), int(h)))
-        if self.stencil and not self.depth:
+        if isinstance(self.depth, str) and (not self.depth or self.depth == self.name):
+            raise ValueError(f"Target {self.name!r}: depth must be True, False or another target's name")
+        if self.stencil and self.depth is not True:
             raise ValueError(f"Target {self.name!r}: stencil=True needs depth=True (they share one texture)")
+        if self.formats is not None:
+            formats = (self.formats,) if isinstance(self.formats, str) else tuple(self.formats)
+            if len(formats) != len(colors) or not all(f in FORMATS for f in formats):
+                raise ValueError(
+                    f"Target {self.name!r}: formats must give one of {sorted(FORMATS)} per colour attachment "
+                    f"({len(colors)}), got {self.formats!r}"
+                )
+            object.__setattr__(self, "formats", formats)
+        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or not 0 <= self.samples <= 16:
+            raise ValueError(f"Target {self.name!r}: samples must be a whole number in [0, 16], got {self.samples!r}")
+        if self.samples and self.stencil:
+            raise ValueError(f"Target {self.name!r}: multisampled targets have no stencil here; give stencil=False")
         object.__setattr__(self, "colors", colors)
         object.__setattr__(self, "scale", float(self.scale))
 
@@ -164,6 +210,17 @@ class Target:
         if self.size is not None:
             return self.size
         return (max(1, round(frame[0] * self.scale)), max(1, round(frame[1] * self.scale)))
+
+    def format_of(self, attachment: str) -> str:
+        """The texel format of colour attachment ``attachment`` (a key of :data:`FORMATS`)."""
+        if self.formats is None:
+            return self.dtype
+        return self.formats[self.colors.index(attachment)]
+
+    def bytes_per_pixel(self) -> int:
+        """GPU memory per pixel of the frame: every attachment and depth (4 bytes) times the samples."""
+        texels = sum(FORMATS[self.format_of(name)][3] for name in self.colors) + (4 if self.depth is True else 0)
+        return texels * max(self.samples, 1)
 
 
 @dataclass(frozen=True)
@@ -206,6 +263,12 @@ class Shader:
       (``{"u_highlight": om.Texture(pattern)}``).
     * ``alpha_cutoff``: fragments whose surface alpha is below it are discarded
       (a depth-only pass of blended surfaces writes depth where they are mostly opaque).
+    * ``surface``: GLSL defining ``void pass_surface(Surface s)``, which replaces the
+      lighting and the colour output of lit items: it gets the resolved surface (eye
+      position and normal, base colour, texel, emission, occlusion, ambient light and
+      reflectance, metallic and roughness, material id, see ``shaders.SURFACE``) and
+      writes the fragment outputs it declares itself (``layout(location = k) out ...``):
+      a G-buffer, a debug view of normals.
     """
 
     depth_only: bool = False
@@ -218,13 +281,14 @@ class Shader:
     inputs: Any = ()
     textures: Any = ()
     alpha_cutoff: float | None = None
+    surface: str = ""
 
     def __post_init__(self) -> None:
         if self.alpha_cutoff is not None and not 0.0 <= float(self.alpha_cutoff) <= 1.0:
             raise ValueError(f"Shader: alpha_cutoff must be in [0, 1] or None, got {self.alpha_cutoff!r}")
         if self.flat_color is not None:
             object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
-        for name in ("vertex", "fragment"):
+        for name in ("vertex", "fragment", "surface"):
             code = getattr(self, name)
             if not isinstance(code, str):
                 raise ValueError(f"Shader: {name} must be GLSL source text, got {type(code).__name__}")
@@ -236,6 +300,8 @@ class Shader:
             raise ValueError(
                 "Shader: the fragment snippet must define void pass_fragment(inout vec4 color, vec3 P, vec3 N)"
             )
+        if self.surface and "pass_surface" not in self.surface:
+            raise ValueError("Shader: the surface snippet must define void pass_surface(Surface s)")
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
         object.__setattr__(self, "defines", _defines(self.defines))
         object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
@@ -512,8 +578,11 @@ class Composed:
         flat = None
         vertex: list[str] = []
         fragment: list[str] = []
+        surface = ""
         cutoff = None
         for s in self.shader:
+            if s.surface:
+                surface = s.surface
             if s.alpha_cutoff is not None:
                 cutoff = float(s.alpha_cutoff)
             depth_only = depth_only or s.depth_only
@@ -535,6 +604,8 @@ class Composed:
             out.append(("PASS_VERTEX", tuple(vertex)))
         if fragment and not depth_only:
             out.append(("PASS_FRAGMENT", tuple(fragment)))
+        if surface and not depth_only:
+            out.append(("PASS_SURFACE", surface))
         defines: dict[str, Any] = {}
         for s in self.shader:
             defines.update(s.defines)

@@ -54,6 +54,7 @@ class BatchRenderer:
         self._bounds = None
         self._caster_bounds = None
         self._mirrors = None
+        self.draw_list_version += 1
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             return
@@ -279,7 +280,8 @@ class BatchRenderer:
         if state.kind in ("mesh", "points"):
             lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
             if lit:
-                features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+                if not any(name == "PASS_SURFACE" for name, _ in shading):  # a surface pass lights nothing itself
+                    features = features + (("LIGHTS", self._lights_for(state.switch).types),)
                 plan = self._shadow_plan
                 if plan is not None and state.raster[ShadowingState.index][1]:
                     if not any(name == "SHADOWS_OFF" for name, _ in shading):
@@ -421,6 +423,9 @@ class BatchRenderer:
 
     def _mode(self, geometry: Geometry, kind: str) -> int:
         ctx = self.ctx
+        if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
+            return ctx.PATCHES
         if kind == "points" or geometry.mode == "points":
             return ctx.POINTS
         if geometry.mode == "lines":
@@ -465,8 +470,10 @@ class BatchRenderer:
             if u is not None:
                 u.value = (start, end, density, mode)
                 prog["u_fog_color"].value = color
+        u = prog.get("u_viewport", None)
+        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+            u.value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
         if state.kind == "lines":
-            prog["u_viewport"].value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
             prog["u_line_width"].value = float(state.value(LineWidth))
         for unit, (sampler, texture, srgb) in enumerate(state.textures):
             u = prog.get(sampler, None)
@@ -476,7 +483,10 @@ class BatchRenderer:
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
-                u.value = value
+                if isinstance(value, tuple) and len(value) > 4:  # arrays (NURBS trimming edges): as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
         for name, value in composed.uniforms().items():
             u = prog.get(name, None)
             if u is not None:

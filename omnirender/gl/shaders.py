@@ -25,14 +25,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from .layout import PBR, PHONG
+from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
-__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
+__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields", "SRGB_GLSL"]
 
 MAX_LIGHTS = 32
 
-_COMMON = """
+#: GLSL sRGB encoding and decoding (every program that writes or reads display values).
+SRGB_GLSL = """
 vec3 to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
     return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -40,6 +41,10 @@ vec3 to_srgb(vec3 c) {
 vec3 to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
 }
+"""
+_COMMON = (
+    SRGB_GLSL
+    + """
 vec3 encode_output(vec3 c) {
 #ifdef LINEAR_OUTPUT
     return max(c, vec3(0.0));
@@ -59,6 +64,7 @@ vec3 apply_fog(vec3 c, float d) {
 }
 #endif
 """
+)
 
 VERTEX = """
 in vec3 in_position;
@@ -92,12 +98,13 @@ in vec4 i_color;
 #endif
 #ifdef INSTANCE_MATERIAL
 in vec4 i_emis;
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 in vec4 i_spec;
 in vec4 i_amb;
 flat out vec4 v_spec;
 flat out vec4 v_amb;
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
 in vec4 i_pbr;
 flat out vec4 v_pbr;
 #endif
@@ -111,6 +118,14 @@ in vec4 i_point;
 #endif
 #elif defined(POINTS) && !defined(VSIZE)
 uniform vec4 u_point;
+#endif
+#ifdef PASS_SURFACE
+#ifdef INSTANCE_MATERIAL
+#define VERTEX_MATERIAL_ID int(i_pbr.z + 0.5)
+#else
+uniform vec4 u_pbr;
+#define VERTEX_MATERIAL_ID int(u_pbr.z + 0.5)
+#endif
 #endif
 uniform mat4 u_view;
 uniform mat4 u_proj;
@@ -168,9 +183,10 @@ void main() {
 #endif
 #ifdef INSTANCE_MATERIAL
     v_emis = i_emis;
-#if MODEL == 0
+#ifdef PHONG_FIELDS
     v_spec = i_spec; v_amb = i_amb;
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
     v_pbr = i_pbr;
 #endif
 #ifdef HIGHLIGHT
@@ -227,12 +243,13 @@ LAYER_UNIFORMS
 #ifdef INSTANCE_MATERIAL
 flat in vec4 v_emis;
 #define M_EMIS v_emis
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 flat in vec4 v_spec;
 flat in vec4 v_amb;
 #define M_SPEC v_spec
 #define M_AMB v_amb
-#elif MODEL == 1
+#endif
+#if MODEL == 1 || defined(PASS_SURFACE)
 flat in vec4 v_pbr;
 #define M_PBR v_pbr
 #endif
@@ -271,8 +288,28 @@ uniform mat3 u_uvm_base;
 #ifdef FLAT_COLOR
 uniform vec4 u_flat_color;          // linear
 #endif
-out vec4 f_color;
 const float PI = 3.14159265;
+#ifdef TRIM
+in vec2 v_param;                    // the NURBS surface's (u, v) in the unit square
+uniform vec4 u_trim[TRIM];          // its trimming loops' edges (x0, y0, x1, y1)
+uniform float u_trim_outer;         // 1: the square's boundary is the outer loop (every loop is a hole)
+bool trim_kept(vec2 p) {            // the winding rule of omnirender.geometry.nurbs.trim_winding
+    float w = u_trim_outer;
+    for (int k = 0; k < TRIM; ++k) {
+        vec4 e = u_trim[k];
+        float c = (e.z - e.x) * (p.y - e.y) - (p.x - e.x) * (e.w - e.y);
+        if (e.y <= p.y && e.w > p.y && c > 0.0) w += 1.0;
+        else if (e.y > p.y && e.w <= p.y && c < 0.0) w -= 1.0;
+    }
+    return w > 0.0;
+}
+#endif
+#ifdef PASS_SURFACE
+SURFACE_STRUCT
+PASS_SURFACE_CODE
+#else
+out vec4 f_color;
+#endif
 STATE_CODE
 PASS_FRAGMENT_CODE
 
@@ -302,7 +339,7 @@ vec3 half_vector(vec3 L, vec3 V, vec3 N) {
     float hh = dot(h, h);
     return hh > 1e-12 ? h * inversesqrt(hh) : N;  // light exactly opposite the eye: no highlight direction
 }
-#if MODEL == 0
+#ifdef PHONG_FIELDS
 vec3 phong_light(int i, float att, vec3 L, vec3 N, vec3 V, vec3 kd) {
     float NdL = dot(N, L);
     if (NdL <= 0.0 || att <= 0.0) return vec3(0.0);
@@ -387,15 +424,50 @@ void main() {
 #endif
 #endif
     STATE_MAIN
-#ifdef DEPTH_ONLY
-    f_color = vec4(0.0);
-#else
+#ifdef TRIM
+    if (!trim_kept(v_param)) discard;
+#endif
 #ifdef ORTHO
     vec3 V = vec3(0.0, 0.0, 1.0);
 #else
     float pp = dot(P, P);
     vec3 V = pp > 0.0 ? -P * inversesqrt(pp) : vec3(0.0, 0.0, 1.0);
 #endif
+    float metallic = 0.0;
+    float rough = 1.0;
+#if MODEL == 1
+    metallic = clamp(M_PBR.y, 0.0, 1.0);
+    rough = clamp(M_PBR.x, 0.04, 1.0);
+#ifdef MR_TEXTURE
+    vec4 mr = texture(u_mr_texture, SLOT_UV(UVSET_MR, u_uvm_mr));  // glTF: roughness in green, metallic in blue
+    metallic = clamp(M_PBR.y * mr.b, 0.0, 1.0);
+    rough = clamp(M_PBR.x * mr.g, 0.04, 1.0);
+#endif
+#endif
+#ifdef PASS_SURFACE
+    {   // the pass takes over: the resolved surface goes to its snippet (a G-buffer write), not to the lights
+        Surface s;
+        s.P = P; s.N = N; s.V = V; s.world = (u_eye_to_world * vec4(P, 1.0)).xyz; s.eye = u_eye_to_world[3].xyz;
+        s.base = base; s.texel = texel; s.emission = emission; s.occlusion = occlusion;
+        s.ambient = u_ambient;
+#ifdef PHONG_FIELDS
+        s.ambient_reflectance = M_AMB.w > 0.5 ? base.rgb : M_AMB.rgb * texel;
+#else
+        s.ambient_reflectance = base.rgb;
+#endif
+        s.metallic = metallic; s.roughness = rough;
+        s.material_id = int(M_PBR.z + 0.5);
+#ifdef UVS
+        s.uv = v_uv0;
+#else
+        s.uv = vec2(0.0);
+#endif
+        s.depth = -1.0;
+        pass_surface(s);
+    }
+#elif defined(DEPTH_ONLY)
+    f_color = vec4(0.0);
+#else
     vec3 color;
 #if defined(FLAT_COLOR)
     color = u_flat_color.rgb;
@@ -403,13 +475,6 @@ void main() {
 #elif defined(UNLIT) || MODEL == 2
     color = base.rgb;
 #elif MODEL == 1
-    float metallic = clamp(M_PBR.y, 0.0, 1.0);
-    float rough = clamp(M_PBR.x, 0.04, 1.0);
-#ifdef MR_TEXTURE
-    vec4 mr = texture(u_mr_texture, SLOT_UV(UVSET_MR, u_uvm_mr));  // glTF: roughness in green, metallic in blue
-    metallic = clamp(M_PBR.y * mr.b, 0.0, 1.0);
-    rough = clamp(M_PBR.x * mr.g, 0.04, 1.0);
-#endif
     float a2 = rough * rough * rough * rough;
     vec3 F0 = mix(vec3(0.04), base.rgb, metallic);
     float k = (rough + 1.0) * (rough + 1.0) / 8.0;
@@ -586,10 +651,10 @@ def instance_fields(kind: str, features: dict[str, Any]) -> tuple[str, ...]:
         return ("model", "color")
     fields = ["model", "color", "emission"]
     model = features.get("MODEL", PHONG)
-    if model == PHONG:
+    if model not in (PBR, UNLIT):
         fields += ["specular", "ambient"]
-    elif model == PBR:
-        fields.append("pbr")
+    if model == PBR or "PASS_SURFACE" in features:
+        fields.append("pbr")  # PBR's roughness and metallic; the material id of a surface pass
     if "HIGHLIGHT" in features:
         fields.append("highlight")
     if kind == "points" and "VSIZE" not in features:
@@ -614,7 +679,27 @@ def _light_code(types: str) -> list[str]:
     ]
 
 
-_SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT")
+_SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT", "PASS_SURFACE")
+
+#: The resolved surface a ``Shader(surface=...)`` snippet receives (eye space; colours linear).
+SURFACE_STRUCT = """struct Surface {
+    vec3 P;                    // eye-space position
+    vec3 N;                    // eye-space unit normal (facing the eye on two-sided surfaces; normal map applied)
+    vec3 V;                    // unit vector towards the eye
+    vec3 world;                // world-space position
+    vec3 eye;                  // world-space position of the eye (of the pass's camera)
+    vec4 base;                 // base colour and alpha (texture and vertex colours applied)
+    vec3 texel;                // the texture's colour (1 without a texture)
+    vec3 emission;
+    float occlusion;           // PBR occlusion texture (1 without)
+    vec3 ambient;              // the ambient light: global ambient plus the lights' ambient terms
+    vec3 ambient_reflectance;  // Phong's ambient colour (or the base colour it follows)
+    float metallic;
+    float roughness;
+    int material_id;           // the row of the deferred material table
+    vec2 uv;
+    float depth;               // window depth to write instead of the fragment's (-1: keep)
+};"""
 
 
 def _header(defines: dict[str, Any]) -> str:
@@ -623,7 +708,8 @@ def _header(defines: dict[str, Any]) -> str:
     if types is not None:
         lines += _light_code(types)
     for name in _SNIPPETS:
-        defines.pop(name, None)
+        if defines.pop(name, None) is not None and name == "PASS_SURFACE":
+            lines.append("#define PASS_SURFACE")
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
@@ -631,6 +717,10 @@ def _header(defines: dict[str, Any]) -> str:
         lines.append("#define NCLIP 0")
     if "MODEL" not in defines:
         lines.append(f"#define MODEL {PHONG}")
+    if defines.get("MODEL", PHONG) not in (PBR, UNLIT):
+        # Phong's material fields: the Phong model's, and a custom shading model's (the forward pipeline shades
+        # custom models with the Phong model of their appearance; the deferred pipeline runs their stages)
+        lines.append("#define PHONG_FIELDS")
     return "\n".join(lines) + "\n"
 
 
@@ -673,6 +763,8 @@ def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> s
         .replace("PASS_VERTEX_CALLS", v_calls)
         .replace("PASS_FRAGMENT_CODE", f_code)
         .replace("PASS_FRAGMENT_CALLS", f_calls)
+        .replace("SURFACE_STRUCT", SURFACE_STRUCT)
+        .replace("PASS_SURFACE_CODE", features.get("PASS_SURFACE", ""))
         .replace("STATE_CODE", state_code)
         .replace("STATE_MAIN", state_main)
     )
@@ -706,7 +798,16 @@ class ProgramCache:
         if kind == "points":
             defines["POINTS"] = True
         head = _header(dict(defines))
-        if kind == "mesh" and "SHADOW_VOLUME" in defines:
+        stages: dict[str, str] = {}
+        if kind == "mesh" and "NURBS" in defines:  # GPU-tessellated NURBS patches (gl/nurbs.py)
+            from .nurbs import tessellation_sources
+
+            head = head.replace("#version 330", "#version 400", 1)
+            head += f"#define NCTRL {(defines['NURBS_P'] + 1) * (defines['NURBS_Q'] + 1)}\n"
+            vs, tcs, tes = tessellation_sources(VERTEX, instance_fields(kind, defines))
+            stages = {"tess_control_shader": head + tcs, "tess_evaluation_shader": head + _snippets(tes, defines, code)}
+            gs, fs = None, FRAGMENT
+        elif kind == "mesh" and "SHADOW_VOLUME" in defines:
             vs, gs, fs = VERTEX, VOLUME_GEOMETRY, VOLUME_FRAGMENT
         elif kind in ("mesh", "points"):
             vs, gs, fs = VERTEX, None, FRAGMENT
@@ -720,6 +821,7 @@ class ProgramCache:
                 vertex_shader=head + vs,
                 geometry_shader=None if gs is None else head + gs,
                 fragment_shader=head + _COMMON + fs,
+                **stages,
             )
         except Exception as exc:
             snippets = any(name in defines for name in _SNIPPETS) or kind not in ("mesh", "points", "lines")

@@ -25,14 +25,15 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["shadow_code", "pcf_mode", "MAX_SHADOW_FACES"]
+__all__ = ["shadow_code", "pcf_mode", "MAX_SHADOW_FACES", "MAPS_CORE"]
 
 #: Faces a frame's atlas holds at most (4 point lights, or 24 directional/spot lights).
 MAX_SHADOW_FACES = 24
 
-_MAPS = """
+#: The atlas look-up for one light's faces (``face_shadow``), with the uniforms it reads: used by the forward
+#: light loops through :data:`_MAPS` and by the deferred pipeline's lighting pass (one light per proxy).
+MAPS_CORE = """
 uniform sampler2D u_shadow_atlas;             // window depth of the faces' casters (raw values)
-uniform vec4 u_lshadow[MAX_LIGHTS];          // first face, face count (0 none, 1, 6)
 uniform mat4 u_shadow_mat[SHADOW_MAPS];      // world -> clip space of the face's light camera
 uniform vec4 u_shadow_tile[SHADOW_MAPS];     // atlas texel offset (xy) and size (zw); size 0: no map (lit)
 uniform vec2 u_shadow_texel[SHADOW_MAPS];    // world size of one texel: x + y * (distance from the light)
@@ -62,14 +63,12 @@ float shadow_lookup(vec4 tile, vec2 uv, float z) {
                    + shadow_bilinear(tile, t + vec2(-h, h), z) + shadow_bilinear(tile, t + vec2(h, h), z));
 #endif
 }
-float light_shadow(int i, vec3 P, vec3 N, vec3 L) {
-    int count = int(u_lshadow[i].y);
-    if (count == 0 || dot(N, L) <= 0.0) return 1.0;  // facing away: the light adds nothing anyway
-    int f = int(u_lshadow[i].x);
+// light with faces [f, f + count) (count 1 or 6) at eye position light_eye; P, N, L in eye space
+float face_shadow(int f, int count, vec3 light_eye, vec3 P, vec3 N, vec3 L) {
     vec3 W = (u_eye_to_world * vec4(P, 1.0)).xyz;
     mat3 rot = mat3(u_eye_to_world);
     if (count == 6) {
-        vec3 d = W - (u_eye_to_world * vec4(u_lpos[i].xyz, 1.0)).xyz;
+        vec3 d = W - (u_eye_to_world * vec4(light_eye, 1.0)).xyz;
         vec3 a = abs(d);
         f += a.x >= a.y && a.x >= a.z ? (d.x > 0.0 ? 0 : 1) : (a.y >= a.z ? (d.y > 0.0 ? 2 : 3) : (d.z > 0.0 ? 4 : 5));
     }
@@ -87,8 +86,20 @@ float light_shadow(int i, vec3 P, vec3 N, vec3 L) {
     if (count == 1 && (q.x < 0.0 || q.x > 1.0 || q.y < 0.0 || q.y > 1.0)) return 1.0;  // no caster there
     return shadow_lookup(tile, clamp(q.xy, 0.0, 1.0), clamp(q.z, 0.0, 1.0));
 }
+"""
+
+_MAPS = (
+    MAPS_CORE
+    + """
+uniform vec4 u_lshadow[MAX_LIGHTS];          // first face, face count (0 none, 1, 6)
+float light_shadow(int i, vec3 P, vec3 N, vec3 L) {
+    int count = int(u_lshadow[i].y);
+    if (count == 0 || dot(N, L) <= 0.0) return 1.0;  // facing away: the light adds nothing anyway
+    return face_shadow(int(u_lshadow[i].x), count, u_lpos[i].xyz, P, N, L);
+}
 #define SHADOW_MAP_ATT(i) att *= light_shadow(i, P, N, L);
 """
+)
 
 _SELECT = """
 uniform float u_light_on[MAX_LIGHTS];

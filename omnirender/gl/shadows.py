@@ -80,6 +80,12 @@ class ShadowMaps(GLTechnique):
 
     __slots__ = ("enabled", "resolution", "softness", "bias", "normal_offset")
 
+    @property
+    def deferred_inline(self) -> bool:
+        """Whether the deferred pipeline shades what it scopes through the G-buffer (with the frame's filter and
+        bias): yes while it receives shadows; ``enabled=False`` keeps its subgraph in the forward passes."""
+        return self.enabled
+
     def __init__(
         self,
         enabled: bool = True,

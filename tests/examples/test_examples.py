@@ -247,3 +247,50 @@ def test_14_user_renderer(tmp_path):
     start = next(i for i, line in enumerate(lines) if line.startswith("class RayTracedSphere"))
     end = next(i for i, line in enumerate(lines) if line.startswith("LIGHT ="))
     assert end - start < 42  # the renderer, blank lines included, in about 40 lines
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_15_toon_model(tmp_path):
+    out = run_example("15_toon_model.py", tmp_path)
+    both = check_image(tmp_path / "15-toon-model.png")
+    assert both.shape[1] == 2 * 480 + 4 and "toon" in out
+    toon, plain = both[:, :480], both[:, 484:]
+
+    def banded(rgb: np.ndarray) -> float:  # how much of the blue ball its six most common shades cover
+        _, counts = np.unique(rgb[rgb[..., 2] > rgb[..., 0] + 40] // 4, axis=0, return_counts=True)
+        return float(np.sort(counts)[::-1][:6].sum() / counts.sum())
+
+    assert banded(toon) > 0.85 and banded(plain) < 0.5  # flat bands instead of a smooth gradient
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_16_see_through(tmp_path):
+    run_example("16_see_through.py", tmp_path)
+    both = check_image(tmp_path / "16-see-through.png")
+    opened, closed = both[:, :480], both[:, 484:]
+
+    def yellow(rgb: np.ndarray) -> int:
+        return int(((rgb[..., 0] > 150) & (rgb[..., 1] > 100) & (rgb[..., 2] < 80)).sum())
+
+    assert yellow(opened) > 1000 and yellow(closed) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+def test_17_nurbs(tmp_path):
+    run_example("17_nurbs.py", tmp_path)
+    both = check_image(tmp_path / "17-nurbs.png")
+    gl, povray = both[:, :480].astype(int), both[:, 484:].astype(int)
+
+    def orange(rgb: np.ndarray) -> np.ndarray:
+        return (rgb[..., 0] > 150) & (rgb[..., 0] - rgb[..., 2] > 90)
+
+    a, b = orange(gl), orange(povray)
+    assert a.sum() > 30000 and (a ^ b).sum() < 0.05 * (a | b).sum()  # the same sheet in both engines
+    rows = np.nonzero(a.any(axis=1))[0]
+    middle = a[(rows.min() + rows.max()) // 2]
+    runs = np.count_nonzero(np.diff(middle.astype(int)) == 1) + middle[0]
+    assert runs >= 2  # a window cuts the sheet's middle row

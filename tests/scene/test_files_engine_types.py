@@ -20,6 +20,7 @@ SAMPLES = {
     "Integrator": lambda m: m.Integrator({"type": "path", "max_depth": 4}),
     "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
     "PhongHighlight": lambda m: m.PhongHighlight(om.Texture(m.PhongHighlight.lobe(20, size=8)), strength=0.5),
+    "MaterialDescription": lambda m: m.MaterialDescription("unlit"),
 }
 #: Raw differs by engine: each takes its own language
 RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
