@@ -166,7 +166,7 @@ class FullScreenPrograms:
         try:
             prog = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=source)
         except Exception as exc:
-            raise ValueError(f"FullScreen: the effect's GLSL failed to compile: {exc}") from None
+            raise ValueError(f"{effect.label or 'FullScreen'}: the effect's GLSL failed to compile: {exc}") from None
         vao = self.ctx.vertex_array(prog, [(self._triangle, "2f", "in_pos")])
         self._programs[key] = (prog, vao)
         return prog, vao

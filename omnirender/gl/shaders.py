@@ -32,7 +32,21 @@ __all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
 
 MAX_LIGHTS = 32
 
-_COMMON = """
+#: om.Fog's equations (attributes.environment.Fog.factor) at eye distance ``d``, linear colours: one GLSL
+#: implementation for the forward shaders and the post-processing chain's om.gl.DepthFog.
+FOG_GLSL = """uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
+uniform vec3 u_fog_color;
+vec3 apply_fog(vec3 c, float d) {
+    float f;
+    if (u_fog.w < 0.5) f = (u_fog.y - d) / (u_fog.y - u_fog.x);
+    else if (u_fog.w < 1.5) f = exp(-u_fog.z * d);
+    else f = exp(-(u_fog.z * d) * (u_fog.z * d));
+    return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
+}
+"""
+
+_COMMON = (
+    """
 vec3 to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
     return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -48,17 +62,11 @@ vec3 encode_output(vec3 c) {
 #endif
 }
 #ifdef FOG
-uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
-uniform vec3 u_fog_color;
-vec3 apply_fog(vec3 c, float d) {
-    float f;
-    if (u_fog.w < 0.5) f = (u_fog.y - d) / (u_fog.y - u_fog.x);
-    else if (u_fog.w < 1.5) f = exp(-u_fog.z * d);
-    else f = exp(-(u_fog.z * d) * (u_fog.z * d));
-    return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
-}
-#endif
 """
+    + FOG_GLSL
+    + """#endif
+"""
+)
 
 VERTEX = """
 in vec3 in_position;

@@ -1,0 +1,160 @@
+"""The post-processing chain: a GL technique whose passes render the scene in linear HDR and apply effects.
+
+``om.gl.PostProcess([om.gl.SSAO(), om.gl.Bloom(), om.gl.ToneMap("aces"), om.gl.FXAA()])`` at the top of
+the scene's root node post-processes every frame; the order is the user's, and an effect may appear
+any number of times.  Its passes (all ``om.gl.Pass`` data; see ``engine.stats["passes"]``):
+
+1. ``scene``: the opaque items, drawn by the frame's pipeline (forward, or deferred with
+   ``GLEngine(pipeline="deferred")``) into a linear half-float target with depth;
+2. the ``"depth"`` stage: effects that read depth and normals (SSAO, fog, light shafts, depth of field),
+   ping-ponging between two float targets: the depth they read is that of the colours they change;
+3. ``transparent``: the transparent items composited by the engine's technique over that image, with
+   the scene's depth (guacamole's post-processing read a depth that did not match its colours here);
+4. the ``"color"`` stage: colour-only effects (bloom, tone mapping, vignette, grading, FXAA, user effects);
+5. ``output``: the image into the frame, sRGB-encoded (linear into a float frame), with the scene's
+   depth, so depth read-back, masks and later compositing see the same surfaces as without the chain;
+6. ``overlay``: 2D items (text) over the result, untouched by the effects.
+
+Without a ``ToneMap`` the output clamps the light to [0, 1] as the frame without a chain does.  The
+chain's targets are single-sampled (MSAA does not apply; use ``FXAA``).  Other engines ignore the chain
+(it is a GL technique); the offline engines warn that they do (see ``docs/NOTES.md``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from ..passes import Clear, FullScreen, Pass, Target
+from ..techniques import GLTechnique
+from . import glsl
+from .effects import STAGES, Effect, EffectFrame
+
+__all__ = ["PostProcess", "SCENE", "chain_effects"]
+
+#: The target the scene is drawn into: linear half floats and the depth every effect reads.
+SCENE = Target("postfx.scene", colors=("color",), depth=True, dtype="f2")
+#: The target transparent items are composited into after depth effects ran (the scene's depth, shared).
+_LATE = Target("postfx.late", colors=("color",), depth=SCENE.name, dtype="f2")
+_PING = (Target("postfx.a", depth=False, dtype="f2"), Target("postfx.b", depth=False, dtype="f2"))
+
+
+def chain_effects(effects: Any) -> tuple[Effect, ...]:
+    """The effects of a chain as a tuple, each checked to be an ``om.gl`` effect and the stages in order."""
+    if isinstance(effects, Effect):
+        effects = (effects,)
+    try:
+        found = tuple(effects)
+    except TypeError:
+        raise ValueError(
+            f"PostProcess: effects must be a list of effects (om.gl.SSAO(), ...), got {effects!r:.60}"
+        ) from None
+    for k, effect in enumerate(found):
+        if not isinstance(effect, Effect):
+            raise ValueError(
+                f"PostProcess: effect {k} is {effect!r:.60}, not a post-processing effect; give om.gl.FXAA(), "
+                "om.gl.ToneMap(), om.gl.Bloom(), om.gl.SSAO(), om.gl.DepthFog(), om.gl.Vignette(), "
+                "om.gl.LightShafts(), om.gl.DepthOfField(), om.gl.ColorGrading() or om.gl.CustomEffect(...)"
+            )
+    for k in range(1, len(found)):
+        if STAGES.index(found[k].stage) < STAGES.index(found[k - 1].stage):
+            raise ValueError(
+                f"PostProcess: effect {k} ({_name(found[k])}) reads depth but follows the colour-only effect "
+                f"{_name(found[k - 1])}; depth effects run before transparent surfaces are composited, so list "
+                "them first (e.g. SSAO, DepthFog, LightShafts, DepthOfField before Bloom, ToneMap, FXAA)"
+            )
+    return found
+
+
+def _name(effect: Effect) -> str:
+    label = getattr(effect, "name", None)
+    kind = f"om.gl.{type(effect).__name__}"
+    return f"{kind} {label!r}" if isinstance(label, str) else kind
+
+
+class PostProcess(GLTechnique):
+    """A user-ordered chain of post-processing effects over the rest of its node (see the module docstring).
+
+    At the top of the root node it runs around the frame's pipeline; elsewhere it post-processes what it
+    scopes and merges the result into the frame by depth (drawn by the forward technique).
+    """
+
+    __slots__ = ("effects",)
+    #: the frame runs it around its pipeline when it holds the whole scene
+    frame_level = True
+    #: the deferred pipeline shades what it scopes through the G-buffer (it draws the scene with the pipeline)
+    deferred_inline = True
+
+    def __init__(self, effects: Iterable[Effect] = ()) -> None:
+        super().__init__(passes=1)
+        found = chain_effects(effects)
+        self.effects = found
+        for effect in found:
+            effect.attach_owner(self)
+
+    def node_path(self) -> str:
+        """The path of the (first) node holding the chain, for messages."""
+        owners = self.owners
+        return owners[0].path if owners else "(not in a node)"
+
+    # -- pass control ----------------------------------------------------------------------------------------
+    def start(self, engine: Any) -> None:
+        engine.technique_frame.data["plan"] = self.plan(engine)
+
+    def needs_pass(self, engine: Any) -> bool:
+        return engine.current_pass < len(engine.technique_frame.data["plan"])
+
+    def prepare_pass(self, engine: Any) -> None:
+        engine.set_pass(engine.technique_frame.data["plan"][engine.current_pass])
+
+    def plan(self, engine: Any) -> list[Pass]:
+        """This frame's passes: scene, depth effects, transparent items, colour effects, output, overlay."""
+        top = len(engine.technique_frames) <= 1
+        view, proj = engine.frame_view, engine.frame_projection
+        camera = {"u_proj": tuple(proj.T.ravel()), "u_inv_proj": tuple(np.linalg.inv(proj).T.ravel())}
+        background = engine.clear_color(getattr(engine, "_frame_background", None))
+        del view
+        passes = [Pass("scene", items="opaque", target=SCENE, clear=Clear(color=background, depth=1.0),
+                       technique="pipeline" if top else "engine")]  # fmt: skip
+        depth = (SCENE.name, "depth")
+        source = (SCENE.name, "color")
+        step = 0
+        where = self.node_path()
+        stages = {stage: [(k, e) for k, e in enumerate(self.effects) if e.stage == stage] for stage in STAGES}
+        for stage in STAGES:
+            if stage == "color":  # transparent surfaces between the stages, over the depth stage's image
+                if source[0] != SCENE.name:
+                    copy = FullScreen(glsl.COPY, inputs={"u_input": source})
+                    passes.append(Pass("composite", target=_LATE, fullscreen=copy))
+                    late = _LATE
+                else:
+                    late = SCENE
+                passes.append(Pass("transparent", items="transparent", target=late, technique="engine"))
+                source = (late.name, "color")
+            for k, effect in stages[stage]:
+                output = _PING[step % 2]
+                step += 1
+                label = (
+                    f"{_name(effect)} (effect {k} of the post-processing chain at {where}); fix its parameters "
+                    "or its GLSL snippet"
+                )
+                frame = EffectFrame(engine, source, depth, output, f"postfx.{k}", label, camera)
+                try:
+                    made = effect.passes(frame)
+                except ValueError as exc:
+                    raise ValueError(f"{label}: {exc}") from None
+                passes.extend(made)
+                source = (output.name, "color")
+        output = FullScreen(
+            glsl.OUTPUT,
+            inputs={"u_input": source, "u_depth": depth},
+            uniforms={"u_linear": 1.0 if engine.linear_output else 0.0},
+            depth=True,
+            depth_test="lequal",
+            label=f"the output of the post-processing chain at {where}",
+        )
+        passes.append(Pass("output", fullscreen=output))
+        passes.append(Pass("overlay", items="overlay", technique="engine"))
+        return passes
