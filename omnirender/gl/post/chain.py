@@ -22,6 +22,7 @@ chain's targets are single-sampled (MSAA does not apply; use ``FXAA``).  Other e
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable
 from typing import Any
 
@@ -98,6 +99,21 @@ class PostProcess(GLTechnique):
         """The path of the (first) node holding the chain, for messages."""
         owners = self.owners
         return owners[0].path if owners else "(not in a node)"
+
+    def supported(self, engine: Any) -> bool:
+        """GL engines run the chain; engines that make images or files (POV-Ray, Mitsuba, Radiance, glTF, RIB)
+        render the scene without it and warn; analysis engines (picking, bounds) ignore it silently."""
+        if super().supported(engine):
+            return True
+        service = str(getattr(engine, "service", "") or "")
+        if service.endswith((".paint", ".export")):
+            warnings.warn(
+                f"{type(engine).__name__} ignores the post-processing chain at {self.node_path()} "
+                f"({', '.join(_name(e) for e in self.effects) or 'no effects'}): its effects are OpenGL image-space "
+                "passes; this image or file shows the scene without them",
+                stacklevel=2,
+            )
+        return False
 
     # -- pass control ----------------------------------------------------------------------------------------
     def start(self, engine: Any) -> None:
