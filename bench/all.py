@@ -23,6 +23,7 @@ SCRIPTS = {
     "gltf_load.py": [],
     "gltf_instances.py": [],
     "compositing.py": [],
+    "postfx.py": [],
     "soak.py": [],
 }
 QUICK = {
@@ -35,6 +36,7 @@ QUICK = {
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
     "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
+    "postfx.py": ["--frames", "3"],
     "soak.py": ["--quick"],
 }
 
