@@ -448,9 +448,9 @@ def _uniforms(owner: str, value: Any) -> dict[str, Any]:
 
 def _table(value: Any) -> np.ndarray:
     try:
-        arr = np.array(value, dtype=np.float64)
+        arr = np.asarray(value)  # the shape is checked before a float copy: a huge table is refused, not copied
     except (TypeError, ValueError):
-        raise ValueError(f"ColorGrading: table must be an (N, N, N, 3) array of numbers, got {value!r:.60}") from None
+        arr = np.zeros(0)
     if (
         arr.ndim != 4
         or arr.shape[3] != 3
@@ -461,6 +461,10 @@ def _table(value: Any) -> np.ndarray:
             f"ColorGrading: table must have shape (N, N, N, 3) with N in 2..64 (table[r, g, b] = new colour), "
             f"got {arr.shape}; ColorGrading.identity(16) is a neutral one"
         )
+    try:
+        arr = np.array(arr, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("ColorGrading: table must hold numbers (display colours in [0, 1])") from None
     if not np.all(np.isfinite(arr)) or arr.min() < 0.0 or arr.max() > 1.0:
         raise ValueError("ColorGrading: table values must be display colours in [0, 1]")
     arr.setflags(write=False)
