@@ -377,3 +377,20 @@ def test_scene_files_save_and_load_the_chain(tmp_path, engine):
     a = engine.render(scene).array
     b = engine.render(loaded).array
     assert np.abs(a.astype(int) - b.astype(int)).max() <= 1
+
+
+# --- reference images -----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_reference_images(pipeline):
+    """Every stage at once: SSAO and fog, a transparent pane composited after them, bloom, tone curve, FXAA."""
+    from .test_references import compare
+
+    e = om.gl.GLEngine(size=(96, 72), samples=0, pipeline=pipeline)
+    glass = om.Material(diffuse=(0.2, 0.9, 0.4), opacity=0.5)
+    pane = om.Node("pane", [glass, om.Box(size=(1.2, 1.2, 0.05), center=(0, 0.6, 1.5))])
+    effects = [om.gl.SSAO(), om.gl.DepthFog(color=(0.2, 0.22, 0.26), start=4, end=16), om.gl.Bloom(threshold=0.7),
+               om.gl.ToneMap("uncharted2", exposure=1.0), om.gl.Vignette(0.3), om.gl.FXAA()]  # fmt: skip
+    try:
+        compare(f"postfx_{pipeline}", e.render(build(CAMERA, [*shapes(), pane], effects=effects)))
+    finally:
+        e.release()
