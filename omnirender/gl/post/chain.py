@@ -151,7 +151,6 @@ class PostProcess(GLTechnique):
                 source = (late.name, "color")
             for k, effect in stages[stage]:
                 output = _PING[step % 2]
-                step += 1
                 label = (
                     f"{_name(effect)} (effect {k} of the post-processing chain at {where}); fix its parameters "
                     "or its GLSL snippet"
@@ -161,8 +160,10 @@ class PostProcess(GLTechnique):
                     made = effect.passes(frame)
                 except ValueError as exc:
                     raise ValueError(f"{label}: {exc}") from None
-                passes.extend(made)
-                source = (output.name, "color")
+                if made:  # an effect with nothing to do (light shafts without lights) passes the image on
+                    passes.extend(made)
+                    source = (output.name, "color")
+                    step += 1
         output = FullScreen(
             glsl.OUTPUT,
             inputs={"u_input": source, "u_depth": depth},

@@ -305,12 +305,21 @@ class LightShafts(Effect):
                 lights.append((ndc[0] * 0.5 + 0.5, ndc[1] * 0.5 + 0.5, min(ndc[2] * 0.5 + 0.5, 1.0), 1.0))
             strength = float(getattr(light, "intensity", 1.0))
             colors.append((*(np.asarray(linear_rgb(light.color)) * strength), 1.0))
-        uniforms = {"u_count": len(lights), "u_samples": int(self.samples), "u_decay": self.decay,
-                    "u_size": self.size, "u_intensity": self.intensity}  # fmt: skip
-        if lights:
-            uniforms["u_lights"] = np.ravel(lights)
-            uniforms["u_light_colors"] = np.ravel(colors)
-        return self._one(frame, glsl.LIGHT_SHAFTS, uniforms)
+        if not lights:
+            return []  # no light, no shafts: the effect passes its input through (the chain skips it)
+        size = engine.target_size
+        where = {"u_count": len(lights), "u_lights": np.ravel(lights)}
+        mask, shafts = frame.target("mask", scale=0.5), frame.target("shafts", scale=0.5)
+        shape = {"u_size": self.size, "u_aspect": (size[0] / size[1], 1.0)}
+        blur = {"u_samples": int(self.samples), "u_decay": self.decay, "u_light_colors": np.ravel(colors)}
+        return [
+            Pass("LightShafts mask", target=mask, fullscreen=frame.fullscreen(glsl.SHAFT_MASK, uniforms={**where,
+                                                                                                           **shape})),
+            Pass("LightShafts blur", target=shafts, fullscreen=frame.fullscreen(
+                glsl.SHAFT_BLUR, inputs={"u_mask": (mask.name, "color")}, uniforms={**where, **blur})),
+            Pass("LightShafts", target=frame.output, fullscreen=frame.fullscreen(
+                glsl.SHAFT_ADD, inputs={"u_shafts": (shafts.name, "color")}, uniforms={"u_intensity": self.intensity})),
+        ]  # fmt: skip
 
 
 class DepthOfField(Effect):
@@ -329,8 +338,14 @@ class DepthOfField(Effect):
         self.focus, self.range, self.max_radius, self.samples = focus, range, max_radius, samples
 
     def passes(self, frame: EffectFrame) -> list[Pass]:
+        coc = frame.target("coc")
         uniforms = {"u_focus": self.focus, "u_range": self.range, "u_max": self.max_radius}
-        return self._one(frame, glsl.depth_of_field(self.samples), uniforms)
+        gather = frame.fullscreen(glsl.depth_of_field(self.samples), inputs={"u_coc": (coc.name, "color")})
+        return [
+            Pass("DepthOfField circles", target=coc, fullscreen=frame.fullscreen(glsl.CIRCLE_OF_CONFUSION,
+                                                                                uniforms=uniforms)),
+            Pass("DepthOfField", target=frame.output, fullscreen=gather),
+        ]  # fmt: skip
 
 
 class ColorGrading(Effect):

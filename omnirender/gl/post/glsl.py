@@ -33,7 +33,10 @@ __all__ = [
     "SSAO_APPLY",
     "FOG",
     "VIGNETTE",
-    "LIGHT_SHAFTS",
+    "SHAFT_MASK",
+    "SHAFT_BLUR",
+    "SHAFT_ADD",
+    "CIRCLE_OF_CONFUSION",
     "depth_of_field",
     "COLOR_GRADING",
 ]
@@ -305,37 +308,62 @@ vec4 effect(vec2 uv) {
 }
 """
 
-#: Volumetric light shafts (radial blur towards each light's image, GPU Gems 3 ch. 13): along the segment from
-#: the pixel to the light, samples count where nothing nearer than the light is seen (depth occlusion) within
-#: ``u_size`` of the light's image, decaying with distance from the pixel.
-LIGHT_SHAFTS = """const int MAX_LIGHTS = 4;
+#: Volumetric light shafts (radial blur towards each light's image, GPU Gems 3 ch. 13), in three passes at half
+#: size: a mask per light (one channel each) of the pixels where nothing nearer than the light is seen
+#: (depth occlusion) within ``u_size`` of its image; the mask blurred along the segment from each pixel to
+#: the light with a decay per sample, times the light's colour; that light added to the image.
+SHAFT_LIGHTS = """const int MAX_LIGHTS = 4;
 uniform vec4 u_lights[MAX_LIGHTS];        // light image uv, its window depth, 1 if in front of the eye
-uniform vec4 u_light_colors[MAX_LIGHTS];  // linear colour times intensity
 uniform int u_count;
+"""
+
+SHAFT_MASK = (
+    SHAFT_LIGHTS
+    + """uniform float u_size;
+uniform vec2 u_aspect;   // width / height of the frame, 1
+vec4 effect(vec2 uv) {
+    vec4 mask = vec4(0.0);
+    float depth = depth_at(uv);
+    for (int k = 0; k < MAX_LIGHTS; ++k) {
+        if (k >= u_count || u_lights[k].w < 0.5 || depth < u_lights[k].z) continue;
+        mask[k] = 1.0 - smoothstep(0.0, u_size, length((uv - u_lights[k].xy) * u_aspect));
+    }
+    return mask;
+}
+"""
+)
+
+SHAFT_BLUR = (
+    SHAFT_LIGHTS
+    + """uniform sampler2D u_mask;
+uniform vec4 u_light_colors[MAX_LIGHTS];  // linear colour times intensity
 uniform int u_samples;
 uniform float u_decay;
-uniform float u_size;
-uniform float u_intensity;
 vec4 effect(vec2 uv) {
-    vec4 c = texture(u_input, uv);
     vec3 added = vec3(0.0);
     for (int k = 0; k < MAX_LIGHTS; ++k) {
         if (k >= u_count || u_lights[k].w < 0.5) continue;
-        vec2 light = u_lights[k].xy;
-        vec2 stride = (light - uv) / float(u_samples);
+        vec2 stride = (u_lights[k].xy - uv) / float(u_samples);
         float sum = 0.0, decay = 1.0;
         vec2 at = uv;
         for (int i = 0; i < u_samples; ++i) {
             at += stride;
-            float visible = (all(greaterThanEqual(at, vec2(0.0))) && all(lessThanEqual(at, vec2(1.0)))
-                             && depth_at(at) >= u_lights[k].z) ? 1.0 : 0.0;
-            vec2 d = (at - light) * vec2(u_resolution.x / u_resolution.y, 1.0);
-            sum += visible * (1.0 - smoothstep(0.0, u_size, length(d))) * decay;
+            bool inside = all(greaterThanEqual(at, vec2(0.0))) && all(lessThanEqual(at, vec2(1.0)));
+            sum += (inside ? texture(u_mask, at)[k] : 0.0) * decay;
             decay *= u_decay;
         }
         added += u_light_colors[k].rgb * sum / float(u_samples);
     }
-    return vec4(c.rgb + u_intensity * added, c.a);
+    return vec4(added, 1.0);
+}
+"""
+)
+
+SHAFT_ADD = """uniform sampler2D u_shafts;
+uniform float u_intensity;
+vec4 effect(vec2 uv) {
+    vec4 c = texture(u_input, uv);
+    return vec4(c.rgb + u_intensity * texture(u_shafts, uv).rgb, c.a);
 }
 """
 
@@ -348,23 +376,28 @@ def _spiral(samples: int) -> np.ndarray:
     return np.column_stack([r * np.cos(a), r * np.sin(a)])
 
 
+#: The circle of confusion's radius in pixels: linear in the eye distance's distance from the focus.
+CIRCLE_OF_CONFUSION = """uniform float u_focus;      // distance in focus
+uniform float u_range;      // distance from the focus at which the blur is largest
+uniform float u_max;        // the largest circle of confusion's radius, pixels
+vec4 effect(vec2 uv) {
+    float d = is_background(uv) ? 1e9 : length(view_position(uv));
+    return vec4(u_max * clamp(abs(d - u_focus) / u_range, 0.0, 1.0), 0.0, 0.0, 1.0);
+}
+"""
+
+
 def depth_of_field(samples: int) -> str:
     """Depth of field: a disc of ``samples`` taps scaled by the circle of confusion of the pixel, each tap
     counted where its own circle reaches the pixel (sharp surfaces do not bleed into blurred ones)."""
     taps = ",\n    ".join(f"vec2({x:.6f}, {y:.6f})" for x, y in _spiral(samples))
-    return f"""uniform float u_focus;      // distance in focus
-uniform float u_range;      // distance from the focus at which the blur is largest
-uniform float u_max;        // the largest circle of confusion's radius, pixels
+    return f"""uniform sampler2D u_coc;   // circles of confusion (CIRCLE_OF_CONFUSION)
 const int TAPS = {samples};
 const vec2 DISC[TAPS] = vec2[](
     {taps});
-float coc(vec2 uv) {{
-    float d = is_background(uv) ? 1e9 : length(view_position(uv));
-    return u_max * clamp(abs(d - u_focus) / u_range, 0.0, 1.0);
-}}
 vec4 effect(vec2 uv) {{
     vec4 centre = texture(u_input, uv);
-    float radius = coc(uv);
+    float radius = texture(u_coc, uv).r;
     if (radius < 0.5) return centre;
     vec2 px = 1.0 / u_resolution;
     vec3 sum = centre.rgb;
@@ -372,7 +405,7 @@ vec4 effect(vec2 uv) {{
     for (int k = 0; k < TAPS; ++k) {{
         vec2 offset = DISC[k] * radius;
         vec2 at = uv + offset * px;
-        float w = smoothstep(length(offset) - 1.0, length(offset) + 1.0, coc(at));
+        float w = smoothstep(length(offset) - 1.0, length(offset) + 1.0, texture(u_coc, at).r);
         sum += w * texture(u_input, at).rgb;
         weight += w;
     }}
