@@ -128,10 +128,9 @@ class PostProcess(GLTechnique):
     def plan(self, engine: Any) -> list[Pass]:
         """This frame's passes: scene, depth effects, transparent items, colour effects, output, overlay."""
         top = len(engine.technique_frames) <= 1
-        view, proj = engine.frame_view, engine.frame_projection
+        proj = engine.frame_projection
         camera = {"u_proj": tuple(proj.T.ravel()), "u_inv_proj": tuple(np.linalg.inv(proj).T.ravel())}
-        background = engine.clear_color(getattr(engine, "_frame_background", None))
-        del view
+        background = engine.clear_color(getattr(engine, "_frame_background", None))  # draw(background=...) wins
         passes = [Pass("scene", items="opaque", target=SCENE, clear=Clear(color=background, depth=1.0),
                        technique="pipeline" if top else "engine")]  # fmt: skip
         depth = (SCENE.name, "depth")
