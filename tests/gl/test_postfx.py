@@ -79,6 +79,27 @@ def test_empty_chain_looks_like_no_chain(engine, deferred, pipeline):
     assert np.allclose(np.nan_to_num(plain.depth, posinf=-1), np.nan_to_num(chained.depth, posinf=-1), atol=1e-3)
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_chain_keeps_the_engines_multisampling(pipeline):
+    """With MSAA the opaque scene is drawn multisampled and resolved (in linear light, so edges differ a little
+    from the frame without a chain, which averages display values)."""
+    e = om.gl.GLEngine(size=SIZE, samples=4, pipeline=pipeline)
+    try:
+        plain = e.render(build(CAMERA, shapes())).array.astype(int)
+        chained = e.render(build(CAMERA, shapes(), effects=[]))
+        names = [p["name"] for p in e.stats["passes"] if "/" not in p["name"]]
+        aliased = om.gl.GLEngine(size=SIZE, samples=0, pipeline=pipeline)
+        single = aliased.render(build(CAMERA, shapes(), effects=[])).array.astype(int)
+        aliased.release()
+    finally:
+        e.release()
+    assert names[names.index("scene") + 1] == "resolve"
+    diff = np.abs(plain - chained.array.astype(int)).max(axis=2)
+    assert diff.mean() < 0.5 and (diff > 8).mean() < 0.02, (diff.mean(), (diff > 8).mean())
+    levels = len(np.unique(chained.array[..., :3].reshape(-1, 3), axis=0))
+    assert levels > 1.3 * len(np.unique(single[..., :3].reshape(-1, 3), axis=0)), "edges are not antialiased"
+
+
 def test_passes_run_depth_effects_before_transparency_and_colour_effects_after(engine):
     effects = [om.gl.SSAO(), om.gl.DepthFog(start=2, end=30), om.gl.Bloom(levels=2), om.gl.ToneMap(), om.gl.FXAA()]
     engine.render(build(CAMERA, shapes(), effects=effects))

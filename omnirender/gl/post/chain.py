@@ -5,7 +5,8 @@ the scene's root node post-processes every frame; the order is the user's, and a
 any number of times.  Its passes (all ``om.gl.Pass`` data; see ``engine.stats["passes"]``):
 
 1. ``scene``: the opaque items, drawn by the frame's pipeline (forward, or deferred with
-   ``GLEngine(pipeline="deferred")``) into a linear half-float target with depth;
+   ``GLEngine(pipeline="deferred")``) into a linear half-float target with depth (multisampled as the
+   engine is, then ``resolve``d: samples are averaged in linear light);
 2. the ``"depth"`` stage: effects that read depth and normals (SSAO, fog, light shafts, depth of field),
    ping-ponging between two float targets: the depth they read is that of the colours they change;
 3. ``transparent``: the transparent items composited by the engine's technique over that image, with
@@ -16,7 +17,8 @@ any number of times.  Its passes (all ``om.gl.Pass`` data; see ``engine.stats["p
 6. ``overlay``: 2D items (text) over the result, untouched by the effects.
 
 Without a ``ToneMap`` the output clamps the light to [0, 1] as the frame without a chain does.  The
-chain's targets are single-sampled (MSAA does not apply; use ``FXAA``).  Other engines ignore the chain
+effects' targets are single-sampled: transparent surfaces composited after the resolve are not
+multisampled (``FXAA`` smooths every edge).  Other engines ignore the chain
 (it is a GL technique); the offline engines warn that they do (see ``docs/NOTES.md``).
 """
 
@@ -39,7 +41,14 @@ __all__ = ["PostProcess", "SCENE", "chain_effects"]
 SCENE = Target("postfx.scene", colors=("color",), depth=True, dtype="f2")
 #: The target transparent items are composited into after depth effects ran (the scene's depth, shared).
 _LATE = Target("postfx.late", colors=("color",), depth=SCENE.name, dtype="f2")
+_MSAA = "postfx.msaa"
 _PING = (Target("postfx.a", depth=False, dtype="f2"), Target("postfx.b", depth=False, dtype="f2"))
+
+
+def _resolve(engine: Any, draw: Any) -> int:
+    """The multisampled scene's colour and depth resolved into the single-sampled scene target."""
+    engine.copy_framebuffer(SCENE)
+    return 0
 
 
 def chain_effects(effects: Any) -> tuple[Effect, ...]:
@@ -131,8 +140,18 @@ class PostProcess(GLTechnique):
         proj = engine.frame_projection
         camera = {"u_proj": tuple(proj.T.ravel()), "u_inv_proj": tuple(np.linalg.inv(proj).T.ravel())}
         background = engine.clear_color(getattr(engine, "_frame_background", None))  # draw(background=...) wins
-        passes = [Pass("scene", items="opaque", target=SCENE, clear=Clear(color=background, depth=1.0),
-                       technique="pipeline" if top else "engine")]  # fmt: skip
+        clear = Clear(color=background, depth=1.0)
+        drawn_by = "pipeline" if top else "engine"
+        samples = int(getattr(engine, "samples", 0) or 0)
+        if samples > 1:  # the engine's multisampling: the opaque scene drawn multisampled, then resolved
+            msaa = Target(_MSAA, colors=("color",), depth=True, dtype="f2", samples=samples)
+            passes = [
+                Pass("scene", items="opaque", target=msaa, clear=clear, technique=drawn_by),
+                Pass("resolve", items="none", scopes=False, target=msaa, custom=_resolve),
+            ]
+        else:
+            passes = [Pass("scene", items="opaque", target=SCENE, clear=clear, technique=drawn_by)]
+
         depth = (SCENE.name, "depth")
         source = (SCENE.name, "color")
         step = 0
