@@ -190,26 +190,29 @@ class Bloom(Effect):
 class SSAO(Effect):
     """Screen-space ambient occlusion: ``samples`` points in the hemisphere of ``radius`` (world units) around
     each surface's normal; a point behind the depth seen there by more than ``bias`` occludes.  The occlusion
-    is blurred (``blur``) and darkens the image by ``intensity`` (0: none, 1: fully)."""
+    is computed at ``scale`` of the frame's size, blurred back to full size over pixels of similar depth
+    (``blur``) and darkens the image by ``intensity`` (0: none, 1: fully)."""
 
-    __slots__ = ("_radius", "_bias", "_samples", "_intensity", "_blur")
+    __slots__ = ("_radius", "_bias", "_samples", "_intensity", "_blur", "_scale")
     stage = "depth"
     radius = Param(check_number(0.0, 1e6, min_open=True), "world-space radius of the sample hemisphere")
     bias = Param(check_number(0.0, 1e6), "depth difference (world units) below which nothing occludes")
     samples = Param(check_number(4, 64, integer=True), "hemisphere samples per pixel")
     intensity = Param(check_number(0.0, 1.0), "how much occlusion darkens (0 to 1)")
     blur = Param(lambda owner, name, v: _flag(owner, name, v), "blur the occlusion (removes the sample pattern)")
+    scale = Param(check_number(0.25, 1.0), "size of the occlusion buffer relative to the frame")
 
     def __init__(self, radius: float = 0.5, bias: float = 0.025, samples: int = 16, intensity: float = 1.0,
-                 blur: bool = True) -> None:  # fmt: skip
+                 blur: bool = True, scale: float = 0.5) -> None:  # fmt: skip
         super().__init__()
         self.radius, self.bias, self.samples, self.intensity, self.blur = radius, bias, samples, intensity, blur
+        self.scale = scale
 
     def passes(self, frame: EffectFrame) -> list[Pass]:
-        raw = frame.target("occlusion")
+        raw = frame.target("occlusion", scale=self.scale)
         ao = frame.fullscreen(glsl.ssao(self.samples), uniforms={"u_radius": self.radius, "u_bias": self.bias})
         out = [Pass("SSAO occlusion", target=raw, fullscreen=ao)]
-        if self.blur:
+        if self.blur:  # at full size: the blur also brings the occlusion back to the frame's pixels by depth
             blurred = frame.target("blurred")
             blur = frame.fullscreen(glsl.BLUR, inputs={"u_source": (raw.name, "color")})
             out.append(Pass("SSAO blur", target=blurred, fullscreen=blur))

@@ -237,7 +237,7 @@ vec4 effect(vec2 uv) {{
     if (is_background(uv)) return vec4(1.0);
     vec3 p = view_position(uv);
     vec3 n = view_normal(uv);
-    ivec2 cell = ivec2(gl_FragCoord.xy) % 4;
+    ivec2 cell = ivec2(gl_FragCoord.xy) % 4;  // the 4 x 4 pattern the blur averages away
     float angle = 6.2831853 * float(cell.x * 4 + cell.y) / 16.0;
     vec3 r = vec3(cos(angle), sin(angle), 0.0);
     vec3 t = r - n * dot(r, n);
@@ -257,10 +257,11 @@ vec4 effect(vec2 uv) {{
 """
 
 
-#: A 4x4 box blur of ``u_source`` (removes the SSAO rotation pattern), only over pixels of similar depth.
+#: A 4x4 box blur of ``u_source``'s texels (removes the SSAO rotation pattern), only over pixels of similar
+#: depth; written at the frame's size, it also brings a smaller occlusion buffer back to the frame's pixels.
 BLUR = """uniform sampler2D u_source;
 vec4 effect(vec2 uv) {
-    vec2 px = 1.0 / u_resolution;
+    vec2 px = 1.0 / vec2(textureSize(u_source, 0));
     float z = view_position(uv).z;
     vec4 sum = vec4(0.0);
     float weight = 0.0;
