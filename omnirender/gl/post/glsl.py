@@ -53,6 +53,11 @@ vec3 view_position_at(vec2 uv, float depth) {
     return p.xyz / p.w;
 }
 vec3 view_position(vec2 uv) { return view_position_at(uv, depth_at(uv)); }
+// the eye-space z alone (cheap: a projection's depth and w rows never involve x and y)
+float view_z(vec2 uv) {
+    float ndc = depth_at(uv) * 2.0 - 1.0;
+    return (u_inv_proj[2][2] * ndc + u_inv_proj[3][2]) / (u_inv_proj[2][3] * ndc + u_inv_proj[3][3]);
+}
 vec2 project(vec3 p) {
     vec4 c = u_proj * vec4(p, 1.0);
     return c.xy / c.w * 0.5 + 0.5;
@@ -248,7 +253,7 @@ vec4 effect(vec2 uv) {{
         vec3 s = p + tbn * KERNEL[k] * u_radius;
         vec2 at = project(s);
         if (any(lessThan(at, vec2(0.0))) || any(greaterThan(at, vec2(1.0)))) continue;
-        float z = view_position(at).z;
+        float z = view_z(at);
         float near = smoothstep(0.0, 1.0, u_radius / max(abs(p.z - z), 1e-5));
         occluded += (z >= s.z + u_bias ? 1.0 : 0.0) * near;
     }}
@@ -262,13 +267,13 @@ vec4 effect(vec2 uv) {{
 BLUR = """uniform sampler2D u_source;
 vec4 effect(vec2 uv) {
     vec2 px = 1.0 / vec2(textureSize(u_source, 0));
-    float z = view_position(uv).z;
+    float z = view_z(uv);
     vec4 sum = vec4(0.0);
     float weight = 0.0;
     for (int y = -2; y < 2; ++y)
         for (int x = -2; x < 2; ++x) {
             vec2 at = uv + (vec2(x, y) + 0.5) * px;
-            float w = abs(view_position(at).z - z) < 0.05 * abs(z) + 1e-3 ? 1.0 : 0.0;
+            float w = abs(view_z(at) - z) < 0.05 * abs(z) + 1e-3 ? 1.0 : 0.0;
             sum += w * texture(u_source, at);
             weight += w;
         }
