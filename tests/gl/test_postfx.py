@@ -415,3 +415,29 @@ def test_reference_images(pipeline):
         compare(f"postfx_{pipeline}", e.render(build(CAMERA, [*shapes(), pane], effects=effects)))
     finally:
         e.release()
+
+
+GREY = "vec4 effect(vec2 uv) { vec4 c = texture(u_input, uv); return vec4(vec3(luminance(c.rgb)), c.a); }"
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_a_chain_lower_in_the_graph_post_processes_what_it_scopes(engine, deferred, pipeline):
+    e = engine if pipeline == "forward" else deferred
+    red = om.Material(diffuse=(1, 0.1, 0.1))
+    scene = build(CAMERA, [
+        om.Node("red", [om.Translation(-1, 0.5, 0), red, om.Sphere(radius=0.5)]),
+        om.Node("grey", [om.gl.PostProcess([om.gl.CustomEffect("grey", GREY)]), om.Translation(1, 0.5, 0), red,
+                         om.Sphere(radius=0.5)]),
+    ])  # fmt: skip
+    out = e.render(scene).array.astype(int)
+    x, y = pixel_of(CAMERA, (-1, 0.5, 0.45))
+    assert out[y, x, 0] > out[y, x, 2] + 80, "the sphere outside the chain keeps its colour"
+    x, y = pixel_of(CAMERA, (1, 0.5, 0.45))
+    assert abs(out[y, x, 0] - out[y, x, 2]) <= 2 and out[y, x, 0] > 40, "the sphere inside the chain is grey"
+
+
+def test_at_the_top_the_deferred_pipeline_shades_the_chains_scene(deferred):
+    deferred.render(build(CAMERA, shapes(), effects=[om.gl.ToneMap()]))
+    drawn = {p["name"]: p["draw_calls"] for p in deferred.stats["passes"]}
+    assert drawn["scene/geometry"] >= 1 and drawn["scene/shading"] == 1
+    assert drawn.get("scene/opaque", 0) == 0  # nothing left for the forward passes

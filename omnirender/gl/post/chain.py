@@ -91,14 +91,13 @@ class PostProcess(GLTechnique):
     scopes and merges the result into the frame by depth (drawn by the forward technique).
     """
 
-    __slots__ = ("effects",)
+    __slots__ = ("effects", "_around_pipeline")
     #: the frame runs it around its pipeline when it holds the whole scene
     frame_level = True
-    #: the deferred pipeline shades what it scopes through the G-buffer (it draws the scene with the pipeline)
-    deferred_inline = True
 
     def __init__(self, effects: Iterable[Effect] = ()) -> None:
         super().__init__(passes=1)
+        object.__setattr__(self, "_around_pipeline", False)
         found = chain_effects(effects)
         self.effects = found
         for effect in found:
@@ -125,8 +124,20 @@ class PostProcess(GLTechnique):
         return False
 
     # -- pass control ----------------------------------------------------------------------------------------
+    @property
+    def deferred_inline(self) -> bool:
+        """Whether the deferred pipeline shades what the chain scopes through its G-buffer: while the chain runs
+        around the pipeline (at the top of the scene); a chain lower in the graph is drawn by the forward passes
+        of the deferred frame, as other techniques are, and post-processes what it scopes."""
+        return self._around_pipeline
+
     def start(self, engine: Any) -> None:
-        engine.technique_frame.data["plan"] = self.plan(engine)
+        plan = self.plan(engine)
+        engine.technique_frame.data["plan"] = plan
+        object.__setattr__(self, "_around_pipeline", plan[0].technique == "pipeline")
+
+    def stop(self, engine: Any) -> None:
+        object.__setattr__(self, "_around_pipeline", False)
 
     def needs_pass(self, engine: Any) -> bool:
         return engine.current_pass < len(engine.technique_frame.data["plan"])
