@@ -383,6 +383,20 @@ def test_offline_engines_and_exporters_ignore_the_chain_and_warn(tmp_path):
     assert hits and hits[0].path.startswith("/scene")
 
 
+@pytest.mark.parametrize("extension", [".glb", ".rib"])
+def test_exporters_write_the_same_file_without_the_chain(tmp_path, extension):
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "chain").mkdir()
+    om.export(build(CAMERA, shapes()), tmp_path / "plain" / f"scene{extension}")
+    with pytest.warns(UserWarning, match="ignores the post-processing chain"):
+        om.export(
+            build(CAMERA, shapes(), effects=[om.gl.Bloom(), om.gl.FXAA()]), tmp_path / "chain" / f"scene{extension}"
+        )
+    assert (tmp_path / "plain" / f"scene{extension}").read_bytes() == (
+        tmp_path / "chain" / f"scene{extension}"
+    ).read_bytes()
+
+
 def test_scene_files_save_and_load_the_chain(tmp_path, engine):
     effects = [om.gl.SSAO(radius=0.4), om.gl.DepthFog(start=2, end=20, mode="exp", density=0.1),
                om.gl.ToneMap("hejl", exposure=0.5), om.gl.ColorGrading(om.gl.ColorGrading.identity(4) ** 1.2),
