@@ -412,6 +412,9 @@ class BatchRenderer:
 
     def _mode(self, geometry: Geometry, kind: str) -> int:
         ctx = self.ctx
+        if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
+            return ctx.PATCHES
         if kind == "points" or geometry.mode == "points":
             return ctx.POINTS
         if geometry.mode == "lines":
@@ -456,8 +459,10 @@ class BatchRenderer:
             if u is not None:
                 u.value = (start, end, density, mode)
                 prog["u_fog_color"].value = color
+        u = prog.get("u_viewport", None)
+        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+            u.value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
         if state.kind == "lines":
-            prog["u_viewport"].value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
             prog["u_line_width"].value = float(state.value(LineWidth))
         for unit, (sampler, texture, srgb) in enumerate(state.textures):
             u = prog.get(sampler, None)
@@ -467,7 +472,10 @@ class BatchRenderer:
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
-                u.value = value
+                if isinstance(value, tuple) and len(value) > 4:  # arrays (NURBS trimming edges): as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
         for name, value in composed.uniforms().items():
             u = prog.get(name, None)
             if u is not None:
