@@ -455,3 +455,21 @@ def test_at_the_top_the_deferred_pipeline_shades_the_chains_scene(deferred):
     drawn = {p["name"]: p["draw_calls"] for p in deferred.stats["passes"]}
     assert drawn["scene/geometry"] >= 1 and drawn["scene/shading"] == 1
     assert drawn.get("scene/opaque", 0) == 0  # nothing left for the forward passes
+
+
+def test_depth_effects_read_the_depth_of_the_colours_they_change(engine):
+    """A depth effect that paints near pixels red and far ones green runs before a near transparent pane is
+    composited, so behind the pane it sees (and paints) the far wall; the pane (two faces) then tints that green."""
+    camera = om.Camera.look_at((0, 0, 6), (0, 0, 0), fov=40)
+    wall = om.Node("wall", [om.Material(diffuse=(0.5, 0.5, 0.5)), om.Box(size=(20, 20, 0.1), center=(0, 0, -6))])
+    pane = om.Node("pane", [om.Material(ambient=(0, 0, 0), diffuse=(0, 0, 0), emission=(0, 0, 1), opacity=0.5),
+                            om.Box(size=(2, 2, 0.05), center=(0, 0, 2))])  # fmt: skip
+    marker = om.gl.CustomEffect("near", """vec4 effect(vec2 uv) {
+    return -view_position(uv).z < 8.0 ? vec4(1.0, 0.0, 0.0, 1.0) : vec4(0.0, 1.0, 0.0, 1.0);
+}""", reads_depth=True)  # fmt: skip
+    out = engine.render(build(camera, [wall, pane], effects=[marker])).array.astype(int)
+    x, y = pixel_of(camera, (0, 0, 2))
+    r, g, b = out[y, x, :3]
+    assert g > 100 and b > 150 and r < 10, f"behind the pane the depth effect saw the pane's depth: {out[y, x]}"
+    x, y = pixel_of(camera, (3, 2, -6))
+    assert tuple(out[y, x, :3]) == (0, 255, 0)  # the wall alone
