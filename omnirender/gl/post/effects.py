@@ -327,27 +327,34 @@ class LightShafts(Effect):
 
 class DepthOfField(Effect):
     """Depth of field: surfaces at eye distance ``focus`` are sharp; the blur's radius grows linearly with the
-    distance from it, to ``max_radius`` pixels at ``range`` world units from the focus and beyond."""
+    distance from it, to ``max_radius`` pixels at ``range`` world units from the focus and beyond.  The blur is
+    gathered at ``scale`` of the frame's size and mixed in where the circle of confusion exceeds a pixel."""
 
-    __slots__ = ("_focus", "_range", "_max_radius", "_samples")
+    __slots__ = ("_focus", "_range", "_max_radius", "_samples", "_scale")
     stage = "depth"
     focus = Param(check_number(0.0, 1e9, min_open=True), "eye distance in focus")
     range = Param(check_number(0.0, 1e9, min_open=True), "distance from the focus where the blur is largest")
     max_radius = Param(check_number(0.0, 64.0), "largest blur radius, pixels")
     samples = Param(check_number(4, 128, integer=True), "taps per pixel")
+    scale = Param(check_number(0.25, 1.0), "size of the blurred image relative to the frame")
 
-    def __init__(self, focus: float = 5.0, range: float = 5.0, max_radius: float = 6.0, samples: int = 32) -> None:
+    def __init__(self, focus: float = 5.0, range: float = 5.0, max_radius: float = 6.0, samples: int = 32,
+                 scale: float = 0.5) -> None:  # fmt: skip
         super().__init__()
         self.focus, self.range, self.max_radius, self.samples = focus, range, max_radius, samples
+        self.scale = scale
 
     def passes(self, frame: EffectFrame) -> list[Pass]:
-        coc = frame.target("coc")
-        uniforms = {"u_focus": self.focus, "u_range": self.range, "u_max": self.max_radius}
+        coc, blurred = frame.target("coc"), frame.target("blurred", scale=self.scale)
+        circles = {"u_focus": self.focus, "u_range": self.range, "u_max": self.max_radius}
         gather = frame.fullscreen(glsl.depth_of_field(self.samples), inputs={"u_coc": (coc.name, "color")})
+        composite = frame.fullscreen(glsl.DOF_COMPOSITE, inputs={"u_coc": (coc.name, "color"),
+                                                                 "u_blurred": (blurred.name, "color")})  # fmt: skip
         return [
             Pass("DepthOfField circles", target=coc, fullscreen=frame.fullscreen(glsl.CIRCLE_OF_CONFUSION,
-                                                                                uniforms=uniforms)),
-            Pass("DepthOfField", target=frame.output, fullscreen=gather),
+                                                                                uniforms=circles)),
+            Pass("DepthOfField blur", target=blurred, fullscreen=gather),
+            Pass("DepthOfField", target=frame.output, fullscreen=composite),
         ]  # fmt: skip
 
 

@@ -37,6 +37,7 @@ __all__ = [
     "SHAFT_BLUR",
     "SHAFT_ADD",
     "CIRCLE_OF_CONFUSION",
+    "DOF_COMPOSITE",
     "depth_of_field",
     "COLOR_GRADING",
 ]
@@ -405,7 +406,7 @@ vec4 effect(vec2 uv) {{
     vec4 centre = texture(u_input, uv);
     float radius = texture(u_coc, uv).r;
     if (radius < 0.5) return centre;
-    vec2 px = 1.0 / u_resolution;
+    vec2 px = 1.0 / vec2(textureSize(u_input, 0));   // offsets in the frame's pixels, whatever size this is drawn at
     vec3 sum = centre.rgb;
     float weight = 1.0;
     for (int k = 0; k < TAPS; ++k) {{
@@ -417,6 +418,16 @@ vec4 effect(vec2 uv) {{
     }}
     return vec4(sum / weight, centre.a);
 }}
+"""
+
+
+#: The sharp image where the circle of confusion is under a pixel, the (smaller) blurred one elsewhere.
+DOF_COMPOSITE = """uniform sampler2D u_coc;
+uniform sampler2D u_blurred;
+vec4 effect(vec2 uv) {
+    vec4 c = texture(u_input, uv);
+    return vec4(mix(c.rgb, texture(u_blurred, uv).rgb, smoothstep(0.5, 1.5, texture(u_coc, uv).r)), c.a);
+}
 """
 
 
