@@ -28,10 +28,20 @@ from typing import Any
 from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
-__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
+__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields", "SRGB_GLSL"]
 
 MAX_LIGHTS = 32
 
+#: GLSL sRGB encoding and decoding (every program that writes or reads display values).
+SRGB_GLSL = """
+vec3 to_srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+vec3 to_linear(vec3 c) {
+    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
+}
+"""
 #: om.Fog's equations (attributes.environment.Fog.factor) at eye distance ``d``, linear colours: one GLSL
 #: implementation for the forward shaders and the post-processing chain's om.gl.DepthFog.
 FOG_GLSL = """uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
@@ -44,16 +54,9 @@ vec3 apply_fog(vec3 c, float d) {
     return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
 }
 """
-
 _COMMON = (
-    """
-vec3 to_srgb(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
-vec3 to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
-}
+    SRGB_GLSL
+    + """
 vec3 encode_output(vec3 c) {
 #ifdef LINEAR_OUTPUT
     return max(c, vec3(0.0));
