@@ -24,6 +24,7 @@ SCRIPTS = {
     "gltf_instances.py": [],
     "compositing.py": [],
     "deferred.py": [],
+    "postfx.py": [],
     "soak.py": [],
 }
 QUICK = {
@@ -37,6 +38,7 @@ QUICK = {
     "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
     "deferred.py": ["--frames", "3"],
+    "postfx.py": ["--frames", "3"],
     "soak.py": ["--quick"],
 }
 

@@ -1,7 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
 Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
-     [deferred]
+     [deferred] [postfx]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -201,6 +201,23 @@ def deferred_images() -> None:
             print("wrote", HERE / f"example_{png.stem}.png")
 
 
+def postfx_images(size: tuple[int, int] = (480, 360)) -> None:
+    """The demo scene without and with a post-processing chain (SSAO, bloom, tone mapping, FXAA); example 8."""
+    chain = om.gl.PostProcess([om.gl.SSAO(radius=0.5), om.gl.Bloom(threshold=0.6, intensity=2.5),
+                               om.gl.ToneMap("aces", exposure=0.25), om.gl.FXAA()])  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        plain, post = Path(tmp) / "plain.png", Path(tmp) / "post.png"
+        om.render(demo_scene(), engine="gl", size=size).save(plain)
+        om.render(om.Node("root", [chain, demo_scene()]), engine="gl", size=size).save(post)
+        labels = ["GL, no chain", "SSAO + bloom + ACES tone mapping + FXAA"]
+        side_by_side([plain, post], labels, HERE / "postfx_chain.png")
+        print("wrote", HERE / "postfx_chain.png")
+        subprocess.run([sys.executable, str(ROOT / "examples" / "08_custom_effect.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "08-custom-effect.png", HERE / "example_08-custom-effect.png")
+        print("wrote", HERE / "example_08-custom-effect.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -208,6 +225,7 @@ SECTIONS = {
     "gallery": gl_gallery,
     "examples": example_images,
     "compositing": compositing_images,
+    "postfx": postfx_images,
     "deferred": deferred_images,
 }
 

@@ -81,3 +81,16 @@ def test_renderer_tree_example_runs(tmp_path, monkeypatch, capsys):
     statue = np.asarray(Image.open(tmp_path / "statue.png").convert("RGB")).astype(int)
     drawn = statue.max(axis=2) > 100
     assert drawn.sum() > 2000 and np.all(statue[drawn].max(axis=1) - statue[drawn].min(axis=1) <= 2)  # grey
+
+
+@pytest.mark.gl
+def test_post_processing_example_runs(tmp_path, monkeypatch):
+    import numpy as np
+    from PIL import Image
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("## Post-processing: a chain of effects in linear HDR"), "README.md", "exec"), {})
+    forward = np.asarray(Image.open(tmp_path / "post.png").convert("RGB"), dtype=int)
+    deferred = np.asarray(Image.open(tmp_path / "post-deferred.png").convert("RGB"), dtype=int)
+    assert forward.shape == (360, 480, 3) and forward.std() > 20
+    assert np.abs(forward - deferred).mean() < 2.0  # the two pipelines agree under the chain

@@ -52,7 +52,7 @@ _SHADING_MODEL = ROW.at("emission", "model")
 _MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
-_FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
 
 
 def _uv_matrix(texture: Any) -> tuple[float, ...]:
@@ -451,7 +451,7 @@ class DrawListCompiler:
                 float(fog.start),
                 float(fog.end),
                 float(fog.density),
-                _FOG_MODES[fog.mode],
+                FOG_MODES[fog.mode],
             )
         self._state_base = (
             raster,

@@ -198,7 +198,11 @@ class FrameRunner:
         self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
-            calls += self._run(self.frame_technique, root, Composed(), item_level=True)
+            technique, scope = self.frame_technique, root
+            whole = root.entries[0] if len(root.entries) == 1 else None
+            if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
+                technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
+            calls += self._run(technique, scope, Composed(), item_level=True)
             calls += self._mirror_passes(root)
         finally:
             self._drawing = False
@@ -353,7 +357,7 @@ class FrameRunner:
             elif description.custom is not None:
                 calls = self._custom(technique, description.custom, source, composed, item_level)
             else:
-                calls = self._draw_scope(source, composed, item_level)
+                calls = self._draw_scope(source, composed, item_level, description.technique)
         finally:
             self._leave_record()
             if saved_camera is not None:
@@ -369,12 +373,15 @@ class FrameRunner:
     def _nested(self, scope: Scope, composed: Composed) -> int:
         return self._run(scope.technique, scope, composed, item_level=False)
 
-    def _draw_scope(self, scope: Scope, composed: Composed, item_level: bool) -> int:
+    def _draw_scope(self, scope: Scope, composed: Composed, item_level: bool, technique: str | None = None) -> int:
         """What a pass that draws items draws: the scope's items (and nested scopes), or them through the
         engine's technique when the pass is a nested technique's; with ``scopes="items"`` every item below,
-        without running the nested techniques."""
+        without running the nested techniques; with ``technique`` ("engine", "pipeline") through that one."""
         if composed.scopes == "items":
             return sum(self._draw_items(s, composed, None) for s in scope.walk())
+        if technique is not None:
+            runner = self.frame_technique if technique == "pipeline" else self.technique
+            return self._run(runner, scope, composed, item_level=True)
         if item_level:
             return self._draw_items(scope, composed, lambda child: self._nested(child, composed))
         return self._run(self.technique, scope, composed, item_level=True)
@@ -601,9 +608,21 @@ class FrameRunner:
             if u is not None:
                 u.value = unit
             unit += 1
+        for uniform, image in effect.textures:
+            u = prog.get(uniform, None)
+            if u is not None:
+                self._texture(image, srgb=False).use(unit)
+                u.value = unit
+                unit += 1
         for name, value in effect.uniforms:
             u = prog.get(name, None)
-            if u is not None:
+            if u is None:
+                continue
+            if isinstance(value, tuple) and u.array_length > 1:  # arrays: the values in order, zeros after
+                data = np.zeros(u.array_length * u.dimension, np.float32)
+                data[: len(value)] = value[: data.size]
+                u.write(data.tobytes())
+            else:
                 u.value = value
         u = prog.get("u_resolution", None)
         if u is not None:

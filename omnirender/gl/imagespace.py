@@ -20,6 +20,7 @@ import numpy as np
 
 from .passes import FORMATS, FullScreen, Target
 from .resources import gpu_call
+from .shaders import SRGB_GLSL
 
 __all__ = ["RenderTarget", "FullScreenPrograms", "PingPong", "RESOLVE", "resolve"]
 
@@ -34,18 +35,14 @@ void main() {
 }
 """
 
-_FRAGMENT_HEAD = """#version 330
+_FRAGMENT_HEAD = (
+    """#version 330
 in vec2 v_uv;
 uniform vec2 u_resolution;   // the target's size in pixels
 layout(location = 0) out vec4 f_color;
-vec3 to_srgb(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
-vec3 to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
-}
 """
+    + SRGB_GLSL
+)
 
 
 class RenderTarget:
@@ -166,7 +163,7 @@ class FullScreenPrograms:
         try:
             prog = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=source)
         except Exception as exc:
-            raise ValueError(f"FullScreen: the effect's GLSL failed to compile: {exc}") from None
+            raise ValueError(f"{effect.label or 'FullScreen'}: the effect's GLSL failed to compile: {exc}") from None
         vao = self.ctx.vertex_array(prog, [(self._triangle, "2f", "in_pos")])
         self._programs[key] = (prog, vao)
         return prog, vao

@@ -19,7 +19,10 @@ A technique's ``prepare_pass`` describes its pass with ``engine.set_pass(Pass(..
   ``custom`` (Python drawing code: ``custom(engine, draw)`` is called instead
   of drawing items; ``draw()`` draws what the pass selects, ``draw(Pass(...))``
   runs a nested pass, so the code can switch targets, cameras and full-screen
-  effects while it draws, e.g. a compositing tree of renderers).
+  effects while it draws, e.g. a compositing tree of renderers), and
+  ``technique`` (which technique's passes draw the selected items: the
+  engine's, or the frame's pipeline, e.g. the deferred one; a post-processing
+  chain draws the scene with the pipeline into a float target).
 
 Passes nest: the pass a nested technique describes is composed with the
 enclosing one (:class:`Composed`): item classes intersect, masks and
@@ -50,6 +53,7 @@ __all__ = [
     "FRAME",
     "DEPTH_FUNCS",
     "FORMATS",
+    "TECHNIQUES",
 ]
 
 #: The classes of draw items: drawn in this order when a pass selects several.
@@ -69,6 +73,10 @@ FORMATS = {
     "rg32f": (2, "f4", None, 8),
     "r11g11b10f": (3, "f2", 0x8C3A, 4),
 }
+#: What draws a pass's items (``Pass.technique``): None the pass itself at the frame's level and the engine's
+#: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);
+#: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``).
+TECHNIQUES = (None, "engine", "pipeline")
 #: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
 DEPTH_FUNCS = _DEPTH_FUNCS
 
@@ -305,15 +313,20 @@ class Shader:
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
         object.__setattr__(self, "defines", _defines(self.defines))
         object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
-        items = self.textures.items() if isinstance(self.textures, Mapping) else self.textures
-        textures = []
-        for uniform, texture in items:
-            if not isinstance(uniform, str) or not uniform.isidentifier() or not hasattr(texture, "image_array"):
-                raise ValueError(
-                    f"Shader: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}"
-                )
-            textures.append((uniform, texture))
-        object.__setattr__(self, "textures", tuple(sorted(textures, key=lambda p: p[0])))
+        object.__setattr__(self, "textures", _textures(self.textures, "Shader"))
+
+
+def _textures(values: Any, owner: str) -> tuple[tuple[str, Any], ...]:
+    """Sampler textures as (uniform, om.Texture) pairs sorted by uniform."""
+    items = values.items() if isinstance(values, Mapping) else values
+    textures = []
+    for uniform, texture in items:
+        if not isinstance(uniform, str) or not uniform.isidentifier() or not hasattr(texture, "image_array"):
+            raise ValueError(
+                f"{owner}: textures maps sampler names to om.Texture objects, got {uniform!r}: {texture!r}"
+            )
+        textures.append((uniform, texture))
+    return tuple(sorted(textures, key=lambda p: p[0]))
 
 
 def _defines(values: Any) -> tuple[tuple[str, Any], ...]:
@@ -352,7 +365,11 @@ class FullScreen:
     attachment of the target that the snippet does not write itself).
     ``inputs`` maps sampler uniform names to ``(target name, attachment)``:
     an attachment name of that target, or ``"depth"`` (window depth in [0, 1]).
-    ``uniforms`` gives other uniform values.  ``blend=True`` composites the
+    ``uniforms`` gives other uniform values (sequences: vectors, matrices in
+    column order, arrays), ``textures`` maps sampler uniforms to ``om.Texture``
+    images bound as stored, without sRGB decoding (data such as a colour
+    grading table).  ``label`` names the effect in error messages (its GLSL
+    failing to compile).  ``blend=True`` composites the
     result over the target ("over", premultiplied by its alpha) instead of
     replacing it; ``depth=True`` writes ``gl_FragDepth`` from a ``float
     effect_depth(vec2 uv)`` the snippet defines.  ``depth_test`` compares
@@ -369,6 +386,8 @@ class FullScreen:
     blend: bool = False
     depth: bool = False
     depth_test: str | bool | None = None
+    textures: Any = ()
+    label: str = ""
 
     def __post_init__(self) -> None:
         if not isinstance(self.fragment, str) or "effect" not in self.fragment:
@@ -386,6 +405,9 @@ class FullScreen:
             raise ValueError("FullScreen: depth_test compares the effect's depth: give depth=True and effect_depth")
         object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
         object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
+        object.__setattr__(self, "textures", _textures(self.textures, "FullScreen"))
+        if not isinstance(self.label, str):
+            raise ValueError(f"FullScreen: label must be a string, got {self.label!r:.60}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -408,6 +430,7 @@ class Pass:
     shader: Shader | None = None
     fullscreen: FullScreen | None = None
     custom: Callable[[Any, Any], Any] | None = None
+    technique: str | None = None
     _state: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
     _fallback: tuple[tuple[int, Any], ...] = field(default=(), repr=False)
 
@@ -448,6 +471,8 @@ class Pass:
                 raise ValueError(f"Pass {self.name!r}: custom must be a function (engine, draw), got {self.custom!r}")
             if self.fullscreen is not None:
                 raise ValueError(f"Pass {self.name!r}: give custom or fullscreen, not both")
+        if self.technique not in TECHNIQUES:
+            raise ValueError(f"Pass {self.name!r}: technique must be one of {TECHNIQUES}, got {self.technique!r}")
         object.__setattr__(self, "_state", self._captured("state"))
         object.__setattr__(self, "_fallback", self._captured("fallback"))
         if self.camera is not None:
@@ -498,6 +523,7 @@ class Pass:
             self.shader,
             self.fullscreen,
             self.custom,
+            self.technique,
         )
 
     def __eq__(self, other: object) -> bool:

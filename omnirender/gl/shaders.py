@@ -42,6 +42,18 @@ vec3 to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
 }
 """
+#: om.Fog's equations (attributes.environment.Fog.factor) at eye distance ``d``, linear colours: one GLSL
+#: implementation for the forward shaders and the post-processing chain's om.gl.DepthFog.
+FOG_GLSL = """uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
+uniform vec3 u_fog_color;
+vec3 apply_fog(vec3 c, float d) {
+    float f;
+    if (u_fog.w < 0.5) f = (u_fog.y - d) / (u_fog.y - u_fog.x);
+    else if (u_fog.w < 1.5) f = exp(-u_fog.z * d);
+    else f = exp(-(u_fog.z * d) * (u_fog.z * d));
+    return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
+}
+"""
 _COMMON = (
     SRGB_GLSL
     + """
@@ -53,16 +65,9 @@ vec3 encode_output(vec3 c) {
 #endif
 }
 #ifdef FOG
-uniform vec4 u_fog;        // start, end, density, mode (0 linear, 1 exp, 2 exp2)
-uniform vec3 u_fog_color;
-vec3 apply_fog(vec3 c, float d) {
-    float f;
-    if (u_fog.w < 0.5) f = (u_fog.y - d) / (u_fog.y - u_fog.x);
-    else if (u_fog.w < 1.5) f = exp(-u_fog.z * d);
-    else f = exp(-(u_fog.z * d) * (u_fog.z * d));
-    return mix(u_fog_color, c, clamp(f, 0.0, 1.0));
-}
-#endif
+"""
+    + FOG_GLSL
+    + """#endif
 """
 )
 

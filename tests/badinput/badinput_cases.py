@@ -826,6 +826,51 @@ for engine in ("gl", "povray", "radiance", ".pov", ".rib", ".rad", ".glb", ".htm
     add(f"content/hostile-strings-{engine}", "engine content", _hostile_strings(engine), kind="handle")
 
 
+# -- post-processing chains (om.gl.PostProcess): parameters, GLSL, stage order, scene files ---------------------
+def _chain(*effects: Callable[[], Any]) -> Callable[[Path], Any]:
+    def run(_tmp: Path) -> None:
+        om.render(scene(om.gl.PostProcess([make() for make in effects]), om.Sphere()), engine="gl", size=(16, 12))
+
+    return run
+
+
+def _post_file(effect: dict) -> Callable[[Path], Any]:
+    def run(_tmp: Path) -> None:
+        text = json.dumps({"format": "omnirender-scene", "version": 1, "root": {"node": "s", "contents": [
+            {"type": "gl.PostProcess", "effects": [effect]}, {"type": "Sphere"}]}})  # fmt: skip
+        from omnirender.scene.files import loads
+
+        loads(text)
+
+    return run
+
+
+_GREY = "vec4 effect(vec2 uv) { return texture(u_input, uv); }"
+for _id, _run, _words in (
+    ("ssao-negative-radius", _chain(lambda: om.gl.SSAO(radius=-1)), ("SSAO", "radius")),
+    ("ssao-huge-samples", _chain(lambda: om.gl.SSAO(samples=10**9)), ("SSAO", "samples")),
+    ("tonemap-unknown-operator", _chain(lambda: om.gl.ToneMap("filmic")), ("ToneMap", "operator", "aces")),
+    ("tonemap-exposure-nan", _chain(lambda: om.gl.ToneMap(exposure=NAN)), ("ToneMap", "exposure")),
+    ("bloom-levels-float", _chain(lambda: om.gl.Bloom(levels=2.5)), ("Bloom", "levels")),
+    ("fog-end-before-start", _chain(lambda: om.gl.DepthFog(start=9, end=2)), ("DepthFog", "end")),
+    ("vignette-amount-2", _chain(lambda: om.gl.Vignette(amount=2)), ("Vignette", "amount")),
+    ("lut-wrong-shape", _chain(lambda: om.gl.ColorGrading(np.zeros((8, 8, 3)))), ("ColorGrading", "(N, N, N, 3)")),
+    ("lut-nan", _chain(lambda: om.gl.ColorGrading(np.full((2, 2, 2, 3), NAN))), ("ColorGrading", "[0, 1]")),
+    ("lut-huge", _chain(lambda: om.gl.ColorGrading(np.zeros((65, 65, 65, 3), np.float32))), ("ColorGrading", "2..64")),
+    ("custom-not-glsl", _chain(lambda: om.gl.CustomEffect("x", 42)), ("CustomEffect", "vec4 effect")),
+    ("custom-uniform-nan", _chain(lambda: om.gl.CustomEffect("x", _GREY, {"u_k": NAN})), ("CustomEffect", "u_k")),
+    ("custom-reserved-uniform", _chain(lambda: om.gl.CustomEffect("x", _GREY, {"u_depth": 1})), ("u_depth",)),
+    ("custom-bad-glsl", _chain(lambda: om.gl.CustomEffect("broken", "vec4 effect(vec2 uv) { return nope; }")),
+     ("CustomEffect 'broken'", "chain at /s", "GLSL", "nope")),
+    ("depth-effect-after-colour", _chain(om.gl.ToneMap, om.gl.SSAO), ("SSAO", "follows", "list them first")),
+    ("not-an-effect", _chain(om.Sphere), ("not a post-processing effect",)),
+    ("file-bad-radius", _post_file({"type": "gl.SSAO", "radius": -1}), ("SSAO", "radius")),
+    ("file-unknown-effect", _post_file({"type": "gl.Sharpen"}), ("gl.Sharpen",)),
+    ("file-effect-not-component", _post_file({"operator": "aces"}), ("effect",)),
+):  # fmt: skip
+    add(f"postfx/{_id}", "engine content", _run, words=_words)
+
+
 def _degenerate(kind: str) -> Callable[[Path], Any]:
     def run(_tmp: Path) -> None:
         flat = om.TriangleSet([(0, 0, 0), (1, 0, 0), (2, 0, 0)])  # zero area

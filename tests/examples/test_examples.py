@@ -162,6 +162,19 @@ def test_07_techniques(tmp_path):
     assert (wire.max(axis=2) < 100).mean() < 0.1 and (wire.min(axis=2) > 240).mean() > 0.8  # lines on white
 
 
+@pytest.mark.gl
+def test_08_custom_effect(tmp_path):
+    out = run_example("08_custom_effect.py", tmp_path)
+    figure = check_image(tmp_path / "08-custom-effect.png")
+    assert "08-custom-effect.png" in out and figure.shape[:2] == (300, 804)  # two panels of 400x300
+    source = (Path(EXAMPLES) / "08_custom_effect.py").read_text()
+    assert len(source.splitlines()) <= 30
+    colour, grey = figure[:, :400], figure[:, 404:]
+    assert np.abs(colour[..., 0] - colour[..., 2]).max() > 100  # the chain alone keeps colours
+    assert np.abs(grey[..., 0] - grey[..., 2]).max() <= 1 and np.abs(grey[..., 0] - grey[..., 1]).max() <= 1
+    assert abs(grey.mean() - colour.mean()) < 20  # luminance kept, colour gone
+
+
 @pytest.mark.slow
 @pytest.mark.gl
 @pytest.mark.povray

@@ -21,6 +21,8 @@ SAMPLES = {
     "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
     "PhongHighlight": lambda m: m.PhongHighlight(om.Texture(m.PhongHighlight.lobe(20, size=8)), strength=0.5),
     "MaterialDescription": lambda m: m.MaterialDescription("unlit"),
+    "CustomEffect": lambda m: m.CustomEffect("grey", "vec4 effect(vec2 uv) { return texture(u_input, uv); }", {"u": 2}),
+    "PostProcess": lambda m: m.PostProcess([m.SSAO(radius=0.3), m.ToneMap("hejl", auto_exposure=True), m.FXAA()]),
 }
 #: Raw differs by engine: each takes its own language
 RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
@@ -40,6 +42,8 @@ def _same(a, b):
         return type(a) is type(b) and _same(a.parameters(), b.parameters())
     if isinstance(a, dict):
         return isinstance(b, dict) and a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)) and any(isinstance(x, RenderingComponent) for x in a):  # a chain's effects
+        return isinstance(b, (list, tuple)) and len(a) == len(b) and all(map(_same, a, b))
     if isinstance(a, (list, tuple, np.ndarray)):
         return np.array_equal(np.asarray(a, dtype=object), np.asarray(b, dtype=object))
     return a == b
