@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .context import GLError, blit, clear_stencil, set_masks
+from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
 from .mirrors import Mirrors, mirror_items
@@ -198,8 +198,15 @@ class FrameRunner:
         self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
-            calls += self._run(self.frame_technique, root, Composed(), item_level=True)
-            calls += self._mirror_passes(root)
+            if self._stereo is None:
+                calls += self._run(self.frame_technique, root, Composed(), item_level=True)
+                calls += self._mirror_passes(root)
+            else:  # each eye's pass draws the scene through the engine's technique
+                calls += self._run(self._stereo, root, Composed(), item_level=False)
+                if self._root is not None and not self._warned_mirrors and mirror_items(root.all_items()):
+                    self._warned_mirrors = True
+                    warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
+                                  "stage reflects one eye)", stacklevel=3)  # fmt: skip
         finally:
             self._drawing = False
             self._close_query()
@@ -563,7 +570,13 @@ class FrameRunner:
         self._applier.forget()
         set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         ctx.scissor = None
-        if clear.color is not None or clear.depth is not None:
+        if clear.color is None and clear.depth is not None and self.raw.available:
+            # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
+            # clear colour would be lost), so clear only the depth buffer with a raw call
+            fbo.use()
+            clear_depth(self.raw, float(clear.depth))
+            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self._linear_output:
                 from ..attributes.photometry import linear_rgb
