@@ -203,8 +203,8 @@ def render(
     if options:
         raise TypeError(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
-            "read_depth, on_missing, technique, shadows, pipeline and stereo (spp/quality are options of the mitsuba/povray "
-            "engines)"
+            "read_depth, on_missing, technique, shadows, pipeline and stereo (spp/quality are options of the "
+            "mitsuba/povray engines)"
         )
     from .context import check_samples_total
 
