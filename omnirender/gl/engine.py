@@ -130,6 +130,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         )
         self._deferred: Any = None
         self.stereo = stereo
+        #: render textures (chained pipelines): the frame engine's PipelineSet, or its host's in a pipeline
+        self._pipelines: Any = None
+        self._pipelines_scanned = -1
         #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
         self.draw_list_version = 0
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
@@ -508,6 +511,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._released = True
 
     def _release(self) -> None:
+        if self._pipelines is not None:
+            if self._pipelines.host is self:
+                self._pipelines.release()
+            self._pipelines = None
         if self._deferred is not None:
             self._deferred.release()
             self._deferred = None

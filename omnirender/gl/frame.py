@@ -166,6 +166,7 @@ class FrameRunner:
 
     def _draw_frame(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
         ctx = self.ctx
+        self._prepare_pipelines()  # render textures first: their engines use the context
         fbo = self.framebuffer if framebuffer is None else framebuffer
         size = tuple(self._size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
@@ -229,6 +230,33 @@ class FrameRunner:
             if "OUT_OF_MEMORY" in err:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
+
+    # -- chained pipelines --------------------------------------------------------------
+    def pipelines(self) -> Any:
+        """The frame's chained pipelines (:class:`~.pipelines.PipelineSet`, made on first use)."""
+        if self._pipelines is None:
+            from .pipelines import PipelineSet
+
+            self._pipelines = PipelineSet(self)
+        return self._pipelines
+
+    def _prepare_pipelines(self) -> None:
+        """Draw the render textures the frame reads, in dependency order (only the frame engine does)."""
+        if self._pipelines is None:
+            if self._pipelines_scanned == self.draw_list_version:
+                return
+            self._pipelines_scanned = self.draw_list_version
+            from .pipelines import PipelineSet
+
+            if not PipelineSet.used_by(self):
+                return
+        pipelines = self.pipelines()
+        if pipelines.host is self:
+            pipelines.prepare()
+
+    def pipeline_image(self, texture: Any) -> Any:
+        """The last image of the render texture ``texture`` as this engine drew it (an ``om.Image``)."""
+        return self.pipelines().image(texture)
 
     def _shadow_map_passes(self, root: Scope) -> int:
         """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""

@@ -21,6 +21,9 @@ SAMPLES = {
     "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
     "PhongHighlight": lambda m: m.PhongHighlight(om.Texture(m.PhongHighlight.lobe(20, size=8)), strength=0.5),
     "MaterialDescription": lambda m: m.MaterialDescription("unlit"),
+    "RenderTexture": lambda m: m.RenderTexture(
+        om.Node("screen", [om.Color((1, 0, 0)), om.Sphere()]), om.Camera.look_at((0, 0, 5)), (32, 16), name="cam"
+    ),
 }
 #: Raw differs by engine: each takes its own language
 RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
@@ -36,6 +39,9 @@ def _components():
 
 
 def _same(a, b):
+    if isinstance(a, om.Node):  # a render texture's scene: the same graph
+        return (isinstance(b, om.Node) and a.name == b.name and len(a.items) == len(b.items)
+                and all(_same(p, q) for p, q in zip(a.items, b.items, strict=True)))  # fmt: skip
     if isinstance(a, RenderingComponent):  # a component parameter (a technique's texture): equal parameters
         return type(a) is type(b) and _same(a.parameters(), b.parameters())
     if isinstance(a, dict):
