@@ -1,6 +1,6 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing] [pipelines]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -161,6 +161,15 @@ def compositing_images() -> None:
             print("wrote", HERE / f"example_{png.stem}.png")
 
 
+def pipeline_images() -> None:
+    """The chained pipelines example (17: a portal and a security-camera screen)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "17_portal.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "17-portal.png", HERE / "example_17-portal.png")
+        print("wrote", HERE / "example_17-portal.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -168,6 +177,7 @@ SECTIONS = {
     "gallery": gl_gallery,
     "examples": example_images,
     "compositing": compositing_images,
+    "pipelines": pipeline_images,
 }
 
 if __name__ == "__main__":

@@ -275,3 +275,16 @@ def test_16_see_through(tmp_path):
         return int(((rgb[..., 0] > 150) & (rgb[..., 1] > 100) & (rgb[..., 2] < 80)).sum())
 
     assert yellow(opened) > 1000 and yellow(closed) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_17_portal(tmp_path):
+    out = run_example("17_portal.py", tmp_path)
+    img = check_image(tmp_path / "17-portal.png")
+    assert "garden view" in out and "security camera" in out
+    portal = img[130:250, 150:330]  # the garden through the portal: sky above, lawn below
+    assert (portal[:40, :, 2] > portal[:40, :, 0] + 40).mean() > 0.8
+    assert (portal[-40:, :, 1] > portal[-40:, :, 2] + 20).mean() > 0.5
+    monitor = img[200:320, 460:600]  # the room seen by the security camera: the red torus on the monitor
+    assert (monitor[..., 0].astype(int) - monitor[..., 1] > 60).sum() > 30
