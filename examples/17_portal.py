@@ -41,8 +41,8 @@ def garden() -> om.Node:
 
 
 def build_scene() -> tuple[om.Node, om.gl.RenderTexture, om.gl.RenderTexture]:
-    room = om.Node("room", [om.Camera.look_at((1.2, 1.7, 5.2), (0, 1.2, 0), fov=45), om.PointLight(position=(1, 3.2, 3)),
-                            om.Background((0.1, 0.1, 0.12))])  # fmt: skip
+    room = om.Node("room", [om.Camera.look_at((1.2, 1.7, 5.2), (0, 1.2, 0), fov=45),
+                            om.PointLight(position=(1, 3.2, 3)), om.Background((0.1, 0.1, 0.12))])  # fmt: skip
     room.add(om.Node("floor", [om.Material(diffuse=(0.6, 0.55, 0.5)), om.Box(size=(8, 0.1, 8), center=(0, -0.05, 0))]))
     room.add(om.Node("wall", [om.Material(diffuse=(0.8, 0.78, 0.72)), om.Box(size=(8, 3, 0.2), center=(0, 1.5, -0.1))]))
     view = om.gl.RenderTexture(garden(), om.Camera.look_at((0, 1.2, 4), (0, 0.9, 0), fov=50), (480, 300),
@@ -59,8 +59,8 @@ def build_scene() -> tuple[om.Node, om.gl.RenderTexture, om.gl.RenderTexture]:
     monitor.add(om.Node("case", [om.Material(diffuse=(0.15, 0.15, 0.15)), om.Box(size=(1.3, 1.0, 0.12))]))
     monitor.add(om.Node("stand", [om.Material(diffuse=(0.15, 0.15, 0.15)), om.Translation(0, -0.75, 0),
                                   om.Box(size=(0.1, 0.5, 0.1))]))  # fmt: skip
-    monitor.add(om.Node("picture", [om.Translation(0, 0, 0.065), om.Material(ambient=(1, 1, 1), diffuse=(0.3, 0.3, 0.3)),
-                                    security, screen(1.2, 0.9)]))  # fmt: skip
+    glow = om.Material(ambient=(1, 1, 1), diffuse=(0.3, 0.3, 0.3))
+    monitor.add(om.Node("picture", [om.Translation(0, 0, 0.065), glow, security, screen(1.2, 0.9)]))
     return room, view, security
 
 
