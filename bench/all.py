@@ -24,6 +24,7 @@ SCRIPTS = {
     "gltf_instances.py": [],
     "compositing.py": [],
     "soak.py": [],
+    "snapshots.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -36,6 +37,7 @@ QUICK = {
     "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
     "soak.py": ["--quick"],
+    "snapshots.py": ["--quick"],
 }
 
 

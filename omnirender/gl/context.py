@@ -125,6 +125,7 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "glClearStencil": ([_i], None),
     "glClear": ([_u], None),
     "glClearDepth": ([_d], None),
+    "glFinish": ([], None),
     "glGetIntegerv": ([_u, _pi], None),
     "glGetFloatv": ([_u, _pf], None),
     "glGetBooleanv": ([_u, _pb], None),

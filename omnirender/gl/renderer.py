@@ -619,6 +619,10 @@ class BatchRenderer:
             return self._read(read_depth)
 
     def _read(self, read_depth: bool) -> Image:
+        if self.raw.available:
+            # wait for the GPU through ctypes, which releases the GIL (moderngl's resolve and read would wait
+            # holding it): other Python threads (an application loop beside render threads) run meanwhile
+            self.raw.glFinish()
         t = self._targets
         drawn = self.framebuffer
         if self._target_stack:
