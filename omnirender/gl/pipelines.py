@@ -167,8 +167,9 @@ class PipelineSet:
         self.stack.append(texture)
         try:
             engine = pipeline.engine
-            with engine.current():
-                engine.compile(texture.scene)
+            camera = texture.camera
+            with engine.current():  # the pipeline's camera shows what its group mask lets through, as in om.render
+                engine.compile(texture.scene, mask=camera.mask if camera is not None and camera.mask else None)
             pipeline.self_reading = False
             deps = self.used_by(engine)
             for dep in deps:

@@ -188,3 +188,50 @@ def test_render_texture_errors_name_the_parameter_and_the_fix():
     with pytest.raises(ValueError, match=r"size must be \(width, height\) in pixels"):
         om.gl.RenderTexture(om.Node("s"), size=(0, 64))
     assert isinstance(om.gl.RenderTexture(om.Node("s")), om.Texture)
+
+
+REFRACT = """
+uniform sampler2D u_scene;
+uniform vec2 u_size;
+uniform float u_shift;
+void pass_fragment(inout vec4 color, vec3 P, vec3 N) {
+    // screen-space refraction: what lies behind, a fixed shift to the right
+    color = vec4(texture(u_scene, (gl_FragCoord.xy + vec2(u_shift, 0.0)) / u_size).rgb, 1.0);
+}
+"""
+
+
+class Refraction(om.gl.GLTechnique):
+    """Shades the subgraph after it with the image of a render texture, read in screen space."""
+
+    __slots__ = ("texture", "shift")
+
+    def __init__(self, texture, shift: float) -> None:
+        super().__init__()
+        self.texture, self.shift = texture, shift
+
+    def prepare_pass(self, engine) -> None:
+        uniforms = {"u_size": engine.target_size, "u_shift": self.shift}
+        shader = om.gl.Shader(fragment=REFRACT, textures={"u_scene": self.texture}, uniforms=uniforms)
+        engine.set_pass(om.gl.Pass("refraction", shader=shader))
+
+
+def test_a_pass_shader_reads_a_render_texture_in_screen_space():
+    scene = om.Node("scene")
+    camera = om.Camera.orthographic((0, 0, 5), height=2, mask="!glass")  # the pipeline sees all but the glass
+    scene.add(om.Camera.orthographic((0, 0, 5), height=2))
+    scene.add(om.Background((0, 0, 0)))
+    for name, color, x0, x1 in (("left", (1, 0, 0), -1, 0), ("right", (0, 0, 1), 0, 1)):
+        scene.add(om.Node(name, [glow(color), quad(x0, -1, x1, 1)]))
+    behind = om.gl.RenderTexture(scene, camera, (64, 64), name="behind")
+    glass = scene.add(om.Node("glass", groups=["glass"]))
+    glass.add(Refraction(behind, shift=12.0))
+    glass.add(om.Translation(0, 0, 0.5))
+    glass.add(quad(-0.5, -0.5, 0.5, 0.5))
+    with om.gl.GLEngine(size=(64, 64), samples=0) as engine:
+        first = engine.render(scene).array
+        assert first[32, 26, :3].max() < 10  # met while drawing: black on the first frame
+        img = engine.render(scene).array
+    # left of the centre the glass shows what lies 12 pixels to its right: red up to x = 20, then blue
+    assert hue(img[32, 18]) == 0 and hue(img[32, 22]) == 2
+    assert hue(img[32, 10]) == 0 and hue(img[32, 54]) == 2  # outside the glass: the scene itself
