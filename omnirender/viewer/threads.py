@@ -80,7 +80,7 @@ class RenderClient:
             self._thread.start()
 
     def stop(self, timeout: float = 30.0) -> None:
-        """Finish the frame being drawn and end the thread (releasing its renderer and context)."""
+        """Draw the newest snapshot if it is still waiting, then end the thread (releasing its renderer)."""
         with self._cond:
             self._stop = True
             self._cond.notify()
@@ -110,7 +110,7 @@ class RenderClient:
                 with self._cond:
                     while self._waiting is None and not self._stop:
                         self._cond.wait()
-                    if self._stop:
+                    if self._waiting is None:  # stopped, and the newest snapshot is drawn
                         return
                     snapshot, self._waiting = self._waiting, None
                 scene = mirror.apply(snapshot)
