@@ -162,12 +162,15 @@ def compositing_images() -> None:
 
 
 def pipeline_images() -> None:
-    """The chained pipelines example (17: a portal and a security-camera screen)."""
+    """The chained pipelines example (17: a portal and a security-camera screen) and a stereo pair of the demo."""
     with tempfile.TemporaryDirectory() as tmp:
         subprocess.run([sys.executable, str(ROOT / "examples" / "17_portal.py"), tmp], check=True, cwd=ROOT,
                        stdout=subprocess.DEVNULL)  # fmt: skip
         shutil.copy(Path(tmp) / "17-portal.png", HERE / "example_17-portal.png")
         print("wrote", HERE / "example_17-portal.png")
+    stereo = om.gl.Stereo("side-by-side", eye_separation=0.35, convergence=7.5)
+    om.render(demo_scene(), engine="gl", size=(960, 360), stereo=stereo).save(HERE / "stereo_demo.png")
+    print("wrote", HERE / "stereo_demo.png")
 
 
 SECTIONS = {
