@@ -122,6 +122,7 @@ class PipelineSet:
         #: render textures met while drawing (pass shaders), drawn before every later frame
         self.met: dict[int, weakref.ref] = {}
         self._found: tuple[int, list[RenderTexture]] | None = None
+        self.report: list[dict[str, Any]] = []
 
     @staticmethod
     def used_by(engine: Any) -> list[RenderTexture]:
@@ -141,10 +142,16 @@ class PipelineSet:
         return self._found[1] + [t for t in met if t is not None]
 
     def prepare(self) -> None:
-        """Draw every pipeline the host's next frame reads (see the module docs)."""
+        """Draw every pipeline the host's next frame reads (see the module docs).
+
+        The host's ``stats["pipelines"]`` lists them in the order they were visited
+        (dependencies first): name, whether it was drawn this frame, its passes.
+        """
         self.frame += 1
+        self.report: list[dict[str, Any]] = []
         for texture in self._needed_by_host():
             self._visit(texture)
+        self.host.stats["pipelines"] = self.report
         for key in [k for k, p in self.pipelines.items() if p.frame != self.frame]:
             self.pipelines.pop(key).release()  # no longer used by the frame
 
@@ -175,10 +182,13 @@ class PipelineSet:
             for dep in deps:
                 self._visit(dep)
             key = (texture.content_key(), tuple((id(d), self.pipelines[id(d)].drawn) for d in deps if d is not texture))
-            if pipeline.self_reading or key != pipeline.key:
+            drawn = pipeline.self_reading or key != pipeline.key
+            if drawn:
                 pipeline.draw(texture)
                 pipeline.key = key
             pipeline.frame = self.frame
+            passes = [p["name"] for p in engine.stats.get("passes", [])] if drawn else []
+            self.report.append({"name": texture.name, "drawn": drawn, "passes": passes})
         finally:
             self.stack.pop()
 

@@ -162,6 +162,11 @@ def test_pipelines_are_drawn_in_dependency_order():
         img = engine.render(main).array  # first frame: the inner portal must already be drawn
         for (u, v), expected in PREDICTED.items():
             assert hue(img[int(25 + v * 50), int(25 + u * 50)]) == expected
+        report = engine.stats["pipelines"]
+        assert [(p["name"], p["drawn"]) for p in report] == [("portal", True), ("outer", True)]
+        assert "opaque" in report[0]["passes"]
+        engine.render(main)
+        assert [p["drawn"] for p in engine.stats["pipelines"]] == [False, False]  # nothing changed
 
 
 def test_a_cycle_of_pipelines_is_refused_with_its_names():
