@@ -1,11 +1,14 @@
-"""Example 17: chained pipelines: a portal into another scene and a security-camera screen.
+"""Example 17: chained pipelines: a portal into another scene, a security-camera screen and a glass ball.
 
 ``om.gl.RenderTexture(scene, camera, size)`` is a texture whose image is a
 scene seen through a camera (guacamole's chained pipelines).  The wall's
 portal shows a garden, a different scene; the monitor shows the room itself
 from a camera in the corner, monitor included: that pipeline reads its own
 previous frame, so the screen within the screen lags one frame per level.
-The GL engine draws both pipelines before each frame.
+The glass ball refracts the room in screen space (``om.gl.Refraction``): it
+reads a pipeline of the room seen by the frame's camera without the ball
+(the camera's group mask).  The GL engine draws the pipelines before each
+frame, in dependency order.
 
     python examples/17_portal.py [OUTPUT_FOLDER]
 """
@@ -40,8 +43,12 @@ def garden() -> om.Node:
     return scene
 
 
+SIZE = (640, 420)
+EYE, CENTER, FOV = (1.2, 1.7, 5.2), (0, 1.2, 0), 45
+
+
 def build_scene() -> tuple[om.Node, om.gl.RenderTexture, om.gl.RenderTexture]:
-    room = om.Node("room", [om.Camera.look_at((1.2, 1.7, 5.2), (0, 1.2, 0), fov=45),
+    room = om.Node("room", [om.Camera.look_at(EYE, CENTER, fov=FOV),
                             om.PointLight(position=(1, 3.2, 3)), om.Background((0.1, 0.1, 0.12))])  # fmt: skip
     room.add(om.Node("floor", [om.Material(diffuse=(0.6, 0.55, 0.5)), om.Box(size=(8, 0.1, 8), center=(0, -0.05, 0))]))
     room.add(om.Node("wall", [om.Material(diffuse=(0.8, 0.78, 0.72)), om.Box(size=(8, 3, 0.2), center=(0, 1.5, -0.1))]))
@@ -61,15 +68,21 @@ def build_scene() -> tuple[om.Node, om.gl.RenderTexture, om.gl.RenderTexture]:
                                   om.Box(size=(0.1, 0.5, 0.1))]))  # fmt: skip
     glow = om.Material(ambient=(1, 1, 1), diffuse=(0.3, 0.3, 0.3))
     monitor.add(om.Node("picture", [om.Translation(0, 0, 0.065), glow, security, screen(1.2, 0.9)]))
+    behind = om.gl.RenderTexture(room, om.Camera.look_at(EYE, CENTER, fov=FOV, mask="!glass"), SIZE,
+                                 name="behind the glass")  # fmt: skip
+    ball = room.add(om.Node("glass ball", [om.Translation(0.55, 0.38, 0.9)], groups=["glass"]))
+    ball.add(om.gl.Refraction(behind, strength=0.12, tint=(0.85, 0.95, 1.0)))
+    ball.add(om.Material(diffuse=(0.2, 0.2, 0.2), specular=(1, 1, 1), shininess=80))
+    ball.add(om.Sphere(radius=0.38))
     return room, view, security
 
 
 if __name__ == "__main__":
     out = output_dir()
     scene, view, security = build_scene()
-    with om.gl.GLEngine(size=(640, 420)) as engine:
+    with om.gl.GLEngine(size=SIZE) as engine:
         for _ in range(3):  # the monitor shows the room's last frame: three frames fill three levels
             image = engine.render(scene)
-        order = [p.name for p in (view, security)]
+        order = [p["name"] for p in engine.stats["pipelines"]]
     image.save(out / "17-portal.png")
     print(f"wrote {out / '17-portal.png'} (pipelines {order}, drawn before each frame)")

@@ -288,3 +288,5 @@ def test_17_portal(tmp_path):
     assert (portal[-40:, :, 1] > portal[-40:, :, 2] + 20).mean() > 0.5
     monitor = img[200:320, 460:600]  # the room seen by the security camera: the red torus on the monitor
     assert (monitor[..., 0].astype(int) - monitor[..., 1] > 60).sum() > 30
+    ball = img[275:355, 318:400].astype(int)  # the glass ball: the torus and the portal's lawn refracted
+    assert (ball[..., 0] - ball[..., 1] > 60).sum() > 30 and (ball[..., 1] - ball[..., 0] > 30).sum() > 30

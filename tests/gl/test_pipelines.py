@@ -240,3 +240,37 @@ def test_a_pass_shader_reads_a_render_texture_in_screen_space():
     # left of the centre the glass shows what lies 12 pixels to its right: red up to x = 20, then blue
     assert hue(img[32, 18]) == 0 and hue(img[32, 22]) == 2
     assert hue(img[32, 10]) == 0 and hue(img[32, 54]) == 2  # outside the glass: the scene itself
+
+
+def glass_scene(technique_args: dict) -> tuple[om.Node, om.Node]:
+    """Red left and blue right halves behind a square of glass refracting a pipeline that leaves it out."""
+    scene = om.Node("scene")
+    scene.add(om.Camera.orthographic((0, 0, 5), height=2))
+    scene.add(om.Background((0, 0, 0)))
+    for name, color, x0, x1 in (("left", (1, 0, 0), -1, 0), ("right", (0, 0, 1), 0, 1)):
+        scene.add(om.Node(name, [glow(color), quad(x0, -1, x1, 1)]))
+    behind = om.gl.RenderTexture(scene, om.Camera.orthographic((0, 0, 5), height=2, mask="!glass"), (64, 64))
+    glass = scene.add(om.Node("glass", groups=["glass"]))
+    glass.add(om.gl.Refraction(behind, **technique_args))
+    glass.add(om.Translation(0, 0, 0.5))
+    glass.add(quad(-0.5, -0.5, 0.5, 0.5))
+    return scene, glass
+
+
+def test_refraction_shows_what_lies_behind_tinted():
+    scene, glass = glass_scene({"strength": 0.0, "surface": 0.0})
+    with om.gl.GLEngine(size=(64, 64), samples=0) as engine:
+        engine.render(scene)  # the glass met the pipeline while drawing: from the next frame on it is drawn first
+        clear = engine.render(scene).array
+        glass.items[0].tint = (0.5, 0.5, 0.5)
+        tinted = engine.render(scene).array
+        scene.remove(glass)
+        plain = engine.render(scene).array
+    inside = (slice(20, 44), slice(20, 44))
+    assert np.abs(clear[inside].astype(int) - plain[inside]).max() <= 2  # a flat facing glass: no displacement
+    linear = (plain[inside][..., [0, 2]].astype(float) / 255) ** 2.2 * 0.5
+    assert np.abs((tinted[inside][..., [0, 2]].astype(float) / 255) ** 2.2 - linear).max() < 0.03
+    with pytest.raises(ValueError, match="strength must be a number"):
+        om.gl.Refraction(om.gl.RenderTexture(om.Node("s")), strength=3)
+    with pytest.raises(ValueError, match="texture must be an om.gl.RenderTexture"):
+        om.gl.Refraction("behind.png")

@@ -21,6 +21,11 @@ SAMPLES = {
     "Material": lambda m: m.Material("plasfunc", (0.5, 0.5, 0.5, 0.02, 0.05), strings=("refl", "my.cal")),
     "PhongHighlight": lambda m: m.PhongHighlight(om.Texture(m.PhongHighlight.lobe(20, size=8)), strength=0.5),
     "MaterialDescription": lambda m: m.MaterialDescription("unlit"),
+    "Refraction": lambda m: m.Refraction(
+        m.RenderTexture(om.Node("behind", [om.Sphere()]), om.Camera.look_at((0, 0, 5), mask="!glass"), (32, 16)),
+        strength=0.1,
+        tint=(0.9, 1.0, 0.95),
+    ),
     "RenderTexture": lambda m: m.RenderTexture(
         om.Node("screen", [om.Color((1, 0, 0)), om.Sphere()]), om.Camera.look_at((0, 0, 5)), (32, 16), name="cam"
     ),
