@@ -23,6 +23,7 @@ SCRIPTS = {
     "gltf_load.py": [],
     "gltf_instances.py": [],
     "compositing.py": [],
+    "deferred.py": [],
     "soak.py": [],
     "snapshots.py": [],
 }
@@ -36,6 +37,7 @@ QUICK = {
     "gltf_load.py": ["--triangles", "200000", "--repeat", "1"],
     "gltf_instances.py": ["--instances", "2000", "--repeat", "1"],
     "compositing.py": ["--frames", "2"],
+    "deferred.py": ["--frames", "3"],
     "soak.py": ["--quick"],
     "snapshots.py": ["--quick"],
 }

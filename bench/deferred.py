@@ -22,13 +22,13 @@ Run: ``.venv/bin/python bench/deferred.py`` (``--frames N``, default 8; ``--samp
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 
 import numpy as np
+from shadows import measure  # the same interleaved frame timing (bench/shadows.py)
 
 import omnirender as om
 from omnirender.gl import GLEngine
+from omnirender.gl.deferred import BufferLayout
 
 SIZE = (640, 480)
 GRID = 32  # 32 x 32 = 1024 objects
@@ -63,29 +63,18 @@ def scene(lights: int, seed: int = 7) -> om.Node:
     return root
 
 
-def measure(configs: dict[str, tuple[GLEngine, om.Node]], n: int) -> dict[str, float]:
-    """Median seconds per frame of every configuration (taking turns frame by frame, after two warm-up rounds)."""
-    times: dict[str, list[float]] = {name: [] for name in configs}
-    for k in range(n + 2):
-        for name, (engine, root) in configs.items():
-            start = time.perf_counter()
-            engine.render(root)
-            if k >= 2:
-                times[name].append(time.perf_counter() - start)
-    return {name: statistics.median(t) for name, t in times.items()}
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--samples", type=int, default=4)
     args = parser.parse_args()
     counts = (8, 32, 128, 512, 2048)
-    configs: dict[str, tuple[GLEngine, om.Node]] = {}
+    configs: dict[str, tuple[GLEngine, om.Node, None]] = {}
     for n in counts:
         if n <= 32:
-            configs[f"forward, {n} lights"] = (GLEngine(size=SIZE, samples=args.samples), scene(n))
-        configs[f"deferred, {n} lights"] = (GLEngine(size=SIZE, samples=args.samples, pipeline="deferred"), scene(n))
+            configs[f"forward, {n} lights"] = (GLEngine(size=SIZE, samples=args.samples), scene(n), None)
+        deferred_engine = GLEngine(size=SIZE, samples=args.samples, pipeline="deferred")
+        configs[f"deferred, {n} lights"] = (deferred_engine, scene(n), None)
     try:
         result = measure(configs, args.frames)
         deferred = configs["deferred, 8 lights"][0].pipeline
@@ -102,9 +91,12 @@ def main() -> None:
         print(f"  G-buffer + L-buffer: {deferred.memory() / 2**20:.1f} MiB at {SIZE[0]}x{SIZE[1]} "
               f"({args.samples} samples); {deferred.memory((1920, 1080), 0) / 2**20:.1f} MiB at 1920x1080 "
               "without multisampling")  # fmt: skip
+        compact = BufferLayout(deferred.layout.models, light_format="r11g11b10f")
+        print(f"  with om.gl.Deferred(light_format='r11g11b10f'): {compact.memory((1920, 1080)) / 2**20:.1f} MiB "
+              "at 1920x1080 (guacamole: about 81 MiB; target at most 32 MiB)")  # fmt: skip
         print(deferred.describe((1920, 1080)))
     finally:
-        for engine, _ in configs.values():
+        for engine, _, _ in configs.values():
             engine.release()
 
 

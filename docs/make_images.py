@@ -1,6 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
-Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing] [pipelines]
+Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
+     [deferred] [pipelines]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -8,6 +9,7 @@ sections makes only those pictures (default: all).
 
 from __future__ import annotations
 
+import colorsys
 import shutil
 import subprocess
 import sys
@@ -161,13 +163,51 @@ def compositing_images() -> None:
             print("wrote", HERE / f"example_{png.stem}.png")
 
 
-def pipeline_images() -> None:
-    """The chained pipelines example (17: a portal and a security-camera screen) and a stereo pair of the demo."""
+def hundred_lights_scene(lights: int = 128, seed: int = 3) -> om.Node:
+    """guacamole's Figure 7c idea: a grid of objects on a dark floor lit only by many small coloured lights,
+    each marked by a small glowing ball (its emission, not a light of its own)."""
+    rng = np.random.default_rng(seed)
+    root = om.Node("scene", [om.Camera.look_at(eye=(0, 7.5, 11), center=(0, 0, 0.5), fov=45),
+                             om.Background((0.02, 0.02, 0.03)), om.AmbientLight(intensity=0.04)])  # fmt: skip
+    root.add(om.Node("floor", [om.Material(diffuse=(0.75, 0.75, 0.75), specular=(0.3,) * 3, shininess=40),
+                               om.Box(size=(16, 0.2, 12), center=(0, -0.1, 0))]))  # fmt: skip
+    shapes = (om.Sphere(radius=0.35), om.Box(size=0.6), om.Torus(major_radius=0.3, minor_radius=0.1))
+    objects = root.add(om.Node("objects", [om.Material(diffuse=(0.85, 0.85, 0.85), specular=(0.5,) * 3)]))
+    for i in range(15):
+        for j in range(11):
+            objects.add(om.Node(f"o{i}_{j}", [om.Translation(-7 + i, 0.35, -5 + j), shapes[(i + 2 * j) % 3]]))
+    for k in range(lights):
+        x, z = rng.uniform(-7.5, 7.5), rng.uniform(-5.5, 5.5)
+        color = tuple(float(c) for c in colorsys.hsv_to_rgb(rng.uniform(), 0.85, 1.0))  # saturated hues
+        lamp = root.add(om.Node(f"light{k}", [om.Translation(x, 0.3, z)]))
+        lamp.add(om.PointLight(color=color, intensity=4.0, quadratic=100.0, casts_shadows=False))
+        lamp.add(om.Material(diffuse=(0, 0, 0), ambient=(0, 0, 0), emission=color))
+        lamp.add(om.Sphere(radius=0.04))
+    return root
+
+
+def deferred_images() -> None:
+    """The deferred pipeline: a hundred lights, the two example shading models, a trimmed NURBS surface."""
+    scene = hundred_lights_scene()
+    path = HERE / "deferred_hundred_lights.png"
+    om.render(scene, engine="gl", size=(960, 540), pipeline="deferred").save(path)
+    print("wrote", path)
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([sys.executable, str(ROOT / "examples" / "17_portal.py"), tmp], check=True, cwd=ROOT,
+        for script in ("15_toon_model.py", "16_see_through.py", "17_nurbs.py"):
+            subprocess.run([sys.executable, str(ROOT / "examples" / script), tmp], check=True, cwd=ROOT,
+                           stdout=subprocess.DEVNULL)  # fmt: skip
+        for png in sorted(Path(tmp).glob("1[567]-*.png")):
+            shutil.copy(png, HERE / f"example_{png.stem}.png")
+            print("wrote", HERE / f"example_{png.stem}.png")
+
+
+def pipeline_images() -> None:
+    """The chained pipelines example (18: a portal and a security-camera screen) and a stereo pair of the demo."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "18_portal.py"), tmp], check=True, cwd=ROOT,
                        stdout=subprocess.DEVNULL)  # fmt: skip
-        shutil.copy(Path(tmp) / "17-portal.png", HERE / "example_17-portal.png")
-        print("wrote", HERE / "example_17-portal.png")
+        shutil.copy(Path(tmp) / "18-portal.png", HERE / "example_18-portal.png")
+        print("wrote", HERE / "example_18-portal.png")
     stereo = om.gl.Stereo("side-by-side", eye_separation=0.35, convergence=7.5)
     om.render(demo_scene(), engine="gl", size=(960, 360), stereo=stereo).save(HERE / "stereo_demo.png")
     print("wrote", HERE / "stereo_demo.png")
@@ -180,6 +220,7 @@ SECTIONS = {
     "gallery": gl_gallery,
     "examples": example_images,
     "compositing": compositing_images,
+    "deferred": deferred_images,
     "pipelines": pipeline_images,
 }
 

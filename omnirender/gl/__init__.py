@@ -114,7 +114,7 @@ def _load() -> None:
     if not _loaded:
         from . import attribute_painters, painters  # noqa: F401
 
-        for name in ("text", "volume"):
+        for name in ("text", "volume", "nurbs"):
             try:
                 importlib.import_module(f".{name}", __name__)
             except ModuleNotFoundError as exc:  # optional painters not written yet

@@ -515,6 +515,9 @@ class DrawListCompiler:
         if kind in ("mesh", "points"):
             features.append(("MODEL", model))
             features.extend(state_features)
+        if geometry.program_features:  # geometry drawn by a program of its own (GPU-tessellated NURBS patches)
+            features.extend(geometry.program_features)
+            uniforms = uniforms + geometry.program_uniforms
         if cull_override is not None:
             raster = raster[: CullFace.index] + (cull_override,) + raster[CullFace.index + 1 :]
         key = (kind, tuple(features), extra, raster, bound, clip, fog, switch, uniforms, code)

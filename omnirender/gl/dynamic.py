@@ -125,9 +125,7 @@ class MovePlan:
             batch = self.batches[b]
             where = self.row_of[affected[part]]
             batch.rows[where, _MODEL] = rows[part]
-            lo, hi = int(where.min()), int(where.max()) + 1
-            d = batch.dirty
-            batch.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
+            batch.changed(int(where.min()), int(where.max()) + 1)
         return len(affected)
 
     def _apply_instances(self, moved: set[int]) -> int:
@@ -144,7 +142,7 @@ class MovePlan:
             if item.slot is not None:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
-                batch.dirty = (0, len(batch.rows))
+                batch.changed(0, len(batch.rows))
             count += 1
         return count
 
@@ -232,11 +230,7 @@ class TransformUpdater:
 
     def _invalidate_moved(self) -> None:
         """What depends on where items are: filtered batches, bounds, shadow maps, mirror planes."""
-        for scope in self.scopes:
-            if scope.filtered:  # batches of pass masks and predicates copy rows: made again when next drawn
-                from .renderer import _release_filtered
-
-                _release_filtered(scope)
+        # batches of pass masks and predicates follow their source batches' versions (Batch.follow)
         self._bounds = None
         self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
         self._mirrors = None  # mirror planes follow their transforms
@@ -264,4 +258,8 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
     if len(batch.rows) != len(made.rows):
         batch.position = None  # another count: sorted and culled again
     batch.rows = made.rows
-    batch.dirty = (0, len(made.rows)) if len(made.rows) else None
+    batch.dirty = None
+    if len(made.rows):
+        batch.changed(0, len(made.rows))
+    else:
+        batch.version += 1

@@ -42,7 +42,7 @@ from .context import (
 )
 from .deferred.materials import MaterialTable
 from .deferred.pipeline import Deferred
-from .drawlist import Batch, DrawItem, DrawState, Scope
+from .drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
 from .dynamic import TransformUpdater
 from .frame import FrameRunner
 from .geometry import Geometry, GeometryCache, unit_mesh
@@ -440,18 +440,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         """World-space (min, max) of the compiled draw list, or None when it is empty."""
         if self._bounds is not None:
             return self._bounds
-        lo = np.full(3, np.inf)
-        hi = np.full(3, -np.inf)
-        for item in self.draw_items:
-            if item.state.overlay:
-                continue
-            found = item.world_bounds()
-            if found is not None:
-                lo = np.minimum(lo, found[0])
-                hi = np.maximum(hi, found[1])
-        if not np.all(np.isfinite(lo)):
-            return None
-        self._bounds = (lo, hi)
+        self._bounds = world_bounds(item for item in self.draw_items if not item.state.overlay)
         return self._bounds
 
     def _camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:

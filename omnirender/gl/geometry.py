@@ -42,6 +42,9 @@ class Geometry:
         "closed",
         "__weakref__",
     )
+    #: program features and uniforms of geometry drawn by its own shader stages (NURBS patches); none for meshes
+    program_features: tuple = ()
+    program_uniforms: tuple = ()
 
     def __init__(
         self,

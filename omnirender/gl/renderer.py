@@ -112,7 +112,10 @@ class BatchRenderer:
             self._batch_pool[pool_key] = batch
         segment.batches = list(batches.values())
         segment.slots = [None if s is None else (batches[s[0]], s[1]) for s in slots]
-        if not where or where[0] != "filtered":
+        if where and where[0] == "filtered":
+            for batch in segment.batches:
+                _select_from_source(batch)
+        else:
             for item, slot in zip(items, segment.slots, strict=True):
                 item.slot = slot
                 if slot is not None and item.instances is None:
@@ -132,7 +135,7 @@ class BatchRenderer:
             where = a.positions
             if where is None:
                 where = a.positions = _positions(a)
-            touched = False
+            touched = regroup = False
             for i in differ:
                 x, y = a.entries[i], b.entries[i]
                 if isinstance(x, Scope):
@@ -152,20 +155,25 @@ class BatchRenderer:
                         if len(batch.rows) != len(y.instances):
                             batch.position = None  # sorted and culled again
                         batch.rows = y.instances.copy()
-                        batch.dirty = (0, len(batch.rows))
+                        batch.dirty = None
+                        batch.changed(0, len(batch.rows))
                         batch.uniform = uniform_material(batch.rows)
                         changed += 1
-                        touched = True
+                        touched = regroup = True
                         continue
                     x.row = x.row.copy()  # the replaced item keeps its values; its batch row is y's now
                     batch.rows[index] = y.row
                     y.row = batch.rows[index]
                     batch.mark(index)
+                    if x.groups != y.groups:
+                        regroup = True  # what pass masks and predicates select may differ: filter again
+                    else:
+                        _replace_in_views(a, batch, index, y)
                     if batch.uniform and not uniform_material(batch.rows[[0, index]]):
                         batch.uniform = False
                 changed += 1
                 touched = True
-            if touched:
+            if touched and regroup:
                 _release_filtered(a)
         return changed
 
@@ -252,6 +260,9 @@ class BatchRenderer:
         key = (composed.masks, composed.selects)
         cached = scope.filtered.get(key)
         if cached is not None:
+            for batches in cached.values():
+                for batch in batches:
+                    batch.follow()  # rows moved or changed in place since: copied again, nothing re-planned
             return cached
         keep = self._accepts(composed)
         out: dict[int, list[Batch]] = {}
@@ -413,6 +424,9 @@ class BatchRenderer:
 
     def _mode(self, geometry: Geometry, kind: str) -> int:
         ctx = self.ctx
+        if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
+            return ctx.PATCHES
         if kind == "points" or geometry.mode == "points":
             return ctx.POINTS
         if geometry.mode == "lines":
@@ -457,8 +471,10 @@ class BatchRenderer:
             if u is not None:
                 u.value = (start, end, density, mode)
                 prog["u_fog_color"].value = color
+        u = prog.get("u_viewport", None)
+        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+            u.value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
         if state.kind == "lines":
-            prog["u_viewport"].value = (self._target_size[0] / 2.0, self._target_size[1] / 2.0)
             prog["u_line_width"].value = float(state.value(LineWidth))
         for unit, (sampler, texture, srgb) in enumerate(state.textures):
             u = prog.get(sampler, None)
@@ -468,7 +484,10 @@ class BatchRenderer:
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
-                u.value = value
+                if isinstance(value, tuple) and len(value) > 4:  # arrays (NURBS trimming edges): as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
         for name, value in composed.uniforms().items():
             u = prog.get(name, None)
             if u is not None:
@@ -702,6 +721,32 @@ def _positions(scope: Scope) -> dict[int, tuple[Segment, int]]:
         out[i] = (segment, position)
         position += 1
     return out
+
+
+def _select_from_source(batch: Batch) -> None:
+    """Make a filtered batch follow the batch its items come from (their slots), when they all come from one."""
+    first = batch.items[0].slot
+    if first is None or any(it.slot is None or it.slot[0] is not first[0] for it in batch.items):
+        return  # not from one planned batch: made again when the scope is
+    source = first[0]
+    if batch.items[0].instances is not None:
+        batch.picks = None  # an instance set: all its rows
+    else:
+        batch.picks = np.fromiter((it.slot[1] for it in batch.items), np.int64, len(batch.items))
+    batch.source = source
+    batch.source_version = source.version
+
+
+def _replace_in_views(scope: Scope, source: Batch, index: int, item: DrawItem) -> None:
+    """``item`` replaced row ``index`` of ``source``: put it into the scope's filtered batches that select it."""
+    for batches in scope.filtered.values():
+        for group in batches.values():
+            for batch in group:
+                if batch.source is not source or batch.picks is None:
+                    continue
+                j = int(np.searchsorted(batch.picks, index))
+                if j < len(batch.picks) and batch.picks[j] == index:
+                    batch.items[j] = item
 
 
 def _release_filtered(scope: Scope) -> None:

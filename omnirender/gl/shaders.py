@@ -28,11 +28,12 @@ from typing import Any
 from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
-__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields"]
+__all__ = ["MAX_LIGHTS", "ProgramCache", "instance_fields", "SRGB_GLSL"]
 
 MAX_LIGHTS = 32
 
-_COMMON = """
+#: GLSL sRGB encoding and decoding (every program that writes or reads display values).
+SRGB_GLSL = """
 vec3 to_srgb(vec3 c) {
     c = clamp(c, 0.0, 1.0);
     return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
@@ -40,6 +41,10 @@ vec3 to_srgb(vec3 c) {
 vec3 to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
 }
+"""
+_COMMON = (
+    SRGB_GLSL
+    + """
 vec3 encode_output(vec3 c) {
 #ifdef LINEAR_OUTPUT
     return max(c, vec3(0.0));
@@ -59,6 +64,7 @@ vec3 apply_fog(vec3 c, float d) {
 }
 #endif
 """
+)
 
 VERTEX = """
 in vec3 in_position;
@@ -283,6 +289,21 @@ uniform mat3 u_uvm_base;
 uniform vec4 u_flat_color;          // linear
 #endif
 const float PI = 3.14159265;
+#ifdef TRIM
+in vec2 v_param;                    // the NURBS surface's (u, v) in the unit square
+uniform vec4 u_trim[TRIM];          // its trimming loops' edges (x0, y0, x1, y1)
+uniform float u_trim_outer;         // 1: the square's boundary is the outer loop (every loop is a hole)
+bool trim_kept(vec2 p) {            // the winding rule of omnirender.geometry.nurbs.trim_winding
+    float w = u_trim_outer;
+    for (int k = 0; k < TRIM; ++k) {
+        vec4 e = u_trim[k];
+        float c = (e.z - e.x) * (p.y - e.y) - (p.x - e.x) * (e.w - e.y);
+        if (e.y <= p.y && e.w > p.y && c > 0.0) w += 1.0;
+        else if (e.y > p.y && e.w <= p.y && c < 0.0) w -= 1.0;
+    }
+    return w > 0.0;
+}
+#endif
 #ifdef PASS_SURFACE
 SURFACE_STRUCT
 PASS_SURFACE_CODE
@@ -403,6 +424,9 @@ void main() {
 #endif
 #endif
     STATE_MAIN
+#ifdef TRIM
+    if (!trim_kept(v_param)) discard;
+#endif
 #ifdef ORTHO
     vec3 V = vec3(0.0, 0.0, 1.0);
 #else
@@ -774,7 +798,16 @@ class ProgramCache:
         if kind == "points":
             defines["POINTS"] = True
         head = _header(dict(defines))
-        if kind == "mesh" and "SHADOW_VOLUME" in defines:
+        stages: dict[str, str] = {}
+        if kind == "mesh" and "NURBS" in defines:  # GPU-tessellated NURBS patches (gl/nurbs.py)
+            from .nurbs import tessellation_sources
+
+            head = head.replace("#version 330", "#version 400", 1)
+            head += f"#define NCTRL {(defines['NURBS_P'] + 1) * (defines['NURBS_Q'] + 1)}\n"
+            vs, tcs, tes = tessellation_sources(VERTEX, instance_fields(kind, defines))
+            stages = {"tess_control_shader": head + tcs, "tess_evaluation_shader": head + _snippets(tes, defines, code)}
+            gs, fs = None, FRAGMENT
+        elif kind == "mesh" and "SHADOW_VOLUME" in defines:
             vs, gs, fs = VERTEX, VOLUME_GEOMETRY, VOLUME_FRAGMENT
         elif kind in ("mesh", "points"):
             vs, gs, fs = VERTEX, None, FRAGMENT
@@ -788,6 +821,7 @@ class ProgramCache:
                 vertex_shader=head + vs,
                 geometry_shader=None if gs is None else head + gs,
                 fragment_shader=head + _COMMON + fs,
+                **stages,
             )
         except Exception as exc:
             snippets = any(name in defines for name in _SNIPPETS) or kind not in ("mesh", "points", "lines")

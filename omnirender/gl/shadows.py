@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
-from .drawlist import Scope
+from .drawlist import Scope, world_bounds
 from .passes import Clear, Pass, Shader, Target
 from .shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from .state import casts_shadows
@@ -265,18 +265,7 @@ _DEFAULT = ShadowMaps()
 
 def caster_bounds(root: Scope) -> tuple[np.ndarray, np.ndarray] | None:
     """World (min, max) of the items that cast shadows, or None when there are none."""
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
-    for item in root.all_items():
-        if item.transparent or not casts_shadows(item):
-            continue
-        found = item.world_bounds()
-        if found is not None:
-            lo = np.minimum(lo, found[0])
-            hi = np.maximum(hi, found[1])
-    if not np.all(np.isfinite(lo)):
-        return None
-    return lo, hi
+    return world_bounds(item for item in root.all_items() if not item.transparent and casts_shadows(item))
 
 
 def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

@@ -31,7 +31,20 @@ from ..attributes import (
 from ..attributes.environment import is_scene_background
 from ..attributes.surface import engine_appearance, track_surfaces
 from ..core import SIMPLIFY, AttributePainter, ShapePainter, default_for
-from ..shapes import CSG, Box, Cone, Cylinder, Disk, LineSet, PointSet, Rectangle, Sphere, Torus, TriangleSet
+from ..shapes import (
+    CSG,
+    Box,
+    Cone,
+    Cylinder,
+    Disk,
+    LineSet,
+    NURBSSurface,
+    PointSet,
+    Rectangle,
+    Sphere,
+    Torus,
+    TriangleSet,
+)
 from . import sdl
 from .appearance import finish_name, srgb_to_linear, texture_name, vertex_colors
 from .attributes import GlobalSettings, Raw
@@ -185,6 +198,33 @@ class TriangleSetPainter(ShapePainter):
         else:
             text = mesh2_text(vertices, indices, normals, uvs, None, None, engine._owner())
             engine.emit(text, texture_name(engine, uv=uvs is not None))
+
+
+@default_for(POVRayEngine)
+class NURBSSurfacePainter(ShapePainter):
+    """Untrimmed polynomial bicubic NURBS surfaces as POV-Ray ``bicubic_patch``es (one per Bézier patch).
+
+    Trimmed, rational, other-degree or textured surfaces (whose texture coordinates are the surface's
+    (u, v), not POV-Ray's per-patch ones) and wireframes go through the simplifier's mesh.
+    """
+
+    __slots__ = ()
+    service = PAINT
+    target = NURBSSurface
+
+    def exec(self, shape: NURBSSurface, engine: POVRayEngine) -> None:
+        style = engine.mono(DrawStyle)
+        native = shape.degrees == (3, 3) and not shape.trim_loops() and not shape.rational
+        if not native or engine_appearance(engine).textures or (style is not None and style.mode != "filled"):
+            _simplify(shape, engine)
+            return
+        patches, _ = shape.bezier_patches()
+        body = []
+        for patch in patches:  # (4, 4, 4) homogeneous control points, weights all equal
+            points = patch[..., :3] / patch[..., 3:]
+            rows = ",\n  ".join(", ".join(sdl.vector(points[i, j]) for j in range(4)) for i in range(4))
+            body.append(f"bicubic_patch {{ type 1 flatness 0 u_steps 5 v_steps 5\n  {rows}\n}}\n")
+        engine.emit(_union("".join(body)), texture_name(engine))
 
 
 def _pixel_radius(engine: POVRayEngine, points: np.ndarray, pixels: float) -> float:

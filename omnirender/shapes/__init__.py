@@ -13,6 +13,7 @@ from .instances import InstanceId, InstanceSet
 from .lod import LevelOfDetail
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
 from .meshfile import MeshFile
+from .nurbs import NURBSSurface, TrimCurve
 from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
 from .text import Text
 
@@ -39,7 +40,12 @@ __all__ = [
     "InstanceId",
     "InstanceSet",
     "LevelOfDetail",
+    "NURBSSurface",
+    "TrimCurve",
     "DeclaredShape",
 ]
 
-from . import csg_simplifier  # noqa: E402,F401  (registers the CSG's mesh-boolean simplifier)
+from . import (
+    csg_simplifier,  # noqa: E402,F401  (registers the CSG's mesh-boolean simplifier)
+    nurbs_simplifier,  # noqa: E402,F401  (registers the NURBS surface's mesh simplifier)
+)

@@ -278,6 +278,20 @@ for label, make, word in [
     ("MeshFile.folder", lambda: (os.makedirs("d.obj", exist_ok=True), om.MeshFile("d.obj")), "not a file"),
     ("MeshFile.nul", lambda: om.MeshFile("a\x00b.obj"), "NUL"),
     ("MeshFile.number", lambda: om.MeshFile(5), "path"),
+    ("NURBSSurface.grid-2d", lambda: om.NURBSSurface(np.zeros((4, 3))), "control_points"),
+    ("NURBSSurface.nan", lambda: om.NURBSSurface(np.full((4, 4, 3), NAN)), "control_points"),
+    ("NURBSSurface.too-few-points", lambda: om.NURBSSurface(np.zeros((3, 4, 3))), "needs more than"),
+    ("NURBSSurface.degree-99", lambda: om.NURBSSurface(np.zeros((4, 4, 3)), degree_u=99), "degree"),
+    ("NURBSSurface.weights-0", lambda: om.NURBSSurface(np.zeros((4, 4, 3)), weights=np.zeros((4, 4))), "weights"),
+    ("NURBSSurface.knots-unclamped", lambda: om.NURBSSurface(np.zeros((4, 4, 3)), knots_u=range(8)), "clamped"),
+    ("NURBSSurface.knots-count", lambda: om.NURBSSurface(np.zeros((4, 4, 3)), knots_v=[0, 1]), "knots_v"),
+    ("NURBSSurface.trim-line", lambda: om.NURBSSurface(np.zeros((4, 4, 3)), trim=[[(0, 0), (1, 1)]]), "trim loop"),
+    (
+        "NURBSSurface.trim-huge",
+        lambda: om.NURBSSurface(np.zeros((4, 4, 3)), trim=[np.random.rand(10**5, 2)]),
+        "sample them more coarsely",
+    ),
+    ("TrimCurve.weights-negative", lambda: om.TrimCurve([(0, 0), (1, 0), (0, 1)], weights=[1, -1, 1]), "weights"),
 ]:
     add(f"array/{label}", "arrays", lambda _t, m=make: m(), words=(word,))
 
@@ -418,6 +432,13 @@ file_case("param-string", doc({"type": "Sphere", "radius": "big"}), words=("radi
 file_case("param-bigint", doc({"type": "Sphere", "radius": HUGE_INT}), words=("radius",))
 file_case("param-1e308", doc({"type": "Sphere", "radius": 1e308}), words=("radius",))
 file_case("torus-1e308", doc({"type": "Torus", "major_radius": 1e308}), words=("Torus", "major_radius"))
+_PATCH = [[[0, 0, 0], [1, 0, 0]], [[0, 1, 0], [1, 1, 0]]]
+file_case("nurbs-knots", doc({"type": "NURBSSurface", "control_points": _PATCH, "degree_u": 1, "degree_v": 1,
+                              "knots_u": [0, 1, 0, 1]}),
+          words=("NURBSSurface", "root.contents[0].knots_u", "non-decreasing"))  # fmt: skip
+file_case("nurbs-trim-curve", doc({"type": "NURBSSurface", "control_points": _PATCH, "degree_u": 1, "degree_v": 1,
+                                   "trim": [{"type": "TrimCurve", "points": [[0, 0]]}]}),
+          words=("TrimCurve", "root.contents[0].trim[0]", "points"))  # fmt: skip
 file_case("vertices-1e39", doc({"type": "TriangleSet", "vertices": [[1e39, 0, 0], [1, 0, 0], [0, 1, 0]]}),
           words=("vertices",))  # fmt: skip
 file_case("json-nan", '{"format": "omnirender-scene", "version": 1, "root": {"node": "s", "contents": '

@@ -279,9 +279,28 @@ def test_16_see_through(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.gl
-def test_17_portal(tmp_path):
-    out = run_example("17_portal.py", tmp_path)
-    img = check_image(tmp_path / "17-portal.png")
+@pytest.mark.povray
+def test_17_nurbs(tmp_path):
+    run_example("17_nurbs.py", tmp_path)
+    both = check_image(tmp_path / "17-nurbs.png")
+    gl, povray = both[:, :480].astype(int), both[:, 484:].astype(int)
+
+    def orange(rgb: np.ndarray) -> np.ndarray:
+        return (rgb[..., 0] > 150) & (rgb[..., 0] - rgb[..., 2] > 90)
+
+    a, b = orange(gl), orange(povray)
+    assert a.sum() > 30000 and (a ^ b).sum() < 0.05 * (a | b).sum()  # the same sheet in both engines
+    rows = np.nonzero(a.any(axis=1))[0]
+    middle = a[(rows.min() + rows.max()) // 2]
+    runs = np.count_nonzero(np.diff(middle.astype(int)) == 1) + middle[0]
+    assert runs >= 2  # a window cuts the sheet's middle row
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_18_portal(tmp_path):
+    out = run_example("18_portal.py", tmp_path)
+    img = check_image(tmp_path / "18-portal.png")
     assert "garden view" in out and "security camera" in out
     portal = img[130:250, 150:330]  # the garden through the portal: sky above, lawn below
     assert (portal[:40, :, 2] > portal[:40, :, 0] + 40).mean() > 0.8

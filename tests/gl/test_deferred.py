@@ -393,3 +393,25 @@ def test_shadows_and_receivers_as_forward(engines):
     a, b = forward.render(scene), deferred.render(scene)
     assert_agree(a, b, "receivers")
     assert (delta_e(b, shadowed) > 3).sum() > 100  # the floor lost the shadows it had
+
+
+def test_volumes_stop_at_the_gbuffer_depth(engines):
+    """An opaque sphere inside a volume: the compositing pass's rays end at the G-buffer depth, so the sphere
+    shows through the volume in front of it, the volume adds less there than along a whole ray, and colour and
+    depth equal the forward pipeline's."""
+    forward, deferred = engines
+    blue = (0.2, 0.4, 1.0, 0.03)
+    volume = om.Volume(np.ones((16, 16, 16), np.float32), spacing=2.0 / 15, transfer_function=[(0, blue), (1, blue)])
+    camera = om.Camera.look_at(eye=(0, 0, 6), center=(0, 0, 0), fov=40)
+    ball = om.Node("ball", [om.Color(1, 0.8, 0), om.Sphere(radius=0.4)])
+    alone = deferred.render(om.Node("s", [camera, volume]), background=(0, 0, 0))
+    inside = om.Node("s", [camera, om.PointLight(position=(2, 3, 5)), ball, volume])
+    both, only = deferred.render(inside, background=(0, 0, 0)), deferred.render(om.Node("s", [camera, ball]))
+    centre = np.asarray(both.pixel(64, 48)[:3], int)
+    assert 100 < centre[0] < only.pixel(64, 48)[0]  # the sphere seen through the volume in front of it
+    assert both.pixel(64, 48)[2] < alone.pixel(64, 48)[2]  # the rays stopped at the sphere
+    reference = forward.render(inside, background=(0, 0, 0))
+    assert_agree(reference, both, "a sphere inside a volume")
+    assert abs(both.depth[48, 64] - reference.depth[48, 64]) < 1e-3 and both.depth[48, 64] <= only.depth[48, 64]
+    hit = om.pick(inside, pixel=(64, 48), size=(128, 96))[0]
+    assert abs((6.0 - hit.point[2]) - only.depth[48, 64]) < 1e-2  # picking finds the sphere where its depth is

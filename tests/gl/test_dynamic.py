@@ -94,3 +94,27 @@ def test_changes_to_another_scene_do_not_disturb_this_one():
         other_moves[0].offset = (9.0, 9.0, 9.0)
         again = e.render(scene, background=(0, 0, 0))
         assert e.stats["compiled"] is False and np.array_equal(again.array, first)
+
+
+def _filtered_batches(engine) -> set[int]:
+    return {id(b) for s in engine.scopes for group in s.filtered.values() for bs in group.values() for b in bs}
+
+
+def test_shadow_casters_selected_once_follow_moves_and_replaced_items():
+    """The shadow passes' selection of casters is planned once; moved or replaced rows flow into it (Batch.follow)."""
+    from omnirender.gl import GLEngine
+
+    scene, moves = moving_scene(24)
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene, background=(0, 0, 0))
+        planned = _filtered_batches(e)
+        assert planned  # the shadow-map passes draw a selection (the items that cast shadows)
+        moves[3].offset = (0.5, 1.5, 0.5)
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False and np.array_equal(image.array, fresh(scene))
+        node = scene["/scene/group/b7"]
+        node.remove(moves[7])
+        moves[7] = node.insert(0, om.Translation(-2.0, 1.0, 1.0))  # replaced, not moved: compiled in place
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["incremental"] and np.array_equal(image.array, fresh(scene))
+        assert _filtered_batches(e) == planned

@@ -107,6 +107,19 @@ def _samples(tmp: Path) -> dict[str, list]:
         "LevelOfDetail": [
             om.LevelOfDetail([om.Sphere(), om.Box()], distances=[10], center=(1, 0, 0), offline="distance")
         ],
+        "NURBSSurface": [
+            om.NURBSSurface(
+                np.arange(48.0).reshape(4, 4, 3),
+                weights=np.full((4, 4), 0.5),
+                knots_v=[0, 0, 0, 0, 2, 2, 2, 2],
+                trim=[
+                    [(0.2, 0.2), (0.2, 0.8), (0.8, 0.5)],
+                    om.TrimCurve([(0.5, 0.1), (0.9, 0.5), (0.5, 0.9), (0.5, 0.1)]),
+                ],
+            ),
+            om.NURBSSurface(np.arange(36.0).reshape(3, 4, 3), degree_u=2, degree_v=1),
+        ],
+        "TrimCurve": [om.TrimCurve([(0.5, 0.1), (0.9, 0.5), (0.1, 0.5), (0.5, 0.1)], weights=[1, 2, 2, 1], degree=3)],
     }
 
 

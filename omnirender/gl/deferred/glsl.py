@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import re
 
-from ..shaders import MAX_LIGHTS
+from ..shaders import MAX_LIGHTS, SRGB_GLSL
 from ..shadow_glsl import MAPS_CORE
 from .layout import BufferLayout, Channel
 from .models import G_TYPES, L_TYPES, PARAM_TYPES, STAGES, ShadingModel, ShadingModelError
@@ -49,15 +49,6 @@ FOG_SLOTS = 7
 _STAGE_IDS = {"geometry": 1, "visibility": 2, "lighting": 3, "shading": 4}
 _MACROS = ("GBuffer", "LBuffer", "material", "geometry", "visibility", "lighting", "shading")
 
-_SRGB = """
-vec3 to_srgb(vec3 c) {
-    c = clamp(c, 0.0, 1.0);
-    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
-}
-vec3 to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c));
-}
-"""
 #: Octahedral normals in 12 + 12 bits and 8-bit channels (the fixed layer's packing).
 PACKING = """
 vec2 oct_wrap(vec2 v) { return (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
@@ -92,7 +83,7 @@ struct Light {
 };
 """
 #: The sRGB curves, the packing and the stages' structs: the head of the lighting and shading programs.
-COMMON = _SRGB + PACKING + STRUCTS
+COMMON = SRGB_GLSL + PACKING + STRUCTS
 
 
 def first_line(model: ShadingModel, stage: str) -> int:

@@ -1,4 +1,4 @@
-"""Example 17: chained pipelines: a portal into another scene, a security-camera screen and a glass ball.
+"""Example 18: chained pipelines: a portal into another scene, a security-camera screen and a glass ball.
 
 ``om.gl.RenderTexture(scene, camera, size)`` is a texture whose image is a
 scene seen through a camera (guacamole's chained pipelines).  The wall's
@@ -10,7 +10,7 @@ reads a pipeline of the room seen by the frame's camera without the ball
 (the camera's group mask).  The GL engine draws the pipelines before each
 frame, in dependency order.
 
-    python examples/17_portal.py [OUTPUT_FOLDER]
+    python examples/18_portal.py [OUTPUT_FOLDER]
 """
 
 from __future__ import annotations
@@ -84,5 +84,5 @@ if __name__ == "__main__":
         for _ in range(3):  # the monitor shows the room's last frame: three frames fill three levels
             image = engine.render(scene)
         order = [p["name"] for p in engine.stats["pipelines"]]
-    image.save(out / "17-portal.png")
-    print(f"wrote {out / '17-portal.png'} (pipelines {order}, drawn before each frame)")
+    image.save(out / "18-portal.png")
+    print(f"wrote {out / '18-portal.png'} (pipelines {order}, drawn before each frame)")
