@@ -26,6 +26,7 @@ SCRIPTS = {
     "deferred.py": [],
     "postfx.py": [],
     "soak.py": [],
+    "snapshots.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -40,6 +41,7 @@ QUICK = {
     "deferred.py": ["--frames", "3"],
     "postfx.py": ["--frames", "3"],
     "soak.py": ["--quick"],
+    "snapshots.py": ["--quick"],
 }
 
 

@@ -1,7 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
 Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
-     [deferred] [postfx]
+     [deferred] [postfx] [pipelines]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -218,6 +218,18 @@ def postfx_images(size: tuple[int, int] = (480, 360)) -> None:
         print("wrote", HERE / "example_08-custom-effect.png")
 
 
+def pipeline_images() -> None:
+    """The chained pipelines example (18: a portal and a security-camera screen) and a stereo pair of the demo."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "18_portal.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "18-portal.png", HERE / "example_18-portal.png")
+        print("wrote", HERE / "example_18-portal.png")
+    stereo = om.gl.Stereo("side-by-side", eye_separation=0.35, convergence=7.5)
+    om.render(demo_scene(), engine="gl", size=(960, 360), stereo=stereo).save(HERE / "stereo_demo.png")
+    print("wrote", HERE / "stereo_demo.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -227,6 +239,7 @@ SECTIONS = {
     "compositing": compositing_images,
     "postfx": postfx_images,
     "deferred": deferred_images,
+    "pipelines": pipeline_images,
 }
 
 if __name__ == "__main__":

@@ -94,3 +94,22 @@ def test_post_processing_example_runs(tmp_path, monkeypatch):
     deferred = np.asarray(Image.open(tmp_path / "post-deferred.png").convert("RGB"), dtype=int)
     assert forward.shape == (360, 480, 3) and forward.std() > 20
     assert np.abs(forward - deferred).mean() < 2.0  # the two pipelines agree under the chain
+
+
+@pytest.mark.gl
+def test_render_threads_example_runs(tmp_path, monkeypatch):
+    """The render-threads block, on a small scene with a moving body, 10 application frames."""
+    import omnirender as om
+
+    monkeypatch.chdir(tmp_path)
+    text = README.read_text().split("**Render threads on immutable snapshots.**", 1)[1]
+    code = re.search(r"```python\n(.*?)```", text, re.S).group(1).replace("range(60)", "range(10)")
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 6))])
+    body = om.Translation(0, 0, 0)
+    scene.add(om.Node("body", [body, om.Sphere()]))
+    namespace = {"om": om, "scene": scene, "body": body}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert (tmp_path / "frame.png").stat().st_size > 500
+    clients = namespace["clients"]
+    assert all(c.error is None and c.frames >= 1 for c in clients)
+    assert all(c.last.frame == 10 for c in clients)  # both drew the last snapshot before they stopped

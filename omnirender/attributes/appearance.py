@@ -420,6 +420,10 @@ class Texture(Parameterised, MonoAttribute):
         object.__setattr__(self, "_cache", arr)
         return arr
 
+    def has_alpha(self) -> bool:
+        """Whether some texel is not fully opaque (the surface is then drawn as see-through)."""
+        return bool(self.image_array()[:, :, 3].min() < 255)
+
     def image_in(self, engine: str, node_path: str) -> np.ndarray:
         """:meth:`image_array`, but a missing or unreadable file raises naming the engine, the node and the fix."""
         try:

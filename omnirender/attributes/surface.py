@@ -187,7 +187,7 @@ def _texture_has_alpha(texture: Texture | None) -> bool:
     if texture is None:
         return False
     try:
-        return bool(texture.image_array()[:, :, 3].min() < 255)
+        return texture.has_alpha()
     except (OSError, ValueError):
         return False  # the engine reports the unreadable file where it uses it
 

@@ -50,6 +50,9 @@ __all__ = [
     "PhongHighlight",
     "Supersample",
     "Deferred",
+    "Stereo",
+    "RenderTexture",
+    "Refraction",
     "ShadingModel",
     "MaterialDescription",
     "ShadingModelError",
@@ -98,6 +101,9 @@ _LAZY = {
     "PhongHighlight": "highlight",
     "Supersample": "supersample",
     "Deferred": "deferred",
+    "Stereo": "stereo",
+    "RenderTexture": "render_texture",
+    "Refraction": "refraction",
     "ShadingModel": "deferred",
     "MaterialDescription": "deferred",
     "ShadingModelError": "deferred",
@@ -205,7 +211,8 @@ def render(
     ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes without a
     handler), ``technique`` (an ``om.Technique`` replacing the default one)
     ``shadows`` (default True: shadow maps for lights that cast shadows) and
-    ``pipeline`` (``"forward"``, the default, or ``"deferred"``: ``om.gl.Deferred``).
+    ``pipeline`` (``"forward"``, the default, or ``"deferred"``: ``om.gl.Deferred``) and
+    ``stereo`` (an ``om.gl.Stereo``: the frame as a stereo pair).
     For many frames keep a ``GLEngine`` (or an ``om.Viewer``) instead: this
     function compiles the scene and its shaders on every call.  Calls share one
     hidden GL context per thread (see :func:`one_shot_context`); the engine's
@@ -215,13 +222,13 @@ def render(
     from .engine import GLEngine
 
     read_depth = options.pop("read_depth", True)
-    names = ("on_missing", "technique", "shadows", "pipeline")
+    names = ("on_missing", "technique", "shadows", "pipeline", "stereo")
     engine_options = {key: options.pop(key) for key in names if key in options}
     if options:
         raise TypeError(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
-            "read_depth, on_missing, technique, shadows and pipeline (spp/quality are options of the mitsuba/povray "
-            "engines)"
+            "read_depth, on_missing, technique, shadows, pipeline and stereo (spp/quality are options of the "
+            "mitsuba/povray engines)"
         )
     from .context import check_samples_total
 

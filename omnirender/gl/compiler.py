@@ -467,6 +467,8 @@ class DrawListCompiler:
         self._state_dirty = False
 
     def _check_texture(self, texture: Any) -> None:
+        if getattr(texture, "rendered", False):
+            return  # a render texture: its pipeline checks its size when it is made
         checked = self._checked_textures.get(id(texture))
         if checked is not None and checked[0]() is texture and checked[1] == texture.version:
             return

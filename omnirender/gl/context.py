@@ -124,6 +124,8 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "glBlitFramebuffer": ([_i, _i, _i, _i, _i, _i, _i, _i, _u, _u], None),
     "glClearStencil": ([_i], None),
     "glClear": ([_u], None),
+    "glClearDepth": ([_d], None),
+    "glFinish": ([], None),
     "glGetIntegerv": ([_u, _pi], None),
     "glGetFloatv": ([_u, _pf], None),
     "glGetBooleanv": ([_u, _pb], None),
@@ -337,6 +339,14 @@ def clear_stencil_bits(raw: RawGL, bits: int) -> None:
         raw.glClearStencil(0)
         raw.glClear(GL_STENCIL_BUFFER_BIT)
         raw._mask(0xFF)
+
+
+def clear_depth(raw: RawGL, value: float = 1.0) -> None:
+    """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off)."""
+    raw.glDisable(0x0C11)
+    raw.glDepthMask(1)
+    raw.glClearDepth(float(value))
+    raw.glClear(GL_DEPTH_BUFFER_BIT)
 
 
 def clear_stencil(raw: RawGL, value: int = 0) -> None:

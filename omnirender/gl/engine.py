@@ -71,7 +71,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     pass's GPU time with timer queries (``engine.stats["passes"]``);
     ``shadows=False`` turns shadow maps off (they are on by default, see
     :class:`~.shadows.ShadowMaps`); ``pipeline="deferred"`` (or an
-    ``om.gl.Deferred(...)``) shades every frame with the deferred pipeline.
+    ``om.gl.Deferred(...)``) shades every frame with the deferred pipeline;
+    ``stereo`` (an ``om.gl.Stereo``) draws every frame as a stereo pair.
 
     OpenGL version: every shader and call is OpenGL 3.3 core, also when the
     context offers 4.x.  The 4.x features that would pay off here are not
@@ -110,6 +111,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         programs: ProgramCache | None = None,
         shadows: bool = True,
         pipeline: Any = "forward",
+        stereo: Any = None,
     ) -> None:
         from . import _load
 
@@ -127,6 +129,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
             pipeline if isinstance(pipeline, Deferred) else (Deferred() if pipeline == "deferred" else None)
         )
         self._deferred: Any = None
+        self.stereo = stereo
+        #: render textures (chained pipelines): the frame engine's PipelineSet, or its host's in a pipeline
+        self._pipelines: Any = None
+        self._pipelines_scanned = -1
         #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
         self.draw_list_version = 0
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
@@ -291,6 +297,23 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         Nested techniques' passes always draw their items with :attr:`technique` (forward).
         """
         return self._pipeline_technique or self.technique
+
+    @property
+    def stereo(self) -> Any:
+        """The frame's :class:`~.stereo.Stereo` technique (two eyes with off-axis projections), or None."""
+        return self._stereo
+
+    @stereo.setter
+    def stereo(self, value: Any) -> None:
+        from .stereo import Stereo
+
+        if value is not None and not isinstance(value, Stereo):
+            raise TypeError(f"GLEngine: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")
+        if value is not None and self._pipeline_technique is not None:
+            raise ValueError(
+                "GLEngine: stereo frames draw each eye with the forward pipeline; give pipeline='forward' with stereo"
+            )
+        self._stereo = value
 
     @property
     def pipeline(self) -> Any:
@@ -477,6 +500,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._released = True
 
     def _release(self) -> None:
+        if self._pipelines is not None:
+            if self._pipelines.host is self:
+                self._pipelines.release()
+            self._pipelines = None
         if self._deferred is not None:
             self._deferred.release()
             self._deferred = None

@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from .context import GLError, blit, clear_stencil, set_masks
+from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
 from .mirrors import Mirrors, mirror_items
@@ -166,6 +166,7 @@ class FrameRunner:
 
     def _draw_frame(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
         ctx = self.ctx
+        self._prepare_pipelines()  # render textures first: their engines use the context
         fbo = self.framebuffer if framebuffer is None else framebuffer
         size = tuple(self._size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
@@ -198,12 +199,19 @@ class FrameRunner:
         self._drawing = True
         try:
             calls = self._shadow_map_passes(root)
-            technique, scope = self.frame_technique, root
-            whole = root.entries[0] if len(root.entries) == 1 else None
-            if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
-                technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
-            calls += self._run(technique, scope, Composed(), item_level=True)
-            calls += self._mirror_passes(root)
+            if self._stereo is None:
+                technique, scope = self.frame_technique, root
+                whole = root.entries[0] if len(root.entries) == 1 else None
+                if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
+                    technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
+                calls += self._run(technique, scope, Composed(), item_level=True)
+                calls += self._mirror_passes(root)
+            else:  # each eye's pass draws the scene through the engine's technique
+                calls += self._run(self._stereo, root, Composed(), item_level=False)
+                if self._root is not None and not self._warned_mirrors and mirror_items(root.all_items()):
+                    self._warned_mirrors = True
+                    warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
+                                  "stage reflects one eye)", stacklevel=3)  # fmt: skip
         finally:
             self._drawing = False
             self._close_query()
@@ -226,6 +234,33 @@ class FrameRunner:
             if "OUT_OF_MEMORY" in err:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
+
+    # -- chained pipelines --------------------------------------------------------------
+    def pipelines(self) -> Any:
+        """The frame's chained pipelines (:class:`~.pipelines.PipelineSet`, made on first use)."""
+        if self._pipelines is None:
+            from .pipelines import PipelineSet
+
+            self._pipelines = PipelineSet(self)
+        return self._pipelines
+
+    def _prepare_pipelines(self) -> None:
+        """Draw the render textures the frame reads, in dependency order (only the frame engine does)."""
+        if self._pipelines is None:
+            if self._pipelines_scanned == self.draw_list_version:
+                return
+            self._pipelines_scanned = self.draw_list_version
+            from .pipelines import PipelineSet
+
+            if not PipelineSet.used_by(self):
+                return
+        pipelines = self.pipelines()
+        if pipelines.host is self:
+            pipelines.prepare()
+
+    def pipeline_image(self, texture: Any) -> Any:
+        """The last image of the render texture ``texture`` as this engine drew it (an ``om.Image``)."""
+        return self.pipelines().image(texture)
 
     def _shadow_map_passes(self, root: Scope) -> int:
         """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
@@ -570,7 +605,13 @@ class FrameRunner:
         self._applier.forget()
         set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         ctx.scissor = None
-        if clear.color is not None or clear.depth is not None:
+        if clear.color is None and clear.depth is not None and self.raw.available:
+            # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
+            # clear colour would be lost), so clear only the depth buffer with a raw call
+            fbo.use()
+            clear_depth(self.raw, float(clear.depth))
+            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self._linear_output:
                 from ..attributes.photometry import linear_rgb

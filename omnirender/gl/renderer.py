@@ -24,6 +24,7 @@ from .geometry import Geometry
 from .layout import ROW
 from .lighting import LightUniforms
 from .passes import Composed
+from .pipelines import apply_sampling
 from .resources import gpu_call
 from .shaders import instance_fields
 from .shadows import ATLAS, SHADOW_UNIT
@@ -521,6 +522,8 @@ class BatchRenderer:
 
     def _texture(self, attr: Any, srgb: bool = True) -> Any:
         """The GL texture of an ``om.Texture``: sRGB colour data, or linear data (normal, roughness maps)."""
+        if getattr(attr, "rendered", False):  # an om.gl.RenderTexture: its pipeline's last image
+            return self.pipelines().texture(attr)
         key = (id(attr), srgb)
         entry = self._textures.get(key)
         if entry is not None and entry[0]() is attr and entry[1] == attr.version:
@@ -533,22 +536,9 @@ class BatchRenderer:
         # and mipmapping, so minified and magnified textures average light, not encoded values
         internal = _GL_SRGB8_ALPHA8 if srgb else _GL_RGBA8
         tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=internal, what="a texture")
-        mipmap = attr.mipmap
-        if mipmap:
+        if attr.mipmap:
             tex.build_mipmaps()
-        lin = attr.filter == "linear"
-        mag = self.ctx.LINEAR if lin else self.ctx.NEAREST
-        if mipmap:
-            minf = self.ctx.LINEAR_MIPMAP_LINEAR if lin else self.ctx.NEAREST_MIPMAP_NEAREST
-        else:
-            minf = mag
-        tex.filter = (minf, mag)
-        tex.repeat_x = tex.repeat_y = attr.wrap != "clamp"
-        if attr.wrap == "mirror" and self.raw.available:
-            # moderngl has no mirrored-repeat switch: set GL_MIRRORED_REPEAT on the bound texture
-            tex.use(0)
-            for pname in (0x2802, 0x2803):  # GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
-                self.raw.glTexParameteri(0x0DE1, pname, 0x8370)
+        apply_sampling(self.ctx, self.raw, tex, attr)
         self._textures[key] = (weakref.ref(attr), attr.version, tex)
         return tex
 
@@ -648,6 +638,10 @@ class BatchRenderer:
             return self._read(read_depth)
 
     def _read(self, read_depth: bool) -> Image:
+        if self.raw.available:
+            # wait for the GPU through ctypes, which releases the GIL (moderngl's resolve and read would wait
+            # holding it): other Python threads (an application loop beside render threads) run meanwhile
+            self.raw.glFinish()
         t = self._targets
         drawn = self.framebuffer
         if self._target_stack:

@@ -3,7 +3,8 @@
 ``om.Viewer`` draws :class:`IsRenderable` objects (and ``om.Node``) with an
 engine, ArtiSynth style: ``rerender()`` prerenders into a :class:`RenderList`
 and repaints; ``repaint()`` redraws the cached lists.  ``om.view(scene)``
-opens an interactive glfw window.
+opens an interactive glfw window.  ``RenderThreads`` and ``RenderClient``
+draw immutable scene snapshots in render threads of their own.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from .axial import AxisAlignedRotation
 from .camera import ViewerCamera
 from .render_list import PASSES, RenderList
 from .renderable import HIGHLIGHT, TRANSPARENT, TWO_DIMENSIONAL, IsRenderable, NodeRenderable, as_renderable
+from .threads import RenderClient, RenderThreads
 from .viewer import Viewer, default_lights
 
 __all__ = [
@@ -31,6 +33,8 @@ __all__ = [
     "TRANSPARENT",
     "TWO_DIMENSIONAL",
     "HIGHLIGHT",
+    "RenderThreads",
+    "RenderClient",
 ]
 
 

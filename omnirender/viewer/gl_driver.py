@@ -73,6 +73,9 @@ class GLDriver:
         background = self.viewer.background
         if engine.mask != self.viewer.mask:
             engine.mask = self.viewer.mask
+        stereo = getattr(self.viewer, "stereo", None)
+        if getattr(engine, "stereo", None) is not stereo:
+            engine.stereo = stereo
         key = self.frame_key(root)
         with engine.ctx:  # make the engine's context current (several contexts may live in one thread)
             if key == self._key:

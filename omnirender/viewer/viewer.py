@@ -52,8 +52,10 @@ class Viewer:
         samples: int = 4,
         background: Sequence[float] = (0.18, 0.19, 0.22, 1.0),
         title: str = "omnirender",
+        stereo: Any = None,
     ) -> None:
         self._size = _check_size(size)
+        self.stereo = stereo
         self._camera = ViewerCamera(self._size)
         self._renderables: list[Any] = []
         self._by_source: dict[int, Any] = {}
@@ -85,6 +87,20 @@ class Viewer:
             self.window = Window(self, title=title)
 
     # -- engine ----------------------------------------------------------
+    @property
+    def stereo(self) -> Any:
+        """The ``om.gl.Stereo`` every frame is drawn with (two eyes, off-axis projections), or None."""
+        return self._stereo
+
+    @stereo.setter
+    def stereo(self, value: Any) -> None:
+        if value is not None:
+            from ..gl.stereo import Stereo
+
+            if not isinstance(value, Stereo):
+                raise TypeError(f"Viewer: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")
+        self._stereo = value
+
     @property
     def engine(self) -> Engine:
         """The renderer renderables draw with (created on first use)."""

@@ -400,6 +400,7 @@ def view(
     update_interval: float = 0.0,
     duration: float | None = None,
     fps: float = 60.0,
+    stereo: Any = None,
 ) -> Any:
     """Open a window on ``scene`` and loop until it is closed (or ``duration`` seconds pass).
 
@@ -407,11 +408,12 @@ def view(
     window's (hidden subgraphs are neither drawn nor picked), else the view fits the
     scene; scenes with their own lights replace the viewer's default lights,
     and the scene's ``om.Background`` colour (if any) is the window's.
-    ``update(t)`` runs in a worker thread (see the module docs).  Returns the viewer.
+    ``update(t)`` runs in a worker thread (see the module docs); ``stereo`` (an
+    ``om.gl.Stereo``) shows the scene as a stereo pair.  Returns the viewer.
     """
     from .viewer import Viewer
 
-    viewer = Viewer(size=size, window=True, title=title)
+    viewer = Viewer(size=size, window=True, title=title, stereo=stereo)
     try:
         open_scene(viewer, scene)
         if update is not None:

@@ -307,3 +307,18 @@ def test_17_nurbs(tmp_path):
     middle = a[(rows.min() + rows.max()) // 2]
     runs = np.count_nonzero(np.diff(middle.astype(int)) == 1) + middle[0]
     assert runs >= 2  # a window cuts the sheet's middle row
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+def test_18_portal(tmp_path):
+    out = run_example("18_portal.py", tmp_path)
+    img = check_image(tmp_path / "18-portal.png")
+    assert "garden view" in out and "security camera" in out
+    portal = img[130:250, 150:330]  # the garden through the portal: sky above, lawn below
+    assert (portal[:40, :, 2] > portal[:40, :, 0] + 40).mean() > 0.8
+    assert (portal[-40:, :, 1] > portal[-40:, :, 2] + 20).mean() > 0.5
+    monitor = img[200:320, 460:600]  # the room seen by the security camera: the red torus on the monitor
+    assert (monitor[..., 0].astype(int) - monitor[..., 1] > 60).sum() > 30
+    ball = img[275:355, 318:400].astype(int)  # the glass ball: the torus and the portal's lawn refracted
+    assert (ball[..., 0] - ball[..., 1] > 60).sum() > 30 and (ball[..., 1] - ball[..., 0] > 30).sum() > 30

@@ -124,6 +124,9 @@ def _samples(tmp: Path) -> dict[str, list]:
 
 
 def _equal(a, b) -> bool:
+    if isinstance(a, om.Node) or isinstance(b, om.Node):  # a render texture's scene: the same graph
+        return (type(a) is type(b) and a.name == b.name and len(a.items) == len(b.items)
+                and all(_equal(p, q) for p, q in zip(a.items, b.items, strict=True)))  # fmt: skip
     if isinstance(a, om.RenderingComponent) or isinstance(b, om.RenderingComponent):
         return type(a) is type(b) and _params_equal(a.parameters(), b.parameters())
     if isinstance(a, (str, os.PathLike)) and isinstance(b, (str, os.PathLike)):

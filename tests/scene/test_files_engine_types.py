@@ -23,6 +23,14 @@ SAMPLES = {
     "MaterialDescription": lambda m: m.MaterialDescription("unlit"),
     "CustomEffect": lambda m: m.CustomEffect("grey", "vec4 effect(vec2 uv) { return texture(u_input, uv); }", {"u": 2}),
     "PostProcess": lambda m: m.PostProcess([m.SSAO(radius=0.3), m.ToneMap("hejl", auto_exposure=True), m.FXAA()]),
+    "Refraction": lambda m: m.Refraction(
+        m.RenderTexture(om.Node("behind", [om.Sphere()]), om.Camera.look_at((0, 0, 5), mask="!glass"), (32, 16)),
+        strength=0.1,
+        tint=(0.9, 1.0, 0.95),
+    ),
+    "RenderTexture": lambda m: m.RenderTexture(
+        om.Node("screen", [om.Color((1, 0, 0)), om.Sphere()]), om.Camera.look_at((0, 0, 5)), (32, 16), name="cam"
+    ),
 }
 #: Raw differs by engine: each takes its own language
 RAW = {"povray": "sphere { <0,0,0>, 1 }", "radiance": "void plastic red 0 0 5 1 0 0 0 0"}
@@ -38,6 +46,9 @@ def _components():
 
 
 def _same(a, b):
+    if isinstance(a, om.Node):  # a render texture's scene: the same graph
+        return (isinstance(b, om.Node) and a.name == b.name and len(a.items) == len(b.items)
+                and all(_same(p, q) for p, q in zip(a.items, b.items, strict=True)))  # fmt: skip
     if isinstance(a, RenderingComponent):  # a component parameter (a technique's texture): equal parameters
         return type(a) is type(b) and _same(a.parameters(), b.parameters())
     if isinstance(a, dict):

@@ -280,3 +280,30 @@ def test_om_view_runs_an_application_update(display):
     viewer = om.view(scene, size=SIZE, duration=0.5, update=update, update_interval=0.05)
     assert len(calls) >= 2 and move.offset[1] > 0
     assert viewer.window is None
+
+
+def test_window_shows_stereo_pairs(window):
+    viewer = window.viewer
+    mono = red_mask(window.screenshot())
+    mono_red, mono_edge = centroid_x(mono), np.nonzero(mono)[1].max()
+    viewer.stereo = om.gl.Stereo("side-by-side", eye_separation=0.4, convergence=9)
+    window.request_rerender()
+    window.step()
+    shot = window.screenshot()
+    red = red_mask(shot)
+    left, right = red[:, : SIZE[0] // 2], red[:, SIZE[0] // 2 :]
+    assert left.sum() > 50 and right.sum() > 50  # the red sphere in each eye's half
+    # the sphere lies at the convergence distance: the same place in both halves, as far from their centres
+    # as from the centre of the mono image (each eye keeps the vertical field, so the same pixels per unit;
+    # compared by the sphere's right edge, since the half image cuts its left side)
+    assert centroid_x(left) == pytest.approx(centroid_x(right), abs=1.0)
+    assert np.nonzero(left)[1].max() == pytest.approx(mono_edge - SIZE[0] / 4, abs=1.5)
+    viewer.stereo = None
+    window.request_rerender()
+    window.step()
+    assert centroid_x(red_mask(window.screenshot())) == pytest.approx(mono_red, abs=1.0)
+
+
+def test_om_view_takes_stereo(display):
+    viewer = om.view(two_shapes(), size=SIZE, duration=0.3, stereo=om.gl.Stereo("anaglyph", 0.3, 9))
+    assert viewer.stereo.mode == "anaglyph" and viewer.image().size == SIZE
