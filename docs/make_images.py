@@ -141,9 +141,11 @@ def material_images() -> None:
 
 def example_images() -> None:
     with tempfile.TemporaryDirectory() as tmp:
-        for script in sorted((ROOT / "examples").glob("0*.py")):
+        scripts = [*sorted((ROOT / "examples").glob("0*.py")), ROOT / "examples" / "11_turntable.py",
+                   ROOT / "examples" / "12_assets.py"]  # fmt: skip
+        for script in scripts:
             subprocess.run([sys.executable, str(script), tmp], check=True, cwd=ROOT, stdout=subprocess.DEVNULL)
-        for png in sorted(Path(tmp).glob("0*.png")):
+        for png in sorted([*Path(tmp).glob("0*.png"), *Path(tmp).glob("12-*.png")]):
             if png.stem in {"01-gl-preview", "01-povray-final"}:
                 continue
             shutil.copy(png, HERE / f"example_{png.stem}.png")
