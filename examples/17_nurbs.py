@@ -38,7 +38,8 @@ def circle(cx: float, cy: float, r: float) -> om.TrimCurve:
 def build_scene() -> om.Node:
     scene = om.Node("scene", [om.Camera.look_at((0.4, 2.6, 5.2), (0, 0.5, 0), fov=40),
                               om.PointLight(position=(3, 5, 4)), om.PointLight(position=(-4, 2, 3), intensity=0.4),
-                              om.Background((0.85, 0.88, 0.92))])  # fmt: skip
+                              om.Background((0.85, 0.88, 0.92)),
+                              om.gl.ShadowMaps(resolution=2048, softness=2.0)])  # fmt: skip
     scene.add(om.Node("floor", [om.Material(diffuse=(0.8, 0.8, 0.75)), om.Box(size=(8, 0.1, 6), center=(0, -0.5, 0))]))
     square = [(0.62, 0.25), (0.62, 0.55), (0.85, 0.55), (0.85, 0.25)]  # clockwise: a hole
     sheet = om.NURBSSurface(wave(), trim=[circle(0.3, 0.4, 0.14), square])
