@@ -414,9 +414,9 @@ class CustomEffect(Effect):
 
     The snippet reads the image so far with ``texture(u_input, uv)`` (linear colour) and may use the
     prelude of every effect (:data:`.glsl.PRELUDE`: ``u_depth``, ``depth_at``, ``view_position``,
-    ``view_normal``, ``luminance``, ``u_resolution``, ``to_srgb``/``to_linear``).  ``reads_depth=True``
-    puts it in the depth stage (before transparent compositing); ``uniforms`` maps uniform names the
-    snippet declares to numbers or sequences of numbers.
+    ``view_normal``, ``view_ray``, ``luminance``, ``u_resolution``, ``to_srgb``/``to_linear``).
+    ``reads_depth=True`` puts it in the depth stage (before transparent compositing); ``uniforms`` maps
+    uniform names the snippet declares to numbers or sequences of numbers.
     """
 
     __slots__ = ("_name", "_glsl", "_uniforms", "_reads_depth")
