@@ -415,3 +415,101 @@ def test_volumes_stop_at_the_gbuffer_depth(engines):
     assert abs(both.depth[48, 64] - reference.depth[48, 64]) < 1e-3 and both.depth[48, 64] <= only.depth[48, 64]
     hit = om.pick(inside, pixel=(64, 48), size=(128, 96))[0]
     assert abs((6.0 - hit.point[2]) - only.depth[48, 64]) < 1e-2  # picking finds the sphere where its depth is
+
+
+# -- orthographic cameras --------------------------------------------------------------------------------------
+def orthographic(scene: om.Node, height: float = 3.4) -> om.Node:
+    """``scene`` with its camera replaced by an orthographic one at the same place, looking the same way."""
+    camera = next(c for c in scene.items if isinstance(c, om.Camera))
+    index = list(scene.items).index(camera)
+    scene.remove(camera)
+    scene.insert(index, om.Camera.orthographic(camera.eye, camera.center, camera.up, height=height))
+    return scene
+
+
+def ortho_mixed() -> om.Node:
+    """Every light type with shadows, a textured PBR box, a Phong sphere, a transparent pane, and fog."""
+    s = orthographic(stage(lights=False))
+    s.add(om.AmbientLight(intensity=0.15))
+    s.add(om.DirectionalLight(direction=(-0.5, -1.0, -0.6), intensity=0.5))
+    s.add(om.PointLight(position=(-2, 2, 2), color=(0.6, 0.7, 1.0), intensity=0.5, quadratic=0.2))
+    s.add(om.SpotLight(position=(1.0, 2.5, 1.5), direction=(-0.3, -1, -0.5), cutoff=35, exponent=2, intensity=0.6))
+    s.add(om.Fog(color=(0.16, 0.16, 0.17), start=3.0, end=9.0))
+    checker = np.kron((np.indices((8, 8)).sum(axis=0) % 2), np.ones((8, 8)))[..., None] * [200, 90, 40] + 40
+    s.add(om.Node("textured pbr", [om.Texture(checker.astype(np.uint8)),
+                                   om.PBRMaterial(base_color=(1, 1, 1), metallic=0.3, roughness=0.5),
+                                   om.Box(size=0.9, center=(-0.6, -0.55, -0.2))]))  # fmt: skip
+    s.add(om.Node("phong", [om.Material(diffuse=(0.9, 0.5, 0.3), specular=(0.7,) * 3, shininess=60),
+                            om.Sphere(center=(0.7, -0.5, 0.2), radius=0.5)]))  # fmt: skip
+    s.add(om.Node("pane", [om.Material(diffuse=(0.2, 0.5, 1.0), opacity=0.4),
+                           om.Box(size=(1.6, 1.0, 0.05), center=(0.2, -0.4, 1.0))]))  # fmt: skip
+    return s
+
+
+ORTHO_SCENES = ["light_directional", "light_point", "light_spot", "light_ambient", "pbr", "textures",
+                "transparency", "fog", "shape_volume"]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def single_sampled():
+    from omnirender.gl import GLEngine
+
+    forward, deferred = GLEngine(size=(128, 96), samples=0), GLEngine(size=(128, 96), samples=0, pipeline="deferred")
+    yield forward, deferred
+    forward.release()
+    deferred.release()
+
+
+@pytest.mark.parametrize("samples", [0, 4])
+@pytest.mark.parametrize("name", [*ORTHO_SCENES, "mixed"])
+def test_orthographic_camera_agrees_with_forward(engines, single_sampled, samples, name):
+    """Under an orthographic camera (linear depth: every surface lies in front of the full-screen passes' window
+    depth 0.5) the deferred image is the forward one, with and without multisampling."""
+    forward, deferred = engines if samples else single_sampled
+    assert deferred.samples == samples
+    scene = ortho_mixed() if name == "mixed" else orthographic(SCENES[name]())
+    a, b = forward.render(scene), deferred.render(scene)
+    assert (np.isfinite(a.depth).mean()) > 0.3  # the scene is seen (the floor at least)
+    assert_agree(a, b, f"{name}, orthographic, samples={samples}")
+
+
+def test_orthographic_depth_mask_and_picking_are_the_same(engines):
+    forward, deferred = engines
+    scene = ortho_mixed()
+    a, b = forward.render(scene), deferred.render(scene)
+    assert (a.mask == b.mask).mean() > 0.995
+    both = np.isfinite(a.depth) & np.isfinite(b.depth)
+    assert (np.isfinite(a.depth) == np.isfinite(b.depth)).mean() > 0.995
+    assert np.percentile(np.abs(a.depth[both] - b.depth[both]), 99) < 1e-3
+    camera = next(c for c in scene.items if isinstance(c, om.Camera))
+    forward_axis = np.subtract(camera.center, camera.eye) / np.linalg.norm(np.subtract(camera.center, camera.eye))
+    for name, point in (("phong", (0.7, -0.5, 0.2)), ("textured pbr", (-0.95, -0.4, -0.2))):
+        clip = camera.projection_matrix(128 / 96) @ camera.view_matrix() @ np.array([*point, 1.0])
+        x, y = int((clip[0] / clip[3] * 0.5 + 0.5) * 128), int((0.5 - clip[1] / clip[3] * 0.5) * 96)
+        hit = om.pick(scene, pixel=(x, y), size=(128, 96))[0]
+        assert name in hit.path
+        along = float(np.dot(np.subtract(hit.point, camera.eye), forward_axis))  # depth: along the view axis
+        assert abs(along - b.depth[y, x]) < 0.05, (name, along, b.depth[y, x])
+
+
+def test_surfaces_near_the_near_plane_are_shaded(engines, single_sampled):
+    """A box nearer than twice the near plane (window depth below 0.5) is shaded as the forward pipeline shades it."""
+    for forward, deferred in (engines, single_sampled):
+        camera = om.Camera.look_at((0, 0, 1.0), (0, 0, 0), fov=60, near=0.5)
+        scene = om.Node("s", [camera, om.PointLight(position=(1, 2, 3)), om.Color(0.8, 0.6, 0.3),
+                              om.Box(size=(0.6, 0.6, 0.4), center=(0, 0, 0))])  # fmt: skip
+        a, b = forward.render(scene), deferred.render(scene)
+        assert a.depth[48, 64] < 0.9 and np.isfinite(b.depth[48, 64])
+        assert_agree(a, b, f"a surface near the near plane, samples={deferred.samples}")
+
+
+@pytest.mark.parametrize("ortho", [False, True])
+def test_post_processed_deferred_frame_agrees_with_forward(engines, ortho):
+    """A post-processing chain draws the scene into a target without stencil: the deferred shading pass blends
+    its edges there (multisampled); its image is the forward one, under either camera."""
+    forward, deferred = engines
+    scene = SCENES["light_spot"]()
+    if ortho:
+        scene = orthographic(scene)
+    scene.insert(1, om.gl.PostProcess([om.gl.ToneMap()]))
+    assert_agree(forward.render(scene), deferred.render(scene), f"post-processed, orthographic={ortho}")

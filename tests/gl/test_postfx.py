@@ -473,3 +473,34 @@ def test_depth_effects_read_the_depth_of_the_colours_they_change(engine):
     assert g > 100 and b > 150 and r < 10, f"behind the pane the depth effect saw the pane's depth: {out[y, x]}"
     x, y = pixel_of(camera, (3, 2, -6))
     assert tuple(out[y, x, :3]) == (0, 255, 0)  # the wall alone
+
+
+# --- orthographic cameras ------------------------------------------------------------------------------------------
+def test_ssao_leaves_tilted_flat_surfaces_under_an_orthographic_camera(engine):
+    """Normals rebuilt from depth face the eye along the view axis under a parallel projection (not along the
+    position vector): two flat slabs turned 60 degrees away from the axis, far off centre, keep their light."""
+    camera = om.Camera.orthographic((0, 0, 10), (0, 0, 0), height=12)
+    wall = om.Material(diffuse=(0.8, 0.8, 0.8))
+    slabs = [om.Node(f"slab{s}", [om.Translation(6 * s, 0, 0), om.Rotation(60 * s, (0, 1, 0)), wall,
+                                  om.Box(size=(3, 3, 0.1))]) for s in (-1, 1)]  # fmt: skip
+    lights = [om.AmbientLight(intensity=1.0)]
+    plain = linear(engine.render(build(camera, slabs, lights=lights)))
+    ao = linear(engine.render(build(camera, slabs, effects=[om.gl.SSAO(radius=0.5)], lights=lights)))
+    ratio = (ao.mean(axis=2) + 1e-4) / (plain.mean(axis=2) + 1e-4)
+    for s in (-1, 1):
+        x, y = pixel_of(camera, (6 * s, 0, 0))
+        kept = ratio[y - 2 : y + 3, x - 2 : x + 3].mean()
+        assert kept > 0.85, f"SSAO darkened a flat slab seen orthographically to {kept:.2f} of its light"
+
+
+def test_no_light_shafts_from_a_light_behind_an_orthographic_camera(engine):
+    """A parallel projection's w is 1 behind the eye as well: the light's eye-space z decides it is not seen."""
+    camera = om.Camera.orthographic((0, 0, 6), (0, 0, 0), height=6)
+    ball = om.Node("ball", [om.Material(diffuse=(0.4, 0.4, 0.4)), om.Sphere(radius=0.5, center=(1.5, 0, 0))])
+    shafts = [om.gl.LightShafts(intensity=1.0)]
+    for z, seen in ((8.0, False), (-4.0, True)):  # behind the camera, then in front of it
+        light = om.PointLight(position=(0, 0.5, z), color=(1, 0.9, 0.7))
+        plain = linear(engine.render(build(camera, [ball], lights=[light], background=(0, 0, 0))))
+        rays = linear(engine.render(build(camera, [ball], effects=shafts, lights=[light], background=(0, 0, 0))))
+        gain = np.abs(rays - plain).max()
+        assert (gain > 0.05) if seen else (gain < 5e-3), f"light at z={z}: shafts add up to {gain:.4f}"

@@ -546,6 +546,11 @@ class DeferredRenderer:
         engine.reset_gl_state()
         fbo = engine.current_framebuffer
         set_masks(ctx, engine.raw, fbo, color=(True, True, True, True), depth=False)
+        # The full-screen triangle lies at window depth 0.5: the default depth test ("less") would keep only
+        # surfaces behind that depth (all but the nearest under a perspective camera, none under an
+        # orthographic one, whose depth is linear).  Where the G-buffer's surface is seen is decided by the
+        # stencil marks, the G-buffer depth written by the fragment, or the edge blending below, never by it.
+        ctx.disable(ctx.DEPTH_TEST)
         if stencil:  # the depth pass marked the samples where the G-buffer's surface won
             defines["STENCIL_MARKED"] = True
             engine.raw.stencil_test(ctx, ("equal", _WON, _WON))

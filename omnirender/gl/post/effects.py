@@ -290,7 +290,7 @@ class LightShafts(Effect):
 
     def passes(self, frame: EffectFrame) -> list[Pass]:
         engine = frame.engine
-        clip = engine.frame_projection @ engine.frame_view
+        view, proj = engine.frame_view, engine.frame_projection
         lights, colors = [], []
         for light, matrix in engine.scene_lights[:4]:
             direction = getattr(light, "direction", None)
@@ -300,9 +300,12 @@ class LightShafts(Effect):
                 p = matrix @ np.array([*(-np.asarray(direction, float)), 0.0])
             else:
                 continue
-            c = clip @ p
-            if c[3] <= 1e-9:
-                lights.append((0.0, 0.0, 1.0, 0.0))  # behind the eye: no shafts
+            eye = view @ p
+            c = proj @ eye
+            # behind the eye (an orthographic projection's w is 1 there too), or a direction an orthographic
+            # camera has no image of (w 0): no shafts
+            if c[3] <= 1e-9 or eye[2] >= 0.0:
+                lights.append((0.0, 0.0, 1.0, 0.0))
             else:
                 ndc = c[:3] / c[3]
                 lights.append((ndc[0] * 0.5 + 0.5, ndc[1] * 0.5 + 0.5, min(ndc[2] * 0.5 + 0.5, 1.0), 1.0))
@@ -411,9 +414,9 @@ class CustomEffect(Effect):
 
     The snippet reads the image so far with ``texture(u_input, uv)`` (linear colour) and may use the
     prelude of every effect (:data:`.glsl.PRELUDE`: ``u_depth``, ``depth_at``, ``view_position``,
-    ``view_normal``, ``luminance``, ``u_resolution``, ``to_srgb``/``to_linear``).  ``reads_depth=True``
-    puts it in the depth stage (before transparent compositing); ``uniforms`` maps uniform names the
-    snippet declares to numbers or sequences of numbers.
+    ``view_normal``, ``view_ray``, ``luminance``, ``u_resolution``, ``to_srgb``/``to_linear``).
+    ``reads_depth=True`` puts it in the depth stage (before transparent compositing); ``uniforms`` maps
+    uniform names the snippet declares to numbers or sequences of numbers.
     """
 
     __slots__ = ("_name", "_glsl", "_uniforms", "_reads_depth")

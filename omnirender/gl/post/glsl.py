@@ -59,6 +59,9 @@ float view_z(vec2 uv) {
     float ndc = depth_at(uv) * 2.0 - 1.0;
     return (u_inv_proj[2][2] * ndc + u_inv_proj[3][2]) / (u_inv_proj[2][3] * ndc + u_inv_proj[3][3]);
 }
+// the unit direction from the eye's view of eye-space point p towards it: the ray through p of a
+// perspective projection, the view axis everywhere for an orthographic one (its w row is (0, 0, 0, 1))
+vec3 view_ray(vec3 p) { return u_proj[3][3] > 0.5 ? vec3(0.0, 0.0, -1.0) : normalize(p); }
 vec2 project(vec3 p) {
     vec4 c = u_proj * vec4(p, 1.0);
     return c.xy / c.w * 0.5 + 0.5;
@@ -73,7 +76,7 @@ vec3 view_normal(vec2 uv) {
     vec3 dx = abs(r.z - p.z) < abs(p.z - l.z) ? r - p : p - l;
     vec3 dy = abs(u.z - p.z) < abs(p.z - d.z) ? u - p : p - d;
     vec3 n = normalize(cross(dx, dy));
-    return dot(n, p) > 0.0 ? -n : n;
+    return dot(n, view_ray(p)) > 0.0 ? -n : n;  // facing the eye
 }
 """
 
