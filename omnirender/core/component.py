@@ -43,8 +43,12 @@ class ChangeJournal:
     __slots__ = ("_changed", "__weakref__")
 
     def __init__(self) -> None:
-        self._changed: dict[int, RenderingComponent] = {}
-        _JOURNALS.append(weakref.ref(self, _JOURNALS.remove))
+        changed: dict[int, RenderingComponent] = {}
+        self._changed = changed
+        # touch() stores into the live journals' dicts directly (no weak reference to follow per change);
+        # the journal's collection takes its dict out of the list
+        _JOURNALS.append(changed)
+        weakref.finalize(self, _forget_journal, changed)
 
     def drain(self) -> list[RenderingComponent]:
         """The components changed since the last drain, in the order they first changed; empties the journal."""
@@ -56,8 +60,15 @@ class ChangeJournal:
         return len(self._changed)
 
 
-#: Live change journals (weak references; a journal removes itself when collected).
-_JOURNALS: list[weakref.ref] = []
+#: The dicts of the live change journals (a journal's dict leaves the list when the journal is collected).
+_JOURNALS: list[dict[int, RenderingComponent]] = []
+
+
+def _forget_journal(changed: dict[int, RenderingComponent]) -> None:
+    for i, d in enumerate(_JOURNALS):
+        if d is changed:
+            del _JOURNALS[i]
+            return
 
 
 class RenderingComponent:
@@ -101,16 +112,26 @@ class RenderingComponent:
 
     def touch(self) -> None:
         """Mark the component as changed: bump its version and its owners' versions, and tell the journals."""
-        object.__setattr__(self, "_version", self._version + 1)
-        if _JOURNALS:
-            for ref in _JOURNALS:
-                journal = ref()
-                if journal is not None:
-                    journal._changed[id(self)] = self
+        _set_version(self, self._version + 1)
+        for changed in _JOURNALS:
+            changed[id(self)] = self
         owners = self._owners
         if owners:
             for node in owners:
                 node.touch()
+
+    @staticmethod
+    def touch_all(components: list[RenderingComponent]) -> None:
+        """:meth:`touch` every one of ``components`` (distinct), the journals told in one update per journal."""
+        for c in components:
+            _set_version(c, c._version + 1)
+        for changed in _JOURNALS:
+            changed.update(zip(map(id, components), components, strict=True))
+        for c in components:
+            owners = c._owners
+            if owners:
+                for node in owners:
+                    node.touch()
 
     def attach_owner(self, owner: Any) -> None:
         """Make ``owner`` (anything with ``touch()``: a node, a shape built from this one) hear of changes."""
@@ -171,6 +192,9 @@ class RenderingComponent:
         params = ", ".join(f"{k}={_short(v)}" for k, v in self.parameters().items())
         return f"{type(self).__name__}({params})"
 
+
+#: The ``_version`` slot's setter: a change bumps the version without going through ``__setattr__``.
+_set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 
 _SLOTS: dict[type, tuple[str, ...]] = {}
 _TRANSIENT: dict[type, dict[str, Callable[[], Any]]] = {}
