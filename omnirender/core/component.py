@@ -21,6 +21,7 @@ from typing import Any
 
 __all__ = [
     "ChangeJournal",
+    "note_edit",
     "RenderingComponent",
     "Shape",
     "Attribute",
@@ -40,21 +41,35 @@ class ChangeJournal:
     store per journal.
     """
 
-    __slots__ = ("_changed", "__weakref__")
+    __slots__ = ("_changed", "_edits", "__weakref__")
 
     def __init__(self) -> None:
         changed: dict[int, RenderingComponent] = {}
+        edits: list[tuple[Any, str, Any, int] | None] = []
         self._changed = changed
+        self._edits = edits
         # touch() stores into the live journals' dicts directly (no weak reference to follow per change);
-        # the journal's collection takes its dict out of the list
+        # the journal's collection takes its dict and its edit list out of the lists
         _JOURNALS.append(changed)
-        weakref.finalize(self, _forget_journal, changed)
+        _EDIT_LOGS.append(edits)
+        weakref.finalize(self, _forget_journal, changed, edits)
 
     def drain(self) -> list[RenderingComponent]:
         """The components changed since the last drain, in the order they first changed; empties the journal."""
         changed = list(self._changed.values())
         self._changed.clear()
         return changed
+
+    def drain_edits(self) -> list[tuple[Any, str, Any, int]] | None:
+        """The list edits since the last drain, in order: ``(container, "insert" | "remove", item, index)``.
+
+        None when more than :data:`EDIT_LIMIT` edits piled up (or an edit
+        could not be described): the reader must assume anything changed.
+        Empties the log.
+        """
+        edits = list(self._edits)
+        self._edits.clear()
+        return None if None in edits else edits  # type: ignore[return-value]
 
     def __len__(self) -> int:
         return len(self._changed)
@@ -64,11 +79,29 @@ class ChangeJournal:
 _JOURNALS: list[dict[int, RenderingComponent]] = []
 
 
-def _forget_journal(changed: dict[int, RenderingComponent]) -> None:
-    for i, d in enumerate(_JOURNALS):
-        if d is changed:
-            del _JOURNALS[i]
-            return
+#: The edit lists of the live change journals (see :func:`note_edit`).
+_EDIT_LOGS: list[list[tuple[Any, str, Any, int] | None]] = []
+#: Edits a journal keeps before it only records that too many happened (an engine that stopped drawing).
+EDIT_LIMIT = 4096
+
+
+def _forget_journal(changed: dict[int, RenderingComponent], edits: list) -> None:
+    for registry, own in ((_JOURNALS, changed), (_EDIT_LOGS, edits)):
+        for i, d in enumerate(registry):
+            if d is own:
+                del registry[i]
+                break
+
+
+def note_edit(container: Any, op: str, item: Any, index: int) -> None:
+    """Tell the live journals that ``container``'s list changed: ``op`` ("insert", "remove", or another word for
+    a change they cannot follow) of ``item`` at ``index``.  Nodes call it; engines read it with
+    :meth:`ChangeJournal.drain_edits` to update only what the edit touches."""
+    for log in _EDIT_LOGS:
+        if len(log) < EDIT_LIMIT:
+            log.append((container, op, item, index))
+        elif len(log) == EDIT_LIMIT:
+            log.append(None)
 
 
 class RenderingComponent:

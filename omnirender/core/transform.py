@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
-from .component import MonoAttribute
+from .component import MonoAttribute, RenderingComponent
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = [
@@ -63,30 +64,18 @@ def plain_triple(value: object) -> tuple[float, float, float] | None:
     gives None and the caller validates it the slow way (:func:`finite_vector`),
     which also makes the error message.
     """
-    try:
-        return _plain_triple(value)
-    except OverflowError:  # an integer beyond float's range
-        return None
-
-
-def _plain_triple(value: object) -> tuple[float, float, float] | None:
     cls = value.__class__
     if cls is tuple or cls is list:
         if len(value) != 3:  # type: ignore[arg-type]
             return None
         x, y, z = value  # type: ignore[misc]
-        if x.__class__ is not float:
-            if x.__class__ not in _SCALARS:
+        if x.__class__ is not float or y.__class__ is not float or z.__class__ is not float:
+            if x.__class__ not in _SCALARS or y.__class__ not in _SCALARS or z.__class__ not in _SCALARS:
                 return None
-            x = float(x)
-        if y.__class__ is not float:
-            if y.__class__ not in _SCALARS:
+            try:
+                x, y, z = float(x), float(y), float(z)
+            except OverflowError:  # an integer beyond float's range
                 return None
-            y = float(y)
-        if z.__class__ is not float:
-            if z.__class__ not in _SCALARS:
-                return None
-            z = float(z)
     elif cls is np.ndarray:
         if value.shape != (3,) or value.dtype.kind not in _REAL_KINDS:  # type: ignore[attr-defined]
             return None
@@ -96,13 +85,12 @@ def _plain_triple(value: object) -> tuple[float, float, float] | None:
     else:
         return None
     # comparisons are False for NaN: a non-finite number takes the validating path
-    if (
-        -MAX_MAGNITUDE <= x <= MAX_MAGNITUDE
-        and -MAX_MAGNITUDE <= y <= MAX_MAGNITUDE
-        and -MAX_MAGNITUDE <= z <= MAX_MAGNITUDE
-    ):
+    if -_MAX <= x <= _MAX and -_MAX <= y <= _MAX and -_MAX <= z <= _MAX:
         return (x, y, z)
     return None
+
+
+_MAX = MAX_MAGNITUDE
 
 
 _DIAGONAL = np.arange(4)
@@ -217,6 +205,17 @@ class Translation(Transform):
             self.offset = offset
         else:
             self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames
+        if name == "offset":
+            offset = plain_triple(value)
+            if offset is not None:
+                _set_offset(self, offset)
+                _set_matrix(self, None)
+                self.touch()
+                return
+        RenderingComponent.__setattr__(self, name, value)
 
     @property
     def offset(self) -> tuple[float, float, float]:

@@ -247,6 +247,8 @@ class Batch:
         "source",
         "picks",
         "source_version",
+        "storage",
+        "sparse",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -274,6 +276,105 @@ class Batch:
         self.source: Batch | None = None
         self.picks: np.ndarray | None = None
         self.source_version = -1
+        #: the array ``rows`` is the start of (spare rows after it, so a row appended keeps every item's view)
+        self.storage: np.ndarray | None = None
+        #: rows changed since the last upload when few (uploaded one by one), or None: the ``dirty`` range
+        self.sparse: list[int] | None = None
+
+    def hold(self, rows: np.ndarray) -> None:
+        """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""
+        n = len(rows)
+        storage = np.empty((n + max(16, n // 8), ROW.stride), np.float32)
+        storage[:n] = rows
+        self.storage = storage
+        self.rows = storage[:n]
+        for i, item in enumerate(self.items):
+            item.row = storage[i]
+
+    def append_row(self, item: DrawItem) -> int:
+        """Add ``item`` as the last row (its row becomes a view of it); returns the row's index."""
+        n = len(self.rows)
+        storage = self.storage
+        if storage is None or n == len(storage):
+            self.items.append(item)
+            self.hold(np.concatenate([self.rows, item.row[None, :]]))
+        else:
+            storage[n] = item.row
+            self.rows = storage[: n + 1]
+            self.items.append(item)
+            item.row = storage[n]
+        item.slot = (self, n)
+        if self.uniform and not uniform_material(self.rows[[0, n]]):
+            self.uniform = False
+        if self.position is not None:
+            if self.drawn == n:  # everything in view: the new row is drawn from the end of the buffer
+                self.position = np.append(self.position, n)
+                self.drawn = n + 1
+            else:
+                self.position = None  # culled: sorted and culled again
+        self._touched(n)
+        return n
+
+    def remove_row(self, index: int) -> int | None:
+        """Remove row ``index``: the last row moves into its place; returns the moved row's old index (or None).
+
+        The removed item keeps a copy of its row; the moved item's slot and
+        row view follow it.  In the GPU buffer the row drawn last takes the
+        removed row's place (sorted batches), so one row is uploaded.
+        """
+        last = len(self.rows) - 1
+        removed = self.items[index]
+        removed.row = removed.row.copy()
+        removed.slot = None
+        storage = self.storage if self.storage is not None else self.rows
+        moved: int | None = None
+        if index != last:
+            storage[index] = storage[last]
+            item = self.items[last]
+            self.items[index] = item
+            item.slot = (self, index)
+            item.row = storage[index]
+            moved = last
+        self.items.pop()
+        self.rows = storage[:last]
+        position = self.position
+        if position is not None:
+            if self.drawn < last + 1:
+                self.position = None
+            else:
+                freed = int(position[index])
+                tail = int(np.flatnonzero(position == last)[0])  # the row in the buffer's last place
+                if moved is not None:
+                    position[index] = position[last]
+                    if tail == last:
+                        tail = index
+                position = position[:last].copy()
+                if freed != last:
+                    position[tail] = freed  # the row drawn last fills the freed place
+                    self._touched(tail)
+                self.position = position
+                self.drawn = last
+        if moved is not None and self.position is None:
+            self._touched(index)
+        if self.sparse is not None:
+            self.sparse = [i for i in self.sparse if i < last]
+        self.version += 1
+        return moved
+
+    def _touched(self, index: int) -> None:
+        """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
+        if self.dirty is None and self.sparse is None:
+            self.sparse = [index]
+        elif self.sparse is not None and len(self.sparse) < 32:
+            self.sparse.append(index)
+        else:
+            if self.sparse:
+                lo, hi = min(self.sparse), max(self.sparse) + 1
+                self.dirty = (lo, hi) if self.dirty is None else (min(self.dirty[0], lo), max(self.dirty[1], hi))
+                self.sparse = None
+            self.changed(index, index + 1)
+            return
+        self.version += 1
 
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""
@@ -282,6 +383,9 @@ class Batch:
     def changed(self, lo: int, hi: int) -> None:
         """Rows ``lo:hi`` changed: upload them with the next draw, and refresh the batches filtered from this one."""
         d = self.dirty
+        if self.sparse:
+            lo, hi = min(lo, *self.sparse), max(hi, max(self.sparse) + 1)
+        self.sparse = None
         self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
         self.version += 1
 

@@ -71,6 +71,8 @@ class MovePlan:
             self.local[with_local] = [self.items[i].local for i in with_local]
         # where each item's row lies: its batch (index into batches, -1: no batch) and its row there
         batches: dict[int, int] = {}
+        self._batch_index = batches
+        self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -81,6 +83,65 @@ class MovePlan:
             b = batches.get(id(batch))
             if b is None:
                 b = batches[id(batch)] = len(self.batches)
+                self.batches.append(batch)
+            self.batch_of[i] = b
+            self.row_of[i] = row
+
+    def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
+        """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
+        where = self._where
+        if where is None:
+            where = self._where = {id(it): i for i, it in enumerate(self.items)}
+        identity = len(self.transforms)
+        for item in removed:
+            i = where.pop(id(item), None)
+            if i is not None:
+                self.chain[i] = identity  # never recomposed again
+                self.batch_of[i] = -1
+        new = [it for it in added if it.instances is None and it.chain]
+        fresh = [t for it in new for t in it.chain if id(t) not in self.index]
+        if fresh:
+            fresh = list({id(t): t for t in fresh}.values())
+            for t in fresh:
+                self.index[id(t)] = len(self.transforms)
+                self.transforms.append(t)
+            stacked = np.empty((len(fresh), 4, 4))
+            for cls, members in _by_class(range(len(fresh)), fresh).items():
+                stacked[members] = cls.stack_matrices([fresh[k] for k in members])
+            self.matrices = np.concatenate([self.matrices[:identity], stacked, self.matrices[identity:]])
+            self.chain[self.chain == identity] = len(self.transforms)
+            identity = len(self.transforms)
+        if new:
+            length = max(self.chain.shape[1], max(len(it.chain) for it in new))
+            if length > self.chain.shape[1]:
+                pad = np.full((len(self.chain), length - self.chain.shape[1]), identity, np.intp)
+                self.chain = np.concatenate([self.chain, pad], axis=1)
+            rows = np.full((len(new), length), identity, np.intp)
+            for r, item in enumerate(new):
+                rows[r, : len(item.chain)] = [self.index[id(t)] for t in item.chain]
+            self.chain = np.concatenate([self.chain, rows])
+            if self.local is not None or any(it.local is not None for it in new):
+                local = np.broadcast_to(np.eye(4), (len(new), 4, 4)).copy()
+                for r, item in enumerate(new):
+                    if item.local is not None:
+                        local[r] = item.local
+                old = self.local
+                if old is None:
+                    old = np.broadcast_to(np.eye(4), (len(self.items), 4, 4))
+                self.local = np.concatenate([old, local])
+            self.batch_of = np.concatenate([self.batch_of, np.full(len(new), -1, np.intp)])
+            self.row_of = np.concatenate([self.row_of, np.zeros(len(new), np.intp)])
+            for item in new:
+                where[id(item)] = len(self.items)
+                self.items.append(item)
+        for item in (*new, *moved):
+            i = where.get(id(item))
+            if i is None or item.slot is None:
+                continue
+            batch, row = item.slot
+            b = self._batch_index.get(id(batch))
+            if b is None:
+                b = self._batch_index[id(batch)] = len(self.batches)
                 self.batches.append(batch)
             self.batch_of[i] = b
             self.row_of[i] = row
@@ -230,10 +291,9 @@ class TransformUpdater:
 
     def _invalidate_moved(self) -> None:
         """What depends on where items are: filtered batches, bounds, shadow maps, mirror planes."""
-        # batches of pass masks and predicates follow their source batches' versions (Batch.follow)
-        self._bounds = None
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
-        self._mirrors = None  # mirror planes follow their transforms
+        # batches of pass masks and predicates follow their source batches' versions (Batch.follow); shadow
+        # maps are drawn again where the casters moved to; mirror planes are read from the rows every frame
+        self.index.moved()
 
     def _refresh_declarations(self, scene: Any) -> None:
         """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""

@@ -42,11 +42,12 @@ from .context import (
 )
 from .deferred.materials import MaterialTable
 from .deferred.pipeline import Deferred
-from .drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
+from .drawlist import Batch, DrawItem, DrawState, Scope
 from .dynamic import TransformUpdater
 from .frame import FrameRunner
 from .geometry import Geometry, GeometryCache, unit_mesh
 from .imagespace import FullScreenPrograms
+from .index import RenderIndex
 from .layout import ROW
 from .renderer import BatchRenderer
 from .resources import gpu_call
@@ -144,9 +145,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self.shadows = bool(shadows)
         self._shadow_plan: Any = None
         self._shadow_cache: Any = None
-        self._caster_bounds: Any = None
         self._shadow_drawn: Any = None
-        self._mirrors: Any = None
         self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
@@ -176,6 +175,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
         self._occurrences: dict[tuple[int, int], int] = {}
         self._next_occurrence = 0
+        #: id(node) -> (its occurrence key (-1: compiled more than once), ref), for compiling only edited subtrees
+        self._occurrence_of: dict[int, tuple[int, Any]] = {}
+        #: id(node) -> (ref, structure version, its components when they all precede its children, else None)
+        self._leading_cache: dict[int, tuple[Any, int, Any]] = {}
         self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
         self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
@@ -206,7 +209,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
         self._drawers: dict[str, Any] = GLEngine._default_drawers
-        self._bounds: tuple[np.ndarray, np.ndarray] | None = None
+        #: the installed draw list and its derived lists (items, mirrors, bounds), kept up to date by change kind
+        self.index = RenderIndex()
         self._defaults = defaults()
         self._requests: list[Any] = []
         self._target_cache: dict[Any, Any] = {}
@@ -405,6 +409,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
                 self._journal.drain()  # nothing compiled to update in place: forget what changed
+                self._journal.drain_edits()
                 self._install(self._immediate)
                 self._move_plan = None
                 self._immediate = Scope()
@@ -421,7 +426,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     @property
     def draw_items(self) -> list[DrawItem]:
         """Every compiled draw item of the installed frame, in compile order (nested scopes included)."""
-        return [] if self._root is None else self._root.all_items()
+        return list(self.index.items())
 
     @property
     def batches(self) -> list[Batch]:
@@ -438,10 +443,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
 
     def scene_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World-space (min, max) of the compiled draw list, or None when it is empty."""
-        if self._bounds is not None:
-            return self._bounds
-        self._bounds = world_bounds(item for item in self.draw_items if not item.state.overlay)
-        return self._bounds
+        return self.index.bounds()
 
     def _camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
         w, h = self._size

@@ -30,9 +30,9 @@ import numpy as np
 from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
-from .mirrors import Mirrors, mirror_items
+from .mirrors import Mirrors
 from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target, _camera
-from .shadows import ShadowPlan, caster_bounds, frame_settings
+from .shadows import ShadowPlan, frame_settings
 from .state import GLCalls, RasterApplier
 
 __all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
@@ -208,7 +208,7 @@ class FrameRunner:
                 calls += self._mirror_passes(root)
             else:  # each eye's pass draws the scene through the engine's technique
                 calls += self._run(self._stereo, root, Composed(), item_level=False)
-                if self._root is not None and not self._warned_mirrors and mirror_items(root.all_items()):
+                if self._root is not None and not self._warned_mirrors and self.index.mirror_items():
                     self._warned_mirrors = True
                     warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
                                   "stage reflects one eye)", stacklevel=3)  # fmt: skip
@@ -228,7 +228,7 @@ class FrameRunner:
         self.stats["passes"] = list(self._records)
         self.stats["batches"] = sum(len(p.batches) for s in (self._root.walk() if self._root else [])
                                     for p in (s.parts or []) if not isinstance(p, Scope))  # fmt: skip
-        self.stats["items"] = self._item_count if self._root is not None else 0
+        self.stats["items"] = len(self.index.items()) if self._root is not None else 0
         err = ctx.error
         if err != "GL_NO_ERROR":
             if "OUT_OF_MEMORY" in err:
@@ -270,9 +270,8 @@ class FrameRunner:
         lights = [(light, m) for light, m in self.scene_lights if getattr(light, "casts_shadows", False)]
         if not lights:
             return 0
-        if self._caster_bounds is None:
-            self._caster_bounds = (caster_bounds(root),)
-        bounds = self._caster_bounds[0]
+        casters = self.index.caster_bounds()
+        bounds = casters[0]
         if bounds is None:
             return 0
         key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
@@ -285,7 +284,7 @@ class FrameRunner:
         if technique is None:
             return 0
         self._shadow_plan = plan
-        drawn = (key, self._caster_bounds, self._size)
+        drawn = (key, casters, self._size)
         last = self._shadow_drawn
         fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
         if fresh and self._keep_target(plan.target):
@@ -296,9 +295,8 @@ class FrameRunner:
 
     def _mirror_passes(self, root: Scope) -> int:
         """The mirror stage (:mod:`.mirrors`) after the frame's technique; returns the draw calls made."""
-        if self._mirrors is None:
-            self._mirrors = mirror_items(root.all_items()) if self._root is not None else []
-        if not self._mirrors:
+        mirrors = self.index.mirror_items() if self._root is not None else []
+        if not mirrors:
             return 0
         if not self.has_stencil or self._target_stack:
             if not self._warned_mirrors:
@@ -306,7 +304,7 @@ class FrameRunner:
                 warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
                               "surfaces here", stacklevel=4)  # fmt: skip
             return 0
-        technique = Mirrors.plan(self._mirrors, self._view, self._proj, self.clear_color(self._frame_background))
+        technique = Mirrors.plan(mirrors, self._view, self._proj, self.clear_color(self._frame_background))
         return self._run(technique, root, Composed(), item_level=False)
 
     def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:

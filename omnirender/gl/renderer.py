@@ -52,12 +52,10 @@ class BatchRenderer:
     def _install(self, root: Scope) -> None:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
         old = self._root
-        self._bounds = None
-        self._caster_bounds = None
-        self._mirrors = None
         self.draw_list_version += 1
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
+            self.index.install(old)
             return
         self.stats["incremental"] = None
         pool = self._batch_pool
@@ -69,7 +67,7 @@ class BatchRenderer:
             for scope in old.walk():
                 _release_filtered(scope)
         self._root = root
-        self._item_count = len(root.all_items())
+        self.index.install(root)
         self._sweep(root)
 
     def _plan(self, scope: Scope, where: tuple, pool: dict[tuple, Batch]) -> None:
@@ -103,8 +101,13 @@ class BatchRenderer:
             if batch is None:
                 batch = Batch(key[0], key[1])
             batch.items = group
-            batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].rows().copy()
+            if group[0].instances is None and not (where and where[0] == "filtered"):
+                batch.hold(np.stack([it.row for it in group]))  # spare rows: items added later keep the views
+            else:
+                batch.rows = group[0].rows().copy() if len(group) == 1 else np.stack([it.row for it in group])
+                batch.storage = None
             batch.dirty = (0, len(group))
+            batch.sparse = None
             batch.uniform = uniform_material(batch.rows)
             batch.sorted_for = None
             batch.position = None
@@ -122,6 +125,123 @@ class BatchRenderer:
                     # the item's row becomes its batch row: a moved transform writes the row once (dynamic.py)
                     item.row = slot[0].rows[slot[1]]
         return segment
+
+    def _splice_install(self, removed: list[Any], added: list[Any]) -> bool:
+        """Take ``removed`` out of the installed draw list and put ``added`` in, patching batch rows in place.
+
+        A removed row is filled by its batch's last row; an added item becomes
+        the last row of the batch of its geometry and state in the root
+        scope's last segment (a new batch when there is none).  Only the
+        changed rows are uploaded (:meth:`Batch.append_row`, :meth:`Batch.remove_row`);
+        the batches that passes filter from them follow.  Returns False, with
+        nothing changed, for what this does not handle: nested technique
+        scopes, instance sets, states whose order matters.
+        """
+        root = self._root
+        if root is None or not root.parts or not isinstance(root.parts[-1], Segment):
+            return False
+        last = root.parts[-1]
+        segments = [p for p in root.parts if isinstance(p, Segment)]
+        if any(b.state.special for b in last.batches):
+            return False
+        for item in (*removed, *added):
+            if not isinstance(item, DrawItem) or item.instances is not None or item.state.special or item.techniques:
+                return False
+        owner: dict[int, Segment] = {id(b): seg for seg in segments for b in seg.batches}
+        for item in removed:
+            if item.slot is not None and id(item.slot[0]) not in owner:
+                return False
+            if item.slot is None and not (item.transparent or item.state.overlay):
+                return False
+        ops: dict[int, list[tuple[Any, ...]]] = {}  # id(batch) -> row edits, for the batches filtered from it
+        moved_items: list[DrawItem] = []
+        for item in removed:
+            if item.slot is not None:
+                batch, index = item.slot
+                segment = owner[id(batch)]
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                moved = batch.remove_row(index)
+                ops.setdefault(id(batch), []).append(("remove", index, moved))
+                if moved is not None:
+                    shifted = batch.items[index]
+                    segment.slots[segment.items.index(shifted)] = shifted.slot
+                    moved_items.append(shifted)
+            else:
+                segment = next(seg for seg in segments if any(x is item for x in seg.others))
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                segment.others.remove(item)
+            root.entries.remove(item)
+        by_key = {(id(b.geometry), id(b.state)): b for b in last.batches}
+        new_batch = False
+        for item in added:
+            if item.transparent or item.state.overlay:
+                last.others.append(item)
+            else:
+                batch = by_key.get((id(item.geometry), id(item.state)))
+                if batch is None:
+                    batch = by_key[(id(item.geometry), id(item.state))] = Batch(item.geometry, item.state)
+                    batch.hold(np.empty((0, ROW.stride), np.float32))
+                    batch.uniform = True
+                    last.batches.append(batch)
+                    self._batch_pool[(("spliced", id(batch)),)] = batch
+                    new_batch = True
+                index = batch.append_row(item)
+                ops.setdefault(id(batch), []).append(("append", index, item))
+            last.items.append(item)
+            last.slots.append(item.slot)
+            root.entries.append(item)
+        root.positions = None
+        if new_batch:
+            _release_filtered(root)
+        else:
+            self._follow_splice(root, ops)
+        self.index.spliced(removed, added)
+        version = self.draw_list_version
+        self.draw_list_version += 1
+        self._follow_version(version, added)
+        if self._move_plan is not None:
+            self._move_plan.splice(removed, added, moved_items)
+        return True
+
+    def _follow_version(self, version: int, added: list[DrawItem]) -> None:
+        """The pipelines scan of ``version`` still holds when no added item reads a render texture."""
+        if self._pipelines is None and self._pipelines_scanned == version:
+            if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
+                self._pipelines_scanned = self.draw_list_version
+
+    def _follow_splice(self, scope: Scope, ops: dict[int, list[tuple[Any, ...]]]) -> None:
+        """Patch the rows the scope's filtered batches select after rows of their sources were removed or added."""
+        for key, views in scope.filtered.items():
+            keep = None
+            for group in views.values():
+                for batch in group:
+                    edits = ops.get(id(batch.source)) if batch.source is not None else None
+                    if not edits or batch.picks is None:
+                        continue
+                    picks = list(batch.picks)
+                    items = list(batch.items)
+                    for op, index, arg in edits:
+                        if op == "remove":
+                            if index in picks:
+                                at = picks.index(index)
+                                del picks[at]
+                                del items[at]
+                            if arg is not None and arg in picks:
+                                picks[picks.index(arg)] = index
+                        else:
+                            if keep is None:
+                                keep = self._accepts(_Selection(*key))
+                            if keep(arg):
+                                picks.append(index)
+                                items.append(arg)
+                    order = sorted(range(len(picks)), key=picks.__getitem__)
+                    batch.picks = np.array([picks[i] for i in order], np.int64)
+                    batch.items = [items[i] for i in order]
+                    batch.source_version = -1  # rows taken again by the next follow()
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
         """Copy the rows of ``new``'s items into ``old``'s structure (checked to be the same); returns the count."""
@@ -179,7 +299,7 @@ class BatchRenderer:
 
     def _sweep(self, root: Scope) -> None:
         """Release GPU objects the new list no longer uses (transient buffers, geometry, textures)."""
-        items = root.all_items()
+        items = self.index.items()
         used = {id(it.geometry) for it in items}
         drawn = {(id(it.geometry), id(it.state)) for it in items if it.transparent}
         for key in list(self._transient):
@@ -320,11 +440,14 @@ class BatchRenderer:
         if fields and (batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None):
             batch.release()
             batch.layout = ROW.subset(fields)
+            # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
+            capacity = max(n, 1) + (n // 8 + 16 if batch.storage is not None else 0)
             batch.buffer = gpu_call(
-                self.ctx.buffer, reserve=max(n, 1) * batch.layout.stride * 4, dynamic=True, what="instance data"
+                self.ctx.buffer, reserve=capacity * batch.layout.stride * 4, dynamic=True, what="instance data"
             )
-            batch.capacity = max(n, 1)
+            batch.capacity = capacity
             batch.dirty = (0, n)
+            batch.sparse = None
         volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
@@ -348,28 +471,38 @@ class BatchRenderer:
                         seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
                         order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
                         batch.drawn = len(seen)
-                    batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.buffer.write(_pack(batch.rows, order, columns))
                     batch.position = np.empty(n, np.int64)
                     batch.position[order] = np.arange(n)
                     batch.sorted_for = self._view_key if own_view else None
                     batch.dirty = None
+                    batch.sparse = None
+                elif batch.sparse:
+                    _upload_rows(batch, columns, batch.position)
                 elif batch.dirty is not None:
                     lo, hi = batch.dirty
                     where = batch.position[lo:hi]
                     first, last = int(where.min()), int(where.max()) + 1
-                    order = np.empty(n, np.int64)
-                    order[batch.position] = np.arange(n)
-                    data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
-                    batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
+                    if first == 0 and last == n and (batch.position == _arange(n)).all():
+                        order = None  # in row order (all in view, never re-sorted): no gather
+                    else:
+                        order = np.empty(n, np.int64)
+                        order[batch.position] = _arange(n)
+                        order = order[first:last]
+                    batch.buffer.write(
+                        _pack(batch.rows if order is not None else batch.rows[first:last], order, columns),
+                        offset=first * batch.layout.stride * 4,
+                    )
                     batch.dirty = None
                 if own_view:
                     n = batch.drawn
                     if not n:
                         return 0
+            elif batch.sparse:
+                _upload_rows(batch, columns, None)
             elif batch.dirty is not None:
                 lo, hi = batch.dirty
-                data = np.ascontiguousarray(batch.rows[lo:hi][:, columns])
-                batch.buffer.write(data.tobytes(), offset=lo * batch.layout.stride * 4)
+                batch.buffer.write(_pack(batch.rows[lo:hi], None, columns), offset=lo * batch.layout.stride * 4)
                 batch.dirty = None
         else:
             row = batch.rows[0]
@@ -701,6 +834,57 @@ def _same_shape(old: Scope, new: Scope) -> bool:
             ):
                 return False
     return True
+
+
+class _Selection:
+    """The masks and predicates of a filtered selection (its cache key), as :meth:`_accepts` reads them."""
+
+    __slots__ = ("masks", "selects")
+
+    def __init__(self, masks: Any, selects: Any) -> None:
+        self.masks, self.selects = masks, selects
+
+
+def _pack(rows: np.ndarray, order: np.ndarray | None, columns: np.ndarray) -> bytes:
+    """The GPU bytes of ``rows`` (those of ``order``, in that order; None: all) restricted to ``columns``.
+
+    Rows first, then columns, each a plain ``take`` (one fancy index over both
+    axes costs several times more).
+    """
+    picked = rows if order is None else np.take(rows, order, axis=0)
+    return np.take(picked, columns, axis=1).tobytes()
+
+
+def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None) -> None:
+    """Upload the batch's few changed rows (``sparse``) where they lie in its buffer; then the dirty range."""
+    stride = batch.layout.stride * 4
+    rows = batch.rows
+    for index in sorted(set(batch.sparse or ())):
+        place = index if position is None else int(position[index])
+        batch.buffer.write(np.take(rows[index], columns).tobytes(), offset=place * stride)
+    batch.sparse = None
+    if batch.dirty is not None:
+        lo, hi = batch.dirty
+        if position is None:
+            batch.buffer.write(_pack(rows[lo:hi], None, columns), offset=lo * stride)
+        else:
+            where = position[lo:hi]
+            first, last = int(where.min()), int(where.max()) + 1
+            order = np.empty(len(rows), np.int64)
+            order[position] = _arange(len(rows))
+            batch.buffer.write(_pack(rows, order[first:last], columns), offset=first * stride)
+        batch.dirty = None
+
+
+_ARANGE = np.arange(0)
+
+
+def _arange(n: int) -> np.ndarray:
+    """``np.arange(n)`` from a cached array (grown when needed)."""
+    global _ARANGE
+    if len(_ARANGE) < n:
+        _ARANGE = np.arange(max(n, 2 * len(_ARANGE)))
+    return _ARANGE[:n]
 
 
 def _positions(scope: Scope) -> dict[int, tuple[Segment, int]]:
