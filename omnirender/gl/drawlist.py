@@ -249,6 +249,8 @@ class Batch:
         "source_version",
         "storage",
         "sparse",
+        "log",
+        "inverse",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -280,6 +282,10 @@ class Batch:
         self.storage: np.ndarray | None = None
         #: rows changed since the last upload when few (uploaded one by one), or None: the ``dirty`` range
         self.sparse: list[int] | None = None
+        #: the last row changes as (version after, lo, hi), so filtered batches copy only those rows
+        self.log: list[tuple[int, int, int]] = []
+        #: a filtered batch: (picks, source row -> index here or -1), made when first needed
+        self.inverse: tuple[Any, np.ndarray] | None = None
 
     def hold(self, rows: np.ndarray) -> None:
         """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""
@@ -312,7 +318,7 @@ class Batch:
                 self.drawn = n + 1
             else:
                 self.position = None  # culled: sorted and culled again
-        self._touched(n)
+        self.row_changed(n)
         return n
 
     def remove_row(self, index: int) -> int | None:
@@ -351,23 +357,26 @@ class Batch:
                 position = position[:last].copy()
                 if freed != last:
                     position[tail] = freed  # the row drawn last fills the freed place
-                    self._touched(tail)
+                    self.row_changed(tail)
                 self.position = position
                 self.drawn = last
         if moved is not None and self.position is None:
-            self._touched(index)
+            self.row_changed(index)
         if self.sparse is not None:
             self.sparse = [i for i in self.sparse if i < last]
         self.version += 1
         return moved
 
-    def _touched(self, index: int) -> None:
+    def row_changed(self, index: int) -> None:
         """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
         if self.dirty is None and self.sparse is None:
             self.sparse = [index]
         elif self.sparse is not None and len(self.sparse) < 32:
             self.sparse.append(index)
         else:
+            self.version += 1
+            self._log(index, index + 1)
+            self.version -= 1  # changed() below counts the change
             if self.sparse:
                 lo, hi = min(self.sparse), max(self.sparse) + 1
                 self.dirty = (lo, hi) if self.dirty is None else (min(self.dirty[0], lo), max(self.dirty[1], hi))
@@ -375,6 +384,7 @@ class Batch:
             self.changed(index, index + 1)
             return
         self.version += 1
+        self._log(index, index + 1)
 
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""
@@ -383,16 +393,26 @@ class Batch:
     def changed(self, lo: int, hi: int) -> None:
         """Rows ``lo:hi`` changed: upload them with the next draw, and refresh the batches filtered from this one."""
         d = self.dirty
+        self.version += 1
+        self._log(lo, hi)
         if self.sparse:
             lo, hi = min(lo, *self.sparse), max(hi, max(self.sparse) + 1)
         self.sparse = None
         self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
-        self.version += 1
+
+    def _log(self, lo: int, hi: int) -> None:
+        log = self.log
+        log.append((self.version, lo, hi))
+        if len(log) > 32:
+            del log[:16]
 
     def follow(self) -> None:
         """A filtered batch: take its source's rows again when they changed since the last time."""
         source = self.source
         if source is None or self.source_version == source.version:
+            return
+        if self._follow_rows(source):
+            self.source_version = source.version
             return
         self.rows = source.rows.copy() if self.picks is None else source.rows[self.picks]
         self.dirty = (0, len(self.rows)) if len(self.rows) else None
@@ -400,6 +420,46 @@ class Batch:
         if self.position is not None and len(self.position) != len(self.rows):
             self.position = None
         self.source_version = source.version
+
+    def _follow_rows(self, source: Batch) -> bool:
+        """Copy only the source rows its log says changed since the last follow; False when it cannot say."""
+        since = self.source_version
+        entries = [e for e in source.log if e[0] > since]
+        if since < 0 or len(entries) != source.version - since or not entries:
+            return False
+        picks = self.picks
+        if len(self.rows) != (len(source.rows) if picks is None else len(picks)):
+            return False
+        inverse = None
+        if picks is not None:
+            if self.inverse is None or self.inverse[0] is not picks or len(self.inverse[1]) != len(source.rows):
+                table = np.full(len(source.rows), -1, np.int64)
+                table[picks] = np.arange(len(picks))
+                self.inverse = (picks, table)
+            inverse = self.inverse[1]
+        for _, lo, hi in entries:
+            if inverse is None:
+                self.rows[lo:hi] = source.rows[lo:hi]
+                mine = range(lo, hi)
+            else:
+                sel = inverse[lo:hi]
+                sel = sel[sel >= 0]
+                if not len(sel):
+                    continue
+                self.rows[sel] = source.rows[picks[sel]]
+                mine = sel.tolist()
+            if len(mine) <= 8:
+                for i in mine:
+                    self.row_changed(int(i))
+            else:
+                self.changed(int(min(mine)), int(max(mine)) + 1)
+            if self.uniform and len(self.rows) > 1:
+                if lo == 0 or (inverse is not None and 0 in mine):
+                    self.uniform = uniform_material(self.rows)
+                else:
+                    check = self.rows[lo:hi] if inverse is None else self.rows[sel]
+                    self.uniform = bool((check[:, _MATERIAL] == self.rows[0, _MATERIAL]).all())
+        return True
 
     def release(self) -> None:
         for vao in self.vaos.values():

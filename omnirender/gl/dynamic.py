@@ -73,6 +73,8 @@ class MovePlan:
         batches: dict[int, int] = {}
         self._batch_index = batches
         self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
+        #: (batch, row indices or None: all) the last apply() rewrote, for the render index's bounds
+        self.moved_rows: list[tuple[Any, Any]] = []
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -149,6 +151,7 @@ class MovePlan:
     def apply(self, changed: list[Any]) -> int:
         """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count."""
         index = self.index
+        self.moved_rows = []
         moved = [(k, t) for t in changed if (k := index.get(id(t))) is not None]
         if not moved:
             return 0
@@ -186,7 +189,12 @@ class MovePlan:
             batch = self.batches[b]
             where = self.row_of[affected[part]]
             batch.rows[where, _MODEL] = rows[part]
-            batch.changed(int(where.min()), int(where.max()) + 1)
+            if len(where) <= 8:  # a few rows: uploaded one by one, not the range between them
+                for w in where.tolist():
+                    batch.row_changed(w)
+            else:
+                batch.changed(int(where.min()), int(where.max()) + 1)
+            self.moved_rows.append((batch, where))
         return len(affected)
 
     def _apply_instances(self, moved: set[int]) -> int:
@@ -204,6 +212,7 @@ class MovePlan:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
                 batch.changed(0, len(batch.rows))
+                self.moved_rows.append((batch, None))
             count += 1
         return count
 
@@ -256,7 +265,7 @@ class TransformUpdater:
         for item, made in updates:
             _install_rows(item, made)
         if updates:
-            self._invalidate_moved()
+            self.index.moved(None)  # instance rows replaced: every bound again
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
@@ -284,16 +293,13 @@ class TransformUpdater:
 
     def _apply_moves(self, changed: list[Any]) -> int:
         """Recompose the model matrix of every item below a changed transform; returns how many rows changed."""
-        count = self._moves().apply(changed)
+        plan = self._moves()
+        count = plan.apply(changed)
         if count:
-            self._invalidate_moved()
+            # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
+            # bounds follow the moved rows; mirror planes are read from the rows every frame
+            self.index.moved(plan.moved_rows)
         return count
-
-    def _invalidate_moved(self) -> None:
-        """What depends on where items are: filtered batches, bounds, shadow maps, mirror planes."""
-        # batches of pass masks and predicates follow their source batches' versions (Batch.follow); shadow
-        # maps are drawn again where the casters moved to; mirror planes are read from the rows every frame
-        self.index.moved()
 
     def _refresh_declarations(self, scene: Any) -> None:
         """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""

@@ -35,7 +35,7 @@ _MODEL = ROW.slice("model")
 class RenderIndex:
     """The installed root scope with its derived lists; ``install`` on a new structure, ``moved`` on moves."""
 
-    __slots__ = ("root", "version", "_items", "_mirrors", "_bounds", "_casters")
+    __slots__ = ("root", "version", "_items", "_mirrors", "_bounds", "_casters", "_boxes")
 
     def __init__(self) -> None:
         self.root: Scope | None = None
@@ -45,6 +45,8 @@ class RenderIndex:
         self._mirrors: list[tuple[Any, Any]] | None = None
         self._bounds: tuple[tuple[np.ndarray, np.ndarray] | None] | None = None
         self._casters: tuple[tuple[np.ndarray, np.ndarray] | None] | None = None
+        #: id(batch) -> (batch, lo, hi): each row's world box, kept up to date row by row
+        self._boxes: dict[int, tuple[Any, np.ndarray, np.ndarray]] = {}
 
     def install(self, root: Scope | None) -> None:
         """``root`` is the draw list now (a new structure or rows replaced): every derived list is stale."""
@@ -52,13 +54,53 @@ class RenderIndex:
         self.version += 1
         self._items = self._mirrors = None
         self._bounds = self._casters = None
+        self._boxes = {}
 
-    def moved(self) -> None:
-        """Rows moved in place: the bounds are stale, the lists of items, mirrors and casters are not."""
+    def moved(self, rows: list[tuple[Any, np.ndarray | None]] | None) -> None:
+        """Rows moved in place: ``(batch, row indices or None for all)`` pairs, or None (any row anywhere).
+
+        The bounds are stale; the lists of items, mirrors and casters are not.
+        The rows' boxes are made again, the others kept.
+        """
         self._bounds = self._casters = None
+        if rows is None:
+            self._boxes = {}
+            return
+        boxes = self._boxes
+        for batch, where in rows:
+            found = boxes.get(id(batch))
+            if found is None:
+                continue
+            if where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
+                del boxes[id(batch)]
+                continue
+            lo, hi = row_boxes(batch.geometry, batch.rows[where])
+            found[1][where] = lo
+            found[2][where] = hi
+
+    def batch_edits(self, batch: Any, edits: list[tuple[Any, ...]]) -> None:
+        """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow."""
+        found = self._boxes.get(id(batch))
+        if found is None:
+            return
+        _, lo, hi = found
+        for op, index, _ in edits:
+            if op == "remove":
+                lo[index], hi[index] = lo[len(lo) - 1], hi[len(hi) - 1]
+                lo, hi = lo[:-1], hi[:-1]
+            else:
+                a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
+                lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+        if len(lo) == len(batch.rows):
+            self._boxes[id(batch)] = (batch, lo, hi)
+        else:
+            del self._boxes[id(batch)]
 
     def spliced(self, removed: list[DrawItem], added: list[DrawItem]) -> None:
-        """Items left and came without a new plan: the item list follows, mirrors only when one is among them."""
+        """Items left and came without a new plan: the item list follows, mirrors only when one is among them.
+
+        The batches' row edits reach the boxes through :meth:`batch_edits`.
+        """
         self.version += 1
         if self._items is not None:
             for item in removed:
@@ -103,6 +145,7 @@ class RenderIndex:
 
         if self.root is None:
             return None
+        boxes: list[tuple[np.ndarray, np.ndarray]] = []
         for scope in self.root.walk():
             if scope.parts is None:  # not planned (not installed): item by item
                 for item in scope.items():
@@ -114,12 +157,15 @@ class RenderIndex:
                     continue
                 for batch in part.batches:  # a batch's items share geometry and state: one test each
                     if batch.items and len(batch.rows) and keep(batch.items[0]):
-                        add(batch.geometry, batch.rows)
+                        boxes.append(self._batch_boxes(batch))
                 for item in part.others:
                     if keep(item):
                         add(item.geometry, item.rows())
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
+        for a, b in boxes:
+            lo = np.minimum(lo, a.min(axis=0))
+            hi = np.maximum(hi, b.max(axis=0))
         for geometry, rows in parts.values():
             found = rows_bounds(geometry, rows[0] if len(rows) == 1 else np.concatenate(rows))
             if found is not None:
@@ -128,6 +174,23 @@ class RenderIndex:
         if not np.all(np.isfinite(lo)):
             return None
         return lo, hi
+
+    def _batch_boxes(self, batch: Any) -> tuple[np.ndarray, np.ndarray]:
+        found = self._boxes.get(id(batch))
+        if found is None or found[0] is not batch or len(found[1]) != len(batch.rows):
+            lo, hi = row_boxes(batch.geometry, batch.rows)
+            found = self._boxes[id(batch)] = (batch, lo, hi)
+        return found[1], found[2]
+
+
+def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre)."""
+    b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
+    models = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
+    linear = models[:, :3, :3]  # (M^T)[:3, :3]: row j holds column j of M
+    center = (b0 + b1) / 2.0 @ linear + models[:, 3, :3]
+    half = (b1 - b0) / 2.0 @ np.abs(linear)
+    return center - half, center + half
 
 
 def rows_bounds(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

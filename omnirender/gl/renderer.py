@@ -153,7 +153,7 @@ class BatchRenderer:
                 return False
             if item.slot is None and not (item.transparent or item.state.overlay):
                 return False
-        ops: dict[int, list[tuple[Any, ...]]] = {}  # id(batch) -> row edits, for the batches filtered from it
+        ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
         moved_items: list[DrawItem] = []
         for item in removed:
             if item.slot is not None:
@@ -163,7 +163,7 @@ class BatchRenderer:
                 del segment.items[at]
                 del segment.slots[at]
                 moved = batch.remove_row(index)
-                ops.setdefault(id(batch), []).append(("remove", index, moved))
+                ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
                 if moved is not None:
                     shifted = batch.items[index]
                     segment.slots[segment.items.index(shifted)] = shifted.slot
@@ -190,7 +190,7 @@ class BatchRenderer:
                     self._batch_pool[(("spliced", id(batch)),)] = batch
                     new_batch = True
                 index = batch.append_row(item)
-                ops.setdefault(id(batch), []).append(("append", index, item))
+                ops.setdefault(id(batch), (batch, []))[1].append(("append", index, item))
             last.items.append(item)
             last.slots.append(item.slot)
             root.entries.append(item)
@@ -200,6 +200,8 @@ class BatchRenderer:
         else:
             self._follow_splice(root, ops)
         self.index.spliced(removed, added)
+        for batch, edits in ops.values():
+            self.index.batch_edits(batch, edits)
         version = self.draw_list_version
         self.draw_list_version += 1
         self._follow_version(version, added)
@@ -213,34 +215,43 @@ class BatchRenderer:
             if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
                 self._pipelines_scanned = self.draw_list_version
 
-    def _follow_splice(self, scope: Scope, ops: dict[int, list[tuple[Any, ...]]]) -> None:
-        """Patch the rows the scope's filtered batches select after rows of their sources were removed or added."""
+    def _follow_splice(self, scope: Scope, ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]]) -> None:
+        """Patch the rows the scope's filtered batches select after rows of their sources were removed or added.
+
+        A filtered batch keeps its picks (source row indices, ascending) and
+        items in the same order: a removed row's pick goes, the pick of the row
+        that moved into its place takes the new index, an appended row that
+        the filter keeps is picked last.
+        """
         for key, views in scope.filtered.items():
             keep = None
             for group in views.values():
                 for batch in group:
-                    edits = ops.get(id(batch.source)) if batch.source is not None else None
-                    if not edits or batch.picks is None:
+                    found = ops.get(id(batch.source)) if batch.source is not None else None
+                    if found is None or batch.picks is None:
                         continue
-                    picks = list(batch.picks)
-                    items = list(batch.items)
-                    for op, index, arg in edits:
+                    picks = batch.picks
+                    for op, index, arg in found[1]:
                         if op == "remove":
-                            if index in picks:
-                                at = picks.index(index)
-                                del picks[at]
-                                del items[at]
-                            if arg is not None and arg in picks:
-                                picks[picks.index(arg)] = index
+                            at = int(np.searchsorted(picks, index))
+                            if at < len(picks) and picks[at] == index:
+                                picks = np.delete(picks, at)
+                                del batch.items[at]
+                            if arg is not None:  # row `arg` (the last) now sits at `index`
+                                at = int(np.searchsorted(picks, arg))
+                                if at < len(picks) and picks[at] == arg:
+                                    item = batch.items.pop(at)
+                                    picks = np.delete(picks, at)
+                                    to = int(np.searchsorted(picks, index))
+                                    picks = np.insert(picks, to, index)
+                                    batch.items.insert(to, item)
                         else:
                             if keep is None:
                                 keep = self._accepts(_Selection(*key))
-                            if keep(arg):
-                                picks.append(index)
-                                items.append(arg)
-                    order = sorted(range(len(picks)), key=picks.__getitem__)
-                    batch.picks = np.array([picks[i] for i in order], np.int64)
-                    batch.items = [items[i] for i in order]
+                            if keep(arg):  # appended: the largest index
+                                picks = np.append(picks, index)
+                                batch.items.append(arg)
+                    batch.picks = picks
                     batch.source_version = -1  # rows taken again by the next follow()
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:

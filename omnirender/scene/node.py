@@ -729,7 +729,7 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local]] | Non
     does not walk the root again.  None when the edit may change what is declared.
     """
     entry = node._declared
-    if entry is None or entry.version != node._version or entry.structure != node._structure:
+    if entry is None or not _holds(entry, node):
         return None
     mask_fn = entry.mask_fn
     if isinstance(item, Node):
@@ -737,18 +737,28 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local]] | Non
             pass  # masked out: declares nothing here
         elif _local_placements(item, mask_fn):
             return None
-    elif isinstance(item, Transform) or getattr(item, "declared", None) is not None:
+    elif isinstance(item, Transform):
+        if entry.placements:  # it may move what the node declares after it
+            return None
+    elif getattr(item, "declared", None) is not None:
         return None
     chain = [(node, entry)]
     up = node._parents
     while len(up) == 1:
         above = up[0]
         e = above._declared
-        if e is None or e.version != above._version or e.structure != above._structure or e.mask_fn is not mask_fn:
+        if e is None or e.mask_fn is not mask_fn or not _holds(e, above):
             break
         chain.append((above, e))
         up = above._parents
     return chain
+
+
+def _holds(entry: _Local, node: Node) -> bool:
+    """Whether ``entry`` is what a walk of ``node`` would give now (as :meth:`_Local.valid`, for its own mask)."""
+    if entry.structure != node._structure:
+        return False
+    return entry.version == node._version or not entry.placements
 
 
 def _patch_declarations(chain: list[tuple[Node, _Local]], index: int, shift: int) -> None:
