@@ -34,7 +34,7 @@ import numpy as np
 import omnirender as om
 from omnirender.attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from omnirender.gl import GLEngine
-from omnirender.gl.context import gl_renderer
+from omnirender.gl.engine.context import gl_renderer
 
 SIZE = (256, 256)
 
@@ -160,7 +160,7 @@ class HandInstanced:
     """
 
     def __init__(self, ctx: moderngl.Context, n: int, camera: om.Camera, background: tuple, shading: str) -> None:
-        from omnirender.gl.geometry import unit_mesh
+        from omnirender.gl.engine.geometry import unit_mesh
 
         self.ctx = ctx
         self.background = background
