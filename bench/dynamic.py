@@ -240,7 +240,7 @@ def bench_culling(n: int, frames: int) -> dict[str, float]:
     timed with culling (and front-to-back sorting) switched off, to show what
     culling itself saves.
     """
-    from omnirender.gl import renderer
+    from omnirender.gl.engine import renderer
 
     d = np.ceil(n ** (1 / 3)) * 1.5 / 2
     inside = om.Camera.look_at((0, 0, -0.3 * d), (0.1, 0.2, d), fov=50, near=0.1, far=d * 4)
