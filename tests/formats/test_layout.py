@@ -19,8 +19,10 @@ def _imported(path: Path) -> set[str]:
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom) and node.level:
             base = list(parts[: len(parts) - node.level])
-            target = [*base, *(node.module.split(".") if node.module else [])]
-            found.add(".".join(target[:1]) or "omnirender")
+            if node.module:
+                found.add([*base, *node.module.split(".")][0])
+            else:
+                found.update([*base, alias.name][0] for alias in node.names)
     return found
 
 
