@@ -43,7 +43,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 import omnirender as om  # noqa: E402
 from omnirender.gl import GLEngine  # noqa: E402
-from omnirender.gl.context import gl_renderer  # noqa: E402
+from omnirender.gl.engine.context import gl_renderer  # noqa: E402
 
 SIZE = (256, 256)
 LIGHT = (-0.4, -0.6, -1.0)

@@ -34,7 +34,7 @@ fi
 echo "=== machine"
 date -u
 command -v nvidia-smi >/dev/null 2>&1 && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
-"$PY" -c "import omnirender, sys; from omnirender.gl.context import gl_renderer; print(sys.version.split()[0], omnirender.__file__); print('GL renderer:', gl_renderer())" || {
+"$PY" -c "import omnirender, sys; from omnirender.gl.engine.context import gl_renderer; print(sys.version.split()[0], omnirender.__file__); print('GL renderer:', gl_renderer())" || {
     echo "gpu.sh: no EGL context: is libEGL.so.1 (the NVIDIA driver's EGL) installed?" >&2
     exit 3
 }

@@ -116,11 +116,11 @@ def test_a_spliced_batch_uploads_only_the_rows_that_changed(monkeypatch):
 
 
 def derived_from_scratch(engine) -> tuple:
-    from omnirender.gl.drawlist import world_bounds
-    from omnirender.gl.mirrors import mirror_items
-    from omnirender.gl.state import casts_shadows
+    from omnirender.gl.engine.drawlist import world_bounds
+    from omnirender.gl.techniques.mirrors import mirror_items
+    from omnirender.gl.engine.state import casts_shadows
 
-    items = engine._root.all_items()
+    items = engine.root_scope.all_items()
     bounds = world_bounds([it for it in items if not it.state.overlay])
     casters = world_bounds([it for it in items if not it.transparent and casts_shadows(it)])
     return items, [m for m, _ in mirror_items(items)], bounds, casters

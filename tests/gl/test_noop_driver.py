@@ -80,7 +80,7 @@ def test_partial_buffer_writes_lie_inside_their_buffers(monkeypatch):
 #: The driver's failure in plain moderngl: a buffer drawn from, then partly rewritten (crashes threaded).
 DRIVER = r"""
 import moderngl, numpy as np
-from omnirender.gl.context import create_context
+from omnirender.gl.engine.context import create_context
 ctx = create_context()
 prog = ctx.program(vertex_shader="#version 330\nin vec4 a; void main() { gl_Position = a; }",
                    fragment_shader="#version 330\nout vec4 c; void main() { c = vec4(1.0); }")
@@ -110,7 +110,7 @@ def test_the_engine_asks_for_an_unthreaded_no_op_driver_only_under_gallium_noop(
     env = dict(os.environ, GALLIUM_NOOP="1")
     env.pop("GALLIUM_THREAD", None)
     code = (
-        "import os\nfrom omnirender.gl.context import create_context\nc = create_context()\n"
+        "import os\nfrom omnirender.gl.engine.context import create_context\nc = create_context()\n"
         "print(os.environ.get('GALLIUM_THREAD'), c.info['GL_RENDERER'])"
     )
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)

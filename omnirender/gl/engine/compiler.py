@@ -1,0 +1,869 @@
+"""Compiling a scene into draw items (the GL engine's one traversal, through the core interpreter).
+
+The GL engine evaluates the scene with the core's interpreter
+(:meth:`~omnirender.core.engine.Engine.run`), on *local* node programs whose
+child nodes are ``NODE`` ops, and hooks in where it needs to:
+
+* :meth:`eval_node` caches the draw items of every node occurrence: a node
+  whose version did not move, entered in an unchanged state, is replayed from
+  the cache without traversal, so a frame where one child of a 10,000-child
+  node changed recompiles only that child;
+* :meth:`run_technique` opens a nested :class:`~.drawlist.Scope` for a
+  technique and compiles what it scopes *once*; its passes run at draw time,
+  every frame (:mod:`.frame`);
+* ``on_enter`` / ``on_leave`` keep the group tags of the current path, which
+  pass masks test.
+
+Painters append draw items through :meth:`submit`; nothing here calls OpenGL.
+The active GL state attributes are captured declaratively (:mod:`.state`),
+materials into the named instance row (:mod:`.layout`).  Lights, camera and
+background come from the core's cached pre-evaluation.
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from ...attributes import Background, BumpMap, DrawStyle, Fog, Highlight, MultiTexture, Texture
+from ...attributes.photometry import linear_rgb
+from ...attributes.surface import Appearance, appearance_key, resolve_appearance
+from ...core.component import RenderingComponent
+from ...core.light import LightSwitch
+from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
+from ...core.transform import Transform
+from ...scene.node import Node
+from ..deferred.models import MaterialDescription
+from .attributes import CullFace, GLState
+from .drawlist import DrawItem, DrawState, Scope
+from .geometry import Geometry
+from .instancing import instance_rows
+from .layout import PBR, PHONG, ROW
+from .shaders import LAYER_BLENDS
+from .state import FillMode, LineWidth, defaults, kinds
+
+__all__ = ["DrawListCompiler", "TextureSet", "linear_rgb"]
+
+_DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, points get its default size
+_MODEL = ROW.slice("model")
+_COLOR = ROW.slice("color")
+_SHADING_MODEL = ROW.at("emission", "model")
+_MATERIAL_ID = ROW.at("pbr", "material")
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
+_POINT_SIZE = ROW.at("point", "size")
+FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+
+
+def _uv_matrix(texture: Any) -> tuple[float, ...]:
+    """A texture's coordinate transform as a GLSL mat3 (column-major)."""
+    return tuple(float(x) for x in texture.uv_matrix().T.ravel())
+
+
+class TextureSet:
+    """What an appearance needs from the GL state: textures to bind, program features, uniforms.
+
+    ``textures`` are (sampler uniform, om.Texture, sRGB) triples; ``features``
+    and ``uniforms`` apply where the shape has texture coordinates, ``alpha``
+    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.
+    """
+
+    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+
+    def __init__(self, app: Appearance) -> None:
+        textures: list[tuple[str, Any, bool]] = []
+        features: list[tuple[str, Any]] = []
+        uniforms: list[tuple[str, Any]] = []
+
+        def slot(feature: str, sampler: str, suffix: str, texture: Any, srgb: bool) -> None:
+            textures.append((sampler, texture, srgb))
+            if feature:
+                features.append((feature, True))
+            features.append((f"UVSET_{suffix.upper()}", int(texture.uv_set)))
+            uniforms.append((f"u_uvm_{suffix}", _uv_matrix(texture)))
+
+        self.base = app.texture
+        if app.texture is not None:
+            slot("TEXTURE", "u_texture", "base", app.texture, True)
+        if app.layers:
+            features.append(("LAYERS", len(app.layers)))
+            for i, layer in enumerate(app.layers):
+                slot("", f"u_layer{i}", f"layer{i}", layer.texture, True)
+                features.append((f"LAYER_BLEND{i}", LAYER_BLENDS[layer.blend]))
+                uniforms.append((f"u_layer_opacity{i}", float(layer.opacity)))
+        normal, scale = app.normal_map()
+        self.normal = normal is not None
+        if normal is not None:
+            slot("", "u_normal_texture", "normal", normal, False)
+            uniforms.append(("u_normal_scale", float(scale)))
+        if app.model == "pbr":
+            if app.metallic_roughness_texture is not None:
+                slot("MR_TEXTURE", "u_mr_texture", "mr", app.metallic_roughness_texture, False)
+            if app.occlusion_texture is not None:
+                slot("OCCLUSION_TEXTURE", "u_occlusion_texture", "occlusion", app.occlusion_texture, False)
+                uniforms.append(("u_occlusion_strength", float(app.occlusion_strength)))
+            if app.emissive_texture is not None:
+                slot("EMISSIVE_TEXTURE", "u_emissive_texture", "emissive", app.emissive_texture, True)
+        self.textures = tuple(textures)
+        self.features = tuple(features)
+        self.uniforms = tuple(uniforms)
+        self.uv1 = any(t.uv_set == 1 for _, t, _ in textures)
+        if app.alpha_mode == "mask":
+            self.alpha: tuple[tuple[str, Any], ...] = (("ALPHA_MASK", True),)
+            self.alpha_uniforms: tuple[tuple[str, Any], ...] = (("u_alpha_cutoff", float(app.alpha_cutoff)),)
+        elif app.model == "pbr" and app.alpha_mode == "opaque":
+            self.alpha, self.alpha_uniforms = (("ALPHA_OPAQUE", True),), ()
+        else:
+            self.alpha, self.alpha_uniforms = (), ()
+
+
+class _NodeEntry:
+    """A node occurrence's contributions (items and scopes), valid while its version and own components hold."""
+
+    __slots__ = ("ref", "version", "own", "entries")
+
+    def __init__(self, node: Any, own: tuple, entries: list[Any]) -> None:
+        self.ref = weakref.ref(node)
+        self.version = node.version
+        self.own = own
+        self.entries = entries
+
+
+class _Bail(Exception):
+    """A subtree compile met what it does not handle: the full compile runs instead."""
+
+
+_UNDO = frozenset((POP, REMOVE, DEINSTALL))
+
+
+def _below(node: Any, ids: set[int]) -> bool:
+    """Whether ``node`` or one of its first-parent ancestors is among ``ids``."""
+    up = node
+    while up is not None:
+        if id(up) in ids:
+            return True
+        up = up.parent
+    return False
+
+
+def _same_declarations(a: Any, b: Any) -> bool:
+    """Whether two pre-evaluations declare the same components (lights, camera, background) at the same places."""
+    if a is None or b is None:
+        return False
+    if a is b:
+        return True
+    pa, pb = a.placements, b.placements
+    return len(pa) == len(pb) and all(x is y and np.array_equal(m, n) for (x, m), (y, n) in zip(pa, pb, strict=True))
+
+
+class DrawListCompiler:
+    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: the compile traversal's hooks, state capture, ``submit``."""
+
+    # -- the interpreter's hooks --------------------------------------------------
+    def on_enter(self, node: Any) -> None:
+        groups = node.groups
+        stack = self._group_path
+        stack.append(stack[-1] + (groups,) if groups else stack[-1])
+
+    def on_leave(self, node: Any) -> None:
+        self._group_path.pop()
+
+    def eval_node(self, node: Any) -> Any:
+        """A child node: replayed from the per-occurrence cache when unchanged, else its local program.
+
+        Occurrences are keyed by small integers (parent occurrence, ordinal),
+        so keys stay flat in graphs of any depth.
+        """
+        frames = self._compile_frames
+        if frames:
+            parent = frames[-1]
+            parent[1] += 1
+            pair = (parent[0], parent[1])
+            key = self._occurrences.get(pair)
+            if key is None:
+                self._next_occurrence += 1
+                key = self._occurrences[pair] = self._next_occurrence
+            entry = self._node_cache.get(key)
+            # an entry exists only for a node the (unchanged) mask admitted: the hit needs no mask test
+            if entry is not None and not parent[2] and entry.ref() is node and entry.version == node.version:
+                self._scope.entries.extend(entry.entries)
+                return None
+        groups = node.groups
+        if groups and not self.admits(groups):
+            return None
+        local = getattr(node, "local_program", None)
+        if local is None or not frames:  # a viewer snapshot, or immediate mode: nothing to cache
+            return node.program(), None
+        scope = self._scope
+        same = entry is not None and entry.ref() is node
+        own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
+        frames.append([key, 0, parent[2] or not same or entry.own != own])
+        start = len(scope.entries)
+
+        def store() -> None:
+            frames.pop()
+            self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+            found = self._occurrence_of.get(id(node))
+            several = found is not None and (found[0] != key or found[1]() is not node)
+            self._occurrence_of[id(node)] = (-1 if several else key, weakref.ref(node))  # -1: several
+
+        return local(), store
+
+    def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
+        """A technique's scope: compiled once into a nested Scope; its passes run when the frame is drawn."""
+        if not technique.supported(self):
+            self.run_program(program)  # ignored: what it scopes is evaluated once, as if it were not there
+            return
+        scope = Scope(technique)
+        outer = self._scope
+        outer.entries.append(scope)
+        self._scope = scope
+        previous = self.technique
+        self.technique = technique  # its service and handler overrides apply to what it scopes
+        path = self._technique_path
+        self._technique_path = (*path, technique)
+        try:
+            self.run_program(program)
+        finally:
+            self.technique = previous
+            self._scope = outer
+            self._technique_path = path
+
+    def begin(self, root: Any) -> None:
+        """The core's pre-evaluation; a following ``render(None)`` uses its camera and lights (the viewer's way)."""
+        super().begin(root)  # type: ignore[misc]
+        self._preevaluated = True
+        self._state_dirty = True
+        self._surface_dirty = True
+
+    # -- compile ---------------------------------------------------------------------
+    def compile(self, scene: Any, mask: Any = None) -> Scope:
+        """Compile ``scene`` (a Node or components) into the root scope; cached while nothing changed."""
+        if mask is not None:
+            self.mask = mask
+        if not hasattr(scene, "local_program"):
+            scene = Node.transient([scene] if isinstance(scene, RenderingComponent) else scene)
+        mask_key = self._mask
+        c = self._compiled
+        changed = self._journal.drain()
+        edits = self._journal.drain_edits()
+        if len(kinds()) != self._kinds_seen:
+            self._new_state_kinds()
+            c = None
+        if c is not None and c[0]() is scene and c[2] == mask_key:
+            if c[1] == scene.version:
+                self.stats["compiled"] = False
+                return self._root
+            if c[3] == scene.structure_version:
+                # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
+                count = self._apply_changes(changed)
+                if count is not None:
+                    self.stats["incremental"] = count
+                    self._refresh_declarations(scene)
+                    self._compiled = (c[0], scene.version, mask_key, c[3])
+                    self.stats["compiled"] = False
+                    return self._root
+            elif edits and self._root is not None and self._full_key is not None:
+                # nodes added or removed, attributes replaced: compile only the subtrees the edits touch
+                count = self._splice(scene, edits, changed)
+                if count is not None:
+                    self.stats["incremental"] = count
+                    self._compiled = (c[0], scene.version, mask_key, scene.structure_version)
+                    self.stats["compiled"] = "subtrees"
+                    return self._root
+        self.sync_registry()
+        camera = scene.declarations(self.mask_function).camera
+        full_key = (mask_key, camera[0].mask if camera is not None else None)
+        if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
+            self._node_cache.clear()
+            self._occurrences.clear()
+            self._occurrence_of.clear()
+        self._full_key = full_key
+        root = Scope(None)
+        self._scope = root
+        self._compile_frames = [[0, 0, False]]
+        generation = self.material_table.generation
+        try:
+            self.run(scene)
+            if self.material_table.generation != generation:  # the material table started again: every id anew
+                self._node_cache.clear()
+                self._occurrence_of.clear()
+                self._surface_memo.clear()
+                self._state_dirty = self._surface_dirty = True
+                root = self._scope = Scope(None)
+                self._compile_frames = [[0, 0, False]]
+                self.run(scene)
+        except BaseException:
+            self._surface.clear()
+            self._clips.clear()
+            self._node_cache.clear()
+            self._occurrence_of.clear()
+            self._compiled = None
+            raise
+        finally:
+            self._compile_frames = []
+            self._scope = self._immediate
+        self._compiled = (weakref.ref(scene), scene.version, mask_key, scene.structure_version)
+        self._prune_caches()
+        self._install(root)
+        self._move_plan = None
+        self.stats["compiled"] = True
+        return root
+
+    # -- compiling only the subtrees that list edits touched --------------------------------
+    def _splice(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
+        """Apply the list edits since the last frame by compiling only the subtrees they touch.
+
+        Handles the edits of simulations and editors: child nodes appended to
+        or removed from a node, components inserted or removed in a node
+        without child nodes (an attribute replaced).  The state each subtree is
+        compiled in is rebuilt by evaluating the components of its ancestors
+        (their shapes go to a scope that is dropped): the ancestors must each
+        hold their components before their child nodes and have one parent.
+        The new items replace the old in their batches (:meth:`_splice_install`).
+        Returns how many items were removed and added, or None when the full
+        compile must run (nothing installed has changed then).
+        """
+        plan = self._splice_plan(scene, edits, changed)
+        if plan is None:
+            return None
+        leaves, groups = plan
+        old_declared = self.declared
+        self._running += 1
+        snapshot = self._snapshot()
+        generation = self.material_table.generation
+        removed: list[Any] = []
+        added: list[Any] = []
+        try:
+            self.begin(scene)
+            if not _same_declarations(old_declared, self.declared):
+                raise _Bail
+            for node, key, path in leaves:
+                removed.extend(self._node_cache[key].entries)
+                added.extend(self._compile_at(node, key, path))
+            for node, key, path, appended, gone in groups:
+                for child in gone:
+                    child_key = self._occurrence_of.pop(id(child))[0]
+                    removed.extend(self._node_cache.pop(child_key).entries)
+                for child in appended:
+                    self._next_occurrence += 1
+                    added.extend(self._compile_at(child, self._next_occurrence, (*path, node)))
+                self._node_cache.pop(key, None)  # its list changed: compiled again by the next full compile
+            if self.material_table.generation != generation:
+                raise _Bail
+        except BaseException:
+            self._reset(snapshot)
+            self._scope = self._immediate
+            self._compile_frames = []
+            self._node_cache.clear()  # some entries may be half made: the full compile starts afresh
+            self._occurrence_of.clear()
+            return None
+        else:
+            self.end(scene)
+        finally:
+            self._running -= 1
+        self._scope = self._immediate
+        self._compile_frames = []
+        for _, _, path in leaves:
+            for above in path:  # their flattened entries hold the old items: compiled again when next missed
+                self._drop_entry(above)
+        for _, _, path, _, _ in groups:
+            for above in path:
+                self._drop_entry(above)
+        if not self._splice_install(removed, added):
+            self._node_cache.clear()
+            self._occurrence_of.clear()
+            return None
+        return len(removed) + len(added)
+
+    def _drop_entry(self, node: Any) -> None:
+        key = self._key_of(node)
+        if key is not None:
+            self._node_cache.pop(key, None)
+
+    def _splice_plan(self, scene: Any, edits: list[Any], changed: list[Any]) -> tuple[list, list] | None:
+        """Which nodes to compile again (leaves) and which children to add and remove, or None."""
+        leaves: dict[int, Any] = {}
+        groups: dict[int, list[Any]] = {}
+        loose: list[Any] = []
+        for container, op, item, _ in edits:
+            if op not in ("insert", "remove") or not isinstance(container, Node):
+                return None
+            key = self._key_of(container)
+            if key is None:
+                loose.append(container)
+                continue
+            if isinstance(item, Node):
+                _, _, appended, gone = groups.setdefault(id(container), [container, key, {}, {}])
+                if op == "insert":
+                    if id(item) in gone:
+                        return None  # moved within the list
+                    appended[id(item)] = item
+                elif id(item) in appended:
+                    del appended[id(item)]
+                else:
+                    gone[id(item)] = item
+            else:
+                leaves[id(container)] = container
+        if set(leaves) & set(groups):
+            return None
+        added_ids = {i for g in groups.values() for i in g[2]}
+        removed_ids = {i for g in groups.values() for i in g[3]}
+        for node in loose:  # edited, not compiled: inside a new subtree, or outside the scene
+            up = node
+            while up is not None and id(up) not in added_ids:
+                if self._key_of(up) is not None:
+                    return None  # below a compiled node without being compiled (masked?): not followed
+                up = up.parent
+        for c in changed:  # components changed since the last frame: only those the new subtrees hold
+            if isinstance(c, Node) or not c.owners:
+                continue
+            for owner in c.owners:
+                if id(owner) not in leaves and not _below(owner, added_ids):
+                    return None
+        leaf_list = []
+        for node in leaves.values():
+            own = self._own(node)
+            if own is None or any(isinstance(x, Node) for x in (*node.items, *own)):
+                return None
+            path = self._path_to(scene, node)
+            if path is None or _below(node, removed_ids):
+                return None
+            leaf_list.append((node, self._key_of(node), path))
+        group_list = []
+        for node, key, appended, gone in groups.values():
+            items = node.items
+            if appended and (
+                len(appended) > len(items) or {id(x) for x in items[len(items) - len(appended) :]} != set(appended)
+            ):
+                return None  # not appended at the end
+            if any(self._key_of(child) is None for child in gone.values()):
+                return None
+            path = self._path_to(scene, node)
+            if path is None or _below(node, removed_ids):
+                return None
+            ordered = [x for x in items[len(items) - len(appended) :]] if appended else []
+            group_list.append((node, key, path, ordered, list(gone.values())))
+        return leaf_list, group_list
+
+    def _key_of(self, node: Any) -> int | None:
+        """The occurrence key of ``node`` in the compiled graph, or None (not compiled, or compiled several times)."""
+        found = self._occurrence_of.get(id(node))
+        if found is None or found[0] < 0 or found[1]() is not node:
+            return None
+        return found[0]
+
+    def _own(self, node: Any) -> tuple | None:
+        """The items ``node`` held when it was last compiled, or None when its entry is gone."""
+        key = self._key_of(node)
+        entry = None if key is None else self._node_cache.get(key)
+        if entry is None or entry.ref() is not node:
+            return None
+        return tuple(x if isinstance(x, Node) else x[0] for x in entry.own)
+
+    def _path_to(self, scene: Any, node: Any) -> tuple[Any, ...] | None:
+        """The ancestors of ``node`` from ``scene`` down (one parent each, components before children), or None."""
+        path = []
+        up = node
+        while up is not scene:
+            parents = up.parents
+            if len(parents) != 1:
+                return None
+            up = parents[0]
+            if self._leading(up) is None:
+                return None
+            path.append(up)
+        path.reverse()
+        return tuple(path)
+
+    def _leading(self, node: Any) -> tuple[Any, ...] | None:
+        """``node``'s components when they all come before its child nodes (else None); cached per list."""
+        version = node.structure_version
+        found = self._leading_cache.get(id(node))
+        if found is not None and found[0]() is node and found[1] == version:
+            return found[2]
+        items = node.items
+        types = list(map(type, items))
+        first = types.index(Node) if Node in types else len(types)
+        leading = items[:first] if types.count(Node) == len(types) - first else None
+        if leading is not None and any(isinstance(x, Node) for x in leading):
+            leading = None  # a Node subclass among them
+        if len(self._leading_cache) > 4096:
+            self._leading_cache.clear()
+        self._leading_cache[id(node)] = (weakref.ref(node), version, leading)
+        return leading
+
+    def _compile_at(self, node: Any, key: int, path: tuple[Any, ...]) -> list[Any]:
+        """Compile ``node`` (occurrence ``key``) in the state its ancestors ``path`` make; returns its entries."""
+        ops = self._ops
+        sink = Scope()
+        self._scope = sink
+        undos = []
+        for above in path:
+            leading = self._leading(above)
+            program = compile_components(leading, [])
+            if any(code == TECHNIQUE for code, _ in program):
+                raise _Bail
+            cut = len(program) - sum(1 for code, _ in program if code in _UNDO)
+            ops[ENTER](above)
+            for code, arg in program[:cut]:
+                ops[code](arg)
+            undos.append(program[cut:])
+        target = Scope(None)
+        self._scope = target
+        own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
+        self._compile_frames = [[key, 0, True]]
+        self.run_program(node.local_program())
+        self._compile_frames = []
+        self._node_cache[key] = _NodeEntry(node, own, list(target.entries))
+        self._occurrence_of[id(node)] = (key, weakref.ref(node))
+        self._scope = sink
+        for undo in reversed(undos):
+            for code, arg in undo:
+                ops[code](arg)
+            ops[LEAVE](-1)
+        return target.entries
+
+    def _new_state_kinds(self) -> None:
+        """A GL state class was defined since the last compile: items must capture one more value."""
+        self._kinds_seen = len(kinds())
+        self._defaults = defaults()
+        self._states.clear()
+        self._node_cache.clear()
+        self._compiled = None
+        self._state_dirty = True
+
+    def _prune_caches(self) -> None:
+        """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
+        if len(self._node_cache) > self._prune_limit:
+            self._node_cache = {k: v for k, v in self._node_cache.items() if v.ref() is not None}
+            live = set(self._node_cache)
+            self._occurrences = {pair: k for pair, k in self._occurrences.items() if k in live}
+            self._prune_limit = max(4096, 2 * len(self._node_cache))
+
+    # -- what painters call ------------------------------------------------------------
+    def submit(
+        self,
+        geometry: Geometry,
+        local: np.ndarray | None = None,
+        kind: str | None = None,
+        extra: Any = None,
+        transparent: bool | None = None,
+    ) -> DrawItem:
+        """Append a draw item for ``geometry`` in the current state (model matrix, material, GL state).
+
+        ``local`` is a shape-local matrix applied after the model matrix (the
+        native painters scale a unit mesh with it).  Painters call this; it
+        issues no GL call.
+        """
+        if self._state_dirty or len(self._state_base[0]) != self._kinds_seen:
+            if len(kinds()) != self._kinds_seen:
+                self._new_state_kinds()
+            self._resolve_state()
+        if self._surface_dirty:
+            self._resolve_surface()
+        m = self.model_matrix()
+        if local is not None:
+            m = m @ local
+        row = self._surface_row.copy()
+        row[_MODEL] = m.T.ravel()
+        if kind is None:
+            kind = (
+                "points"
+                if geometry.mode == "triangles" and self._fill == "points"
+                else ("mesh" if geometry.mode == "triangles" else geometry.mode)
+            )
+        app = self._appearance
+        if transparent is None:
+            see_through = app.alpha_mode == "blend" or (
+                app.alpha_mode == "opaque" and app.model == "phong" and geometry.translucent
+            )
+            transparent = self._blend_on or (see_through and not self._alpha_tested)
+        cull = None
+        single = not app.double_sided and kind == "mesh"
+        if (single or (geometry.closed and not transparent)) and kind == "mesh" and self._auto_cull:
+            # a closed opaque surface never shows its back faces, a single-sided material hides them: cull them
+            # (mirrored instances: the front)
+            cull = "back" if np.linalg.det(m[:3, :3]) > 0.0 else "front"
+        state = self._state_for(kind, geometry, extra, cull, int(row[_SHADING_MODEL]))
+        item = DrawItem(
+            geometry,
+            state,
+            row,
+            transparent,
+            self.current_node,
+            self._group_path[-1],
+            tuple(self.context.mono_stack(Transform)),
+            local,
+            self._technique_path,
+        )
+        self._scope.entries.append(item)
+        return item
+
+    def capture(self, shape: Any) -> list[DrawItem]:
+        """The draw items ``shape`` makes in the current state, without drawing them (instance sets use it)."""
+        scope = Scope()
+        outer = self._scope
+        self._scope = scope
+        try:
+            self.eval(shape)
+        finally:
+            self._scope = outer
+        return scope.all_items()
+
+    def submit_instances(
+        self, source: Any, template: DrawItem, matrices: np.ndarray, colors: np.ndarray | None, may_mirror: bool
+    ) -> DrawItem:
+        """An item drawing ``template`` once per matrix (``(N, 4, 4)``, after the current model matrix).
+
+        ``source`` is the instance set; ``colors`` (``(N, 4)`` display RGBA or
+        None) replace the template's colour as ``om.Color`` would.  The rows
+        are made with numpy in one go (:func:`~.instancing.instance_rows`);
+        the item is drawn as one instanced batch.
+        """
+        made = instance_rows(
+            template.row, template.local, template.transparent, self.model_matrix(), matrices, colors, may_mirror
+        )
+        item = DrawItem(
+            template.geometry,
+            self.instance_state(template, made.mirrored),
+            template.row,
+            made.transparent,
+            template.node,
+            template.groups,
+            template.chain,
+            None,
+            template.techniques,
+        )
+        item.instances = made.rows
+        item.instance_models = made.models
+        item.source = source
+        item.template = template
+        self._scope.entries.append(item)
+        return item
+
+    def instance_state(self, template: DrawItem, mirrored: bool) -> DrawState:
+        """The template's state, or the same without face culling when some instance mirrors."""
+        state = template.state
+        if mirrored and not template.transparent and state.value(CullFace) in ("back", "front"):
+            # mirrored instances: cull nothing rather than the wrong faces of some
+            state = self._state_for(
+                state.kind, template.geometry, state.extra, "none", int(template.row[_SHADING_MODEL])
+            )
+        return state
+
+    def _resolve_state(self) -> None:
+        mono = self.mono
+        style = mono(DrawStyle)
+        self._fill = style.mode if style is not None else "filled"
+        # without a DrawStyle: DrawStyle's default (1 px), as in POV-Ray and Mitsuba
+        self._point_size = float(style.point_size) if style is not None else _DEFAULT_POINT_SIZE
+        values = []
+        features: list[tuple[str, Any]] = []
+        uniforms: list[tuple[str, Any]] = []
+        code: list[Any] = []
+        special = False
+        cull_set = False
+        for k in kinds():
+            if issubclass(k, GLState):
+                top = mono(k)
+                value = top.capture() if top is not None else k.default
+                if k is CullFace:
+                    cull_set = top is not None
+                    if top is None and style is not None:
+                        value = style.cull
+            elif k is FillMode:
+                value = self._fill == "wireframe"
+            elif k is LineWidth:
+                value = float(style.line_width) if style is not None else 1.0
+            elif k.source() is not None:  # a kind capturing a generic attribute (Shadowing, Mirror)
+                top = mono(k.source())
+                value = k.default if top is None else k.from_attribute(top)
+            else:
+                value = k.default
+            values.append(value)
+            if value != k.default:
+                special = special or k.orders(value)
+                extra = k.features(value)
+                if extra:
+                    features.extend(extra)
+                    uniforms.extend(k.uniforms(value))
+                    if k.fragment_code or k.fragment_main:
+                        code.append(k)
+        raster = tuple(values)
+        from .attributes import AlphaTest, Blend
+
+        self._blend_on = raster[Blend.index] is not None
+        # an om.gl.AlphaTest cuts out what the alpha hides: such surfaces are drawn (and write depth) as opaque ones
+        self._alpha_tested = raster[AlphaTest.index] is not None
+        cull_value = raster[CullFace.index]
+        # automatic back-face culling only where nothing decides culling and nothing shows the inside
+        self._auto_cull = not cull_set and cull_value == "none" and not self._clips and self._fill != "wireframe"
+        fog = mono(Fog)
+        fog_key = None
+        if fog is not None:
+            fog_key = (
+                linear_rgb(fog.color),
+                float(fog.start),
+                float(fog.end),
+                float(fog.density),
+                FOG_MODES[fog.mode],
+            )
+        self._state_base = (
+            raster,
+            tuple(features),
+            tuple(uniforms),
+            tuple(code),
+            special,
+            tuple(plane for _, plane in self._clips),
+            fog_key,
+            mono(LightSwitch),
+            style is not None and style.shading == "flat",
+        )
+        self._state_dirty = False
+
+    def _check_texture(self, texture: Any) -> None:
+        if getattr(texture, "rendered", False):
+            return  # a render texture: its pipeline checks its size when it is made
+        checked = self._checked_textures.get(id(texture))
+        if checked is not None and checked[0]() is texture and checked[1] == texture.version:
+            return
+        try:
+            h, w = texture.image_array().shape[:2]
+        except (OSError, ValueError) as exc:  # a missing or unreadable image file: say where it is used
+            where = f" in node {self.node_path}" if self.node_path else ""
+            raise type(exc)(
+                f"GLEngine: {exc}{where}; fix the path or pass an array (om.Texture(numpy_array))"
+            ) from None
+        self.check_texture_size(f"Texture (image {w}x{h})", (w, h), self.max_texture_size)
+        if len(self._checked_textures) > 4096:
+            self._checked_textures.clear()
+        self._checked_textures[id(texture)] = (weakref.ref(texture), texture.version)
+
+    def _state_for(self, kind: str, geometry: Geometry, extra: Any, cull_override: str | None, model: int) -> DrawState:
+        raster, state_features, uniforms, code, special, clip, fog, switch, flat = self._state_base
+        texset = self._texset
+        features: list[tuple[str, Any]] = []
+        if geometry.colors is not None:
+            features.append(("VCOLOR", True))
+        textured = bool(texset.textures) and geometry.texcoords is not None and kind == "mesh"
+        bound: tuple = ()
+        if textured:
+            features.append(("UVS", True))
+            features.extend(texset.features)
+            if texset.uv1 and geometry.texcoords1 is not None:
+                features.append(("UV1", True))
+            if texset.normal and geometry.tangent_source is not None:
+                features.append(("NORMAL_MAP", True))
+            uniforms = uniforms + texset.uniforms
+            bound = texset.textures
+        if kind in ("mesh", "points") and texset.alpha:
+            features.extend(texset.alpha)
+            uniforms = uniforms + texset.alpha_uniforms
+        if flat and kind == "mesh":
+            features.append(("FLAT", True))
+        if clip:
+            features.append(("NCLIP", len(clip)))
+        if fog is not None:
+            features.append(("FOG", True))
+        if kind == "points" and geometry.sizes is not None:
+            features.append(("VSIZE", True))
+        if kind in ("mesh", "points"):
+            features.append(("MODEL", model))
+            features.extend(state_features)
+        if geometry.program_features:  # geometry drawn by a program of its own (GPU-tessellated NURBS patches)
+            features.extend(geometry.program_features)
+            uniforms = uniforms + geometry.program_uniforms
+        if cull_override is not None:
+            raster = raster[: CullFace.index] + (cull_override,) + raster[CullFace.index + 1 :]
+        key = (kind, tuple(features), extra, raster, bound, clip, fog, switch, uniforms, code)
+        state = self._states.get(key)
+        if state is None:
+            if len(self._states) > 4096:  # e.g. text labels that change every frame
+                self._states.clear()
+            state = self._states[key] = DrawState(
+                kind,
+                tuple(features),
+                raster,
+                uniforms=uniforms if kind in ("mesh", "points") else (),
+                code=code if kind in ("mesh", "points") else (),
+                texture=texset.base if textured else None,
+                textures=bound,
+                clip=clip,
+                fog=fog,
+                switch=switch,
+                extra=extra,
+                overlay=kind == "text",
+                special=special,
+            )
+        return state
+
+    def _resolve_surface(self) -> None:
+        """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
+        mono = self.mono
+        texture, layers, bump = mono(Texture), mono(MultiTexture), mono(BumpMap)
+        highlight = mono(Highlight)
+        description = mono(MaterialDescription)
+        key = (
+            appearance_key(self._surface, texture, layers, bump),
+            None if highlight is None else (id(highlight), highlight.version),
+            None if description is None else (id(description), description.version),
+        )
+        memo = self._surface_memo
+        entry = memo.get(key)
+        if entry is None:
+            app = resolve_appearance(self._surface, texture, layers, bump)
+            for tex in app.textures:
+                self._check_texture(tex)
+            # the attributes are kept alive with the entry, so the ids in its key stay theirs
+            row = self._material_row(app, highlight)
+            # the shading model and the id of the material description (the deferred pipeline's material table)
+            if description is not None:
+                row[_SHADING_MODEL] = description.model.number
+            row[_MATERIAL_ID] = self.material_table.for_appearance(app, description)
+            entry = (app, row, TextureSet(app), (texture, layers, bump, highlight, description))
+            if len(memo) > 256:
+                memo.clear()
+            memo[key] = entry
+        app, row, texset, _ = entry
+        point_size = self._point_size
+        if row[_POINT_SIZE] != point_size:
+            row = row.copy()
+            row[_POINT_SIZE] = point_size
+        self._appearance = app
+        self._texset = texset
+        self._surface_row = row
+        self._surface_dirty = False
+
+    def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
+        row = np.zeros(ROW.stride, np.float32)
+        alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
+        row[_COLOR] = (*app.base, alpha)
+        if app.model == "pbr":
+            row[ROW.slice("emission")] = (*app.emission, PBR)
+            row[ROW.slice("pbr")] = (app.roughness, app.metallic, 0.0, 0.0)
+        else:
+            row[ROW.slice("specular")] = (*app.specular, app.shininess)
+            row[ROW.slice("emission")] = (*app.emission, PHONG)
+            row[ROW.slice("ambient")] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
+        if highlight is not None:
+            row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
+        row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
+        return row
+
+    # -- queries ----------------------------------------------------------------------
+    @property
+    def scene_background(self) -> Any:
+        """The first ``om.Background`` of the last pre-evaluated scene, or None."""
+        declared = self.declared
+        if declared is None:
+            return None
+        found = declared.first(Background)
+        return None if found is None else found[0]
+
+    @property
+    def scene_lights(self) -> list[tuple[Any, np.ndarray]]:
+        """The lights of the last pre-evaluated scene with their world matrices."""
+        return [] if self.declared is None else self.declared.lights

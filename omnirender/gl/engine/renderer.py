@@ -1,0 +1,429 @@
+"""Installing compiled scopes as instanced batches (and the batches a pass mask or predicate keeps).
+
+Opaque items are grouped into batches per scope segment (one instanced call
+per geometry and state); a newly compiled root scope with the structure of
+the installed one rewrites only the changed rows in place.  Drawing them is
+the :class:`~.drawer.BatchDrawer`'s job.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...core.mask import compile_mask
+from .drawlist import Batch, DrawItem, Scope, Segment, plan_batches, uniform_material
+from .geometry import Geometry
+from .layout import ROW
+from .passes import Composed
+
+__all__ = ["BatchRenderer", "item_filter"]
+
+
+class BatchRenderer:
+    """Mixin of :class:`~omnirender.gl.glengine.GLEngine`: install the compiled scopes as batches.
+
+    (The draw side is the :class:`~.drawer.BatchDrawer` collaborator; this install side becomes one with the
+    render index.)
+    """
+
+    # -- installing a compiled root scope ------------------------------------------------
+    def _install(self, root: Scope) -> None:
+        """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
+        old = self._root
+        self.draw_list_version += 1
+        if old is not None and old is not root and old.entries and _same_shape(old, root):
+            self.stats["incremental"] = self._update_in_place(old, root)
+            self.index.install(old)
+            return
+        self.stats["incremental"] = None
+        pool = self._batch_pool
+        self._batch_pool = {}
+        self._plan(root, (), pool)
+        for batch in pool.values():
+            batch.release()
+        if old is not None and old is not root:
+            for scope in old.walk():
+                _release_filtered(scope)
+        self._root = root
+        self.index.install(root)
+        self._sweep(root)
+
+    def _plan(self, scope: Scope, where: tuple, pool: dict[tuple, Batch]) -> None:
+        parts: list[Segment | Scope] = []
+        run: list[DrawItem] = []
+
+        def flush() -> None:
+            if run:
+                parts.append(self._segment(list(run), (*where, len(parts)), pool))
+                run.clear()
+
+        for entry in scope.entries:
+            if isinstance(entry, Scope):
+                flush()
+                self._plan(entry, (*where, len(parts)), pool)
+                parts.append(entry)
+            else:
+                run.append(entry)
+        flush()
+        scope.parts = parts
+        scope.positions = None
+        scope.filtered = {}
+
+    def _segment(self, items: list[DrawItem], where: tuple, pool: dict[tuple, Batch]) -> Segment:
+        segment = Segment(items)
+        groups, slots = plan_batches(items)
+        batches: dict[tuple, Batch] = {}
+        for key, group in groups.items():
+            pool_key = (where, *key)
+            batch = pool.pop(pool_key, None)
+            if batch is None:
+                batch = Batch(key[0], key[1])
+            batch.items = group
+            if group[0].instances is None and not (where and where[0] == "filtered"):
+                batch.hold(np.stack([it.row for it in group]))  # spare rows: items added later keep the views
+            else:
+                batch.rows = group[0].rows().copy() if len(group) == 1 else np.stack([it.row for it in group])
+                batch.storage = None
+            batch.dirty = (0, len(group))
+            batch.sparse = None
+            batch.uniform = uniform_material(batch.rows)
+            batch.sorted_for = None
+            batch.position = None
+            batches[key] = batch
+            self._batch_pool[pool_key] = batch
+        segment.batches = list(batches.values())
+        segment.slots = [None if s is None else (batches[s[0]], s[1]) for s in slots]
+        if where and where[0] == "filtered":
+            for batch in segment.batches:
+                _select_from_source(batch)
+        else:
+            for item, slot in zip(items, segment.slots, strict=True):
+                item.slot = slot
+                if slot is not None and item.instances is None:
+                    # the item's row becomes its batch row: a moved transform writes the row once (dynamic.py)
+                    item.row = slot[0].rows[slot[1]]
+        return segment
+
+    def _splice_install(self, removed: list[Any], added: list[Any]) -> bool:
+        """Take ``removed`` out of the installed draw list and put ``added`` in, patching batch rows in place.
+
+        A removed row is filled by its batch's last row; an added item becomes
+        the last row of the batch of its geometry and state in the root
+        scope's last segment (a new batch when there is none).  Only the
+        changed rows are uploaded (:meth:`Batch.append_row`, :meth:`Batch.remove_row`);
+        the batches that passes filter from them follow.  Returns False, with
+        nothing changed, for what this does not handle: nested technique
+        scopes, instance sets, states whose order matters.
+        """
+        root = self._root
+        if root is None or not root.parts or not isinstance(root.parts[-1], Segment):
+            return False
+        last = root.parts[-1]
+        segments = [p for p in root.parts if isinstance(p, Segment)]
+        if any(b.state.special for b in last.batches):
+            return False
+        for item in (*removed, *added):
+            if not isinstance(item, DrawItem) or item.instances is not None or item.state.special or item.techniques:
+                return False
+        owner: dict[int, Segment] = {id(b): seg for seg in segments for b in seg.batches}
+        for item in removed:
+            if item.slot is not None and id(item.slot[0]) not in owner:
+                return False
+            if item.slot is None and not (item.transparent or item.state.overlay):
+                return False
+        ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
+        moved_items: list[DrawItem] = []
+        for item in removed:
+            if item.slot is not None:
+                batch, index = item.slot
+                segment = owner[id(batch)]
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                moved = batch.remove_row(index)
+                ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
+                if moved is not None:
+                    shifted = batch.items[index]
+                    segment.slots[segment.items.index(shifted)] = shifted.slot
+                    moved_items.append(shifted)
+            else:
+                segment = next(seg for seg in segments if any(x is item for x in seg.others))
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                segment.others.remove(item)
+            root.entries.remove(item)
+        by_key = {(id(b.geometry), id(b.state)): b for b in last.batches}
+        new_batch = False
+        for item in added:
+            if item.transparent or item.state.overlay:
+                last.others.append(item)
+            else:
+                batch = by_key.get((id(item.geometry), id(item.state)))
+                if batch is None:
+                    batch = by_key[(id(item.geometry), id(item.state))] = Batch(item.geometry, item.state)
+                    batch.hold(np.empty((0, ROW.stride), np.float32))
+                    batch.uniform = True
+                    last.batches.append(batch)
+                    self._batch_pool[(("spliced", id(batch)),)] = batch
+                    new_batch = True
+                index = batch.append_row(item)
+                ops.setdefault(id(batch), (batch, []))[1].append(("append", index, item))
+            last.items.append(item)
+            last.slots.append(item.slot)
+            root.entries.append(item)
+        root.positions = None
+        if new_batch:
+            _release_filtered(root)
+        else:
+            self._follow_splice(root, ops)
+        self.index.spliced(removed, added)
+        for batch, edits in ops.values():
+            self.index.batch_edits(batch, edits)
+        version = self.draw_list_version
+        self.draw_list_version += 1
+        self._follow_version(version, added)
+        if self._move_plan is not None:
+            self._move_plan.splice(removed, added, moved_items)
+        return True
+
+    def _follow_version(self, version: int, added: list[DrawItem]) -> None:
+        """The pipelines scan of ``version`` still holds when no added item reads a render texture."""
+        if self._pipelines is None and self._pipelines_scanned == version:
+            if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
+                self._pipelines_scanned = self.draw_list_version
+
+    def _follow_splice(self, scope: Scope, ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]]) -> None:
+        """Patch the rows the scope's filtered batches select after rows of their sources were removed or added.
+
+        A filtered batch keeps its picks (source row indices, ascending) and
+        items in the same order: a removed row's pick goes, the pick of the row
+        that moved into its place takes the new index, an appended row that
+        the filter keeps is picked last.
+        """
+        for key, views in scope.filtered.items():
+            keep = None
+            for group in views.values():
+                for batch in group:
+                    found = ops.get(id(batch.source)) if batch.source is not None else None
+                    if found is None or batch.picks is None:
+                        continue
+                    picks = batch.picks
+                    for op, index, arg in found[1]:
+                        if op == "remove":
+                            at = int(np.searchsorted(picks, index))
+                            if at < len(picks) and picks[at] == index:
+                                picks = np.delete(picks, at)
+                                del batch.items[at]
+                            if arg is not None:  # row `arg` (the last) now sits at `index`
+                                at = int(np.searchsorted(picks, arg))
+                                if at < len(picks) and picks[at] == arg:
+                                    item = batch.items.pop(at)
+                                    picks = np.delete(picks, at)
+                                    to = int(np.searchsorted(picks, index))
+                                    picks = np.insert(picks, to, index)
+                                    batch.items.insert(to, item)
+                        else:
+                            if keep is None:
+                                keep = item_filter(_Selection(*key))
+                            if keep(arg):  # appended: the largest index
+                                picks = np.append(picks, index)
+                                batch.items.append(arg)
+                    batch.picks = picks
+                    batch.source_version = -1  # rows taken again by the next follow()
+
+    def _update_in_place(self, old: Scope, new: Scope) -> int:
+        """Copy the rows of ``new``'s items into ``old``'s structure (checked to be the same); returns the count."""
+        changed = 0
+        stack = [(old, new)]
+        while stack:
+            a, b = stack.pop()
+            differ = [i for i, (x, y) in enumerate(zip(a.entries, b.entries, strict=True)) if x is not y]
+            if not differ:
+                continue
+            where = a.positions
+            if where is None:
+                where = a.positions = _positions(a)
+            touched = regroup = False
+            for i in differ:
+                x, y = a.entries[i], b.entries[i]
+                if isinstance(x, Scope):
+                    stack.append((x, y))  # type: ignore[arg-type]
+                    continue
+                a.entries[i] = y
+                segment, position = where[i]
+                segment.items[position] = y
+                slot = segment.slots[position]
+                if slot is None:
+                    segment.others = [it for it in segment.items if it.transparent or it.state.overlay]
+                else:
+                    batch, index = slot
+                    batch.items[index] = y
+                    y.slot = slot
+                    if y.instances is not None:  # an instance set's array: the whole batch, maybe another length
+                        if len(batch.rows) != len(y.instances):
+                            batch.position = None  # sorted and culled again
+                        batch.rows = y.instances.copy()
+                        batch.dirty = None
+                        batch.changed(0, len(batch.rows))
+                        batch.uniform = uniform_material(batch.rows)
+                        changed += 1
+                        touched = regroup = True
+                        continue
+                    x.row = x.row.copy()  # the replaced item keeps its values; its batch row is y's now
+                    batch.rows[index] = y.row
+                    y.row = batch.rows[index]
+                    batch.mark(index)
+                    if x.groups != y.groups:
+                        regroup = True  # what pass masks and predicates select may differ: filter again
+                    else:
+                        _replace_in_views(a, batch, index, y)
+                    if batch.uniform and not uniform_material(batch.rows[[0, index]]):
+                        batch.uniform = False
+                changed += 1
+                touched = True
+            if touched and regroup:
+                _release_filtered(a)
+        return changed
+
+    def _sweep(self, root: Scope) -> None:
+        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures)."""
+        items = self.index.items()
+        used = {id(it.geometry) for it in items}
+        self.drawer.sweep(items)
+        self.geometry_cache.sweep(used)
+        for geom in list(self._uploaded_set):
+            if id(geom) not in used and not geom.persistent:
+                geom.release()
+
+    def upload(self, geometry: Geometry) -> None:
+        """Make sure ``geometry`` has its GPU buffers (drawers call it)."""
+        if geometry.buffers is None:
+            geometry.upload(self.ctx)
+            self._uploaded_set.add(geometry)
+
+    # -- drawing a scope's items in a pass -----------------------------------------------
+
+    def filtered_batches(self, scope: Scope, composed: Composed) -> dict[int, list[Batch]]:
+        """Batches of the opaque items a mask/predicate keeps, per segment index (cached until the scope changes)."""
+        key = (composed.masks, composed.selects)
+        cached = scope.filtered.get(key)
+        if cached is not None:
+            for batches in cached.values():
+                for batch in batches:
+                    batch.follow()  # rows moved or changed in place since: copied again, nothing re-planned
+            return cached
+        keep = item_filter(composed)
+        out: dict[int, list[Batch]] = {}
+        for index, part in enumerate(scope.parts or []):
+            if isinstance(part, Segment):
+                kept = [it for it in part.items if keep(it)]
+                out[index] = self._segment(kept, ("filtered", id(scope), key, index), {}).batches if kept else []
+        scope.filtered[key] = out
+        return out
+
+    # -- batches -----------------------------------------------------------------------
+
+
+class _Selection:
+    """The masks and predicates of a filtered selection (its cache key), as :meth:`_accepts` reads them."""
+
+    __slots__ = ("masks", "selects")
+
+    def __init__(self, masks: Any, selects: Any) -> None:
+        self.masks, self.selects = masks, selects
+
+
+def item_filter(composed: Composed) -> Any:
+    """The predicate of the items ``composed``'s group masks and ``select`` predicates keep."""
+    masks = [compile_mask(m) for m in composed.masks]
+    selects = composed.selects
+
+    def keep(item: DrawItem) -> bool:
+        for mask in masks:
+            for groups in item.groups:
+                if not mask(groups):
+                    return False
+        return all(select(item) for select in selects)
+
+    return keep
+
+
+def _same_shape(old: Scope, new: Scope) -> bool:
+    """Whether ``new`` has ``old``'s structure: same techniques, and per item the same geometry, state, class."""
+    stack = [(old, new)]
+    while stack:
+        a, b = stack.pop()
+        if a.technique is not b.technique or len(a.entries) != len(b.entries):
+            return False
+        for x, y in zip(a.entries, b.entries, strict=True):
+            if x is y:
+                continue
+            if isinstance(x, Scope):
+                if not isinstance(y, Scope):
+                    return False
+                stack.append((x, y))
+            elif (
+                isinstance(y, Scope)
+                or x.geometry is not y.geometry
+                or x.state is not y.state
+                or x.transparent != y.transparent
+            ):
+                return False
+    return True
+
+
+def _positions(scope: Scope) -> dict[int, tuple[Segment, int]]:
+    """Entry index -> (segment, position in it) for the items of a planned scope."""
+    out: dict[int, tuple[Segment, int]] = {}
+    parts = iter(scope.parts or [])
+    segment: Segment | None = None
+    position = 0
+    for i, entry in enumerate(scope.entries):
+        if isinstance(entry, Scope):
+            segment = None
+            continue
+        if segment is None or position == len(segment.items):
+            part = next(parts)
+            while isinstance(part, Scope):
+                part = next(parts)
+            segment, position = part, 0
+        out[i] = (segment, position)
+        position += 1
+    return out
+
+
+def _select_from_source(batch: Batch) -> None:
+    """Make a filtered batch follow the batch its items come from (their slots), when they all come from one."""
+    first = batch.items[0].slot
+    if first is None or any(it.slot is None or it.slot[0] is not first[0] for it in batch.items):
+        return  # not from one planned batch: made again when the scope is
+    source = first[0]
+    if batch.items[0].instances is not None:
+        batch.picks = None  # an instance set: all its rows
+    else:
+        batch.picks = np.fromiter((it.slot[1] for it in batch.items), np.int64, len(batch.items))
+    batch.source = source
+    batch.source_version = source.version
+
+
+def _replace_in_views(scope: Scope, source: Batch, index: int, item: DrawItem) -> None:
+    """``item`` replaced row ``index`` of ``source``: put it into the scope's filtered batches that select it."""
+    for batches in scope.filtered.values():
+        for group in batches.values():
+            for batch in group:
+                if batch.source is not source or batch.picks is None:
+                    continue
+                j = int(np.searchsorted(batch.picks, index))
+                if j < len(batch.picks) and batch.picks[j] == index:
+                    batch.items[j] = item
+
+
+def _release_filtered(scope: Scope) -> None:
+    for batches in scope.filtered.values():
+        for group in batches.values():
+            for batch in group:
+                batch.release()
+    scope.filtered = {}
