@@ -117,8 +117,8 @@ def test_a_spliced_batch_uploads_only_the_rows_that_changed(monkeypatch):
 
 def derived_from_scratch(engine) -> tuple:
     from omnirender.gl.engine.drawlist import world_bounds
-    from omnirender.gl.techniques.mirrors import mirror_items
     from omnirender.gl.engine.state import casts_shadows
+    from omnirender.gl.techniques.mirrors import mirror_items
 
     items = engine.root_scope.all_items()
     bounds = world_bounds([it for it in items if not it.state.overlay])
@@ -211,3 +211,42 @@ def test_adding_and_removing_plain_children_keeps_the_root_declarations_without_
     assert len(scene.declarations().lights) == len(before.lights) + 1
     scene.remove(lamp)
     assert len(scene.declarations().lights) == len(before.lights)
+
+
+@pytest.mark.parametrize("with_colors", [True, False])
+def test_instance_positions_alone_are_written_in_place_and_colours_converted_once(with_colors, monkeypatch):
+    from omnirender.gl import GLEngine
+    from omnirender.gl.engine import instancing
+
+    n = 300
+    rng = np.random.default_rng(3)
+    positions = rng.uniform(-4, 4, (n, 3))
+    colors = np.concatenate([rng.uniform(0.2, 1.0, (n, 3)), np.ones((n, 1))], axis=1) if with_colors else None
+    balls = om.InstanceSet(om.Box(size=0.3), positions, colors=colors)
+    scene = om.Node("scene", [om.Camera.look_at((0, 6, 14), (0, 0, 0), fov=45)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    scene.add(om.Node("set", [om.Translation(0.5, 0.0, 0.0), balls]))
+    made: list[int] = []
+    original = instancing.instance_rows
+
+    def counting(*args, **kwargs):
+        made.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(instancing, "instance_rows", counting)
+    monkeypatch.setattr("omnirender.gl.engine.dynamic.instance_rows", counting)
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene)
+        for step in range(3):
+            positions[:, 1] += 0.2
+            positions[step, 0] = -3.0
+            balls.touch()
+            made.clear()
+            image = e.render(scene)
+            assert e.stats["compiled"] is False and not made  # rows not made again: translations written
+            assert np.array_equal(image.array, fresh(scene, True))
+        if with_colors:
+            colors[:10, :3] = (1.0, 0.0, 0.0)  # colours changed: the rows are made again, once
+            balls.touch()
+            image = e.render(scene)
+            assert made and np.array_equal(image.array, fresh(scene, True))

@@ -130,6 +130,15 @@ class _NodeEntry:
         self.entries = entries
 
 
+def _colors_copy(source: Any) -> np.ndarray | None:
+    """A copy of an instance set's colours as the application holds them (None without colours)."""
+    colors = getattr(source, "colors", None)
+    if colors is None:
+        return None
+    array = getattr(colors, "array", None)
+    return np.array(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+
+
 class _Bail(Exception):
     """A subtree compile met what it does not handle: the full compile runs instead."""
 
@@ -640,6 +649,7 @@ class DrawListCompiler:
         item.instance_models = made.models
         item.source = source
         item.template = template
+        item.source_colors = _colors_copy(source)
         self._scope.entries.append(item)
         return item
 

@@ -115,6 +115,7 @@ class DrawItem:
         "instance_models",
         "source",
         "template",
+        "source_colors",
     )
 
     def __init__(
@@ -151,6 +152,9 @@ class DrawItem:
         #: for an instance set: the InstanceSet and the item of its shape that each instance repeats
         self.source: Any = None
         self.template: DrawItem | None = None
+        #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
+        #: only positions changed writes the translations and keeps the converted colours
+        self.source_colors: np.ndarray | None = None
 
     def rows(self) -> np.ndarray:
         """The rows this item draws: its instances', or its own as a (1, stride) array."""

@@ -27,6 +27,7 @@ from .layout import ROW
 __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
+_TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 
 
 class MovePlan:
@@ -276,6 +277,10 @@ class TransformUpdater:
             items = plan.sources.get(id(shape))
             if not items:
                 return None
+            positions = _positions_only(shape, items)
+            if positions is not None:
+                out.extend((item, positions) for item in items)
+                continue
             matrices, colors, may_mirror = set_arrays(shape)
             for item in items:
                 template = item.template
@@ -314,8 +319,59 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
-def _install_rows(item: Any, made: InstanceRows) -> None:
-    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed)."""
+def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
+    """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
+
+    That is: positions, no scales, no visibility mask, the same count and the
+    same colours as the items' rows were made from (colours are compared, so
+    their conversion to linear is done once, not every frame).  Positions that
+    are not finite take the full path, which names the instance.
+    """
+    if shape.scales is not None or shape.visible is not None:
+        return None
+    source = shape.transforms
+    array = getattr(source, "array", None)
+    t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
+    t = np.asarray(t, dtype=np.float64)
+    if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
+        return None
+    colors = shape.colors
+    if colors is not None:
+        array = getattr(colors, "array", None)
+        colors = np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+    for item in items:
+        if item.instances is None or len(item.instances) != len(t):
+            return None
+        before = item.source_colors
+        if (before is None) != (colors is None) or (before is not None and not np.array_equal(before, colors)):
+            return None
+    return t
+
+
+def _write_positions(item: Any, positions: np.ndarray) -> None:
+    """Write the translations of an instance set's rows (the chain, then the position, then the shape's local)."""
+    local = item.template.local
+    offset = positions if local is None else positions + local[:3, 3]
+    model = _chain_matrix(item.chain)
+    world = offset @ model[:3, :3].T + model[:3, 3]
+    item.instance_models[:, :3, 3] = offset
+    item.instances[:, _TRANSLATION] = world
+    if item.slot is not None:
+        batch, _ = item.slot
+        if batch.rows is not item.instances:
+            batch.rows[:, _TRANSLATION] = world
+        batch.changed(0, len(batch.rows))
+
+
+def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
+    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
+
+    An array instead: only the instance positions changed (:func:`_positions_only`).
+    """
+    if isinstance(made, np.ndarray):
+        _write_positions(item, made)
+        return
+    item.source_colors = _colors_of(item.source)
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:
@@ -329,3 +385,11 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
         batch.changed(0, len(made.rows))
     else:
         batch.version += 1
+
+
+def _colors_of(source: Any) -> np.ndarray | None:
+    colors = getattr(source, "colors", None)
+    if colors is None:
+        return None
+    array = getattr(colors, "array", None)
+    return np.array(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
