@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from itertools import chain
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
@@ -239,13 +241,16 @@ class Translation(Transform):
         out = np.zeros((len(transforms), 4, 4))
         out[:, _DIAGONAL, _DIAGONAL] = 1.0
         if transforms:
-            out[:, :3, 3] = [t._offset for t in transforms]  # type: ignore[attr-defined]
+            n = len(transforms)
+            flat = chain.from_iterable(map(_OFFSET, transforms))  # C-level loops: no Python step per transform
+            out[:, :3, 3] = np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
         return out
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}
 
 
+_OFFSET = attrgetter("_offset")
 _set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
 _set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]
 

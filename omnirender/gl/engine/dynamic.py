@@ -15,6 +15,7 @@ changed rows as one range (or all of them when most changed).  Anything else
 
 from __future__ import annotations
 
+from itertools import compress, repeat
 from typing import Any
 
 import numpy as np
@@ -151,16 +152,18 @@ class MovePlan:
 
     def apply(self, changed: list[Any]) -> int:
         """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count."""
-        index = self.index
         self.moved_rows = []
-        moved = [(k, t) for t in changed if (k := index.get(id(t))) is not None]
-        if not moved:
+        # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
+        found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
+        keep = found >= 0
+        if not keep.any():
             return 0
-        positions = [k for k, _ in moved]
-        for cls, members in _by_class(positions, [t for _, t in moved]).items():
+        positions = found[keep]
+        moved = changed if keep.all() else list(compress(changed, keep.tolist()))
+        for cls, members in _by_class(positions.tolist(), moved).items():
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
-        count = self._apply_items(np.array(positions, np.intp))
-        return count + self._apply_instances(set(positions))
+        count = self._apply_items(positions)
+        return count + self._apply_instances(set(positions.tolist()))
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -220,6 +223,9 @@ class MovePlan:
 
 def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
     """Positions grouped by the class of the transform at the same place in ``transforms``."""
+    classes = list(map(type, transforms))
+    if classes and classes.count(classes[0]) == len(classes):  # one class, the common case: no loop
+        return {classes[0]: list(positions)}
     out: dict[type, list[int]] = {}
     for k, t in zip(positions, transforms, strict=True):
         cls = t.__class__
@@ -250,15 +256,19 @@ class TransformUpdater:
         """
         if not changed:
             return None
-        moved: list[Any] = []
-        sets: list[Any] = []
-        for c in changed:
-            if isinstance(c, Transform) and c.static:
-                moved.append(c)
-            elif isinstance(c, InstanceSet):
-                sets.append(c)
-            else:
-                return None
+        classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
+        if all(issubclass(cls, Transform) and cls.static for cls in classes):
+            moved, sets = changed, []
+        else:
+            moved = []
+            sets = []
+            for c in changed:
+                if isinstance(c, Transform) and c.static:
+                    moved.append(c)
+                elif isinstance(c, InstanceSet):
+                    sets.append(c)
+                else:
+                    return None
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
