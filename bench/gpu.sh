@@ -45,14 +45,14 @@ run() {
     echo "=== $*"
     timeout 150 "$PY" "$@" || { echo "gpu.sh: '$*' failed or ran past 150 s (exit $?)"; failed=$((failed + 1)); }
 }
-run bench/frame_cost.py --quick
+run bench/frame_cost.py --quick --timer wall
 run bench/dynamic.py --quick
 run bench/gl_objects.py --quick
 run bench/shadows.py --frames 6
 run bench/deferred.py --frames 3
 run bench/postfx.py --frames 3
 if "$PY" -c "import sys; sys.exit(0)" && ls /usr/lib/*/dri/swrast_dri.so /usr/lib/*/libgallium* >/dev/null 2>&1; then
-    run bench/frame_cost.py --cpu --quick
+    run bench/frame_cost.py --cpu --quick --timer wall
 else
     echo; echo "=== bench/frame_cost.py --cpu skipped: Mesa (the no-op driver) is not installed"
 fi
