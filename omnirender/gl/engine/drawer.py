@@ -499,6 +499,10 @@ class BatchDrawer:
         """Transient instance buffers held now (for leak checks)."""
         return len(self._transient)
 
+    def texture_count(self) -> int:
+        """GL textures of ``om.Texture`` attributes held now (for leak checks)."""
+        return len(self._textures)
+
     def release(self) -> None:
         for buf, vao, *_ in self._transient.values():
             vao.release()

@@ -52,9 +52,7 @@ class FrameTargets:
             size = (max(1, round(base[0] * description.scale)), max(1, round(base[1] * description.scale)))
         return description, size
 
-    def get(
-        self, description: Target, enclosing: tuple[int, int], size: tuple[int, int] | None = None
-    ) -> RenderTarget:
+    def get(self, description: Target, enclosing: tuple[int, int], size: tuple[int, int] | None = None) -> RenderTarget:
         """The GPU target of ``description`` (made or kept), named in this frame."""
         key = self.key(description, enclosing, size)
         size = key[1]
