@@ -33,10 +33,12 @@ import numpy as np
 from ..engine.attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
 from ..engine.context import clear_stencil_bits, frame_has_stencil, sample_positions, set_masks, sharing_depth
 from ..engine.drawlist import DrawItem
+from ..engine.glenum import GL_DEPTH_CLAMP, GL_SAMPLE_MASK, GL_SAMPLES
 from ..engine.layout import ROW
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.state import FillMode, MirrorState
 from ..engine.technique import GLTechnique
+from ..engine.units import MATERIAL_TABLE
 from ..techniques.forward import Forward
 from ..techniques.shadows import ATLAS
 from .glsl import (
@@ -55,17 +57,15 @@ from .proxies import ATTRIBUTES, FULLSCREEN, STRIDE, LightTable, proxy_meshes
 
 __all__ = ["Deferred", "DeferredRenderer", "in_gbuffer", "TABLE_UNIT"]
 
-#: Texture unit of the material table in the geometry pass (units 0-7 materials, 8 shadows, 9+ pass inputs).
-TABLE_UNIT = 15
+#: Texture unit of the material table in the geometry pass (the table of units: ``engine/units.py``).
+TABLE_UNIT = MATERIAL_TABLE
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _SHADED_KINDS = ("mesh", "points")
 #: GL state kinds an item may set and still go through the G-buffer (the rest keep it in the forward passes).
 _REJECTING = (Blend, ColorMask, DepthMask, DepthTest, StencilTest, StencilOp)
-_GL_SAMPLES = 0x80A9
 #: Stencil bits the pipeline marks in the frame for the lighting and shading passes (cleared after shading):
 #: where the G-buffer's surface is the one seen, and pixels whose samples are lit one by one (edges).
 _WON, _EDGE = 0x40, 0x80
-_GL_DEPTH_CLAMP = 0x864F
 
 
 def _inline(technique: Any) -> bool:
@@ -446,7 +446,7 @@ class DeferredRenderer:
         ctx.blend_equation = ctx.FUNC_ADD
         ctx.cull_face = "front"  # back faces: one fragment per pixel, also with the camera inside the proxy
         ctx.depth_func = ">="  # the proxy's back face behind the surface: the surface may be inside
-        ctx.enable_direct(_GL_DEPTH_CLAMP)
+        ctx.enable_direct(GL_DEPTH_CLAMP)
         defines = self._frame_defines(engine)
         plan = engine.frame_shadows
         if plan is not None:
@@ -470,7 +470,7 @@ class DeferredRenderer:
                 calls += 1
                 lights += len(rows)
         finally:
-            ctx.disable_direct(_GL_DEPTH_CLAMP)
+            ctx.disable_direct(GL_DEPTH_CLAMP)
             engine.reset_gl_state()
         engine.count(calls, lights)
         self.stats["lights"] = lights
@@ -643,7 +643,6 @@ class DeferredRenderer:
         self._programs.clear()
 
 
-_GL_SAMPLE_MASK = 0x8E51
 #: The per-pixel centre depth and edge flag of a multisampled G-buffer, and the lights of its edge samples.
 _PIXELS = Target("deferred.pixels", colors=("pixel",), formats=("rg32f",), depth=True, relative="enclosing")
 _LIGHTS = "deferred.lights"
@@ -652,12 +651,12 @@ _LIGHTS = "deferred.lights"
 def _mask_sample(engine: Any, prog: Any, k: int | None) -> None:
     """Let only sample ``k`` be written and tell ``prog`` which sample it reads (None: one draw, every sample)."""
     if k is None:
-        engine.ctx.disable_direct(_GL_SAMPLE_MASK)
+        engine.ctx.disable_direct(GL_SAMPLE_MASK)
         u = prog.get("u_sample", None)
         if u is not None:
             u.value = 0
         return
-    engine.ctx.enable_direct(_GL_SAMPLE_MASK)
+    engine.ctx.enable_direct(GL_SAMPLE_MASK)
     engine.raw.glSampleMaski(0, 1 << k)
     prog["u_sample"].value = k
 
@@ -668,5 +667,5 @@ def current_samples(engine: Any) -> int:
     if not raw.available:
         return 0
     value = ctypes.c_int(0)
-    raw.glGetIntegerv(_GL_SAMPLES, ctypes.byref(value))
+    raw.glGetIntegerv(GL_SAMPLES, ctypes.byref(value))
     return int(value.value) if value.value > 1 else 0

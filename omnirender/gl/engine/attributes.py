@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...core.component import MonoAttribute
+from .glenum import GL_DEPTH_CLAMP
 from .state import GLCalls, StateKind, register_kind
 
 __all__ = [
@@ -414,9 +415,6 @@ class DepthClamp(_Switch, GLState):
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
         if value:
-            gl.ctx.enable_direct(_GL_DEPTH_CLAMP)
+            gl.ctx.enable_direct(GL_DEPTH_CLAMP)
         else:
-            gl.ctx.disable_direct(_GL_DEPTH_CLAMP)
-
-
-_GL_DEPTH_CLAMP = 0x864F
+            gl.ctx.disable_direct(GL_DEPTH_CLAMP)

@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from ..techniques.shadows import ATLAS, SHADOW_UNIT
 from .attributes import Blend, CullFace, DepthMask
 from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, uniform_material
 from .frame_state import FrameState
 from .geometry import Geometry
+from .glenum import GL_CLIP_DISTANCE0, GL_RGBA8, GL_SRGB8_ALPHA8, GL_TRIANGLES_ADJACENCY
 from .layout import ROW
 from .lighting import LightUniforms
 from .passes import Composed
@@ -37,12 +37,12 @@ from .resources import gpu_call
 from .shaders import instance_fields
 from .state import LineWidth, ShadowingState, defaults
 from .targets import FrameTargets
+from .units import PASS_INPUTS
 
 __all__ = ["BatchDrawer", "SORT_MIN", "PASS_INPUT_UNIT"]
 
-_GL_CLIP_DISTANCE0 = 0x3000
-#: First texture unit of a pass's Shader inputs (after the shadow atlas; units below are the materials').
-PASS_INPUT_UNIT = SHADOW_UNIT + 1
+#: First texture unit of a pass's Shader inputs (the table of units: :mod:`.units`).
+PASS_INPUT_UNIT = PASS_INPUTS
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
@@ -51,9 +51,6 @@ _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _OVER = ("src_alpha", "one_minus_src_alpha", "add")
 _MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
                       ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
-_GL_SRGB8_ALPHA8 = 0x8C43
-_TRIANGLES_ADJACENCY = 0x000C
-_GL_RGBA8 = 0x8058
 
 
 class BatchDrawer:
@@ -225,7 +222,7 @@ class BatchDrawer:
         self._set_uniforms(prog, state, composed)
         if batch.uniform:
             self._set_material(prog, batch.rows[0])
-        vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
+        vao.render(GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
         self.report.count(1, n)
         return 1
 
@@ -306,7 +303,8 @@ class BatchDrawer:
         lights = self._lights_for(state.switch)
         lights.apply(prog)
         if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
-            self.state.shadow_plan.apply(prog, self.targets.named(ATLAS).depth, lights.order)
+            plan = self.state.shadow_plan
+            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -341,17 +339,21 @@ class BatchDrawer:
                     u.value = value
         inputs = composed.inputs()
         if inputs:
-            for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
-                u = prog.get(uniform, None)
-                if u is not None:
-                    if isinstance(source, tuple):
-                        name, attachment = source
-                        target = self.targets.named(name)
-                        texture = target.depth if attachment == "depth" else target.texture(attachment)
-                    else:
-                        texture = self.texture(source)  # an om.Texture of the pass
-                    texture.use(unit)
-                    u.value = unit
+            self._bind_inputs(prog, inputs)
+
+    def _bind_inputs(self, prog: Any, inputs: dict[str, Any]) -> None:
+        """Bind a pass's Shader inputs (targets of the frame by name, or textures) from :data:`PASS_INPUT_UNIT`."""
+        for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
+            u = prog.get(uniform, None)
+            if u is not None:
+                if isinstance(source, tuple):
+                    name, attachment = source
+                    target = self.targets.named(name)
+                    texture = target.depth if attachment == "depth" else target.texture(attachment)
+                else:
+                    texture = self.texture(source)  # an om.Texture of the pass
+                texture.use(unit)
+                u.value = unit
 
     def _apply_raster(self, raster: tuple, state: DrawState) -> None:
         self.state.applier.apply(raster)
@@ -359,9 +361,9 @@ class BatchDrawer:
         if self.nclip != nclip:
             for i in range(6):
                 if i < nclip:
-                    self.ctx.enable_direct(_GL_CLIP_DISTANCE0 + i)
+                    self.ctx.enable_direct(GL_CLIP_DISTANCE0 + i)
                 else:
-                    self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
+                    self.ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
             self.nclip = nclip
 
     def texture(self, attr: Any, srgb: bool = True) -> Any:
@@ -378,7 +380,7 @@ class BatchDrawer:
         h, w = img.shape[:2]
         # GL_SRGB8_ALPHA8: texture images are display (sRGB) values; the GPU decodes them before filtering
         # and mipmapping, so minified and magnified textures average light, not encoded values
-        internal = _GL_SRGB8_ALPHA8 if srgb else _GL_RGBA8
+        internal = GL_SRGB8_ALPHA8 if srgb else GL_RGBA8
         tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=internal, what="a texture")
         if attr.mipmap:
             tex.build_mipmaps()
@@ -492,7 +494,7 @@ class BatchDrawer:
     def disable_clip_planes(self) -> None:
         """State preservation: no clip distance stays enabled after a frame."""
         for i in range(self.nclip):
-            self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
+            self.ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
         self.nclip = 0
 
     def live_buffers(self) -> int:

@@ -39,6 +39,7 @@ from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawer import BatchDrawer
 from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
+from .glenum import GL_SCISSOR_TEST
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target
 from .report import PassRecord, PassReport
@@ -47,8 +48,6 @@ from .state import GLCalls, RasterApplier, defaults
 from .targets import FrameTargets
 
 __all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
-
-_GL_SCISSOR_TEST = 0x0C11
 
 
 class FrameRunner:
@@ -321,7 +320,7 @@ class FrameRunner:
         source = self.current_framebuffer
         size = tuple(source.size)
         target = self.targets.get(description, self.state.target_size, size)
-        self.ctx.disable_direct(_GL_SCISSOR_TEST)
+        self.ctx.disable_direct(GL_SCISSOR_TEST)
         blit(self.raw, source, target.fbo, size, bool(description.colors), description.depth)
         self.state.applier.forget()
         return target

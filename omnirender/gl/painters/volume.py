@@ -26,13 +26,13 @@ from ...core.handler import ShapePainter, default_for
 from ...shapes import Volume
 from ..engine.context import set_masks
 from ..engine.geometry import Geometry, unit_mesh
+from ..engine.glenum import GL_DEPTH_CLAMP
 from ..engine.layout import ROW
 from ..engine.passes import Target
 from ..glengine import GLEngine
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
 
-_GL_DEPTH_CLAMP = 0x864F
 #: Where the depth drawn before the volumes is copied (a frame target: made once, kept while volumes are drawn).
 _DRAWN_DEPTH = Target("gl.volume.drawn-depth", colors=(), depth=True)
 
@@ -185,7 +185,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     # back faces: they exist also when the camera is inside the box (front faces are then behind the near
     # plane); depth clamping keeps back faces beyond the far plane from being clipped away
     ctx.cull_face = "front"
-    ctx.enable_direct(_GL_DEPTH_CLAMP)
+    ctx.enable_direct(GL_DEPTH_CLAMP)
     ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
     set_masks(ctx, engine.raw, engine.current_framebuffer, depth=True)
     view, proj = engine.frame_view, engine.frame_projection
@@ -232,7 +232,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         vao.release()
         calls += 1
     ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-    ctx.disable_direct(_GL_DEPTH_CLAMP)
+    ctx.disable_direct(GL_DEPTH_CLAMP)
     ctx.cull_face = "back"
     return calls
 
