@@ -586,7 +586,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     # -- drawing (the frame runner and the drawer do it) ------------------------------------------
     @classmethod
     def register_drawer(cls, kind: str, drawer: Any) -> None:
-        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes)."""
+        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes).
+
+        A drawer sets the GL state it needs with :meth:`apply_gl_state`; one that makes GL state calls of its
+        own calls :meth:`forget_gl_state` after them."""
         cls._default_drawers[kind] = drawer
 
     def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
@@ -635,6 +638,12 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     def forget_gl_state(self) -> None:
         """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
         self.frame_runner.forget_gl_state()
+
+    def apply_gl_state(self, *states: Any) -> None:
+        """Set GL state from a drawer: ``engine.apply_gl_state(om.gl.DepthTest(False), om.gl.Blend())`` makes
+        those states current through the engine's state applier (which then knows what GL holds: nothing
+        needs resetting afterwards).  Other states stay as the pass set them."""
+        self.frame_runner.apply_gl_state(*states)
 
     def reset_gl_state(self) -> None:
         """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),

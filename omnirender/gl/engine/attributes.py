@@ -156,6 +156,7 @@ class DepthMask(_Switch, GLState):
 
     __slots__ = ("enabled",)
     default = True
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
@@ -260,6 +261,7 @@ class ColorMask(GLState):
 
     __slots__ = ("red", "green", "blue", "alpha")
     default = (True, True, True, True)
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     def __init__(self, red: bool = True, green: bool = True, blue: bool = True, alpha: bool = True) -> None:
         super().__init__()
@@ -340,6 +342,7 @@ class ScissorTest(GLState):
 
     __slots__ = ("enabled", "box")
     default = None
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     def __init__(self, box: tuple[int, int, int, int] = (0, 0, 1, 1), enabled: bool = True) -> None:
         super().__init__()

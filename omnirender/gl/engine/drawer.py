@@ -26,7 +26,7 @@ from .attributes import Blend, CullFace, DepthMask
 from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, uniform_material
 from .frame_state import FrameState
 from .geometry import Geometry
-from .glenum import GL_CLIP_DISTANCE0, GL_RGBA8, GL_SRGB8_ALPHA8, GL_TRIANGLES_ADJACENCY
+from .glenum import GL_RGBA8, GL_SRGB8_ALPHA8, GL_TRIANGLES_ADJACENCY
 from .layout import ROW
 from .lighting import LightUniforms
 from .passes import Composed
@@ -69,8 +69,6 @@ class BatchDrawer:
         self.report = report
         #: drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind
         self.drawers = drawers
-        #: clip distances enabled now
-        self.nclip = 0
         self._transient: dict[Any, tuple[Any, ...]] = {}
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
@@ -109,7 +107,6 @@ class BatchDrawer:
                     drawer = self.drawers.get(it.state.kind)
                     if drawer is not None:
                         made = drawer(self.engine, [it], it.state)
-                        self.state.applier.forget()
                         self.report.count(made, 1)
                         calls += made
         return calls
@@ -144,7 +141,6 @@ class BatchDrawer:
         drawer = self.drawers.get(state.kind)
         if drawer is not None:
             calls = drawer(self.engine, batch.items, state)
-            self.state.applier.forget()
             self.report.count(calls, len(batch.items))
             return calls
         n = len(batch.rows)
@@ -356,15 +352,9 @@ class BatchDrawer:
                 u.value = unit
 
     def _apply_raster(self, raster: tuple, state: DrawState) -> None:
-        self.state.applier.apply(raster)
-        nclip = len(state.clip)
-        if self.nclip != nclip:
-            for i in range(6):
-                if i < nclip:
-                    self.ctx.enable_direct(GL_CLIP_DISTANCE0 + i)
-                else:
-                    self.ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
-            self.nclip = nclip
+        applier = self.state.applier
+        applier.apply(raster)
+        applier.clip_planes(len(state.clip))
 
     def texture(self, attr: Any, srgb: bool = True) -> Any:
         """The GL texture of an ``om.Texture``: sRGB colour data, or linear data (normal, roughness maps)."""
@@ -427,7 +417,6 @@ class BatchDrawer:
             drawer = self.drawers.get(state.kind)
             if drawer is not None:
                 made = drawer(self.engine, [items[i] for i in indices], state)
-                self.state.applier.forget()
                 self.report.count(made, len(indices))
                 calls += made
                 continue
@@ -490,12 +479,6 @@ class BatchDrawer:
             live = {(id(t), srgb) for it in items for _, t, srgb in it.state.textures}
             for key in [k for k in self._textures if k not in live]:
                 self._textures.pop(key)[2].release()
-
-    def disable_clip_planes(self) -> None:
-        """State preservation: no clip distance stays enabled after a frame."""
-        for i in range(self.nclip):
-            self.ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
-        self.nclip = 0
 
     def live_buffers(self) -> int:
         """Transient instance buffers held now (for leak checks)."""

@@ -15,6 +15,7 @@ import numpy as np
 
 from ...core.handler import ShapePainter, default_for
 from ...shapes import Text
+from ..engine.attributes import Blend, DepthTest
 from ..engine.geometry import Geometry
 from ..engine.layout import ROW
 from ..glengine import GLEngine
@@ -148,10 +149,7 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     atlases = engine.__dict__.setdefault("_atlases", {})
     w, h = engine.target_size
     calls = 0
-    ctx.disable(ctx.DEPTH_TEST)
-    ctx.enable(ctx.BLEND)
-    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-    engine.forget_gl_state()
+    engine.apply_gl_state(DepthTest(False), Blend())  # over everything, blended "over"
     clip = engine.frame_projection @ engine.frame_view
     for item in items:
         string, size = item.state.extra
@@ -188,8 +186,6 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
         vao.release()
         vbo.release()
         calls += 1
-    ctx.enable(ctx.DEPTH_TEST)
-    ctx.disable(ctx.BLEND)
     return calls
 
 
