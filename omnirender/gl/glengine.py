@@ -645,9 +645,21 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         needs resetting afterwards).  Other states stay as the pass set them."""
         self.frame_runner.apply_gl_state(*states)
 
+    def default_gl_state(self) -> None:
+        """Put every GL state kind at its default through the engine's state applier (no blending, culling,
+        stencil, scissor, wireframe, offset); with :meth:`apply_gl_state` after it, a drawer or a custom pass
+        sets exactly the state it needs and the engine keeps knowing what GL holds."""
+        self.frame_runner.default_gl_state()
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """From a custom pass: draw into ``framebuffer`` (a moderngl framebuffer of ``size`` pixels) through the
+        engine's state applier (moderngl's ``use()`` resets masks and scissor behind the engine's back)."""
+        self.frame_runner.bind_framebuffer(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
-        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        for code that then sets the few states it needs with raw GL calls; the next draw applies its state in
+        full.  (Engine code uses :meth:`default_gl_state` and :meth:`apply_gl_state` instead.)"""
         self.frame_runner.reset_gl_state()
 
     @property

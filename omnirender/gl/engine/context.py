@@ -372,6 +372,14 @@ def clear_stencil_bits(raw: RawGL, bits: int) -> None:
         raw._mask(0xFF)
 
 
+def clear_stencil_value(raw: RawGL, value: int = 0) -> None:
+    """Clear the stencil buffer of the bound framebuffer to ``value`` under the state set now (write mask, scissor:
+    the caller sets them through the state applier)."""
+    if raw.available:
+        raw.glClearStencil(int(value))
+        raw.glClear(GL_STENCIL_BUFFER_BIT)
+
+
 def clear_depth(raw: RawGL, value: float = 1.0) -> None:
     """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off)."""
     raw.glDisable(GL_SCISSOR_TEST)

@@ -112,6 +112,14 @@ class FrameRunner:
             values[type(state).index] = state.capture()
         self.state.applier.override(values)
 
+    def default_gl_state(self) -> None:
+        """Every GL state kind at its default, through the applier."""
+        self.state.applier.apply(defaults())
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """Draw into ``framebuffer`` (of ``size``) until the pass binds another, through the applier."""
+        self.state.applier.bind(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Every GL state kind at its default; the next draw applies its state in full."""
         applier = self.state.applier

@@ -9,6 +9,7 @@ default font when DejaVu is missing) and kept for the engine's life.
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
@@ -140,13 +141,17 @@ class TextPainter(ShapePainter):
         engine.submit(geom, kind="text", extra=(shape.string, float(shape.size)), transparent=False)
 
 
+#: glyph atlases by engine and text size (they go with their engine)
+_ATLASES: weakref.WeakKeyDictionary[Any, dict[int, Any]] = weakref.WeakKeyDictionary()
+
+
 def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     """The drawer for ``"text"`` items: project anchors, build glyph quads, draw without depth test."""
     ctx = engine.ctx
     if not engine.programs.registered("text"):
         engine.programs.register("text", _VS, _FS)
     prog = engine.programs.get("text")
-    atlases = engine.__dict__.setdefault("_atlases", {})
+    atlases = _ATLASES.setdefault(engine, {})
     w, h = engine.target_size
     calls = 0
     engine.apply_gl_state(DepthTest(False), Blend())  # over everything, blended "over"
