@@ -651,6 +651,11 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         sets exactly the state it needs and the engine keeps knowing what GL holds."""
         self.frame_runner.default_gl_state()
 
+    def sample_mask(self, sample: int | None) -> None:
+        """From a custom pass: the draws that follow write only sample ``sample`` of a multisampled target
+        (``None``: every sample again), through the engine's state applier."""
+        self.frame_runner.sample_mask(sample)
+
     def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
         """From a custom pass: draw into ``framebuffer`` (a moderngl framebuffer of ``size`` pixels) through the
         engine's state applier (moderngl's ``use()`` resets masks and scissor behind the engine's back)."""

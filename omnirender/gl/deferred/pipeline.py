@@ -43,7 +43,7 @@ from ..engine.attributes import (
 )
 from ..engine.context import clear_stencil_value, frame_has_stencil, sample_positions, sharing_depth
 from ..engine.drawlist import DrawItem
-from ..engine.glenum import GL_SAMPLE_MASK, GL_SAMPLES
+from ..engine.glenum import GL_SAMPLES
 from ..engine.layout import ROW
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.state import FillMode, MirrorState
@@ -645,14 +645,12 @@ _LIGHTS = "deferred.lights"
 
 def _mask_sample(engine: Any, prog: Any, k: int | None) -> None:
     """Let only sample ``k`` be written and tell ``prog`` which sample it reads (None: one draw, every sample)."""
+    engine.sample_mask(k)
     if k is None:
-        engine.ctx.disable_direct(GL_SAMPLE_MASK)
         u = prog.get("u_sample", None)
         if u is not None:
             u.value = 0
         return
-    engine.ctx.enable_direct(GL_SAMPLE_MASK)
-    engine.raw.glSampleMaski(0, 1 << k)
     prog["u_sample"].value = k
 
 

@@ -116,6 +116,10 @@ class FrameRunner:
         """Every GL state kind at its default, through the applier."""
         self.state.applier.apply(defaults())
 
+    def sample_mask(self, sample: int | None) -> None:
+        """Draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        self.state.applier.sample_mask(sample)
+
     def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
         """Draw into ``framebuffer`` (of ``size``) until the pass binds another, through the applier."""
         self.state.applier.bind(framebuffer, size)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Hashable
 from typing import Any
 
-from .glenum import GL_CLIP_DISTANCE0
+from .glenum import GL_CLIP_DISTANCE0, GL_SAMPLE_MASK
 
 __all__ = [
     "StateKind",
@@ -195,7 +195,7 @@ class RasterApplier:
     :meth:`forget`: the next :meth:`apply` then sets every kind.
     """
 
-    __slots__ = ("current", "gl", "clip_count", "face")
+    __slots__ = ("current", "gl", "clip_count", "face", "samples")
 
     def __init__(self, gl: GLCalls) -> None:
         self.gl = gl
@@ -204,6 +204,8 @@ class RasterApplier:
         self.clip_count = 0
         #: the front face winding ("ccw" or "cw")
         self.face = "ccw"
+        #: the one sample a multisampled draw writes (GL_SAMPLE_MASK), or None: every sample
+        self.samples: int | None = None
 
     def apply(self, raster: tuple[Any, ...]) -> None:
         current = self.current
@@ -276,18 +278,32 @@ class RasterApplier:
         ctx = self.gl.ctx
         ctx.enable(ctx.PROGRAM_POINT_SIZE)
 
+    def sample_mask(self, sample: int | None) -> None:
+        """Let draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        if sample == self.samples:
+            return
+        ctx = self.gl.ctx
+        if sample is None:
+            ctx.disable_direct(GL_SAMPLE_MASK)
+        else:
+            ctx.enable_direct(GL_SAMPLE_MASK)
+            self.gl.raw.glSampleMaski(0, 1 << sample)
+        self.samples = sample
+
     def forget(self) -> None:
         """Code outside the engine may have changed any GL state (a custom pass, a drawer of its own kind):
         apply every state next time."""
         self.current = None
         self.clip_count = -1
         self.face = ""
+        self.samples = -1
 
     def restore_defaults(self) -> None:
         """State preservation: every state back to its default (what a plain moderngl user expects)."""
         self.apply(defaults())
         self.clip_planes(0)
         self.front_face("ccw")
+        self.sample_mask(None)
 
 
 def defaults() -> tuple[Any, ...]:
