@@ -53,9 +53,12 @@ def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3) -> Nod
 def _gltf_scene(path: str | os.PathLike[str]) -> Node | None:
     """A glTF file with a camera as ``om.load_gltf`` reads it: its camera, its lights (default lights placed
     for its camera when it has none); None when it has no camera (then it is framed like any mesh)."""
-    from ..animation.gltf import load_gltf  # lazily: the importer builds nodes and attributes
     from ..attributes.lights import default_lights
+    from .readers import scene_reader
 
+    load_gltf = scene_reader(path)  # the registered glTF importer (formats/ registers it)
+    if load_gltf is None:
+        return None
     scene = load_gltf(path, animation=None)
     declared = scene.declarations()
     if declared.camera is None:
