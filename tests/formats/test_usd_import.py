@@ -149,13 +149,13 @@ def test_ngons_are_fan_triangulated_and_primvars_of_every_interpolation_are_read
 
 def test_left_handed_meshes_are_wound_the_other_way(tmp_path):
     stage = _new(tmp_path)
-    right = _quad(stage, "/R")
+    _quad(stage, "/R")
     left = _quad(stage, "/L")
     left.GetOrientationAttr().Set("leftHanded")
     root = om.load_usd(_save(stage))
-    (r,) = [c for c in root["/R"].components if isinstance(c, om.TriangleSet)]
-    (l,) = [c for c in root["/L"].components if isinstance(c, om.TriangleSet)]
-    assert np.allclose(r.index_array()[:, [0, 2, 1]], l.index_array())
+    (rh,) = [c for c in root["/R"].components if isinstance(c, om.TriangleSet)]
+    (lh,) = [c for c in root["/L"].components if isinstance(c, om.TriangleSet)]
+    assert np.allclose(rh.index_array()[:, [0, 2, 1]], lh.index_array())
 
 
 def test_subdivision_surfaces_are_drawn_as_their_cage_with_one_warning(tmp_path):
