@@ -232,6 +232,15 @@ def pipeline_images() -> None:
     print("wrote", HERE / "stereo_demo.png")
 
 
+def usd_images() -> None:
+    """Example 19: a USD stage in the four engines."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "19_usd.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "19-usd.png", HERE / "example_19-usd.png")
+        print("wrote", HERE / "example_19-usd.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -242,6 +251,7 @@ SECTIONS = {
     "postfx": postfx_images,
     "deferred": deferred_images,
     "pipelines": pipeline_images,
+    "usd": usd_images,
 }
 
 if __name__ == "__main__":

@@ -451,3 +451,24 @@ def test_the_command_line_renders_a_stage(tmp_path):
     with warnings.catch_warnings():
         img = np.asarray(__import__("PIL.Image", fromlist=["Image"]).open(out))
     assert img.shape[:2] == (60, 80) and img[..., :3].std() > 10
+
+
+def test_a_point_instancer_draws_as_one_instanced_batch(tmp_path):
+    require("gl")
+    from omnirender.gl import GLEngine
+
+    calls = []
+    for count in (10, 2000):
+        stage = _new(tmp_path, f"crowd{count}.usda")
+        instancer = UsdGeom.PointInstancer.Define(stage, "/Crowd")
+        proto = UsdGeom.Sphere.Define(stage, "/Crowd/Prototypes/Ball")
+        instancer.CreatePrototypesRel().SetTargets([proto.GetPath()])
+        instancer.CreateProtoIndicesAttr([0] * count)
+        instancer.CreatePositionsAttr([(3.0 * (i % 50), 0, 3.0 * (i // 50)) for i in range(count)])
+        engine = GLEngine(size=(64, 48), samples=0, shadows=False)
+        try:
+            engine.render(om.load_usd(_save(stage)), read_depth=False)
+            calls.append(engine.stats["draw_calls"])
+        finally:
+            engine.release()
+    assert calls[0] == calls[1], calls

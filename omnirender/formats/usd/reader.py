@@ -192,6 +192,7 @@ class _StageReader:
         self.prototypes: dict[str, Node] = {}
         self.subdivided: list[str] = []
         self.cameras = 0
+        self.uv_names: list[str] = ["st"]
 
     def warn(self, message: str) -> None:
         warnings.warn(f"load_usd {self.name}: {message}", stacklevel=4)
@@ -397,25 +398,41 @@ class _StageReader:
         prim = mesh.GetPrim()
         where = str(prim.GetPath())
         points = np.asarray(mesh.GetPointsAttr().Get(self.time) or [], np.float32).reshape(-1, 3)
-        counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], np.int64)
-        fvi = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], np.int64)
+        counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], np.int32)
+        fvi = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], np.int32)
         if len(points) == 0 or len(counts) == 0:
             return []
-        if counts.sum() != len(fvi) or (counts < 0).any():
+        if counts.sum(dtype=np.int64) != len(fvi) or counts.min() < 0:
             raise USDImportError(f"load_usd {self.name}: {where}: faceVertexCounts do not add up to the indices")
         if len(fvi) and (fvi.min() < 0 or fvi.max() >= len(points)):
             raise USDImportError(f"load_usd {self.name}: {where}: a face vertex index is out of range")
         scheme = str(mesh.GetSubdivisionSchemeAttr().Get())
         if scheme not in ("none", "bilinear"):
             self.subdivided.append(where)
-        corners, faces = triangulate(counts)
-        if str(mesh.GetOrientationAttr().Get()) == "leftHanded":
-            corners = corners[:, [0, 2, 1]]
-        tri_points = fvi[corners]  # (T, 3) point indices
-        primvars = self.mesh_primvars(mesh, counts, fvi, faces)
+        left = str(mesh.GetOrientationAttr().Get()) == "leftHanded"
+        k = int(counts[0])
+        cached: dict[str, np.ndarray] = {}
+
+        def fan() -> tuple[np.ndarray, np.ndarray]:
+            """(T, 3) face-vertex corners and (T,) face of each triangle (computed when needed)."""
+            if "corners" not in cached:
+                corners, cached["faces"] = triangulate(counts)
+                cached["corners"] = corners[:, [0, 2, 1]] if left else corners
+            return cached["corners"], cached["faces"]
+
+        if k in (3, 4) and counts.min() == counts.max():  # one gather from the (F, k) index table
+            order = [0, 1, 2] if k == 3 else [0, 1, 2, 0, 2, 3]
+            if left:
+                order = [0, 2, 1] if k == 3 else [0, 2, 1, 0, 3, 2]
+            tri_points = fvi.reshape(-1, k)[:, order].reshape(-1, 3)
+        else:
+            tri_points = fvi[fan()[0]]  # (T, 3) point indices
+        self.uv_names = self.materials.uv_names(prim)
+        primvars = self.mesh_primvars(mesh, counts, fvi, len(points))
         display = self.display(mesh)
         per_corner = any(interp in ("faceVarying", "uniform") for interp, _ in primvars.values())
         if per_corner:  # unweld: one vertex per triangle corner
+            corners, faces = fan()
             flat_corners = corners.reshape(-1)
             vertices = points[tri_points.reshape(-1)]
             indices = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
@@ -431,10 +448,11 @@ class _StageReader:
                 return np.broadcast_to(values[0], (len(vertices), values.shape[1]))
 
         else:
-            used = np.unique(tri_points)
-            if len(used) < len(points):  # points no face uses would only inflate the bounds
-                remap = np.full(len(points), -1, np.int64)
-                remap[used] = np.arange(len(used))
+            mask = np.zeros(len(points), bool)
+            mask[tri_points.reshape(-1)] = True
+            if not mask.all():  # points no face uses would only inflate the bounds
+                used = np.flatnonzero(mask)
+                remap = np.cumsum(mask) - 1
                 vertices, indices = points[used], remap[tri_points]
             else:
                 used, vertices, indices = None, points, tri_points
@@ -450,10 +468,11 @@ class _StageReader:
             n = spread(interp, values).astype(np.float32)
             if str(mesh.GetOrientationAttr().Get()) == "leftHanded":
                 n = -n
-            length = np.linalg.norm(n, axis=1, keepdims=True)
-            arrays["normals"] = np.where(length > 0.0, n / np.maximum(length, 1e-30), n)
-        uv_names = self.materials.uv_names(prim)
-        for uv_name in uv_names:
+            if len(n) and np.einsum("ij,ij->i", n, n).min() < 1e-24:  # TriangleSet refuses zero-length normals
+                self.warn(f"{where}: some normals have zero length; smooth normals are computed instead")
+            else:
+                arrays["normals"] = n  # normalised by TriangleSet
+        for uv_name in self.uv_names:
             if uv_name in primvars:
                 interp, values = primvars[uv_name]
                 arrays["texcoords"] = spread(interp, values).astype(np.float32)
@@ -470,6 +489,7 @@ class _StageReader:
         triangles: list[tuple[Any, np.ndarray]] = []  # (material prim or None, triangle rows)
         subsets = self.UsdGeom.Subset.GetGeomSubsets(mesh, "face", "materialBind")
         if subsets:
+            faces = fan()[1]
             taken = np.zeros(len(counts), bool)
             for subset in subsets:
                 ids = np.asarray(subset.GetIndicesAttr().Get(self.time) or [], np.int64)
@@ -505,21 +525,17 @@ class _StageReader:
         return out
 
     def mesh_primvars(
-        self, mesh: Any, counts: np.ndarray, fvi: np.ndarray, faces: np.ndarray
+        self, mesh: Any, counts: np.ndarray, fvi: np.ndarray, n_points: int
     ) -> dict[str, tuple[str, np.ndarray]]:
         """name -> (interpolation, flattened values (K, C)) of the primvars omnirender draws."""
         api = self.UsdGeom.PrimvarsAPI(mesh.GetPrim())
         wanted = {"displayColor": 3, "displayOpacity": 1}
-        for uv_name in self.materials.uv_names(mesh.GetPrim()):
+        for uv_name in self.uv_names:
             wanted[uv_name] = 2
         sizes = {"constant": 1, "uniform": len(counts), "faceVarying": len(fvi)}
-        n_points = None
         out: dict[str, tuple[str, np.ndarray]] = {}
 
         def accept(name: str, interp: str, values: np.ndarray) -> None:
-            nonlocal n_points
-            if n_points is None:
-                n_points = len(mesh.GetPointsAttr().Get(self.time) or [])
             expected = sizes.get(interp, n_points)
             if len(values) < expected:
                 self.warn(f"{mesh.GetPath()}: primvar {name} has {len(values)} values, {interp} needs {expected}")
@@ -533,7 +549,7 @@ class _StageReader:
             raw = pv.Get(self.time)
             if raw is None:
                 continue
-            values = np.asarray(raw, np.float64).reshape(-1, width)
+            values = np.asarray(raw, np.float32).reshape(-1, width)
             idx = pv.GetIndices(self.time)
             if idx is not None and len(idx):
                 idx = np.asarray(idx, np.int64)
@@ -544,13 +560,13 @@ class _StageReader:
             accept(name, str(pv.GetInterpolation()), values)
         pv = api.GetPrimvar("normals")
         if pv and pv.HasAuthoredValue():
-            values = np.asarray(pv.ComputeFlattened(self.time), np.float64).reshape(-1, 3)
+            values = np.asarray(pv.ComputeFlattened(self.time), np.float32).reshape(-1, 3)
             accept("normals", str(pv.GetInterpolation()), values)
         else:
             attr = mesh.GetNormalsAttr()
             raw = attr.Get(self.time) if attr.HasAuthoredValue() else None
             if raw is not None and len(raw):
-                accept("normals", str(mesh.GetNormalsInterpolation()), np.asarray(raw, np.float64).reshape(-1, 3))
+                accept("normals", str(mesh.GetNormalsInterpolation()), np.asarray(raw, np.float32).reshape(-1, 3))
         return out
 
     # -- points, curves, instancers ----------------------------------------------------
@@ -708,6 +724,13 @@ def triangulate(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Faces with fewer than 3 vertices give no triangle.  Vectorised: no loop over faces.
     """
     counts = np.asarray(counts, np.int64)
+    n = len(counts)
+    if n and counts.min() == counts.max() and counts[0] in (3, 4):  # all triangles or all quads: no searching
+        if counts[0] == 3:
+            return np.arange(3 * n, dtype=np.int64).reshape(n, 3), np.arange(n, dtype=np.int64)
+        first = np.arange(0, 4 * n, 4, dtype=np.int64)[:, None]
+        corners = (first + np.array([0, 1, 2, 0, 2, 3], np.int64)).reshape(-1, 3)
+        return corners, np.repeat(np.arange(n, dtype=np.int64), 2)
     n_tris = np.maximum(counts - 2, 0)
     starts = np.cumsum(counts) - counts
     faces = np.repeat(np.arange(len(counts)), n_tris)

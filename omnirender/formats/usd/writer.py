@@ -167,7 +167,9 @@ class USDEngine(NodeTrackingEngine):
         prim = self.define(self.UsdGeom.Xform, node.name, np.linalg.solve(parent_world, world), node.name)
         path = self.last_path
         if prim is not None and node.groups:
-            prim.GetPrim().SetCustomDataByKey("omnirender:groups", sorted(node.groups))
+            from pxr import Vt
+
+            prim.GetPrim().SetCustomDataByKey("omnirender:groups", Vt.StringArray(sorted(node.groups)))
         self._stack.append((path, np.array(world)))
 
     def leave_node(self, node: Any) -> None:
