@@ -126,3 +126,24 @@ def test_export_refuses_an_unknown_suffix_and_writes_atomically(tmp_path):
     path = om.export(om.Node("s", [om.Sphere()]), tmp_path / "x.usda")
     assert [p.name for p in tmp_path.iterdir()] == ["x.usda"]  # no temporary files left
     assert "def Sphere" in path.read_text()
+
+
+def test_without_omnirender_attributes_the_plain_usd_mapping_looks_alike(tmp_path):
+    """What another USD tool sees (UsdPreviewSurface, physical UsdLux units) reads back close to the original."""
+    require("gl")
+    from omnirender.colorimetry import cielab, delta_e2000
+
+    scene = demo_scene()
+    path = om.export(scene, tmp_path / "plain.usda")
+    stage = Usd.Stage.Open(str(path))
+    for prim in stage.Traverse():
+        for attr in prim.GetAttributes():
+            if attr.GetName().startswith("omnirender:"):
+                prim.RemoveProperty(attr.GetName())
+    stage.GetRootLayer().Save()
+    a = om.render(scene, engine="gl", size=SIZE)
+    b = om.render(om.load_usd(path), engine="gl", size=SIZE)
+    assert float(np.mean(a.mask == b.mask)) >= 0.98
+    both = a.mask & b.mask
+    de = delta_e2000(cielab(a.rgb[both].astype(np.float64)), cielab(b.rgb[both].astype(np.float64)))
+    assert float(np.median(de)) <= 8.0, f"median CIEDE2000 {np.median(de):.1f}"

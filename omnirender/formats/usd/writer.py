@@ -405,10 +405,11 @@ class USDEngine(NodeTrackingEngine):
                 prim.CreateTreatAsPointAttr(True)
                 prim.CreateRadiusAttr(0.0)
                 position = light.world_position(world)
-                # normalised point light: radiant intensity L / 4 = pi * omnirender's intensity (GL's attenuation
-                # matched by the inverse square at the camera's centre of interest, as the glTF export does)
+                # normalised point light of radiance L: radiant intensity L / 4, which intensity_scale gives per
+                # unit of omnirender's intensity (GL's attenuation matched by the inverse square at the camera's
+                # centre of interest, as the glTF export does)
                 physical = intensity_scale(light, position, self.reference_point())
-                intensity = float(light.intensity) * physical * 4.0 * math.pi
+                intensity = float(light.intensity) * physical * 4.0
                 prim.CreateNormalizeAttr(True)
                 if isinstance(light, SpotLight):
                     matrix = _frame(light.world_direction(world), position)
