@@ -110,10 +110,11 @@ def _load(path: str, trusted: bool = False, size: tuple[int, int] = (4, 3)) -> A
         raise UsageError(f"scene file not found: {path}")
     if not p.is_file():
         raise UsageError(f"{path} is a folder, not a scene file")
-    if suffix in USD_SUFFIXES:  # a stage has its own cameras and lights (om.render fits a camera when it has none)
+    if suffix in USD_SUFFIXES:  # a whole stage: its cameras and lights, framed like a mesh when it has none
         from .formats.usd import load_usd
+        from .scene.mesh_scene import framed
 
-        return load_usd(p, trusted=trusted)
+        return framed(load_usd(p, trusted=trusted), aspect=size[0] / size[1])
     if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
