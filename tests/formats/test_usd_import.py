@@ -415,6 +415,11 @@ def test_mesh_file_reads_usd_files_and_packages(tmp_path):
     assert UsdUtils.CreateNewUsdzPackage(str(tmp_path / "m.usdc"), str(tmp_path / "m.usdz"))
     lo, hi = om.bounds(om.Node("m", [om.MeshFile(tmp_path / "m.usdz")]))
     assert np.allclose(lo, (-1, -1, 0)) and np.allclose(hi, (1, 1, 0))
+    gprims = _new(tmp_path, "g.usda")  # spheres, cubes... are tessellated into the mesh's parts
+    UsdGeom.Sphere.Define(gprims, "/Ball").AddTranslateOp().Set(Gf.Vec3d(0, 5, 0))
+    UsdGeom.Cube.Define(gprims, "/Box")
+    lo, hi = om.bounds(om.Node("m", [om.MeshFile(_save(gprims))]))
+    assert np.allclose(lo, (-1, -1, -1), atol=0.02) and np.allclose(hi, (1, 6, 1), atol=0.02)
 
 
 def test_load_usd_takes_a_stage_and_refuses_bad_input(tmp_path):

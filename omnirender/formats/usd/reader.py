@@ -40,7 +40,7 @@ import numpy as np
 
 from ...animation.animation import Animation
 from ...animation.tracks import Keyframes
-from ...attributes import PBRMaterial
+from ...attributes import Color, Material, PBRMaterial, Texture
 from ...attributes.photometry import linear_to_srgb
 from ...core.transform import Matrix, Rotation, Scaling, Translation
 from ...geometry.trs import decompose_trs
@@ -109,24 +109,30 @@ def load_usd(
 
 def flatten_usd(path: str | os.PathLike[str]) -> list[tuple[list[Any], TriangleSet]]:
     """The triangle sets of a stage in world coordinates with their attributes: what ``om.MeshFile`` reads."""
+    from ...core import SIMPLIFY, Engine, Shape
     from ...core.transform import Transform
 
     root = load_usd(path, animation=False)
     out: list[tuple[list[Any], Any]] = []
+    engine = Engine()  # its simplifiers turn spheres, boxes... into triangle sets
 
-    def walk(node: Node, matrix: np.ndarray, attrs: list[Any]) -> None:
+    def walk(items: list[Any], matrix: np.ndarray, attrs: list[Any]) -> None:
         attrs = list(attrs)
-        for item in node.items:
+        for item in items:
             if isinstance(item, Transform):
                 matrix = matrix @ item.matrix
             elif isinstance(item, Node):
-                walk(item, matrix, attrs)
+                walk(list(item.items), matrix, attrs)
             elif isinstance(item, TriangleSet):
                 out.append((list(attrs), item.transformed(matrix)))
-            elif isinstance(item, PBRMaterial):
+            elif isinstance(item, (PBRMaterial, Material, Color, Texture)):
                 attrs.append(item)
+            elif isinstance(item, Shape) and not isinstance(item, (LineSet, PointSet, InstanceSet)):
+                simplifier = engine.find_handler(SIMPLIFY, type(item))
+                if simplifier is not None:
+                    walk(list(simplifier.exec(item, engine)), matrix, attrs)
 
-    walk(root, np.eye(4), [])
+    walk([root], np.eye(4), [])
     return out
 
 
