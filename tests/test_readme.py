@@ -113,3 +113,10 @@ def test_render_threads_example_runs(tmp_path, monkeypatch):
     clients = namespace["clients"]
     assert all(c.error is None and c.frames >= 1 for c in clients)
     assert all(c.last.frame == 10 for c in clients)  # both drew the last snapshot before they stopped
+
+
+def test_usd_example_runs(tmp_path, monkeypatch):
+    pytest.importorskip("pxr")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("### OpenUSD stages"), "README.md", "exec"), {})
+    assert "def Sphere" in (tmp_path / "ball.usda").read_text()
