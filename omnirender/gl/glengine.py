@@ -56,10 +56,14 @@ from .engine.renderer import BatchRenderer
 from .engine.report import PassReport
 from .engine.resources import gpu_call
 from .engine.shaders import ProgramCache
+from .engine.stages import FrameStage, PipelinesStage, StageList, TechniqueStage
 from .engine.state import defaults, kinds
 from .engine.targets import FrameTargets
 from .engine.technique import GLTechnique
 from .techniques.forward import Forward
+from .techniques.mirrors import MirrorStage
+from .techniques.shadows import ShadowMapStage
+from .techniques.stereo import StereoStage
 
 __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
 
@@ -218,7 +222,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
         self.pass_report = PassReport(self.ctx)
         self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
-        self.frame_runner = FrameRunner(self, self.frame_state, self.drawer, self.frame_targets, self.pass_report)
+        stages = StageList([PipelinesStage(), ShadowMapStage(), TechniqueStage(), MirrorStage(), StereoStage()])
+        self.frame_runner = FrameRunner(
+            self, self.frame_state, self.drawer, self.frame_targets, self.pass_report, stages
+        )
 
     def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
         """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
@@ -596,6 +603,22 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         override = None if camera is None else _camera(camera, "GLEngine.draw")
         with self.current():
             self.frame_runner.draw(background, clear, override, framebuffer)
+
+    @property
+    def stages(self) -> StageList:
+        """The stages every frame runs, in order (``engine.stages.names()``: pipelines, shadow maps,
+        technique, mirrors, stereo); see :mod:`~.engine.stages`."""
+        return self.frame_runner.stages
+
+    def add_stage(self, stage: FrameStage, *, before: str | None = None, after: str | None = None) -> None:
+        """Run ``stage`` (an :class:`om.gl.FrameStage`) in every frame, before or after the stage named so
+        (last without either): a technique of the application's joins the frame without editing it."""
+        self.frame_runner.stages.add(stage, before=before, after=after)
+        stage.changed()
+
+    def remove_stage(self, stage: FrameStage | str) -> FrameStage:
+        """Take ``stage`` (or the stage of that name) out of every frame; returns it."""
+        return self.frame_runner.stages.remove(stage)
 
     def set_pass(self, description: Pass) -> None:
         """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""

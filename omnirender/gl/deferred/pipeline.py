@@ -112,20 +112,31 @@ class Deferred(GLTechnique):
     """
 
     __slots__ = ("light_format",)
-    PASS_NAMES = ("geometry", "lighting", "shading", "opaque", "transparent", "transparent depth", "overlay")
+    #: The passes of a deferred frame, in order, as data (like ``Forward.PASSES``): the G-buffer, lighting,
+    #: shading and forward-opaque passes are described per frame by the :class:`DeferredRenderer` method
+    #: named here (they depend on the frame's buffer layout and samples), the rest are ``Forward``'s passes
+    #: for what the G-buffer does not hold.
+    PASSES: tuple[tuple[str, str | Pass], ...] = (
+        ("geometry", "geometry_pass"),
+        ("lighting", "lighting_pass"),
+        ("shading", "shading_pass"),
+        ("opaque", "forward_opaque_pass"),
+        *((p.name, p) for p in Forward.PASSES[1:]),
+    )
+    PASS_NAMES = tuple(name for name, _ in PASSES)
 
     def __init__(self, light_format: str = "f2") -> None:
-        super().__init__(passes=len(self.PASS_NAMES))
+        super().__init__(passes=len(self.PASSES))
         if light_format not in LIGHT_FORMATS:
             raise ValueError(f"Deferred: light_format must be one of {LIGHT_FORMATS}, got {light_format!r}")
         #: the L-buffer's texel format: "f2" (half floats) or "r11g11b10f" (compact: 16 bytes per Phong pixel)
         self.light_format = light_format
 
+    def start(self, engine: Any) -> None:
+        DeferredRenderer.of(engine).begin(engine, self)
+
     def prepare_pass(self, engine: Any) -> None:
-        renderer = DeferredRenderer.of(engine)
-        if engine.current_pass == 0:
-            renderer.update(engine, self)
-        engine.set_pass(renderer.describe_pass(self, engine, engine.current_pass))
+        engine.set_pass(DeferredRenderer.of(engine).describe_pass(self, engine, engine.current_pass))
 
 
 class DeferredRenderer:
@@ -202,48 +213,60 @@ class DeferredRenderer:
         self._fog_uniforms = {"u_fogs": tuple(table.ravel().tolist()), "u_fog_colors": tuple(colors.ravel().tolist())}
         self._passes.clear()
 
+    def begin(self, engine: Any, technique: Deferred) -> None:
+        """A run of ``technique`` starts: the frame's models and fogs, each new model compiled once, the
+        material table bound for the geometry pass."""
+        self.update(engine, technique)
+        self._check_models(engine)
+        engine.material_table.texture(engine.ctx).use(TABLE_UNIT)
+
     def describe_pass(self, technique: Deferred, engine: Any, index: int) -> Pass:
-        """The description of pass ``index`` of ``technique`` in this frame."""
+        """The description of pass ``index`` of ``technique`` in this frame (``Deferred.PASSES[index]``)."""
         frame_level = len(engine.technique_frames) == 1
-        if index == 0:
-            self._check_models(engine)
-            engine.material_table.texture(engine.ctx).use(TABLE_UNIT)
         samples = current_samples(engine)
         key = (index, samples, frame_level)
         found = self._passes.get(key)
         if found is not None:
             return found
-        all_in, others = self._summary if frame_level else (False, True)
-        name = Deferred.PASS_NAMES[index]
-        layout = self.layout
-        assert layout is not None
-        if index == 0:
-            shader = Shader(
-                surface=surface_snippet(layout),
-                vertex=vertex_snippet(layout),
-                uniforms={**self._fog_uniforms, "u_materials": TABLE_UNIT},
-            )
-            made = Pass(
-                name,
-                items="opaque",
-                select=None if all_in else in_gbuffer,
-                scopes="items",
-                target=layout.target(samples),
-                clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0),
-                shader=shader,
-            )
-        elif index == 1:
-            made = Pass(name, items="none", scopes=False, custom=self.lighting)
-        elif index == 2:
-            made = Pass(name, items="none", scopes=False, custom=self.shading)
-        elif index == 3:
-            made = (
-                Pass(name, items="opaque", select=forward_drawn) if others else Pass(name, items="none", scopes=False)
-            )
+        name, how = technique.PASSES[index]
+        if isinstance(how, Pass):
+            made = how
         else:
-            made = Forward.PASSES[index - 3]
+            all_in, others = self._summary if frame_level else (False, True)
+            made = getattr(self, how)(name, samples, all_in, others)
         self._passes[key] = made
         return made
+
+    def geometry_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The G-buffer pass: the opaque items the G-buffer holds (every item below, nested scopes' too)."""
+        layout = self.layout
+        assert layout is not None
+        shader = Shader(
+            surface=surface_snippet(layout),
+            vertex=vertex_snippet(layout),
+            uniforms={**self._fog_uniforms, "u_materials": TABLE_UNIT},
+        )
+        return Pass(
+            name,
+            items="opaque",
+            select=None if all_in else in_gbuffer,
+            scopes="items",
+            target=layout.target(samples),
+            clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0),
+            shader=shader,
+        )
+
+    def lighting_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The light proxies into the L-buffer (:meth:`lighting`)."""
+        return Pass(name, items="none", scopes=False, custom=self.lighting)
+
+    def shading_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The full-screen shading of the G- and L-buffers into the frame (:meth:`shading`)."""
+        return Pass(name, items="none", scopes=False, custom=self.shading)
+
+    def forward_opaque_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The opaque items the G-buffer does not hold, drawn forward (nothing when it holds them all)."""
+        return Pass(name, items="opaque", select=forward_drawn) if others else Pass(name, items="none", scopes=False)
 
     def _check_models(self, engine: Any) -> None:
         """Compile each new model's stages once, before any frame uses them: errors name model, stage and line."""

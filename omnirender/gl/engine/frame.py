@@ -31,13 +31,10 @@ in every call).
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
 
-from ..techniques.mirrors import Mirrors, mirror_items
-from ..techniques.shadows import ShadowPlan, caster_bounds, frame_settings
 from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawer import BatchDrawer
 from .drawlist import Scope
@@ -45,6 +42,7 @@ from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target
 from .report import PassRecord, PassReport
+from .stages import StageList
 from .state import GLCalls, RasterApplier, defaults
 from .targets import FrameTargets
 
@@ -54,11 +52,17 @@ _GL_SCISSOR_TEST = 0x0C11
 
 
 class FrameRunner:
-    """Runs a frame: the stages before the frame technique, the techniques' passes over the compiled scopes
-    (nested ones included), the stages after it; binds targets, clears, draws full-screen passes."""
+    """Runs a frame: its stages (:mod:`.stages`) in order, each running techniques' passes over the compiled
+    scopes (nested techniques included); binds targets, clears, draws full-screen passes."""
 
     def __init__(
-        self, engine: Any, state: FrameState, drawer: BatchDrawer, targets: FrameTargets, report: PassReport
+        self,
+        engine: Any,
+        state: FrameState,
+        drawer: BatchDrawer,
+        targets: FrameTargets,
+        report: PassReport,
+        stages: StageList,
     ) -> None:
         #: the engine facade: techniques get it in every call; only its public API is used here
         self.engine = engine
@@ -69,17 +73,15 @@ class FrameRunner:
         self.targets = targets
         self.report = report
         self.fullscreen_programs = FullScreenPrograms(self.ctx)
+        #: the frame's stages, in order
+        self.stages = stages
         self._requests: list[Any] = []
-        self._shadow_cache: Any = None
-        self._shadow_drawn: Any = None
-        self._caster_bounds: Any = None
-        self._mirrors: Any = None
-        self._warned_mirrors = False
 
     def placements_changed(self) -> None:
-        """Items moved or the draw list changed: shadow casters' bounds and mirror planes are found again."""
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
-        self._mirrors = None  # mirror planes follow their transforms
+        """Items moved or the draw list changed: every stage forgets what it derived from placements
+        (shadow casters' bounds, mirror planes)."""
+        for stage in self.stages:
+            stage.changed()
 
     # -- what techniques call (through the engine) -----------------------------------
     def set_pass(self, description: Pass) -> None:
@@ -113,7 +115,9 @@ class FrameRunner:
     def draw(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
         """Draw the installed scopes into ``framebuffer`` (else the engine's): every stage and technique pass."""
         engine, ctx, state = self.engine, self.ctx, self.state
-        engine.prepare_pipelines()  # render textures first: their engines use the context
+        stages = tuple(self.stages)
+        for stage in stages:
+            stage.prepare(engine)  # e.g. render textures first: their engines use the context
         fbo = engine.framebuffer if framebuffer is None else framebuffer
         size = tuple(engine.size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
@@ -141,22 +145,10 @@ class FrameRunner:
         root = installed if installed is not None else Scope()
         state.shadow_plan = None
         state.drawing = True
+        calls = 0
         try:
-            calls = self._shadow_map_passes(root, installed is not None)
-            stereo = engine.stereo
-            if stereo is None:
-                technique, scope = engine.frame_technique, root
-                whole = root.entries[0] if len(root.entries) == 1 else None
-                if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
-                    technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
-                calls += self.run(technique, scope, Composed(), item_level=True)
-                calls += self._mirror_passes(root, installed is not None)
-            else:  # each eye's pass draws the scene through the engine's technique
-                calls += self.run(stereo, root, Composed(), item_level=False)
-                if installed is not None and not self._warned_mirrors and mirror_items(root.all_items()):
-                    self._warned_mirrors = True
-                    warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
-                                  "stage reflects one eye)", stacklevel=4)  # fmt: skip
+            for stage in stages:
+                calls += stage.draw(self, root)
         finally:
             state.drawing = False
             self.report.close()
@@ -174,56 +166,6 @@ class FrameRunner:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
 
-    def _shadow_map_passes(self, root: Scope, installed: bool) -> int:
-        """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
-        engine = self.engine
-        settings = frame_settings(root if installed else None, engine.shadows)
-        if settings is None:
-            return 0
-        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
-        if not lights:
-            return 0
-        if self._caster_bounds is None:
-            self._caster_bounds = (caster_bounds(root),)
-        bounds = self._caster_bounds[0]
-        if bounds is None:
-            return 0
-        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
-               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
-        plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
-        if plan is None:
-            plan = ShadowPlan(settings, lights, bounds)
-            self._shadow_cache = (key, plan, plan.technique())
-        technique = self._shadow_cache[2]
-        if technique is None:
-            return 0
-        self.state.shadow_plan = plan
-        drawn = (key, self._caster_bounds, tuple(engine.size))
-        last = self._shadow_drawn
-        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
-        if fresh and self.targets.keep(plan.target, self.state.target_size):
-            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
-        calls = self.run(technique, root, Composed(), item_level=True)
-        self._shadow_drawn = drawn
-        return calls
-
-    def _mirror_passes(self, root: Scope, installed: bool) -> int:
-        """The mirror stage (:mod:`..techniques.mirrors`) after the frame's technique; returns the draw calls made."""
-        if self._mirrors is None:
-            self._mirrors = mirror_items(root.all_items()) if installed else []
-        if not self._mirrors:
-            return 0
-        engine = self.engine
-        if not engine.has_stencil or engine.pushed_targets:
-            if not self._warned_mirrors:
-                self._warned_mirrors = True
-                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
-                              "surfaces here", stacklevel=5)  # fmt: skip
-            return 0
-        state = self.state
-        technique = Mirrors.plan(self._mirrors, state.view, state.proj, engine.clear_color(state.background))
-        return self.run(technique, root, Composed(), item_level=False)
-
     def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:
         """(camera, view, projection) of a frame: the scene's, or ``override`` (validated ``(view, Camera|proj)``)."""
         if override is None:
@@ -235,8 +177,15 @@ class FrameRunner:
         return proj, view, proj.projection_matrix(size[0] / size[1])
 
     # -- techniques and passes ---------------------------------------------------------------
-    def run(self, technique: Any, scope: Scope, outer: Composed, item_level: bool) -> int:
-        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included)."""
+    def run(self, technique: Any, scope: Scope, outer: Composed | None = None, item_level: bool = True) -> int:
+        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included).
+
+        ``outer`` is the pass the technique runs in (its state, masks and shader features apply to every
+        pass of the technique; none for a stage's own techniques); ``item_level=False`` runs the technique's
+        item passes through the engine's technique (what a nested technique's passes do).
+        """
+        if outer is None:
+            outer = Composed()
         engine = self.engine
         engine.enter_technique(technique)
         calls = 0
@@ -378,6 +327,11 @@ class FrameRunner:
         return target
 
     # -- targets ------------------------------------------------------------------------
+    def keep_target(self, description: Target) -> bool:
+        """Keep the offscreen target of ``description`` from the last frame in this one, unchanged (False when
+        it is gone: draw it again)."""
+        return self.targets.keep(description, self.state.target_size)
+
     def _bind_target(self, description: Target) -> tuple:
         state = self.state
         target = self.targets.get(description, state.target_size)
@@ -527,3 +481,5 @@ class FrameRunner:
 
     def release(self) -> None:
         self.fullscreen_programs.release()
+        for stage in self.stages:
+            stage.release()
