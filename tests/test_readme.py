@@ -131,3 +131,10 @@ def test_frame_stage_example_runs(tmp_path, monkeypatch, capsys):
     plain = om.gl.render(om.Node("scene", [om.PointLight(position=(2, 3, 4)), om.Sphere()]), (160, 120)).array[..., :3]
     assert image[:6, :6, :3].mean() < 0.7 * plain[:6, :6, :3].mean()  # the corners darkened by the stage
     assert abs(image[60, 80, :3].mean() - plain[60, 80, :3].mean()) < 8  # the centre about as it was
+
+
+def test_usd_example_runs(tmp_path, monkeypatch):
+    pytest.importorskip("pxr")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("### OpenUSD stages"), "README.md", "exec"), {})
+    assert "def Sphere" in (tmp_path / "ball.usda").read_text()
