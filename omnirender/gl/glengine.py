@@ -586,7 +586,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     # -- drawing (the frame runner and the drawer do it) ------------------------------------------
     @classmethod
     def register_drawer(cls, kind: str, drawer: Any) -> None:
-        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes)."""
+        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes).
+
+        A drawer sets the GL state it needs with :meth:`apply_gl_state`; one that makes GL state calls of its
+        own calls :meth:`forget_gl_state` after them."""
         cls._default_drawers[kind] = drawer
 
     def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
@@ -636,9 +639,32 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
         self.frame_runner.forget_gl_state()
 
+    def apply_gl_state(self, *states: Any) -> None:
+        """Set GL state from a drawer: ``engine.apply_gl_state(om.gl.DepthTest(False), om.gl.Blend())`` makes
+        those states current through the engine's state applier (which then knows what GL holds: nothing
+        needs resetting afterwards).  Other states stay as the pass set them."""
+        self.frame_runner.apply_gl_state(*states)
+
+    def default_gl_state(self) -> None:
+        """Put every GL state kind at its default through the engine's state applier (no blending, culling,
+        stencil, scissor, wireframe, offset); with :meth:`apply_gl_state` after it, a drawer or a custom pass
+        sets exactly the state it needs and the engine keeps knowing what GL holds."""
+        self.frame_runner.default_gl_state()
+
+    def sample_mask(self, sample: int | None) -> None:
+        """From a custom pass: the draws that follow write only sample ``sample`` of a multisampled target
+        (``None``: every sample again), through the engine's state applier."""
+        self.frame_runner.sample_mask(sample)
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """From a custom pass: draw into ``framebuffer`` (a moderngl framebuffer of ``size`` pixels) through the
+        engine's state applier (moderngl's ``use()`` resets masks and scissor behind the engine's back)."""
+        self.frame_runner.bind_framebuffer(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
-        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        for code that then sets the few states it needs with raw GL calls; the next draw applies its state in
+        full.  (Engine code uses :meth:`default_gl_state` and :meth:`apply_gl_state` instead.)"""
         self.frame_runner.reset_gl_state()
 
     @property

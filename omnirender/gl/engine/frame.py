@@ -35,20 +35,21 @@ from typing import Any
 
 import numpy as np
 
-from .context import GLError, blit, clear_depth, clear_stencil, set_masks
+from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, ScissorTest, StencilOp
+from .context import GLError, blit, clear_depth, clear_stencil
 from .drawer import BatchDrawer
 from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
-from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target
+from .passes import Composed, FullScreen, Pass, Target
 from .report import PassRecord, PassReport
 from .stages import StageList
-from .state import GLCalls, RasterApplier, defaults
+from .state import FillMode, GLCalls, RasterApplier, defaults
 from .targets import FrameTargets
 
 __all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
 
-_GL_SCISSOR_TEST = 0x0C11
+_OVER = ("src_alpha", "one_minus_src_alpha", "add")  # blending of a full-screen pass with blend=True
 
 
 class FrameRunner:
@@ -99,6 +100,30 @@ class FrameRunner:
         """A drawer changed GL state itself: the next draw applies its state in full."""
         self.state.applier.forget()
 
+    def apply_gl_state(self, *states: Any) -> None:
+        """Make the GL state attributes ``states`` (``om.gl.DepthTest(False)``, ``om.gl.Blend()``, ...) current,
+        through the applier (the other states stay as they are)."""
+        values = {}
+        for state in states:
+            if not hasattr(state, "capture") or getattr(type(state), "index", -1) < 0:
+                raise TypeError(
+                    f"GLEngine.apply_gl_state takes GL state attributes (om.gl.Blend(), ...), got {state!r:.60}"
+                )
+            values[type(state).index] = state.capture()
+        self.state.applier.override(values)
+
+    def default_gl_state(self) -> None:
+        """Every GL state kind at its default, through the applier."""
+        self.state.applier.apply(defaults())
+
+    def sample_mask(self, sample: int | None) -> None:
+        """Draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        self.state.applier.sample_mask(sample)
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """Draw into ``framebuffer`` (of ``size``) until the pass binds another, through the applier."""
+        self.state.applier.bind(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Every GL state kind at its default; the next draw applies its state in full."""
         applier = self.state.applier
@@ -121,19 +146,16 @@ class FrameRunner:
         fbo = engine.framebuffer if framebuffer is None else framebuffer
         size = tuple(engine.size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
-        fbo.use()
-        ctx.viewport = (0, 0, *size)
         state.target_size = size
         state.linear_output = False
-        state.applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
-        self.drawer.nclip = 0
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        state.applier = applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
+        applier.begin(fbo, size)
         state.background = background
         if clear:
             fbo.clear(*engine.clear_color(background), depth=1.0)
+            applier.reassert()  # moderngl's clear set the framebuffer's own masks
             if engine.has_stencil and not engine.pushed_targets and framebuffer is None:
-                clear_stencil(self.raw, 0)
-        ctx.enable(ctx.PROGRAM_POINT_SIZE)
+                clear_stencil(self.raw, 0)  # the default stencil write mask (every bit) is set
         camera, view, proj = self._frame_camera(override, size)
         state.camera = camera
         state.set_camera(view, proj, camera.is_orthographic)
@@ -227,7 +249,7 @@ class FrameRunner:
         saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
         saved_camera = None
         if description.front_face != "ccw":
-            self.ctx.front_face = description.front_face
+            state.applier.front_face(description.front_face)
         if description.camera is not None:
             saved_camera = state.camera_state()
             view, proj = description.camera
@@ -256,7 +278,7 @@ class FrameRunner:
             if saved_viewport is not None:
                 self._restore_viewport(saved_viewport)
             if description.front_face != "ccw":
-                self.ctx.front_face = "ccw"
+                state.applier.front_face("ccw")
             if saved_target is not None:
                 self._unbind_target(saved_target)
         return calls
@@ -298,10 +320,10 @@ class FrameRunner:
         try:
             own = custom(self.engine, draw)
         finally:
-            # the code may have changed any GL state and binding: the next draw applies its state in full
+            # the application's code may have changed any GL state and binding: the next draw applies its
+            # state in full (the one place the frame cannot know what GL holds)
             applier.forget()
-            fbo.use()
-            self.ctx.viewport = (0, 0, *size)
+            applier.bind(fbo, size)
         if own is not None and (isinstance(own, bool) or not isinstance(own, int)):
             raise TypeError(f"a custom pass returns the draw calls it made itself (an int) or None, got {own!r:.60}")
         return calls + (own or 0)
@@ -321,9 +343,8 @@ class FrameRunner:
         source = self.current_framebuffer
         size = tuple(source.size)
         target = self.targets.get(description, self.state.target_size, size)
-        self.ctx.disable_direct(_GL_SCISSOR_TEST)
+        self.state.applier.override({ScissorTest.index: None})  # a blit obeys the scissor test
         blit(self.raw, source, target.fbo, size, bool(description.colors), description.depth)
-        self.state.applier.forget()
         return target
 
     # -- targets ------------------------------------------------------------------------
@@ -337,11 +358,7 @@ class FrameRunner:
         target = self.targets.get(description, state.target_size)
         applier = state.applier
         saved = (applier.gl.framebuffer, state.target_size, state.linear_output)
-        applier.forget()
-        target.fbo.use()
-        self.ctx.viewport = (0, 0, *target.size)
-        applier.gl.framebuffer = target.fbo
-        applier.gl.size = target.size
+        applier.bind(target.fbo, target.size)
         state.target_size = target.size
         state.linear_output = description.dtype != "f1"
         return saved
@@ -349,55 +366,47 @@ class FrameRunner:
     def _unbind_target(self, saved: tuple) -> None:
         fbo, size, linear = saved
         state = self.state
-        applier = state.applier
-        applier.forget()
-        fbo.use()
-        self.ctx.viewport = (0, 0, *size)
-        applier.gl.framebuffer = fbo
-        applier.gl.size = size
+        state.applier.bind(fbo, size)
         state.target_size = size
         state.linear_output = linear
 
     def _set_viewport(self, box: tuple[int, int, int, int]) -> tuple:
         """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound target."""
         saved = (self.ctx.viewport, self.state.target_size)
-        self.ctx.viewport = box
+        self.state.applier.viewport(box)
         self.state.target_size = (box[2], box[3])
         return saved
 
     def _restore_viewport(self, saved: tuple) -> None:
-        self.ctx.viewport, self.state.target_size = saved
+        self.state.applier.viewport(saved[0])
+        self.state.target_size = saved[1]
 
     def _clear(self, clear: Any) -> None:
-        ctx = self.ctx
-        fbo = self.state.applier.gl.framebuffer
-        self.state.applier.forget()
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        ctx.scissor = None
+        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit, no scissor)."""
+        applier = self.state.applier
+        fbo = applier.gl.framebuffer
         if clear.color is None and clear.depth is not None and self.raw.available:
             # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
             # clear colour would be lost), so clear only the depth buffer with a raw call
-            fbo.use()
+            applier.override({ScissorTest.index: None, DepthMask.index: True})
             clear_depth(self.raw, float(clear.depth))
-            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self.state.linear_output:
                 from ...attributes.photometry import linear_rgb
 
                 color = (*linear_rgb(color), color[3])
-            if color is None:
-                set_masks(ctx, self.raw, fbo, color=(False, False, False, False))
-                color = (0.0, 0.0, 0.0, 0.0)
-            if clear.depth is None:
-                set_masks(ctx, self.raw, fbo, depth=False)
-                fbo.depth_mask = False  # moderngl applies the framebuffer's own depth mask when it clears
-            fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            writes = color is not None
+            applier.override({ColorMask.index: (writes,) * 4, DepthMask.index: clear.depth is not None,
+                              ScissorTest.index: None})  # fmt: skip
+            fbo.depth_mask = clear.depth is not None  # moderngl applies the framebuffer's own depth mask when it clears
+            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth))
             fbo.depth_mask = True
-            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+            applier.reassert()  # GL holds the masks the applier set again
         if clear.stencil is not None:
+            ops = applier.value(StencilOp)
+            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: None})  # glClear obeys both
             clear_stencil(self.raw, int(clear.stencil))
-            self.state.applier.forget()  # the stencil write mask was reset to clear every bit
 
     # -- image-space passes --------------------------------------------------------------
     def _fullscreen(self, effect: FullScreen, composed: Composed) -> int:
@@ -438,46 +447,30 @@ class FrameRunner:
         if u is not None:
             u.value = tuple(float(v) for v in self.state.target_size)
         # the pass's GL state (a stencil test, a scissor, a colour mask), then what the triangle needs
-        self.state.applier.forget()
-        self.state.applier.apply(composed.raster(defaults(), defaults()))
-        self.state.applier.forget()
-        ctx.disable(ctx.CULL_FACE)
-        ctx.wireframe = False
-        ctx.polygon_offset = (0.0, 0.0)
+        raster = list(composed.raster(defaults(), defaults()))
+        raster[CullFace.index] = "none"
+        raster[FillMode.index] = False
+        raster[PolygonOffset.index] = None
         if effect.depth:
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = DEPTH_FUNCS[effect.depth_test or "always"]
-            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, color=(True, True, True, True), depth=True)
+            raster[DepthTest.index] = effect.depth_test or "always"
+            raster[ColorMask.index] = (True, True, True, True)
+            raster[DepthMask.index] = True
         else:
-            ctx.disable(ctx.DEPTH_TEST)
-            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, depth=False)
-        if effect.blend:
-            ctx.enable(ctx.BLEND)
-            ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
-        else:
-            ctx.disable(ctx.BLEND)
+            raster[DepthTest.index] = None
+            raster[DepthMask.index] = False
+        raster[Blend.index] = _OVER if effect.blend else None
+        applier = self.state.applier
+        applier.apply(tuple(raster))
+        applier.clip_planes(0)  # the triangle's vertex shader writes no clip distance
         vao.render(ctx.TRIANGLES, vertices=3)
-        self.state.applier.forget()
         self.report.count(1, 0)
         return 1
 
     def _restore_defaults(self, fbo: Any = None, size: tuple[int, int] | None = None) -> None:
         """State preservation: leave the context as a plain moderngl user expects it, ``fbo`` bound."""
-        ctx = self.ctx
         applier = self.state.applier
-        applier.apply(defaults())
-        applier.forget()
-        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
-        ctx.wireframe = False
-        ctx.polygon_offset = (0.0, 0.0)
-        ctx.scissor = None
-        fbo = self.engine.framebuffer if fbo is None else fbo
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        self.drawer.disable_clip_planes()
-        fbo.use()
-        ctx.viewport = (0, 0, *(self.engine.size if size is None else size))
+        applier.restore_defaults()
+        applier.bind(self.engine.framebuffer if fbo is None else fbo, self.engine.size if size is None else size)
 
     def release(self) -> None:
         self.fullscreen_programs.release()

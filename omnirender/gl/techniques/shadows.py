@@ -40,13 +40,14 @@ from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from ..engine.stages import FrameStage
 from ..engine.state import casts_shadows
 from ..engine.technique import GLTechnique
+from ..engine.units import SHADOW_ATLAS
 
 __all__ = ["ShadowMaps", "ShadowPlan", "ShadowMapStage", "ATLAS", "SHADOW_UNIT", "caster_bounds"]
 
 #: Name of the frame's shadow-map atlas target.
 ATLAS = "shadow-atlas"
-#: Texture unit of the atlas (units 0-7 are the materials').
-SHADOW_UNIT = 8
+#: Texture unit of the atlas (the table of units: ``engine/units.py``).
+SHADOW_UNIT = SHADOW_ATLAS
 #: Cube faces of a point light: the axis each looks along, and its up vector.
 _CUBE = (
     ((1, 0, 0), (0, -1, 0)),
