@@ -393,30 +393,10 @@ class DrawListCompiler:
 
     def _splice_plan(self, scene: Any, edits: list[Any], changed: list[Any]) -> tuple[list, list] | None:
         """Which nodes to compile again (leaves) and which children to add and remove, or None."""
-        leaves: dict[int, Any] = {}
-        groups: dict[int, list[Any]] = {}
-        loose: list[Any] = []
-        for container, op, item, _ in edits:
-            if op not in ("insert", "remove") or not isinstance(container, Node):
-                return None
-            key = self._key_of(container)
-            if key is None:
-                loose.append(container)
-                continue
-            if isinstance(item, Node):
-                _, _, appended, gone = groups.setdefault(id(container), [container, key, {}, {}])
-                if op == "insert":
-                    if id(item) in gone:
-                        return None  # moved within the list
-                    appended[id(item)] = item
-                elif id(item) in appended:
-                    del appended[id(item)]
-                else:
-                    gone[id(item)] = item
-            else:
-                leaves[id(container)] = container
-        if set(leaves) & set(groups):
+        grouped = self._group_edits(edits)
+        if grouped is None:
             return None
+        leaves, groups, loose = grouped
         added_ids = {i for g in groups.values() for i in g[2]}
         removed_ids = {i for g in groups.values() for i in g[3]}
         for node in loose:  # edited, not compiled: inside a new subtree, or outside the scene
@@ -455,6 +435,34 @@ class DrawListCompiler:
             ordered = [x for x in items[len(items) - len(appended) :]] if appended else []
             group_list.append((node, key, path, ordered, list(gone.values())))
         return leaf_list, group_list
+
+    def _group_edits(self, edits: list[Any]) -> tuple[dict, dict, list] | None:
+        """The edits by node: (nodes whose components changed, compiled nodes whose children came or went (node,
+        key, appended, removed), edited nodes not compiled), or None for an edit the splice does not follow."""
+        leaves: dict[int, Any] = {}
+        groups: dict[int, list[Any]] = {}
+        loose: list[Any] = []
+        for container, op, item, _ in edits:
+            if op not in ("insert", "remove") or not isinstance(container, Node):
+                return None
+            key = self._key_of(container)
+            if key is None:
+                loose.append(container)
+            elif not isinstance(item, Node):
+                leaves[id(container)] = container
+            else:
+                _, _, appended, gone = groups.setdefault(id(container), [container, key, {}, {}])
+                if op == "insert" and id(item) in gone:
+                    return None  # moved within the list
+                if op == "insert":
+                    appended[id(item)] = item
+                elif id(item) in appended:
+                    del appended[id(item)]
+                else:
+                    gone[id(item)] = item
+        if set(leaves) & set(groups):
+            return None
+        return leaves, groups, loose
 
     def _key_of(self, node: Any) -> int | None:
         """The occurrence key of ``node`` in the compiled graph, or None (not compiled, or compiled several times)."""

@@ -277,6 +277,7 @@ class TransformUpdater:
             _install_rows(item, made)
         if updates:
             self.index.moved(None)  # instance rows replaced: every bound again
+            self.frame_runner.placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
@@ -314,6 +315,7 @@ class TransformUpdater:
             # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
             # bounds follow the moved rows; mirror planes are read from the rows every frame
             self.index.moved(plan.moved_rows)
+            self.frame_runner.placements_changed()
         return count
 
     def _refresh_declarations(self, scene: Any) -> None:

@@ -33,6 +33,7 @@ class BatchRenderer:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
         old = self._root
         self.draw_list_version += 1
+        self.frame_runner.placements_changed()  # stages of users may derive things from placements
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             self.index.install(old)
@@ -180,6 +181,7 @@ class BatchRenderer:
         else:
             self._follow_splice(root, ops)
         self.index.spliced(removed, added)
+        self.frame_runner.placements_changed()
         for batch, edits in ops.values():
             self.index.batch_edits(batch, edits)
         version = self.draw_list_version
