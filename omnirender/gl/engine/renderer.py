@@ -182,6 +182,12 @@ class BatchRenderer:
             self._follow_splice(root, ops)
         self.index.spliced(removed, added)
         self.frame_runner.placements_changed()
+        kept = {id(it.geometry) for it in added}
+        if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
+            # what only removed items used is released now (their geometry, textures, transient buffers)
+            parts = [p for scope in root.walk() for p in (scope.parts or []) if isinstance(p, Segment)]
+            self._sweep(root, [b.items[0] for p in parts for b in p.batches if b.items] + [
+                it for p in parts for it in p.others])  # fmt: skip
         for batch, edits in ops.values():
             self.index.batch_edits(batch, edits)
         version = self.draw_list_version
@@ -290,9 +296,13 @@ class BatchRenderer:
                 _release_filtered(a)
         return changed
 
-    def _sweep(self, root: Scope) -> None:
-        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures)."""
-        items = self.index.items()
+    def _sweep(self, root: Scope, items: list[DrawItem] | None = None) -> None:
+        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures).
+
+        ``items``: the items to keep what they use (default: every item; after a splice, one item per batch
+        and the unbatched items, which use the same geometry, states and textures).
+        """
+        items = self.index.items() if items is None else items
         used = {id(it.geometry) for it in items}
         self.drawer.sweep(items)
         self.geometry_cache.sweep(used)
