@@ -29,6 +29,7 @@ __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_EYE3 = np.eye(3)
 
 
 class MovePlan:
@@ -365,7 +366,11 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
     local = item.template.local
     offset = positions if local is None else positions + local[:3, 3]
     model = _chain_matrix(item.chain)
-    world = offset @ model[:3, :3].T + model[:3, 3]
+    if (model[:3, :3] == _EYE3).all():
+        world = offset + model[:3, 3]
+    else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
+        world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
+        world += model[:3, 3]
     item.instance_models[:, :3, 3] = offset
     item.instances[:, _TRANSLATION] = world
     if item.slot is not None:
