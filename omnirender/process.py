@@ -91,7 +91,11 @@ def run_watched(
         proc.wait()
         reader.join(5)
         raise
-    reader.join(5)
+    finally:
+        reader.join(5)
+        if not reader.is_alive():  # the pipe is ours to close (else the reader still holds it)
+            assert stream is not None
+            stream.close()
     if failures:
         raise failures[0]
     return proc.returncode, b"".join(chunks)

@@ -209,7 +209,11 @@ def render(
     """
     entry = _engines.get(engine)
     if entry is None:
-        raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
+        from .options import did_you_mean
+
+        raise ValueError(
+            f"unknown engine {engine!r}; registered engines: {sorted(_engines)}{did_you_mean(engine, _engines)}"
+        )
     size = _check_size(size)
     as_scene = getattr(scene, "as_scene", None)
     if callable(as_scene):  # not a scene graph but drawn by one (a renderer tree)

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from .animation import frame_times
+from .mainguard import check_main_guard
 from .worker import FrameResult, Job, dump_job, install_job, release_all, run_frame
 
 __all__ = ["render_frames", "FrameReport", "FrameFailure", "FramesFailed", "frame_paths", "load_scene"]
@@ -218,6 +219,7 @@ Backend = Any
 def _backend(workers: Any, count: int) -> tuple[Backend, str]:
     if workers is None:
         n = min(os.cpu_count() or 1, count)
+        check_main_guard("om.render_frames (workers=None: one process per core)")
         return _pool(n), f"{n} local processes"
     if isinstance(workers, bool):
         raise TypeError("render_frames: workers must be None, an int, a Dask client or a scheduler address")
@@ -227,6 +229,7 @@ def _backend(workers: Any, count: int) -> tuple[Backend, str]:
         if workers == 0:
             return _here, "this process"
         n = min(workers, count)
+        check_main_guard(f"om.render_frames(workers={workers})")
         return _pool(n), f"{n} local process{'es' if n > 1 else ''}"
     from .dask import dask_backend
 
