@@ -79,7 +79,7 @@ def run_demo(
     scene = demo_scene()
     stats = om.statistics(scene)
     print(f"demo scene: {stats['nodes']} nodes, {stats['shapes']} shapes, {stats['attributes']} attributes", end="")
-    print(f", {stats['triangles']} triangles" if "triangles" in stats else "")
+    print(f", {stats['triangles']} triangles" if "triangles" in stats else "", flush=True)
     written: list[Path] = []
     for name in usable:
         path = output / f"demo-{name}.png"
@@ -89,7 +89,7 @@ def run_demo(
             image = om.render(scene, engine=name, size=size, **options)
             image.save(path)
         except Exception as exc:  # one engine failing must not hide the others' pictures
-            print(f"{name:8s} failed: {' '.join(str(exc).split()) or type(exc).__name__}")
+            print(f"{name:8s} failed: {' '.join(str(exc).split()) or type(exc).__name__}", flush=True)
             continue
         written.append(path)
         note = ""
@@ -97,6 +97,6 @@ def run_demo(
             from .mitsuba.denoise import INSTALL
 
             note = f"; grainy: no denoiser, {INSTALL}"
-        print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s{note})")
+        print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s{note})", flush=True)
     print(f"{len(written)} image(s) in {output.resolve()}")
     return written

@@ -175,3 +175,48 @@ def test_mitsuba_quality_and_denoise_options():
     assert final.info["quality"] == "final" and final.info["max_depth"] == rendering.QUALITY["final"].max_depth
     with pytest.raises(ValueError, match="quality must be one of 'preview', 'final'.*did you mean 'final'"):
         om.render(scene, engine="mitsuba", size=(16, 12), quality="finale")
+
+
+# -- progress: a bar on a terminal, log lines elsewhere ---------------------------------------------------
+def test_progress_logs_lines_when_stderr_is_no_terminal(caplog, monkeypatch):
+    import logging
+
+    from omnirender import progress
+
+    monkeypatch.setattr(progress, "LOG_INTERVAL", 0.0)
+    with caplog.at_level(logging.INFO, logger="omnirender"):
+        with progress.Progress(4, "work", "step") as bar:  # pytest's stderr is no terminal
+            for _ in range(4):
+                bar.advance()
+    lines = [r.getMessage() for r in caplog.records if r.name == "omnirender"]
+    assert lines[0].startswith("work: 1/4 step (25%)") and "left" in lines[0]
+    assert lines[-1].startswith("work: 4/4 step done in")
+
+
+@pytest.mark.gl
+def test_render_frames_reports_progress_in_the_log(caplog, monkeypatch, tmp_path):
+    import logging
+
+    from omnirender import progress
+
+    monkeypatch.setattr(progress, "LOG_INTERVAL", 0.0)
+    scene = om.Node("s", [om.Camera.look_at((0, 0, 5)), om.Sphere()])
+    scene.add(om.Animation(fps=4)).add(om.orbit(scene.components[0], seconds=1))
+    with caplog.at_level(logging.INFO, logger="omnirender"):
+        om.render_frames(scene, range(3), engine="gl", size=(16, 12), out=str(tmp_path / "%03d.png"), workers=0)
+    lines = [r.getMessage() for r in caplog.records if r.name == "omnirender"]
+    assert any(line.startswith("gl frames: 3/3 frame done") for line in lines), lines
+
+
+def test_the_command_shows_progress_lines_on_a_stderr_that_is_no_terminal(tmp_path):
+    code = """
+import logging, sys
+from omnirender.cli import main
+from omnirender.progress import Progress
+main(["engines"])
+with Progress(2, "job", "px", interval=0) as bar:
+    bar.update(1)
+    bar.update(2)
+"""
+    proc = _python(code)
+    assert "omnirender: job: 1/2 px (50%)" in proc.stderr and "omnirender: job: 2/2 px done" in proc.stderr

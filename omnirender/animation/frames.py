@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import sys
 import time
 import uuid
 from collections.abc import Iterator
@@ -198,7 +197,7 @@ def render_frames(
                 else:
                     report.failed.append(FrameFailure(result.frame, result.time, result.error, result.attempts))
                     bar.set_postfix_str(f"{len(report.failed)} failed", refresh=False)
-                bar.update(1)
+                bar.advance()
         finally:
             bar.close()
     else:
@@ -288,20 +287,7 @@ def _pool(n: int) -> Backend:
 
 
 def _progress(total: int, engine: str, show: bool | None) -> Any:
-    enabled = sys.stderr.isatty() if show is None else bool(show)
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover - tqdm comes with every rendering extra
-        return _NoBar()
-    return tqdm(total=total, desc=f"{engine} frames", unit="frame", disable=not enabled, file=sys.stderr)
+    """A bar on a terminal, log lines elsewhere (``show`` None), a bar (True) or nothing (False)."""
+    from ..progress import Progress
 
-
-class _NoBar:
-    def update(self, n: int) -> None:
-        pass
-
-    def set_postfix_str(self, text: str, refresh: bool = True) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
+    return Progress(total, f"{engine} frames", "frame", show=show)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -76,8 +75,8 @@ def render(
     ``depth`` adds the eye-space depth (from a cheap first-hit pass with
     Mitsuba's ``depth`` integrator that also gives the coverage alpha); ``rfilter``
     the film's reconstruction filter (``"box"`` keeps edges where the GL
-    engine has them); ``progress`` shows a tqdm bar (default: when stderr is
-    a terminal and the render is long); ``global_ambient`` (GL's 0.2, added to
+    engine has them); ``progress`` for a long render (default): a tqdm bar on a terminal, log lines
+    elsewhere (:mod:`omnirender.progress`), True a bar, False nothing; ``global_ambient`` (GL's 0.2, added to
     the lights' ambient terms as a constant environment) and ``headlight`` (for
     scenes without lights) light the scene like the GL engine.  The image has tone-mapped (clamped)
     sRGB with straight alpha in ``.array``, linear radiance RGBA in ``.hdr``.
@@ -153,22 +152,25 @@ def render(
 
 
 def _render(mi_scene: Any, spp: int, seed: int, progress: bool | None, size: tuple[int, int]) -> np.ndarray:
+    """Trace ``spp`` samples per pixel; a long render is traced in up to 16 passes that report progress
+    (a bar on a terminal, log lines elsewhere: :mod:`omnirender.progress`)."""
+    from ..progress import Progress, wants_progress
+
     mi = mitsuba()
     w, h = size
     if progress is None:
-        progress = sys.stderr.isatty() and w * h * spp >= 4_000_000
-    if not progress:
+        progress = None if w * h * spp >= 4_000_000 and wants_progress(None) else False
+    if progress is False or spp == 1:
         return np.array(mi.render(mi_scene, spp=spp, seed=seed), dtype=np.float32)
-    from tqdm import tqdm
-
     chunks = min(spp, 16)
     counts = [spp // chunks + (1 if i < spp % chunks else 0) for i in range(chunks)]
     total = None
-    with tqdm(total=spp, unit="spp", desc="mitsuba", file=sys.stderr) as bar:
+    with Progress(spp, "mitsuba", "spp", show=progress) as bar:
         for i, n in enumerate(counts):
             part = np.array(mi.render(mi_scene, spp=n, seed=seed * 1000 + i), dtype=np.float64) * n
             total = part if total is None else total + part
-            bar.update(n)
+            bar.advance(n)
+    assert total is not None
     return (total / spp).astype(np.float32)
 
 

@@ -90,3 +90,22 @@ def test_path_tracers_render_a_mesh_file_without_warnings_about_lights_the_comma
                 capsys, "render", str(mesh), "-e", engine, "--size", "32x24", "-o", str(tmp_path / "m.png"), *extra
             )
         assert code == 0 and "casts_shadows" not in err, err
+
+
+@pytest.mark.parametrize("ext", [".obj", ".ply", ".stl"])
+def test_export_writes_mesh_files_that_read_back(capsys, tmp_path, ext):
+    import trimesh
+
+    import omnirender as om
+
+    scene = om.Node("s", [om.Camera.look_at((0, 0, 5))])
+    scene.add(om.Node("a", [om.Translation(2, 0, 0), om.Box(size=1)]))
+    scene.add(om.Node("b", [om.Sphere(radius=0.5)]))
+    om.save(scene, tmp_path / "s.json")
+    target = tmp_path / f"out{ext}"
+    code, out, err = run(capsys, "export", str(tmp_path / "s.json"), str(target))
+    assert code == 0, err
+    mesh = trimesh.load(target, force="mesh")
+    lo, hi = om.bounds(scene)
+    assert np.allclose(mesh.bounds, [lo, hi], atol=0.02)  # both shapes, in world coordinates
+    assert len(mesh.faces) > 12
