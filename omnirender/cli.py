@@ -106,14 +106,15 @@ def _load(
     ``animated``: a glTF file is read with its animations (``om.load_gltf``), staged with a fitted
     camera and the default lights when it has no camera of its own.
     """
-    from .scene.mesh_scene import MESH_SUFFIXES
+    from .scene.mesh_scene import mesh_suffixes
 
+    mesh_exts = mesh_suffixes()
     p = Path(path)
     suffix = p.suffix.lower()
-    if suffix not in SCENE_EXTENSIONS + MESH_SUFFIXES:
+    if suffix not in SCENE_EXTENSIONS + mesh_exts:
         raise UsageError(
             f"{path}: unknown extension {p.suffix!r}; give a scene file ({', '.join(SCENE_EXTENSIONS)}) "
-            f"or a mesh file ({', '.join(MESH_SUFFIXES)})"
+            f"or a mesh file ({', '.join(mesh_exts)})"
         )
     if not p.exists():
         raise UsageError(f"scene file not found: {path}")
@@ -124,7 +125,7 @@ def _load(
         from .scene.mesh_scene import staged
 
         return staged(load_gltf(p), size[0] / size[1], fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES)
-    if suffix in MESH_SUFFIXES:
+    if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
         return mesh_scene(p, size[0] / size[1], fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES)

@@ -1,0 +1,277 @@
+"""Mesh files (OBJ, PLY, STL, OFF through trimesh; glTF/GLB through the glTF importer) as ``om.MeshFile`` parts,
+and a scene's surfaces written as one mesh (``.obj``, ``.ply``, ``.stl``).
+
+:func:`read_mesh` is the reader :class:`~omnirender.shapes.MeshFile` calls
+(registered by :mod:`omnirender.formats`) the first time a file is used.
+Trimesh is imported only then, so declaring a MeshFile needs no extra package.
+
+:func:`export` (``om.export(scene, "x.obj")``): :class:`MeshEngine` (service
+``"mesh.export"``) evaluates the scene like the other exporters (the camera's
+group mask, every shape through its simplifier, an ``InstanceSet`` as its
+instances) and collects each triangle set in world coordinates with its base
+colour (the appearance every engine resolves).  The triangles are merged into
+one ``trimesh.Trimesh`` with per-vertex colours (OBJ and PLY keep them; STL
+holds geometry only) and written atomically.  Lines and points have no
+surface: they are left out with one warning naming them, never silently.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..core import ShapePainter, default_for
+from ..fileio import atomic_path
+from ..shapes import LineSet, PointSet, Polyline
+from ..shapes.meshes import TriangleSet
+from ..shapes.trimeshes import is_trimesh, is_trimesh_scene, triangle_arrays
+from .obj import read_plain_obj
+from .walk import NodeTrackingEngine, track_surfaces
+
+__all__ = ["read_mesh", "SUFFIXES", "export", "MeshEngine", "MESH_EXTENSIONS"]
+
+SUFFIXES = (".obj", ".ply", ".stl", ".off", ".gltf", ".glb")
+#: What :func:`export` writes (trimesh's writers).
+MESH_EXTENSIONS = (".obj", ".ply", ".stl")
+
+
+def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a mesh file or trimesh object: ``[(material parameters or None, TriangleSet)]``."""
+    if is_trimesh(path) or is_trimesh_scene(path):
+        return _parts(path, "the trimesh object")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"MeshFile: no such file {path!r}")
+    if path.lower().endswith((".gltf", ".glb")):
+        return _load_gltf(path)
+    if str(path).lower().endswith(".obj"):
+        try:
+            plain = read_plain_obj(path)
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: cannot load {path!r}: {exc}") from None
+        if plain is not None:  # a plain OBJ file: no trimesh import needed
+            try:
+                return [(None, TriangleSet(**plain))]
+            except ValueError as exc:
+                raise ValueError(f"MeshFile: {path!r} holds invalid geometry: {exc}") from None
+    try:
+        import trimesh
+    except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
+        raise ValueError(f"MeshFile: loading {path!r} needs trimesh (pip install omnirender[mesh]): {exc}") from None
+    try:
+        loaded = trimesh.load(path, process=False)
+    except Exception as exc:
+        raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
+    return _parts(loaded, repr(path))
+
+
+def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a loaded trimesh object (a Trimesh, or a Scene's meshes with their transforms)."""
+    if is_trimesh_scene(loaded):
+        try:
+            meshes = loaded.dump(concatenate=False)
+        except Exception as exc:
+            raise ValueError(f"MeshFile: cannot load {path}: {type(exc).__name__}: {exc}") from None
+    else:
+        meshes = [loaded]
+    parts = []
+    for mesh in meshes:
+        if not is_trimesh(mesh) or len(mesh.faces) == 0:
+            continue  # point clouds, paths and empty geometry carry no triangles
+        try:
+            parts.append(_part(mesh))
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: {path} holds invalid geometry: {exc}") from None
+    if not parts:
+        raise ValueError(f"MeshFile: {path} contains no triangles (empty or not a mesh file)")
+    return parts
+
+
+def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
+    arrays = triangle_arrays(mesh)
+    material = None
+    visual = mesh.visual
+    kind = getattr(visual, "kind", None)
+    if kind == "face":
+        fc = np.asarray(visual.face_colors, dtype=np.float32) / 255.0
+        if len(np.unique(fc, axis=0)) == 1:  # one colour for all: a material, shared vertices kept
+            material = {"kind": "phong", "diffuse": tuple(float(c) for c in fc[0, :3]), "opacity": float(fc[0, 3])}
+            arrays["colors"] = None
+    elif kind != "vertex" and (kind == "texture" or hasattr(visual, "material")):
+        material = _material(getattr(visual, "material", None))
+        if material is not None and arrays["texcoords"] is None:
+            material.pop("texture", None)
+    return material, TriangleSet(**arrays)
+
+
+def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:
+    if value is None:
+        return default
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 3:
+        return default
+    if a.max() > 1.0 or a.dtype.kind in "iu":
+        a = a / 255.0
+    return tuple(float(x) for x in np.clip(a[:3], 0.0, 1.0))
+
+
+def _alpha(value: Any) -> float:
+    if value is None:
+        return 1.0
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 4:
+        return 1.0
+    return float(np.clip(a[3] / 255.0 if a.max() > 1.0 else a[3], 0.0, 1.0))
+
+
+def _texture(image: Any) -> np.ndarray | None:
+    if image is None:
+        return None
+    try:
+        return np.asarray(image.convert("RGBA"), dtype=np.uint8)
+    except Exception:
+        return None
+
+
+def _material(mat: Any) -> dict[str, Any] | None:
+    if mat is None:
+        return None
+    name = type(mat).__name__
+    if name == "PBRMaterial":
+        base = getattr(mat, "baseColorFactor", None)
+        out: dict[str, Any] = {
+            "kind": "pbr",
+            "base_color": _rgb(base, (1.0, 1.0, 1.0)),
+            "metallic": float(mat.metallicFactor) if mat.metallicFactor is not None else 1.0,
+            "roughness": float(mat.roughnessFactor) if mat.roughnessFactor is not None else 1.0,
+            "emission": _rgb(getattr(mat, "emissiveFactor", None), (0.0, 0.0, 0.0)),
+            "opacity": _alpha(base),
+        }
+        tex = _texture(getattr(mat, "baseColorTexture", None))
+    elif name == "SimpleMaterial":
+        diffuse = getattr(mat, "diffuse", None)
+        glossiness = getattr(mat, "glossiness", None)
+        shininess = float(glossiness) if glossiness is not None else 1.0
+        # MTL's Ns 0 (common in exported files with Ks 1) means "no highlight", as importers such as Blender read
+        # it (roughness 1): a Phong lobe that wide would whiten the whole surface
+        specular = _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)) if shininess >= 1.0 else (0.0, 0.0, 0.0)
+        out = {
+            "kind": "phong",
+            "ambient": _rgb(getattr(mat, "ambient", None), (0.2, 0.2, 0.2)),
+            "diffuse": _rgb(diffuse, (0.8, 0.8, 0.8)),
+            "specular": specular,
+            "shininess": max(shininess, 1.0),
+            "opacity": _alpha(diffuse),
+        }
+        tex = _texture(getattr(mat, "image", None))
+    else:
+        return None
+    if tex is not None:
+        out["texture"] = tex
+    return out
+
+
+def _load_gltf(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts."""
+    from .gltf.reader import GLTFImportError, flatten_gltf
+
+    try:
+        flat = flatten_gltf(path)
+    except GLTFImportError as exc:
+        raise ValueError(f"MeshFile: {exc}") from None
+    parts = [({"kind": "attributes", "attributes": attrs} if attrs else None, ts) for attrs, ts in flat]
+    if not parts:
+        raise ValueError(f"MeshFile: {path!r} contains no triangles (empty or not a mesh file)")
+    return parts
+
+
+# -- writing: a scene's surfaces as one mesh -----------------------------------------------------------
+class MeshEngine(NodeTrackingEngine):
+    """Collects world-space triangles with their linear base colour (RGBA in 0..1) in ``parts``."""
+
+    service = "mesh.export"
+
+    def __init__(self, *, on_missing: str = "raise", mask: Any = None) -> None:
+        super().__init__(on_missing=on_missing, mask=mask)
+        #: (vertices (N, 3), faces (K, 3), RGBA) per triangle set, in evaluation order
+        self.parts: list[tuple[np.ndarray, np.ndarray, tuple[float, ...]]] = []
+        #: shape class name -> node paths of shapes without a surface (left out)
+        self.left_out: dict[str, list[str]] = {}
+
+
+track_surfaces(MeshEngine)
+
+
+@default_for(MeshEngine)
+class TriangleSetCollector(ShapePainter):
+    """A triangle set's world-space vertices and faces with its resolved base colour."""
+
+    __slots__ = ()
+    service = MeshEngine.service
+    target = TriangleSet
+
+    def exec(self, shape: TriangleSet, engine: MeshEngine) -> None:
+        m = engine.model_matrix()
+        vertices = shape.vertex_array().astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+        faces = np.asarray(shape.index_array(), dtype=np.int64).reshape(-1, 3)
+        if np.linalg.det(m[:3, :3]) < 0:  # a mirroring transform: keep the faces facing out
+            faces = faces[:, ::-1]
+        from ..attributes.surface import engine_appearance
+
+        appearance = engine_appearance(engine, texcoords=False)
+        engine.parts.append((vertices, faces, (*appearance.base, appearance.alpha)))
+
+
+class _NoSurface(ShapePainter):
+    __slots__ = ()
+    service = MeshEngine.service
+
+    def exec(self, shape: Any, engine: MeshEngine) -> None:
+        engine.left_out.setdefault(type(shape).__name__, []).append(engine.node_path or "/")
+
+
+for _target in (LineSet, Polyline, PointSet):
+    default_for(MeshEngine)(type(f"{_target.__name__}Skipper", (_NoSurface,), {"__slots__": (), "target": _target}))
+
+
+def _srgb8(linear: np.ndarray) -> np.ndarray:
+    from ..attributes.photometry import linear_to_srgb
+
+    return np.clip(np.round(linear_to_srgb(np.clip(linear, 0.0, 1.0)) * 255.0), 0, 255).astype(np.uint8)
+
+
+def export(scene: Any, path: str | os.PathLike[str], *, mask: str | None = None, on_missing: str = "raise") -> None:
+    """Write the triangles of ``scene`` to ``path`` (.obj, .ply or .stl, by its extension) in world coordinates.
+
+    Colours: each shape's base colour as vertex colours in sRGB (OBJ and PLY;
+    STL has none).  Shapes without a surface (lines, points) are left out with
+    a warning naming their nodes.
+    """
+    import trimesh
+
+    target = Path(path)
+    ext = target.suffix.lower()
+    if ext not in MESH_EXTENSIONS:
+        raise ValueError(f"mesh export: cannot write {target.name!r}; use one of {', '.join(MESH_EXTENSIONS)}")
+    if not hasattr(scene, "preevaluate"):  # a list of components
+        from ..scene import Node
+
+        scene = Node("scene", list(scene))
+    engine = MeshEngine(on_missing=on_missing, mask=mask)
+    engine.run(scene)
+    if engine.left_out:
+        what = "; ".join(f"{name} in {', '.join(sorted(set(paths))[:3])}" for name, paths in engine.left_out.items())
+        warnings.warn(f"mesh export {target.name}: shapes without a surface are left out ({what})", stacklevel=2)
+    if not engine.parts:
+        raise ValueError(f"mesh export {target.name}: the scene {scene.path} has no triangles to write")
+    offsets = np.cumsum([0] + [len(v) for v, _, _ in engine.parts])
+    vertices = np.concatenate([v for v, _, _ in engine.parts])
+    faces = np.concatenate([f + offsets[i] for i, (_, f, _) in enumerate(engine.parts)])
+    rgba = np.concatenate([np.repeat([c], len(v), axis=0) for v, _, c in engine.parts])
+    colors = np.concatenate([_srgb8(rgba[:, :3]), np.clip(np.round(rgba[:, 3:] * 255), 0, 255).astype(np.uint8)], 1)
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, vertex_colors=colors, process=False)
+    with atomic_path(target) as tmp:
+        mesh.export(tmp, file_type=ext[1:])
