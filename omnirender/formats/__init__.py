@@ -29,7 +29,5 @@ register_exporter(".glb", "omnirender.formats.gltf.writer:export", "glTF 2.0 bin
 register_exporter(".rib", "omnirender.formats.rib:export", "RenderMan RIB")
 register_exporter(".html", "omnirender.formats.html:export", "self-contained web page (three.js, works offline)")
 register_exporter(".obj", "omnirender.formats.meshes:export", "Wavefront OBJ: every surface as one mesh (trimesh)")
-register_exporter(
-    ".ply", "omnirender.formats.meshes:export", "PLY: every surface as one mesh with colours (trimesh)"
-)
+register_exporter(".ply", "omnirender.formats.meshes:export", "PLY: every surface as one mesh with colours (trimesh)")
 register_exporter(".stl", "omnirender.formats.meshes:export", "STL: every surface as one mesh, no colours (trimesh)")
