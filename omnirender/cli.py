@@ -19,7 +19,6 @@ extension nothing writes); 130 interrupted (Ctrl-C).
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 import traceback
 from pathlib import Path
@@ -553,31 +552,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class _StderrHandler(logging.StreamHandler):
-    """Log lines to whatever ``sys.stderr`` is when they are written."""
-
-    @property  # type: ignore[override]
-    def stream(self) -> Any:
-        return sys.stderr
-
-    @stream.setter
-    def stream(self, value: Any) -> None:
-        pass
-
-
-def _show_progress_lines() -> None:
-    """Where stderr is no terminal (logs, CI), show omnirender's progress lines there (see omnirender.progress)."""
-    logger = logging.getLogger("omnirender")
-    if sys.stderr.isatty() or logger.handlers or logger.level != logging.NOTSET:
-        return
-    handler = _StderrHandler()
-    handler.setFormatter(logging.Formatter("omnirender: %(message)s"))
-    logger.addHandler(handler)
-    logger.setLevel(logging.INFO)
-
-
 def main(argv: list[str] | None = None) -> int:
-    _show_progress_lines()
+    from .progress import show_progress_lines
+
+    show_progress_lines()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -19,12 +19,36 @@ import sys
 import time
 from typing import Any
 
-__all__ = ["Progress", "LOG_INTERVAL", "logger", "wants_progress"]
+__all__ = ["Progress", "LOG_INTERVAL", "logger", "wants_progress", "show_progress_lines"]
 
 #: The logger progress lines go to.
 logger = logging.getLogger("omnirender")
 #: Seconds between two progress lines in the log.
 LOG_INTERVAL = 10.0
+
+
+class _StderrHandler(logging.StreamHandler):
+    """Log lines to whatever ``sys.stderr`` is when they are written (tests and notebooks replace it)."""
+
+    @property  # type: ignore[override]
+    def stream(self) -> Any:
+        return sys.stderr
+
+    @stream.setter
+    def stream(self, value: Any) -> None:
+        pass
+
+
+def show_progress_lines() -> None:
+    """For applications (the ``omnirender`` command, the examples): where stderr is no terminal, print the
+    progress lines there (``omnirender: ...``).  Does nothing on a terminal (the bars show) or when the
+    ``omnirender`` logger is configured already."""
+    if sys.stderr.isatty() or logger.handlers or logger.level != logging.NOTSET:
+        return
+    handler = _StderrHandler()
+    handler.setFormatter(logging.Formatter("omnirender: %(message)s"))
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
 
 
 def wants_progress(show: Any) -> bool:

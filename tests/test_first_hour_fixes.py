@@ -220,3 +220,16 @@ with Progress(2, "job", "px", interval=0) as bar:
 """
     proc = _python(code)
     assert "omnirender: job: 1/2 px (50%)" in proc.stderr and "omnirender: job: 2/2 px done" in proc.stderr
+
+
+def test_slow_mesh_loading_is_reported_in_the_log(caplog, monkeypatch, tmp_path):
+    import logging
+
+    from omnirender.shapes import files
+
+    monkeypatch.setattr(files, "SLOW_LOAD", 0.0)  # every load counts as slow here
+    (tmp_path / "t.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with caplog.at_level(logging.INFO, logger="omnirender"):
+        om.MeshFile(tmp_path / "t.obj").load()
+    messages = [r.getMessage() for r in caplog.records]
+    assert any("t.obj: 1 triangles in" in m for m in messages), messages

@@ -12,6 +12,7 @@ import doctest
 import io
 import math
 import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -29,25 +30,37 @@ def python_blocks(path: Path) -> list[tuple[int, str]]:
 
 
 def run_session(path: Path, namespace: dict) -> dict[int, str]:
-    """Run every block of ``path`` in ``namespace``, in order; returns what each block printed, by line."""
+    """Run every block of ``path`` in ``namespace``, in order; returns what each block printed, by line.
+
+    A block that warns fails: the README's examples print no warning on a clean run.
+    """
     printed: dict[int, str] = {}
     for line, code in python_blocks(path):
-        out = io.StringIO()
-        where = f"{path.name}:{line}"
-        if code.lstrip().startswith(">>>"):
-            test = doctest.DocTestParser().get_doctest(code, namespace, where, str(path), line - 1)
-            runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
-            with contextlib.redirect_stdout(out):
-                result = runner.run(test, clear_globs=False)
-            assert result.failed == 0, f"{where}: the session's output differs from the text:\n{out.getvalue()}"
-        else:
-            with contextlib.redirect_stdout(out):
-                try:
-                    exec(compile(code, where, "exec"), namespace)
-                except Exception as exc:
-                    raise AssertionError(f"{where}: the block fails as written: {type(exc).__name__}: {exc}") from exc
-        printed[line] = out.getvalue()
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            printed[line] = _run_block(path, line, code, namespace)
+        shown = [f"{w.category.__name__}: {w.message}" for w in caught if w.category is not DeprecationWarning]
+        assert not shown, f"{path.name}:{line}: the block warns:\n" + "\n".join(shown)
     return printed
+
+
+def _run_block(path: Path, line: int, code: str, namespace: dict) -> str:
+    """Run one block (a doctest session or plain code) in ``namespace``; returns what it printed."""
+    out = io.StringIO()
+    where = f"{path.name}:{line}"
+    if code.lstrip().startswith(">>>"):
+        test = doctest.DocTestParser().get_doctest(code, namespace, where, str(path), line - 1)
+        runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+        with contextlib.redirect_stdout(out):
+            result = runner.run(test, clear_globs=False)
+        assert result.failed == 0, f"{where}: the session's output differs from the text:\n{out.getvalue()}"
+        return out.getvalue()
+    with contextlib.redirect_stdout(out):
+        try:
+            exec(compile(code, where, "exec"), namespace)
+        except Exception as exc:
+            raise AssertionError(f"{where}: the block fails as written: {type(exc).__name__}: {exc}") from exc
+    return out.getvalue()
 
 
 def printed_by(printed: dict[int, str], path: Path, marker: str) -> str:
