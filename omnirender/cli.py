@@ -53,6 +53,7 @@ exit codes: 0 success, 1 the work failed (bad scene file, engine missing or fail
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 #: Scene-file extensions (mesh files are read too, see :func:`_load`).
 SCENE_EXTENSIONS = (".json", ".yaml", ".yml")
+USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")  # stages: loaded whole (cameras, lights), not as meshes
 #: What the exit codes mean (also in ``omnirender --help``).
 EXIT_CODES = {
     0: "success",
@@ -119,11 +120,16 @@ def _load(
         raise UsageError(f"scene file not found: {path}")
     if not p.is_file():
         raise UsageError(f"{path} is a folder, not a scene file")
+    if suffix in USD_SUFFIXES:  # a whole stage: its cameras and lights, framed like a mesh when it has none
+        from .formats.usd import load_usd
+        from .scene.mesh_scene import framed
+
+        return framed(load_usd(p, trusted=trusted), size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
     if animated and suffix in (".glb", ".gltf"):
         from .animation import load_gltf
-        from .scene.mesh_scene import staged
+        from .scene.mesh_scene import framed
 
-        return staged(load_gltf(p), size[0] / size[1], fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES)
+        return framed(load_gltf(p), size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
     if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
@@ -476,7 +482,9 @@ def build_parser() -> argparse.ArgumentParser:
     def command(name: str, help: str, scene: bool = True) -> argparse.ArgumentParser:
         return sub.add_parser(name, help=help, parents=[common, reads] if scene else [common])
 
-    scene_help = "scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)"
+    scene_help = (
+        "scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)"
+    )
     engine_help = f"{_engine_names()}; see 'omnirender engines'"
     quality_help = (
         "mitsuba only: preview (default: few samples, denoised when pyoidn is installed) or final (many samples)"
@@ -493,7 +501,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = command("animate", help="render the frames of an animated scene (locally or on Dask) and make a video")
     p.add_argument(
-        "scene", help=f"scene file with an om.Animation, an animated .glb/.gltf, or any {scene_help} with --turntable"
+        "scene",
+        help=f"scene file with an om.Animation, an animated glTF or USD file; with --turntable any {scene_help}",
     )
     p.add_argument("-e", "--engine", default="gl", help=engine_help)
     p.add_argument("-o", "--output", help="video (.mp4, .gif...) or frame pattern (frames/%%05d.png)")

@@ -82,6 +82,7 @@ def test_every_readme_and_docs_block_is_collected():
 @pytest.mark.mitsuba
 @pytest.mark.radiance
 def test_the_readme_runs_as_one_session(tmp_path, monkeypatch):
+    import omnirender as om
 
     monkeypatch.chdir(tmp_path)
     namespace = {"__name__": "__main__"}
@@ -142,6 +143,16 @@ def test_the_readme_runs_as_one_session(tmp_path, monkeypatch):
 
     # Slurm: the job script is printed
     assert "#SBATCH" in printed_by(printed, README, "slurm_cluster(")
+
+    # a stage of one's own: it joins the frame where it was added and darkens the corners
+    assert "'mirrors', 'dark edges', 'stereo'" in printed_by(printed, README, "add_stage")
+    stage = np.asarray(Image.open(tmp_path / "stage.png").convert("RGB"), float)
+    plain = om.gl.render(om.Node("scene", [om.PointLight(position=(2, 3, 4)), om.Sphere()]), (160, 120)).array[..., :3]
+    assert stage[:6, :6, :3].mean() < 0.7 * plain[:6, :6, :3].mean()  # the corners darkened by the stage
+    assert abs(stage[60, 80, :3].mean() - plain[60, 80, :3].mean()) < 8  # the centre about as it was
+
+    # OpenUSD (the block needs usd-core, in the 'all' extra)
+    assert "def Sphere" in (tmp_path / "ball.usda").read_text()
 
 
 @pytest.mark.gl

@@ -2,7 +2,9 @@
 
 Trimesh and PyVista users expect to point a viewer at a mesh file; a mesh
 has no camera or lights, so :func:`mesh_scene` adds a camera fitted to the
-mesh's bounds and the default key, fill and back lights placed for it.
+mesh's bounds and the default key, fill and back lights placed for it.  A
+glTF file with a camera is shown as ``om.load_gltf`` reads it: through its
+camera, lit by its lights (or by the default lights placed for that camera).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from ..core.camera import Camera
 from ..shapes.files import mesh_suffixes
 from .node import Node
 
-__all__ = ["mesh_scene", "staged", "mesh_suffixes"]
+__all__ = ["mesh_scene", "mesh_suffixes", "framed", "staged_lights"]
 
 
 def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3, fill_shadows: bool = False) -> Node:
@@ -26,39 +28,82 @@ def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3, fill_s
     The camera looks at the mesh's bounding box from the front, a little
     above and to the right, so that the whole mesh shows in an image of
     width / height ``aspect``.  The file is read here (to measure it): a
-    malformed one raises ValueError naming it.  ``fill_shadows``: see :func:`staged`.
+    malformed one raises ValueError naming it.  ``fill_shadows``: see :func:`staged_lights`.
     """
     from ..shapes import MeshFile
+    from ..techniques import bounds
 
+    if isinstance(mesh, (str, os.PathLike)) and str(mesh).lower().endswith((".glb", ".gltf")):
+        kept = _gltf_scene(mesh, fill_shadows)
+        if kept is not None:
+            return kept
     shape = MeshFile(mesh)
     shape.load()
     name = Path(os.fspath(mesh)).stem if isinstance(mesh, (str, os.PathLike)) else "mesh"
-    return staged(Node(_node_name(name), [shape]), aspect, fill_shadows)
-
-
-def staged(body: Node, aspect: float = 4 / 3, fill_shadows: bool = False) -> Node:
-    """``body`` in a new root node with a camera fitted to it and the default key, fill and back lights
-    (as :func:`mesh_scene` places them), unless ``body`` has a camera already; then ``body`` itself.
-
-    The fill and back lights cast no shadows, unless ``fill_shadows`` (for path tracers, which cannot
-    turn a light's shadows off and warn when a scene asks for it: the command line stages the lights
-    for them with shadows, as they would draw them anyway).
-    """
-    from ..attributes.lights import default_lights
-    from ..techniques import bounds
-
-    if body.preevaluate()[1] is not None:
-        return body
+    body = Node(_node_name(name), [shape])
     box = bounds(body)
-    if box is None:
-        raise ValueError(f"{body.path} has no geometry to look at")
+    if box is None:  # pragma: no cover - load() refuses meshes without triangles
+        raise ValueError(f"mesh_scene: {mesh!r} has no geometry to look at")
     camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
     eye_to_world = np.linalg.inv(camera.view_matrix())
-    lights = default_lights(eye_to_world) if not body.preevaluate()[0] else []
+    return Node("scene", [camera, *staged_lights(eye_to_world, fill_shadows), body])
+
+
+def staged_lights(eye_to_world: np.ndarray, fill_shadows: bool = False) -> list[Any]:
+    """The default key, fill and back lights placed for a camera (``eye_to_world``).
+
+    The fill and back lights cast no shadows, unless ``fill_shadows``: path tracers cannot turn a
+    light's shadows off and warn when a scene asks for it, so the command line stages the lights for
+    them with shadows, as they would draw them anyway (the user asked for nothing).
+    """
+    from ..attributes.lights import default_lights
+
+    lights = default_lights(eye_to_world)
     if fill_shadows:
         for light in lights:
             light.casts_shadows = True
-    return Node("scene", [camera, *lights, body])
+    return lights
+
+
+def _gltf_scene(path: str | os.PathLike[str], fill_shadows: bool = False) -> Node | None:
+    """A glTF file with a camera as ``om.load_gltf`` reads it: its camera, its lights (default lights placed
+    for its camera when it has none); None when it has no camera (then it is framed like any mesh)."""
+    from .readers import scene_reader
+
+    load_gltf = scene_reader(path)  # the registered glTF importer (formats/ registers it)
+    if load_gltf is None:
+        return None
+    scene = load_gltf(path, animation=None)
+    declared = scene.declarations()
+    if declared.camera is None:
+        return None
+    if declared.lights:
+        return scene
+    camera, world = declared.camera
+    eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    return Node("scene", [*staged_lights(eye_to_world, fill_shadows), scene])
+
+
+def framed(scene: Node, aspect: float = 4 / 3, fill_shadows: bool = False) -> Node:
+    """``scene`` as the command line shows a file: its own camera and lights, else a camera fitted to its
+    bounds (as :func:`mesh_scene` places it) and default lights placed for the camera (``fill_shadows``: see
+    :func:`staged_lights`)."""
+    from ..techniques import bounds
+
+    declared = scene.declarations()
+    if declared.camera is not None and declared.lights:
+        return scene
+    if declared.camera is None:
+        box = bounds(scene)
+        if box is None:
+            raise ValueError(f"{scene.name}: nothing to look at")
+        camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
+        eye_to_world = np.linalg.inv(camera.view_matrix())
+        lights = [] if declared.lights else staged_lights(eye_to_world, fill_shadows)
+        return Node("scene", [camera, *lights, scene])
+    camera, world = declared.camera
+    eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    return Node("scene", [*staged_lights(eye_to_world, fill_shadows), scene])
 
 
 def _node_name(stem: str) -> str:
