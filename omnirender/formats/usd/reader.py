@@ -646,11 +646,12 @@ class _StageReader:
             if len(rows) == 0 or not proto:
                 continue
             for k, (local, attrs, shape) in enumerate(self.leaves(proto, np.eye(4))):
-                transforms = matrices[rows] @ local
+                placed = matrices if len(rows) == n else matrices[rows]
+                transforms = placed if np.array_equal(local, np.eye(4)) else placed @ local
                 item = InstanceSet(
                     shape,
                     transforms,
-                    colors=None if colors is None else colors[rows],
+                    colors=None if colors is None else (colors if len(rows) == n else colors[rows]),
                     visible=None if visible[rows].all() else visible[rows],
                 )
                 name = _node_name(proto.GetName()) + (f"-{k}" if k else "")
@@ -665,7 +666,6 @@ class _StageReader:
         t = np.zeros((n, 3)) if positions is None or len(positions) != n else np.asarray(positions, np.float64)
         m = np.zeros((n, 4, 4))
         m[:, 3, 3] = 1.0
-        linear = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
         orientations = (
             instancer.GetOrientationsfAttr().Get(self.time) if hasattr(instancer, "GetOrientationsfAttr") else None
         )
@@ -673,20 +673,16 @@ class _StageReader:
             orientations = instancer.GetOrientationsAttr().Get(self.time)
         if orientations is not None and len(orientations) == n:
             q = _quaternions(orientations)  # (w, x, y, z)
-            q /= np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-300)
+            q /= np.maximum(np.sqrt(np.einsum("ij,ij->i", q, q)), 1e-300)[:, None]
             w, x, y, z = q.T
-            linear = np.stack(
-                [
-                    np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=1),
-                    np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=1),
-                    np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1),
-                ],
-                axis=1,
-            )
+            m[:, 0, 0], m[:, 0, 1], m[:, 0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+            m[:, 1, 0], m[:, 1, 1], m[:, 1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+            m[:, 2, 0], m[:, 2, 1], m[:, 2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+        else:
+            m[:, 0, 0] = m[:, 1, 1] = m[:, 2, 2] = 1.0
         scales = instancer.GetScalesAttr().Get(self.time)
         if scales is not None and len(scales) == n:
-            linear = linear * np.asarray(scales, np.float64)[:, None, :]
-        m[:, :3, :3] = linear
+            m[:, :3, :3] *= np.asarray(scales, np.float64)[:, None, :]
         m[:, :3, 3] = t
         return m
 
