@@ -199,6 +199,7 @@ class _StageReader:
         self.subdivided: list[str] = []
         self.cameras = 0
         self.uv_names: list[str] = ["st"]
+        self.frozen: list[str] = []  # time-varying attributes read at one time (only transforms are animated)
 
     def warn(self, message: str) -> None:
         warnings.warn(f"load_usd {self.name}: {message}", stacklevel=4)
@@ -218,6 +219,12 @@ class _StageReader:
             self.warn(
                 f"{len(self.subdivided)} subdivision surface(s) drawn as their control cage ({shown}); "
                 "author subdivisionScheme = 'none' for polygon meshes"
+            )
+        if self.frozen:
+            shown = ", ".join(self.frozen[:5]) + (" ..." if len(self.frozen) > 5 else "")
+            self.warn(
+                f"{len(self.frozen)} time-sampled attribute(s) other than transforms are read at the start time "
+                f"only ({shown})"
             )
         if self.camera_path is not None and self.cameras == 0:
             raise USDImportError(f"load_usd {self.name}: no camera at {self.camera_path!r}")
@@ -242,6 +249,8 @@ class _StageReader:
             return None
         imageable = UsdGeom.Imageable(prim)
         if imageable:
+            if self.animate and imageable.GetVisibilityAttr().ValueMightBeTimeVarying():
+                self.frozen.append(str(imageable.GetVisibilityAttr().GetPath()))
             if imageable.GetVisibilityAttr().Get(self.time) == UsdGeom.Tokens.invisible:
                 return None
             purpose = imageable.GetPurposeAttr().Get()
@@ -403,6 +412,8 @@ class _StageReader:
     def mesh(self, mesh: Any) -> list[Any]:
         prim = mesh.GetPrim()
         where = str(prim.GetPath())
+        if self.animate and mesh.GetPointsAttr().ValueMightBeTimeVarying():
+            self.frozen.append(str(mesh.GetPointsAttr().GetPath()))
         points = np.asarray(mesh.GetPointsAttr().Get(self.time) or [], np.float32).reshape(-1, 3)
         counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], np.int32)
         fvi = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], np.int32)
