@@ -485,3 +485,23 @@ def test_a_point_instancer_draws_as_one_instanced_batch(tmp_path):
         finally:
             engine.release()
     assert calls[0] == calls[1], calls
+
+
+def test_the_command_line_exports_and_animates_stages(tmp_path):
+    from omnirender.cli import main
+    from usd_stages import shapes_stage
+
+    stage = shapes_stage(tmp_path)
+    assert main(["export", str(stage), str(tmp_path / "again.usdc")]) == 0
+    assert main(["export", str(tmp_path / "again.usdc"), str(tmp_path / "same.glb")]) == 0
+    assert (tmp_path / "same.glb").stat().st_size > 1000
+    moving = _new(tmp_path, "moving.usda")
+    moving.SetStartTimeCode(0)
+    moving.SetEndTimeCode(2)
+    moving.SetTimeCodesPerSecond(2)
+    op = UsdGeom.Sphere.Define(moving, "/Ball").AddTranslateOp()
+    op.Set(Gf.Vec3d(0, 0, 0), 0)
+    op.Set(Gf.Vec3d(1, 0, 0), 2)
+    frames = tmp_path / "frames" / "%02d.png"
+    assert main(["animate", _save(moving), "-o", str(frames), "--size", "32x24", "--workers", "0"]) == 0
+    assert len(list((tmp_path / "frames").glob("*.png"))) >= 2
