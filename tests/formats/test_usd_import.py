@@ -488,8 +488,9 @@ def test_a_point_instancer_draws_as_one_instanced_batch(tmp_path):
 
 
 def test_the_command_line_exports_and_animates_stages(tmp_path):
-    from omnirender.cli import main
     from usd_stages import shapes_stage
+
+    from omnirender.cli import main
 
     stage = shapes_stage(tmp_path)
     assert main(["export", str(stage), str(tmp_path / "again.usdc")]) == 0
