@@ -44,7 +44,8 @@ def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
 
     ``view`` is the world-to-eye matrix.  Perspective: the image plane at unit
     distance spans ``2 tan(fov/2)`` vertically and ``aspect`` times that
-    horizontally.  Orthographic: the view volume is ``height`` tall.
+    horizontally.  Orthographic: the view volume is ``height`` tall.  An
+    off-axis camera (``camera.shift``) moves the window's centre.
     """
     w, h = size
     aspect = w / h
@@ -54,10 +55,16 @@ def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
     up = axes[:, 1] / np.linalg.norm(axes[:, 1])
     forward = -axes[:, 2] / np.linalg.norm(axes[:, 2])
     location = eye_to_world[:3, 3]
+    sx, sy = camera.shift
     if camera.is_orthographic:
         kind, extent = "orthographic", float(camera.height)
+        location = location + extent * (sx * right + sy * up)  # parallel rays: the window moves with the eye
     else:
         kind, extent = "perspective", 2.0 * math.tan(math.radians(camera.fov) / 2.0)
+        # off-axis: POV-Ray's ray is direction + x right + y up (x, y in [-1/2, 1/2]), so pointing ``direction`` at
+        # the shifted window's centre gives glFrustum's asymmetric window (POV-Ray then warns that the camera
+        # vectors are not perpendicular, and renders exactly that)
+        forward = forward + extent * (sx * right + sy * up)
 
     # the axes at full precision: POV-Ray warns "Camera vectors are not perpendicular" when a dot product of
     # the parsed vectors exceeds 1e-10, which 9 significant digits do not guarantee

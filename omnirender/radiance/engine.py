@@ -56,7 +56,8 @@ def view_arguments(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> l
     Perspective (``-vtv``): the vertical angle is the camera's fov and the
     horizontal one spans ``aspect`` times the image plane.  Orthographic
     (``-vtl``): the view is ``height`` tall and ``height * aspect`` wide.  The
-    near and far planes become Radiance's fore and aft clipping planes.
+    near and far planes become Radiance's fore and aft clipping planes; an
+    off-axis camera's ``shift`` becomes the view shift and lift (``-vs``, ``-vl``).
     """
     w, h = size
     aspect = w / h
@@ -79,6 +80,9 @@ def view_arguments(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> l
         "-vv", *_exact([vertical]),
         "-vo", *_exact([camera.near]),
         "-va", *_exact([camera.far]),
+        # off-axis window (camera.shift in image heights): Radiance's view shift and lift, in image widths/heights
+        "-vs", *_exact([camera.shift[0] / aspect]),
+        "-vl", *_exact([camera.shift[1]]),
     ]  # fmt: skip
 
 
