@@ -264,9 +264,7 @@ class AmbientLight(LightSource):
 
     __slots__ = ()
 
-    def __init__(
-        self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2, enabled: bool = True
-    ) -> None:
+    def __init__(self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2, enabled: bool = True) -> None:
         super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), False, enabled)
 
     @property
