@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core.technique import pass_accepted
 from .context import GLError, blit, clear_depth, clear_stencil, set_masks
 from .drawlist import Scope
 from .imagespace import FullScreenPrograms, RenderTarget
@@ -342,13 +343,14 @@ class FrameRunner:
                     index = self.current_pass
                     self._requests.append(None)
                     try:
-                        technique.prepare_pass(self)
+                        accepted = pass_accepted(technique.prepare_pass(self))
                     finally:
                         description = self._requests.pop()
-                    if description is None:
-                        description = Pass(f"{type(technique).__name__}[{index}]")
-                    calls += self._execute(technique, description, scope, outer, item_level)
-                    technique.finish_pass(self)
+                    if accepted:  # a technique may decline a pass (VRS): not drawn, not finished
+                        if description is None:
+                            description = Pass(f"{type(technique).__name__}[{index}]")
+                        calls += self._execute(technique, description, scope, outer, item_level)
+                        technique.finish_pass(self)
                     technique.next_pass(self)
             finally:
                 technique.stop(self)
