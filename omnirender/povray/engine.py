@@ -26,9 +26,10 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Mirror, Shadowing
+from ..attributes.conversion import native_to
 from ..core import Camera, Engine, LightSwitch, Technique
 from . import sdl
-from .attributes import GlobalSettings, Interior, Raw
+from .attributes import Finish, GlobalSettings, Interior, Pigment, Raw
 
 __all__ = ["POVRayEngine", "camera_sdl", "depth_texture", "decode_depth", "coverage"]
 
@@ -372,3 +373,7 @@ def decode_depth(rgb16: np.ndarray, far: float) -> np.ndarray:
 def coverage(rgb16: np.ndarray) -> np.ndarray:
     """(H, W) uint8 alpha of the depth pass: 255 on objects, 0 on the (blue) background."""
     return np.where(rgb16[:, :, 2] < 32768, 255, 0).astype(np.uint8)
+
+
+# Its own renderer-specific attributes stay on their stacks here (other engines convert them to generic ones).
+native_to(POVRayEngine, "pov.paint", Finish, Pigment)

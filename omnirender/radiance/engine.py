@@ -23,10 +23,12 @@ import numpy as np
 
 from ..attributes import photometry
 from ..attributes.clipping import ClipRecords
+from ..attributes.conversion import native_to
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
 from ..options import check_real
 from . import rad
+from .attributes import Material as RadMaterial
 from .attributes import Options
 
 __all__ = ["RadianceEngine", "MeshJob", "view_arguments"]
@@ -319,3 +321,7 @@ class RadianceEngine(Engine):
             f"# view: rpict {view} -x {self.size[0]} -y {self.size[1]} -pa 0 -av {ambient}\n"
         )
         return head + self.lights_text() + "".join(self.body)
+
+
+# Its own renderer-specific attributes stay on their stacks here (other engines convert them to generic ones).
+native_to(RadianceEngine, "rad.paint", RadMaterial)
