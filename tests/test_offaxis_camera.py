@@ -126,7 +126,7 @@ def test_two_eyes_see_screen_points_at_the_same_pixel():
 def test_rib_and_gltf_exports_keep_or_report_the_shift(tmp_path):
     cam = om.Camera.from_screen(SCREEN, (0.9, 0.5, 3.0), near=0.5, far=50.0)
     scene = om.Node("s", [cam, om.Sphere()])
-    from omnirender.export import rib
+    from omnirender.formats import rib
 
     text = rib.to_text(scene, size=SIZE)
     # RenderMan: fov spans the (vertical) smaller side; the window is the screen's, in units of tan(fov / 2)
