@@ -115,3 +115,36 @@ def test_stereo_errors_say_what_to_give():
         om.gl.GLEngine(size=(64, 48), pipeline="deferred", stereo=om.gl.Stereo()).release()
     with pytest.raises(TypeError, match="om.gl.Stereo"):
         om.Viewer(stereo="side-by-side")
+
+
+def _centroid(rgb: np.ndarray) -> tuple[float, float]:
+    weight = rgb[..., :3].astype(float).sum(-1)
+    weight[weight < 0.5 * weight.max()] = 0
+    ys, xs = np.indices(weight.shape)
+    return float((weight * xs).sum() / weight.sum()) + 0.5, float((weight * ys).sum() / weight.sum()) + 0.5
+
+
+def test_screen_stereo_with_a_tracked_head_node_has_zero_disparity_on_the_screen():
+    """guacamole's screen + eye nodes: each eye looks through the screen rectangle (off-axis); a marker on the
+    screen lands on the same pixel of both eye images within half a pixel, wherever the tracked head is."""
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 3), (0, 0, 0), near=0.5, far=50), om.Background((0, 0, 0))])
+    tracker = om.Translation(0.4, -0.3, 2.5)
+    head = scene.add(om.Node("head", [tracker]))
+    scene.add(om.Node("marker", [om.Translation(0.8, 0.6, 0.0), om.Rotation(90, (1, 0, 0)), om.Color((1, 1, 1)),
+                                 om.Rectangle(size=(0.1, 0.1))]))  # fmt: skip  # flat, in the screen's plane
+    # the screen node (not drawn): a 3.2 x 2.4 rectangle turned to face +z, its -z edge up
+    screen = om.Node("screen", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(3.2, 2.4))])
+    stereo = om.gl.Stereo("side-by-side", eye_separation=0.065, screen=screen, head=head)
+    expected = ((0.8 + 1.6) / 3.2 * 160, (1.2 - 0.6) / 2.4 * 120)
+    seen = []
+    for position in [(0.4, -0.3, 2.5), (-1.0, 0.5, 1.5)]:
+        tracker.offset = position
+        img = om.render(scene, engine="gl", size=(2 * 160, 120), stereo=stereo).array
+        left, right = _centroid(img[:, :160]), _centroid(img[:, 160:])
+        assert abs(left[0] - right[0]) <= 0.5 and abs(left[1] - right[1]) <= 0.5, position
+        assert abs(left[0] - expected[0]) <= 0.5 and abs(left[1] - expected[1]) <= 0.5, position
+        seen.append(img)
+    with pytest.raises(ValueError, match="either convergence= or screen="):
+        om.gl.Stereo(screen=screen, convergence=3)
+    with pytest.raises(ValueError, match="head= needs screen="):
+        om.gl.Stereo(head=head)
