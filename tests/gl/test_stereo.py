@@ -111,8 +111,6 @@ def test_stereo_errors_say_what_to_give():
     scene.insert(0, om.Camera.orthographic((0, 0, 0), (0, 0, -1), height=2))
     with pytest.raises(ValueError, match="orthographic; stereo needs a perspective camera"):
         om.render(scene, engine="gl", size=(64, 48), stereo=om.gl.Stereo())
-    with pytest.raises(ValueError, match="pipeline='forward'"):
-        om.gl.GLEngine(size=(64, 48), pipeline="deferred", stereo=om.gl.Stereo()).release()
     with pytest.raises(TypeError, match="om.gl.Stereo"):
         om.Viewer(stereo="side-by-side")
 
@@ -148,3 +146,33 @@ def test_screen_stereo_with_a_tracked_head_node_has_zero_disparity_on_the_screen
         om.gl.Stereo(screen=screen, convergence=3)
     with pytest.raises(ValueError, match="head= needs screen="):
         om.gl.Stereo(head=head)
+
+
+@pytest.mark.parametrize("mode", ["side-by-side", "top-bottom", "anaglyph", "right"])
+def test_stereo_with_the_deferred_pipeline_equals_forward_per_eye(mode):
+    """guacamole's stereo on its deferred pipeline: each eye through the whole pipeline (one G-buffer layout, an
+    eye-sized target copied into its place); per eye within 3/255 of forward stereo."""
+    scene = om.Node("s", [om.Camera.look_at((0, 1, 5), (0, 0, 0)), om.PointLight(position=(3, 4, 5)),
+                          om.Background((0.1, 0.1, 0.2))])  # fmt: skip
+    scene.add(
+        om.Node("a", [om.Material(diffuse=(1, 0.3, 0.2), specular=(1, 1, 1), shininess=30), om.Sphere(radius=0.8)])
+    )
+    scene.add(om.Node("b", [om.Translation(1.2, 0, -1), om.Material(diffuse=(0.2, 0.8, 0.3)), om.Box(size=(1, 1, 1))]))
+    scene.add(
+        om.Node("f", [om.Translation(0, -0.9, 0), om.Material(diffuse=(0.7, 0.7, 0.7)), om.Box(size=(6, 0.1, 6))])
+    )
+    stereo = om.gl.Stereo(mode, eye_separation=0.3)
+    images = {}
+    for pipeline in ("forward", "deferred"):
+        with om.gl.GLEngine(size=(160, 80), samples=0, stereo=stereo, pipeline=pipeline) as engine:
+            images[pipeline] = engine.render(scene).array[..., :3].astype(int)
+            names = [p["name"] for p in engine.stats["passes"] if "eye" in p["name"]]
+        assert any("left" in n for n in names) == (mode != "right")
+    forward, deferred = images["forward"], images["deferred"]
+    halves = {
+        "side-by-side": [(slice(None), slice(0, 80)), (slice(None), slice(80, None))],
+        "top-bottom": [(slice(0, 40), slice(None)), (slice(40, None), slice(None))],
+    }.get(mode, [(slice(None),) * 2])
+    for half in halves:  # fmt: skip
+        assert np.abs(forward[half] - deferred[half]).mean() <= 3.0
+    assert forward.std() > 20  # something was drawn

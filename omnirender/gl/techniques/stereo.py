@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..engine.attributes import ColorMask
-from ..engine.passes import Clear, Pass
+from ..engine.passes import Clear, FullScreen, Pass, Target
 from ..engine.technique import GLTechnique
 
 __all__ = ["Stereo", "MODES", "eye_matrices", "disparity_pixels"]
@@ -33,6 +33,13 @@ __all__ = ["Stereo", "MODES", "eye_matrices", "disparity_pixels"]
 MODES = ("side-by-side", "top-bottom", "anaglyph", "left", "right")
 #: Colour masks of the anaglyph's eyes: red for the left eye, green and blue (cyan) for the right.
 ANAGLYPH_MASKS = (ColorMask(True, False, False, True), ColorMask(False, True, True, True))
+#: A pipeline eye (deferred) copied into its place in the frame, colour over what is there and its depth.
+_EYE = Target("stereo.eye")
+_EYE_COPY = """uniform sampler2D u_eye;
+uniform sampler2D u_eye_depth;
+vec4 effect(vec2 uv) { return texture(u_eye, uv); }
+float effect_depth(vec2 uv) { return texture(u_eye_depth, uv).r; }
+"""
 
 
 def eye_matrices(
@@ -112,7 +119,8 @@ class Stereo(GLTechnique):
     ):
         if mode not in MODES:
             raise ValueError(f"Stereo: mode must be one of {MODES}, got {mode!r}")
-        super().__init__(passes=1 if mode in ("left", "right") else 2)
+        # per eye: the eye, then (pipelines other than forward only) its copy into the frame
+        super().__init__(passes=2 if mode in ("left", "right") else 4)
         self.mode = mode
         self.eye_separation = _positive("eye_separation", eye_separation)
         self.convergence = None if convergence is None else _positive("convergence", convergence)
@@ -176,26 +184,45 @@ class Stereo(GLTechnique):
         d = float(np.linalg.norm(np.subtract(center, eye)))
         return d if d > 0 else float(np.linalg.norm(eye_world))
 
-    def prepare_pass(self, engine: Any) -> None:
+    def prepare_pass(self, engine: Any) -> bool:
+        """Pass 2k draws eye k; pass 2k+1 copies it into the frame when the engine's pipeline is not forward
+        (a deferred eye is drawn whole into an eye-sized target first: its passes own the viewport), else it
+        is declined."""
         proj = engine.frame_projection
         if abs(proj[3, 3] - 1.0) < 1e-9:
             raise ValueError(
                 "Stereo: the camera is orthographic; stereo needs a perspective camera (om.Camera.look_at)"
             )
-        sign = self.eyes()[engine.current_pass]
+        index, copy = divmod(engine.current_pass, 2)
+        sign = self.eyes()[index]
         size = engine.target_size
         box = self.viewport(sign, size)
         w, h = (box[2], box[3]) if box is not None else size
+        through_pipeline = engine.frame_technique is not engine.technique  # e.g. the deferred pipeline
+        name = "left eye" if sign < 0 else "right eye"
+        mask = ANAGLYPH_MASKS[index] if self.mode == "anaglyph" else None
+        if copy:
+            if not through_pipeline:
+                return False
+            inputs = {"u_eye": (_EYE.name, "color"), "u_eye_depth": (_EYE.name, "depth")}
+            fullscreen = FullScreen(_EYE_COPY, inputs=inputs,
+                                    blend=True, depth=True, label="stereo eye copy",
+                                    # the anaglyph's second eye starts from a cleared depth, as in forward
+                                    depth_test=None if mask is not None and index == 1 else "lequal")  # fmt: skip
+            engine.set_pass(Pass(f"{name} copy", fullscreen=fullscreen, viewport=box, state=(mask,) if mask else ()))
+            return True
         if self.screen is not None:
             view, p = self.screen_eye(engine, sign, w / h)
         else:
             view, p = eye_matrices(
                 engine.frame_view, proj, w / h, sign, self.eye_separation, self.convergence_for(engine)
             )
-        name = "left eye" if sign < 0 else "right eye"
-        if self.mode == "anaglyph":
-            mask = ANAGLYPH_MASKS[engine.current_pass]
-            clear = Clear(color=None, depth=1.0) if engine.current_pass == 1 else None
+        if through_pipeline:  # the whole pipeline into an eye-sized target (cleared transparent), copied next
+            target = Target(_EYE.name, size=(w, h))
+            engine.set_pass(Pass(name, camera=(view, p), target=target, clear=Clear(), technique="pipeline"))
+        elif self.mode == "anaglyph":
+            clear = Clear(color=None, depth=1.0) if index == 1 else None
             engine.set_pass(Pass(name, camera=(view, p), state=(mask,), clear=clear))
         else:
             engine.set_pass(Pass(name, camera=(view, p), viewport=box))
+        return True
