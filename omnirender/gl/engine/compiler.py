@@ -408,8 +408,8 @@ class DrawListCompiler:
         for c in changed:  # components changed since the last frame: only those the new subtrees hold
             if isinstance(c, Node) or not c.owners:
                 continue
-            for owner in c.owners:
-                if id(owner) not in leaves and not _below(owner, added_ids):
+            for owner in c.owners:  # an owner may be a component built from it (an instance set's shape)
+                if not isinstance(owner, Node) or (id(owner) not in leaves and not _below(owner, added_ids)):
                     return None
         leaf_list = []
         for node in leaves.values():
