@@ -189,10 +189,10 @@ class FrameRunner:
         if bounds is None:
             return 0
         key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
-               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
         if plan is None:
-            plan = ShadowPlan(settings, lights, bounds)
+            plan = ShadowPlan(settings, lights, bounds, tuple(engine.size))
             self._shadow_cache = (key, plan, plan.technique())
         technique = self._shadow_cache[2]
         if technique is None:

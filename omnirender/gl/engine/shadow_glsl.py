@@ -12,7 +12,8 @@ both are no-ops.
   direction from the light), with normal offset and depth bias measured in
   texels of that face, and percentage-closer filtering chosen at compile
   time by ``SHADOW_PCF`` (0: one comparison, hard shadows; 1: bilinear 2x2;
-  2: four bilinear taps spread over ``u_shadow_style.x`` texels).  Software
+  2: four bilinear taps spread over ``u_shadow_style.x`` texels, a tent over
+  3x3 texels at the default softness 2, Filament's and three.js's PCF).  Software
   rasterisers run every side of a branch, so the filter is a define, not a
   uniform.
 * ``LIGHT_SELECT``: ``u_light_on[i]`` scales light ``i`` and ``u_ambient_on``
@@ -83,7 +84,10 @@ float face_shadow(int f, int count, vec3 light_eye, vec3 P, vec3 N, vec3 L) {
     clip = u_shadow_mat[f] * vec4(W, 1.0);
     if (clip.w <= 0.0) return 1.0;
     vec3 q = clip.xyz / clip.w * 0.5 + 0.5;
-    if (count == 1 && (q.x < 0.0 || q.x > 1.0 || q.y < 0.0 || q.y > 1.0)) return 1.0;  // no caster there
+    // outside the face's map no caster can be (faces are cropped to the casters); a cube face's own border
+    // keeps a few texels of slack for the offsets, which may carry a point just past it
+    float slack = count == 1 ? 0.0 : 4.0 / tile.z;
+    if (q.x < -slack || q.x > 1.0 + slack || q.y < -slack || q.y > 1.0 + slack) return 1.0;
     return shadow_lookup(tile, clamp(q.xy, 0.0, 1.0), clamp(q.z, 0.0, 1.0));
 }
 """
