@@ -16,9 +16,9 @@ scopes included, from the light's camera:
 Perspective faces are fitted tightly: each is cropped to the rectangle the
 casters' bounds cover in it (:func:`frustum_crop`), so its texels go where
 shadows can fall.  The map resolution follows the image (``resolution=None``:
-about twice the image's larger side, :func:`auto_resolution`) within an atlas
+the image's larger side, :func:`auto_resolution`) within an atlas
 budget (:data:`MAX_ATLAS`), so a shadow texel stays near a pixel on the
-screen; both depend on the casters, the lights and the image size only, never
+screen (1024 texels at 640x480); both depend on the casters, the lights and the image size only, never
 on the camera, so maps drawn once stay valid while the camera moves.
 
 Lit shaders then look each light up in its face (``SHADOW_MAPS``, see
@@ -78,14 +78,14 @@ _MAX_SPOT_CUTOFF = 65.0
 #: The atlas's largest side in texels (the faces of a frame share it: 4096^2 depth texels are 64 MiB).
 MAX_ATLAS = 4096
 #: Automatic map resolutions: texels per pixel of the image's larger side, and the range.
-AUTO_TEXELS_PER_PIXEL = 2.0
+AUTO_TEXELS_PER_PIXEL = 1.0
 AUTO_RANGE = (512, 2048)
 #: Cropped faces keep this margin (a fraction of the crop) around the casters' rectangle.
 _CROP_MARGIN = 0.02
 
 
 def auto_resolution(size: tuple[int, int]) -> int:
-    """The map resolution for an image of ``size``: twice its larger side, a power of two in ``AUTO_RANGE``."""
+    """The map resolution for an image of ``size``: its larger side, a power of two in ``AUTO_RANGE``."""
     want = AUTO_TEXELS_PER_PIXEL * max(int(size[0]), int(size[1]), 1)
     r = 1 << max(int(math.ceil(math.log2(want))), 0)
     return int(min(max(r, AUTO_RANGE[0]), AUTO_RANGE[1]))
