@@ -232,6 +232,15 @@ def pipeline_images() -> None:
     print("wrote", HERE / "stereo_demo.png")
 
 
+def usd_images() -> None:
+    """Example 19: a USD stage in the four engines."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "19_usd.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "19-usd.png", HERE / "example_19-usd.png")
+        print("wrote", HERE / "example_19-usd.png")
+
+
 def asset_suite_images(size: tuple[int, int] = (128, 96)) -> None:
     """The cross-engine asset suite (tests/asset_suite.py) as a contact sheet: one row per asset, one column per
     engine, each engine's IoU / mean CIEDE2000 against GL under its picture (asset_suite.png)."""
@@ -272,6 +281,7 @@ SECTIONS = {
     "postfx": postfx_images,
     "deferred": deferred_images,
     "pipelines": pipeline_images,
+    "usd": usd_images,
     "assets": asset_suite_images,
 }
 

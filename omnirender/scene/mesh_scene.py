@@ -19,7 +19,7 @@ from ..core.camera import Camera
 from ..shapes.files import mesh_suffixes
 from .node import Node
 
-__all__ = ["mesh_scene", "mesh_suffixes"]
+__all__ = ["mesh_scene", "mesh_suffixes", "framed"]
 
 
 def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3) -> Node:
@@ -65,6 +65,28 @@ def _gltf_scene(path: str | os.PathLike[str]) -> Node | None:
         return None
     if declared.lights:
         return scene
+    camera, world = declared.camera
+    eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    return Node("scene", [*default_lights(eye_to_world), scene])
+
+
+def framed(scene: Node, aspect: float = 4 / 3) -> Node:
+    """``scene`` as the command line shows a file: its own camera and lights, else a camera fitted to its
+    bounds (as :func:`mesh_scene` places it) and default lights placed for the camera."""
+    from ..attributes.lights import default_lights
+    from ..techniques import bounds
+
+    declared = scene.declarations()
+    if declared.camera is not None and declared.lights:
+        return scene
+    if declared.camera is None:
+        box = bounds(scene)
+        if box is None:
+            raise ValueError(f"{scene.name}: nothing to look at")
+        camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
+        eye_to_world = np.linalg.inv(camera.view_matrix())
+        lights = [] if declared.lights else default_lights(eye_to_world)
+        return Node("scene", [camera, *lights, scene])
     camera, world = declared.camera
     eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
     return Node("scene", [*default_lights(eye_to_world), scene])
