@@ -75,7 +75,7 @@ def test_a_scene_renderer_keeps_its_engine_and_compiled_scene_between_frames():
         assert renderer.engine(host) is guest and guest.stats["compiled"] is False  # replayed
         renderer.scene.add(om.Sphere(center=(1, 1, 0), radius=0.2))
         host.render(scene)
-        assert guest.stats["compiled"] is True
+        assert guest.stats["compiled"] in (True, "subtrees")  # compiled again (the edited node alone)
     renderer.release()
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import os
 from typing import Any
 
 from .glenum import (
@@ -72,6 +73,11 @@ def create_context(require: int = 330) -> Any:
         import moderngl
     except ImportError as exc:  # pragma: no cover - depends on the installation
         raise GLError(f"GLEngine: moderngl is not installed ({exc}); pip install 'omnirender[gl]'") from None
+    if os.environ.get("GALLIUM_NOOP") == "1":
+        # Mesa's no-op driver (22.x) under its threaded context corrupts memory when part of a buffer that a
+        # draw used is rewritten (glBufferSubData after a draw; our offsets are in range, llvmpipe and GPUs are
+        # fine): run it unthreaded, as llvmpipe runs.  Read when the first context is made.
+        os.environ.setdefault("GALLIUM_THREAD", "0")
     try:
         return moderngl.create_standalone_context(backend="egl", require=require)
     except Exception as exc:
