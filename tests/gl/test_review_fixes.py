@@ -180,12 +180,25 @@ def test_shape_construction_errors_say_how_to_fix():
         om.TriangleSet(v, colors=[(1, 0, 0), (0, 1, 0)])
 
 
-def test_oversized_texture_and_volume_raise_a_clear_error(engine):
+@pytest.mark.parametrize("limit", ["context", 16384, 32768])
+def test_oversized_texture_and_volume_raise_a_clear_error(engine, monkeypatch, limit):
+    """The limits are the context's (llvmpipe allows 16384 texels per side, NVIDIA 32768): an image one texel
+    wider is refused with a clear error, by the engine or, beyond what any GPU holds, by the Texture itself."""
+    from omnirender.attributes.appearance import MAX_TEXTURE_SIDE
+
+    if limit != "context":  # another driver's limit, as the engine would have read it from that context
+        monkeypatch.setattr(engine, "max_texture_size", limit)
     s = om.Node("scene")
     s.add(om.Camera.look_at(eye=(0, 0, 4)))
     n = s.add(om.Node("textured"))
     # one pixel high, one pixel wider than the GPU allows: tiny in memory, still too large
-    n.add(om.Texture(np.zeros((1, engine.max_texture_size + 1, 3), np.uint8)))
+    image = np.zeros((1, engine.max_texture_size + 1, 3), np.uint8)
+    if image.shape[1] > MAX_TEXTURE_SIDE:  # no GPU holds it: the declaration refuses it already
+        with pytest.raises(ValueError, match=r"Texture: image is .* at most \d+ per side .*scale the image down"):
+            om.Texture(image)
+        image = np.zeros((1, 2, 3), np.uint8)
+        monkeypatch.setattr(engine, "max_texture_size", 1)  # the engine's own check, at a limit an image exceeds
+    n.add(om.Texture(image))
     n.add(om.Box())
     with pytest.raises(ValueError, match=r"Texture .*in node /scene/textured: .*resize") as info:
         engine.render(s)
