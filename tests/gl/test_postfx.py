@@ -100,6 +100,29 @@ def test_chain_keeps_the_engines_multisampling(pipeline):
     assert levels > 1.3 * len(np.unique(single[..., :3].reshape(-1, 3), axis=0)), "edges are not antialiased"
 
 
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_the_chain_resolves_samples_in_a_shader_not_by_the_drivers_blit(monkeypatch, pipeline):
+    """glBlitFramebuffer resolves float samples "in an implementation-dependent manner" (OpenGL 4.6, 18.3.2):
+    NVIDIA's left the chain's edges aliased.  The chain averages the samples itself."""
+    from omnirender.gl import frame as frame_module
+
+    multisampled_blits = []
+    real = frame_module.blit
+
+    def recording(raw, source, target, *args, **kwargs):
+        if any(getattr(a, "samples", 0) > 1 for a in (*source.color_attachments, source.depth_attachment) if a):
+            multisampled_blits.append(source)
+        return real(raw, source, target, *args, **kwargs)
+
+    monkeypatch.setattr(frame_module, "blit", recording)
+    e = om.gl.GLEngine(size=SIZE, samples=4, pipeline=pipeline)
+    try:
+        e.render(build(CAMERA, shapes(), effects=[]))
+    finally:
+        e.release()
+    assert not multisampled_blits, "the chain's samples were resolved by glBlitFramebuffer"
+
+
 def test_passes_run_depth_effects_before_transparency_and_colour_effects_after(engine):
     effects = [om.gl.SSAO(), om.gl.DepthFog(start=2, end=30), om.gl.Bloom(levels=2), om.gl.ToneMap(), om.gl.FXAA()]
     engine.render(build(CAMERA, shapes(), effects=effects))
