@@ -34,7 +34,7 @@ import numpy as np
 import omnirender as om
 from omnirender.attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from omnirender.gl import GLEngine
-from omnirender.gl.context import gl_renderer
+from omnirender.gl.engine.context import gl_renderer
 
 SIZE = (256, 256)
 
@@ -160,7 +160,7 @@ class HandInstanced:
     """
 
     def __init__(self, ctx: moderngl.Context, n: int, camera: om.Camera, background: tuple, shading: str) -> None:
-        from omnirender.gl.geometry import unit_mesh
+        from omnirender.gl.engine.geometry import unit_mesh
 
         self.ctx = ctx
         self.background = background
@@ -240,7 +240,7 @@ def bench_culling(n: int, frames: int) -> dict[str, float]:
     timed with culling (and front-to-back sorting) switched off, to show what
     culling itself saves.
     """
-    from omnirender.gl import renderer
+    from omnirender.gl.engine import renderer
 
     d = np.ceil(n ** (1 / 3)) * 1.5 / 2
     inside = om.Camera.look_at((0, 0, -0.3 * d), (0.1, 0.2, d), fov=50, near=0.1, far=d * 4)

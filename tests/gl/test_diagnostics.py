@@ -13,7 +13,7 @@ import pytest
 
 import omnirender as om
 from omnirender.gl.deferred.glsl import explain, first_line
-from omnirender.gl.diagnostics import Diagnostic, errors, parse
+from omnirender.gl.engine.diagnostics import Diagnostic, errors, parse
 
 MESA = "0:{line}(12): error: `undefined_name' undeclared"
 NVIDIA = '0({line}) : error C1503: undefined variable "undefined_name"'

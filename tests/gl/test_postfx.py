@@ -104,7 +104,7 @@ def test_chain_keeps_the_engines_multisampling(pipeline):
 def test_the_chain_resolves_samples_in_a_shader_not_by_the_drivers_blit(monkeypatch, pipeline):
     """glBlitFramebuffer resolves float samples "in an implementation-dependent manner" (OpenGL 4.6, 18.3.2):
     NVIDIA's left the chain's edges aliased.  The chain averages the samples itself."""
-    from omnirender.gl import frame as frame_module
+    from omnirender.gl.engine import frame as frame_module
 
     multisampled_blits = []
     real = frame_module.blit

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from omnirender.gl import context as glcontext
-from omnirender.gl.context import SIGNATURES, RawGL
+from omnirender.gl.engine import context as glcontext
+from omnirender.gl.engine.context import SIGNATURES, RawGL
 
 ROOT = Path(__file__).resolve().parents[2]
 #: GL_TRUE / GL_FALSE with garbage in the upper bytes, as NVIDIA's driver leaves them (0xC6A08C01 = -962556927)

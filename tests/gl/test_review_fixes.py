@@ -67,7 +67,7 @@ def test_plain_shapes_after_a_special_state_shape_are_drawn_after_it(engine):
 
 def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
     """An animated clip plane through a transparent sphere and a per-frame texture / draw style leak nothing."""
-    from omnirender.gl.resources import live_buffers
+    from omnirender.gl.engine.resources import live_buffers
 
     scene = om.Node("scene")
     scene.add(om.Camera.look_at(eye=(0, 0, 4)))
@@ -149,7 +149,7 @@ TRIANGLE = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0)], np.float32)
     ],
 )
 def test_custom_painters_cannot_send_bad_geometry_to_the_driver(monkeypatch, positions, indices, message):
-    from omnirender.gl.geometry import Geometry
+    from omnirender.gl.engine.geometry import Geometry
 
     uploads = []
     original = Geometry.upload

@@ -23,9 +23,9 @@ sample count on a software rasteriser, whatever it shows.
 
 from __future__ import annotations
 
-from ..diagnostics import errors
-from ..shaders import MAX_LIGHTS, SRGB_GLSL
-from ..shadow_glsl import MAPS_CORE
+from ..engine.diagnostics import errors
+from ..engine.shaders import MAX_LIGHTS, SRGB_GLSL
+from ..engine.shadow_glsl import MAPS_CORE
 from .layout import BufferLayout, Channel
 from .models import G_TYPES, L_TYPES, PARAM_TYPES, STAGES, ShadingModel, ShadingModelError
 

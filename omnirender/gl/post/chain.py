@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from ..passes import Clear, FullScreen, Pass, Target
-from ..techniques import GLTechnique
+from ..engine.passes import Clear, FullScreen, Pass, Target
+from ..engine.technique import GLTechnique
 from . import glsl
 from .effects import STAGES, Effect, EffectFrame
 
