@@ -693,7 +693,7 @@ def shading_program(layout: BufferLayout, samples: int, defines: dict[str, objec
 def explain(error: str, models: tuple[ShadingModel, ...], where: str) -> ShadingModelError | None:
     """A :class:`ShadingModelError` naming model, stage and line for a driver error in a model's code, or None.
 
-    The driver's log is read by :func:`~omnirender.gl.diagnostics.parse` (Mesa, NVIDIA, AMD, Intel
+    The driver's log is read by :func:`~omnirender.gl.engine.diagnostics.parse` (Mesa, NVIDIA, AMD, Intel
     formats); the line number it reports encodes the model and the stage (:func:`first_line`).
     """
     by_number = {m.number: m for m in models}

@@ -51,7 +51,7 @@ class GlyphAtlas:
     def __init__(self, size: int, extra: str = "") -> None:
         from PIL import Image, ImageDraw, ImageFont
 
-        from ..fonts import font_file
+        from ...fonts import font_file
 
         try:
             font = ImageFont.truetype(str(font_file()), size)
