@@ -79,6 +79,7 @@ def test_empty_chain_looks_like_no_chain(engine, deferred, pipeline):
     assert np.allclose(np.nan_to_num(plain.depth, posinf=-1), np.nan_to_num(chained.depth, posinf=-1), atol=1e-3)
 
 
+@pytest.mark.gl_needs(samples=4)
 @pytest.mark.parametrize("pipeline", ["forward", "deferred"])
 def test_chain_keeps_the_engines_multisampling(pipeline):
     """With MSAA the opaque scene is drawn multisampled and resolved (in linear light, so edges differ a little
@@ -100,6 +101,7 @@ def test_chain_keeps_the_engines_multisampling(pipeline):
     assert levels > 1.3 * len(np.unique(single[..., :3].reshape(-1, 3), axis=0)), "edges are not antialiased"
 
 
+@pytest.mark.gl_needs(samples=4)
 @pytest.mark.parametrize("pipeline", ["forward", "deferred"])
 def test_the_chain_resolves_samples_in_a_shader_not_by_the_drivers_blit(monkeypatch, pipeline):
     """glBlitFramebuffer resolves float samples "in an implementation-dependent manner" (OpenGL 4.6, 18.3.2):

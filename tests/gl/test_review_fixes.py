@@ -238,6 +238,7 @@ def test_camera_inside_a_volume_sees_it(engine):
     assert 0.05 <= inside.depth[36, 48] < 0.5
 
 
+@pytest.mark.gl_needs(samples=4)
 def test_multisampling_is_on_by_default():
     """om.render's default anti-aliases edges: a tilted white square on black has intermediate grey levels."""
     s = om.Node("scene")
