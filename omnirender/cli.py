@@ -95,20 +95,21 @@ _count = _number(int, 0, False, "a whole number >= 0")
 
 def _load(path: str, trusted: bool = False, size: tuple[int, int] = (4, 3)) -> Any:
     """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``)."""
-    from .scene.mesh_scene import MESH_SUFFIXES
+    from .scene.mesh_scene import mesh_suffixes
 
+    mesh_exts = mesh_suffixes()
     p = Path(path)
     suffix = p.suffix.lower()
-    if suffix not in SCENE_EXTENSIONS + MESH_SUFFIXES:
+    if suffix not in SCENE_EXTENSIONS + mesh_exts:
         raise UsageError(
             f"{path}: unknown extension {p.suffix!r}; give a scene file ({', '.join(SCENE_EXTENSIONS)}) "
-            f"or a mesh file ({', '.join(MESH_SUFFIXES)})"
+            f"or a mesh file ({', '.join(mesh_exts)})"
         )
     if not p.exists():
         raise UsageError(f"scene file not found: {path}")
     if not p.is_file():
         raise UsageError(f"{path} is a folder, not a scene file")
-    if suffix in MESH_SUFFIXES:
+    if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
         return mesh_scene(p, aspect=size[0] / size[1])

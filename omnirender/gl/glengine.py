@@ -43,16 +43,21 @@ from .engine.context import (
     delete_renderbuffer,
     depth_stencil_framebuffer,
 )
+from .engine.drawer import BatchDrawer
 from .engine.drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
 from .engine.dynamic import TransformUpdater
 from .engine.frame import FrameRunner
+from .engine.frame_state import FrameState
 from .engine.geometry import Geometry, GeometryCache, unit_mesh
-from .engine.imagespace import FullScreenPrograms
+from .engine.imagespace import RenderTarget
 from .engine.layout import ROW
+from .engine.passes import Pass, Target, _camera
 from .engine.renderer import BatchRenderer
+from .engine.report import PassReport
 from .engine.resources import gpu_call
 from .engine.shaders import ProgramCache
 from .engine.state import defaults, kinds
+from .engine.targets import FrameTargets
 from .engine.technique import GLTechnique
 from .techniques.forward import Forward
 
@@ -62,7 +67,7 @@ __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
 PIPELINES = ("forward", "deferred")
 
 
-class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, Engine):
+class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
 
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
@@ -128,7 +133,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._pipeline_technique = (
             pipeline if isinstance(pipeline, Deferred) else (Deferred() if pipeline == "deferred" else None)
         )
-        self._deferred: Any = None
+        #: the engine's deferred renderer (made by the deferred pipeline on first use), or None
+        self.deferred_renderer: Any = None
         self.stereo = stereo
         #: render textures (chained pipelines): the frame engine's PipelineSet, or its host's in a pipeline
         self._pipelines: Any = None
@@ -142,12 +148,6 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         check_samples_total(size, int(samples))  # before a context exists: a bad size costs nothing
         #: draw shadow maps for lights that cast shadows (om.gl.ShadowMaps in a scene refines this)
         self.shadows = bool(shadows)
-        self._shadow_plan: Any = None
-        self._shadow_cache: Any = None
-        self._caster_bounds: Any = None
-        self._shadow_drawn: Any = None
-        self._mirrors: Any = None
-        self._warned_mirrors = False
         self.ctx = context if context is not None else create_context()
         self._own_context = context is None
         if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
@@ -201,29 +201,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._kinds_seen = len(kinds())
         # draw state
         self._batch_pool: dict[tuple, Batch] = {}
-        self._transient: dict[Any, tuple[Any, ...]] = {}
-        self._textures: dict[int, tuple[Any, int, Any]] = {}
         self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
-        self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
-        self._drawers: dict[str, Any] = GLEngine._default_drawers
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
         self._defaults = defaults()
-        self._requests: list[Any] = []
-        self._target_cache: dict[Any, Any] = {}
-        self._frame_targets: dict[str, Any] = {}
-        self._fullscreen_programs = FullScreenPrograms(self.ctx)
-        self._query_pool: list[Any] = []
-        self._records: list[Any] = []
-        self._record_stack: list[Any] = []
-        self._applier: Any = None
-        self._nclip = 0
-        self._target_size = tuple(self._size)
-        self._linear_output = False
         self.stats: dict[str, Any] = {}
-        self._view = np.eye(4)
-        self._proj = np.eye(4)
-        self._ortho = False
-        self._camera_used: Camera | None = None
         with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
             info = self.ctx.info
@@ -231,6 +212,13 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
             self.max_texture_size = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
             self.max_texture_size_3d = int(info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
         self._checked_textures: dict[int, tuple[Any, int]] = {}
+        # the frame side's collaborators, made once and handed to each other (three.js's WebGLRenderer is
+        # assembled the same way): what the pass sees, its targets, its report, the drawer, the frame runner
+        self.frame_state = FrameState(self._size)
+        self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
+        self.pass_report = PassReport(self.ctx)
+        self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
+        self.frame_runner = FrameRunner(self, self.frame_state, self.drawer, self.frame_targets, self.pass_report)
 
     def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
         """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
@@ -319,7 +307,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
     def pipeline(self) -> Any:
         """``"forward"``, or the engine's :class:`~.deferred.DeferredRenderer` (``describe()``, ``memory()``)
         once a deferred frame was drawn or the engine was made with ``pipeline="deferred"``."""
-        if self._pipeline == "deferred" or self._deferred is not None:
+        if self._pipeline == "deferred" or self.deferred_renderer is not None:
             from .deferred.pipeline import DeferredRenderer
 
             return DeferredRenderer.of(self)
@@ -443,7 +431,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         self._bounds = world_bounds(item for item in self.draw_items if not item.state.overlay)
         return self._bounds
 
-    def _camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
+    def camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
+        """(camera, view, projection) of the scene's camera (else the auto-fit one) at the engine's size."""
         w, h = self._size
         aspect = w / h
         if self.camera is not None:
@@ -482,7 +471,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
         n += sum(1 for b in self._batch_pool.values() if b.buffer is not None)
         n += sum(1 for s in self.scopes for group in s.filtered.values() for bs in group.values() for b in bs
                  if b.buffer is not None)  # fmt: skip
-        n += len(self._transient)
+        n += self.drawer.live_buffers()
         return n
 
     def release(self) -> None:
@@ -504,9 +493,9 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
             if self._pipelines.host is self:
                 self._pipelines.release()
             self._pipelines = None
-        if self._deferred is not None:
-            self._deferred.release()
-            self._deferred = None
+        if self.deferred_renderer is not None:
+            self.deferred_renderer.release()
+            self.deferred_renderer = None
         self.material_table.release()
         for batch in self._batch_pool.values():
             batch.release()
@@ -516,28 +505,236 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, FrameRunner, E
                 for batches in group.values():
                     for batch in batches:
                         batch.release()
-        for buf, vao, *_ in self._transient.values():
-            vao.release()
-            buf.release()
-        self._transient.clear()
+        self.drawer.release()
         for g in list(self._uploaded_set):
             g.release()
-        for entry in self._textures.values():
-            entry[2].release()
-        self._textures.clear()
-        for target in self._target_cache.values():
-            target.release()
-        self._target_cache.clear()
-        self._fullscreen_programs.release()
-        for query in self._query_pool:
-            query.mglo.release() if hasattr(query.mglo, "release") else None
-        self._query_pool.clear()
+        self.frame_targets.release()
+        self.frame_runner.release()
+        self.pass_report.release()
         if self._own_programs:
             self.programs.release()
         self._release_targets()
         self._root = None
         self._node_cache.clear()
         self._compiled = None
+
+    # -- the installed draw list -------------------------------------------------------------
+    @property
+    def root_scope(self) -> Scope | None:
+        """The installed root scope (None before the first frame)."""
+        return self._root
+
+    @property
+    def item_count(self) -> int:
+        """How many draw items the installed list holds (nested scopes included)."""
+        return self._item_count if self._root is not None else 0
+
+    # -- framebuffers pushed by a FramebufferStack ----------------------------------------------
+    @property
+    def pushed_targets(self) -> int:
+        """How many offscreen targets a :class:`~.engine.framebuffer.FramebufferStack` pushed (0: the engine's own)."""
+        return len(self._target_stack)
+
+    def push_target(self, target: Any) -> None:
+        """Draw into ``target`` (an ``OffscreenTarget``) until :meth:`pop_target`."""
+        self._target_stack.append(target)
+
+    def pop_target(self) -> Any:
+        """Stop drawing into the last pushed target and hand it back (RuntimeError when none is pushed)."""
+        if not self._target_stack:
+            raise RuntimeError("FramebufferStack.pop: nothing was pushed (unbalanced push/pop)")
+        return self._target_stack.pop()
+
+    # -- chained pipelines ----------------------------------------------------------------
+    def pipelines(self) -> Any:
+        """The frame's chained pipelines (:class:`~.engine.pipelines.PipelineSet`, made on first use)."""
+        if self._pipelines is None:
+            from .engine.pipelines import PipelineSet
+
+            self._pipelines = PipelineSet(self)
+        return self._pipelines
+
+    def share_pipelines(self, pipelines: Any) -> None:
+        """Use ``pipelines`` (a host engine's) as this engine's: a render texture's engine draws the others."""
+        self._pipelines = pipelines
+
+    def prepare_pipelines(self) -> None:
+        """Draw the render textures the frame reads, in dependency order (only the frame engine does)."""
+        if self._pipelines is None:
+            if self._pipelines_scanned == self.draw_list_version:
+                return
+            self._pipelines_scanned = self.draw_list_version
+            from .engine.pipelines import PipelineSet
+
+            if not PipelineSet.used_by(self):
+                return
+        pipelines = self.pipelines()
+        if pipelines.host is self:
+            pipelines.prepare()
+
+    def pipeline_image(self, texture: Any) -> Any:
+        """The last image of the render texture ``texture`` as this engine drew it (an ``om.Image``)."""
+        return self.pipelines().image(texture)
+
+    # -- drawing (the frame runner and the drawer do it) ------------------------------------------
+    @classmethod
+    def register_drawer(cls, kind: str, drawer: Any) -> None:
+        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes)."""
+        cls._default_drawers[kind] = drawer
+
+    def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
+        """Draw the installed scopes into the framebuffer: the engine technique's passes and every nested one.
+
+        ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        ``camera`` (an ``om.Camera`` or ``(view, projection)`` 4x4 matrices) replaces the scene's camera
+        for this frame; ``framebuffer`` (a moderngl framebuffer on this engine's context, e.g. another
+        engine's :attr:`current_framebuffer`) is drawn into instead of the engine's own.  Together they
+        let one engine draw its scene into a frame another engine is composing, seen by that frame's camera.
+        """
+        if framebuffer is not None and not hasattr(framebuffer, "use"):
+            raise TypeError(f"GLEngine.draw: framebuffer must be a moderngl Framebuffer, got {framebuffer!r:.60}")
+        override = None if camera is None else _camera(camera, "GLEngine.draw")
+        with self.current():
+            self.frame_runner.draw(background, clear, override, framebuffer)
+
+    def set_pass(self, description: Pass) -> None:
+        """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""
+        self.frame_runner.set_pass(description)
+
+    def target(self, name: str) -> RenderTarget:
+        """The offscreen target ``name`` of the current frame (its ``texture(attachment)``, ``depth``, arrays)."""
+        return self.frame_targets.named(name)
+
+    def count(self, calls: int, instances: int) -> None:
+        """Add draw calls and instances to the pass being drawn (drawers of custom kinds may call it)."""
+        self.pass_report.count(calls, instances)
+
+    def forget_gl_state(self) -> None:
+        """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
+        self.frame_runner.forget_gl_state()
+
+    def reset_gl_state(self) -> None:
+        """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
+        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        self.frame_runner.reset_gl_state()
+
+    @property
+    def current_framebuffer(self) -> Any:
+        """The framebuffer being drawn into: the pass's offscreen target while a frame is drawn, else the engine's."""
+        drawing = self.frame_runner.current_framebuffer
+        return self.framebuffer if drawing is None else drawing
+
+    def copy_framebuffer(self, description: Target) -> RenderTarget:
+        """Copy colour and depth of :attr:`current_framebuffer` into the frame's offscreen target ``description``.
+
+        The target (made at the current framebuffer's size, kept while later frames copy into it) is then
+        read by :class:`FullScreen` inputs by its name, like a pass's; multisampling is resolved.  Custom
+        passes and drawers use it to read what is already drawn (a filter, a merge by depth, the depth a
+        volume's rays stop at).  The scissor test is switched off for the copy.
+        """
+        return self.frame_runner.copy_framebuffer(description)
+
+    def light_order(self) -> list[Any]:
+        """The lights of the pass being drawn in shader order (index i is light i of the light loops)."""
+        return self.drawer.light_order()
+
+    # -- what the pass being drawn sees ---------------------------------------------------
+    @property
+    def eye_position(self) -> np.ndarray:
+        """World position of the frame's own camera (the same in every pass: shadow maps and mirrors included)."""
+        return np.linalg.inv(self.frame_state.frame_view)[:3, 3]
+
+    @property
+    def frame_view(self) -> np.ndarray:
+        """World-to-eye matrix of the pass being drawn (drawers use it)."""
+        return self.frame_state.view
+
+    @property
+    def frame_projection(self) -> np.ndarray:
+        """Projection matrix of the pass being drawn."""
+        return self.frame_state.proj
+
+    @property
+    def frame_camera(self) -> Any:
+        """The ``om.Camera`` of the frame (its near and far planes, projection kind)."""
+        return self.frame_state.camera
+
+    @property
+    def frame_eye(self) -> np.ndarray:
+        """World position of the eye of the pass being drawn."""
+        return np.linalg.inv(self.frame_state.view)[:3, 3]
+
+    @property
+    def frame_orthographic(self) -> bool:
+        """Whether the pass being drawn uses an orthographic projection."""
+        return self.frame_state.ortho
+
+    @property
+    def target_size(self) -> tuple[int, int]:
+        """Size of the framebuffer being drawn into."""
+        return self.frame_state.target_size
+
+    @property
+    def linear_output(self) -> bool:
+        """Whether the framebuffer being drawn into holds linear light (a float target), not display values."""
+        return self.frame_state.linear_output
+
+    @property
+    def frame_shadows(self) -> Any:
+        """The frame's shadow maps (a :class:`~.techniques.shadows.ShadowPlan`: faces per light, uniforms), or None."""
+        return self.frame_state.shadow_plan
+
+    @property
+    def frame_background(self) -> Any:
+        """The ``background`` given to the frame's :meth:`draw` (None: the scene's or the engine's)."""
+        return self.frame_state.background
+
+    # -- read back -------------------------------------------------------------
+    def read(self, read_depth: bool = True) -> Image:
+        """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
+        with self.current():
+            return self._read(read_depth)
+
+    def _read(self, read_depth: bool) -> Image:
+        if self.raw.available:
+            # wait for the GPU through ctypes, which releases the GIL (moderngl's resolve and read would wait
+            # holding it): other Python threads (an application loop beside render threads) run meanwhile
+            self.raw.glFinish()
+        t = self._targets
+        drawn = self.framebuffer
+        if self._target_stack:
+            fbo = drawn
+        else:
+            if drawn is not t["fbo"]:
+                self.ctx.copy_framebuffer(t["fbo"], drawn)
+            fbo = t["fbo"]
+        w, h = self._size
+        data = fbo.read(components=4, alignment=1)
+        array = np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1]
+        depth = None
+        if read_depth:
+            raw = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4", alignment=1), np.float32).reshape(
+                h, w
+            )[::-1]
+            depth = self.linear_depth(raw)
+        return Image(np.ascontiguousarray(array), depth, engine="gl", info=dict(self.stats))
+
+    def linear_depth(self, raw: np.ndarray) -> np.ndarray:
+        """Window depth in [0, 1] -> eye-space distance along the view axis (inf for the far plane)."""
+        camera = self.frame_state.camera
+        if camera is None:
+            camera = self.camera_matrices()[0]
+        n, f = camera.near, camera.far
+        d = raw.astype(np.float64)
+        if camera.is_orthographic:
+            z = n + d * (f - n)
+        else:
+            ndc = 2.0 * d - 1.0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = 2.0 * f * n / ((f + n) - ndc * (f - n))
+        out = z.astype(np.float32)
+        out[raw >= 1.0] = np.inf
+        return out
 
     def __enter__(self) -> GLEngine:
         return self

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.export import gltf, html
+from omnirender.formats import html
+from omnirender.formats.gltf import writer as gltf
 
 SIZE = (320, 240)
 BACKGROUND = (0.1, 0.12, 0.15)

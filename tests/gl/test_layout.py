@@ -21,7 +21,7 @@ KNOWN_INWARD = {
     ("omnirender.gl.engine.compiler", "omnirender.gl.deferred.models"),
     ("omnirender.gl.engine.frame", "omnirender.gl.techniques.mirrors"),
     ("omnirender.gl.engine.frame", "omnirender.gl.techniques.shadows"),
-    ("omnirender.gl.engine.renderer", "omnirender.gl.techniques.shadows"),
+    ("omnirender.gl.engine.drawer", "omnirender.gl.techniques.shadows"),
 }
 
 

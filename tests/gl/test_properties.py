@@ -310,7 +310,7 @@ def test_textures_of_replaced_attributes_are_released(engine):
         holder.add(om.Texture(image.copy()))
         holder.add(om.Box())
         engine.render(scene, read_depth=False)
-        assert len(engine._textures) == 1
+        assert engine.drawer.texture_count() == 1
 
 
 def test_transparent_shape_over_transparent_background_keeps_its_opacity(engine):

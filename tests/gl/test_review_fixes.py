@@ -86,7 +86,7 @@ def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
         holder.add(om.DrawStyle(line_width=float(frame + 1)))
         holder.add(om.Box(center=(0.5, 0, 0)))
         engine.render(scene, read_depth=False)
-        counts.append((engine.live_buffers(), live_buffers(engine.ctx), len(engine._transient)))
+        counts.append((engine.live_buffers(), live_buffers(engine.ctx), engine.drawer.live_buffers()))
     assert max(c[0] for c in counts[5:]) <= counts[5][0], counts
     assert max(c[1] for c in counts[5:]) <= counts[5][1], counts
     assert max(c[2] for c in counts) <= 4, counts  # two shapes, each in the blended pass and the depth pass

@@ -153,15 +153,15 @@ class DeferredRenderer:
     @classmethod
     def of(cls, engine: Any) -> DeferredRenderer:
         """The engine's deferred renderer (made on first use, released with the engine)."""
-        found = getattr(engine, "_deferred", None)
+        found = engine.deferred_renderer
         if found is None:
-            found = engine._deferred = cls(engine)
+            found = engine.deferred_renderer = cls(engine)
         return found
 
     # -- what the frame holds ----------------------------------------------------------------------
     def update(self, engine: Any, technique: Deferred) -> None:
         """Models, fogs and whether selections are needed: recomputed when the draw list changed."""
-        key = (id(engine._root), engine.draw_list_version, technique.light_format)
+        key = (id(engine.root_scope), engine.draw_list_version, technique.light_format)
         if key == self._frame_key:
             return
         self._frame_key = key

@@ -232,8 +232,7 @@ class TransformUpdater:
         """What depends on where items are: filtered batches, bounds, shadow maps, mirror planes."""
         # batches of pass masks and predicates follow their source batches' versions (Batch.follow)
         self._bounds = None
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
-        self._mirrors = None  # mirror planes follow their transforms
+        self.frame_runner.placements_changed()  # shadow maps and mirror planes follow what moved
 
     def _refresh_declarations(self, scene: Any) -> None:
         """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""

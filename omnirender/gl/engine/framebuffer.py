@@ -93,21 +93,19 @@ class FramebufferStack:
             if clear:
                 target.fbo.use()
                 target.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        e._target_stack.append(target)
+        e.push_target(target)
         return target
 
     def pop(self) -> OffscreenTarget:
         """Return to the previous target; the popped one is handed back (release it when done)."""
         e = self.engine
-        if not e._target_stack:
-            raise RuntimeError("FramebufferStack.pop: nothing was pushed (unbalanced push/pop)")
-        target = e._target_stack.pop()
+        target = e.pop_target()
         with e.current():
             e.framebuffer.use()
         return target
 
     def __len__(self) -> int:
-        return len(self.engine._target_stack)
+        return self.engine.pushed_targets
 
 
 class DepthSprite:

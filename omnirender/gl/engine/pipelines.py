@@ -60,7 +60,7 @@ class GLPipeline:
         self.engine = type(host)(  # a GLEngine like its host (the engine package never imports the facade)
             size=self.size, samples=host.samples, context=host.ctx, programs=host.programs, shadows=host.shadows
         )
-        self.engine._pipelines = pipelines  # its render textures are the frame's pipelines
+        self.engine.share_pipelines(pipelines)  # its render textures are the frame's pipelines
         ctx = host.ctx
         self.textures = []
         self.fbos = []

@@ -213,5 +213,11 @@ class RasterApplier:
 
 
 def defaults() -> tuple[Any, ...]:
-    """The raster tuple with every kind at its default."""
-    return tuple(kind.default for kind in _KINDS)
+    """The raster tuple with every kind at its default (made again only when a kind was registered since)."""
+    global _DEFAULTS
+    if len(_DEFAULTS) != len(_KINDS):
+        _DEFAULTS = tuple(kind.default for kind in _KINDS)
+    return _DEFAULTS
+
+
+_DEFAULTS: tuple[Any, ...] = ()

@@ -192,4 +192,4 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     return calls
 
 
-GLEngine._default_drawers["text"] = draw_text
+GLEngine.register_drawer("text", draw_text)

@@ -237,4 +237,4 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     return calls
 
 
-GLEngine._default_drawers["volume"] = draw_volumes
+GLEngine.register_drawer("volume", draw_volumes)

@@ -1,7 +1,7 @@
-"""MeshFile: a mesh stored in a file (OBJ, PLY, STL, OFF, glTF/GLB), loaded through trimesh.
+"""Mesh files (OBJ, PLY, STL, OFF through trimesh; glTF/GLB through the glTF importer) as ``om.MeshFile`` parts.
 
-The file is parsed lazily on first use (``parts()``), once per version: a scene
-can name many files and pay only for those an engine actually evaluates.
+:func:`read_mesh` is the reader :class:`~omnirender.shapes.MeshFile` calls
+(registered by :mod:`omnirender.formats`) the first time a file is used.
 Trimesh is imported only then, so declaring a MeshFile needs no extra package.
 """
 
@@ -12,78 +12,17 @@ from typing import Any
 
 import numpy as np
 
-from .base import DeclaredShape, parameter
-from .meshes import TriangleSet
-from .objreader import read_plain_obj
-from .trimeshes import is_trimesh, is_trimesh_scene, triangle_arrays
+from ..shapes.meshes import TriangleSet
+from ..shapes.trimeshes import is_trimesh, is_trimesh_scene, triangle_arrays
+from .obj import read_plain_obj
 
-__all__ = ["MeshFile"]
+__all__ = ["read_mesh", "SUFFIXES"]
 
 SUFFIXES = (".obj", ".ply", ".stl", ".off", ".gltf", ".glb")
 
 
-class MeshFile(DeclaredShape):
-    """A mesh file; ``parts()`` gives, per part, its material parameters (or None) and a TriangleSet.
-
-    Supported: OBJ (+MTL), PLY, STL, OFF, glTF/GLB (node transforms applied).
-    A missing file raises FileNotFoundError at construction; an unreadable or
-    malformed one raises ValueError naming the path and the loader's reason
-    when first used (``parts()``/``load()``).  ``path`` may also be a mesh
-    trimesh already made (a ``trimesh.Trimesh`` or ``trimesh.Scene``): it is
-    used as it is (scene files cannot hold it; ``om.embed_files`` turns it into
-    triangle sets).
-
-    Material parameters are dicts: ``{"kind": "phong", "ambient", "diffuse",
-    "specular", "shininess", "opacity"}`` (OBJ/MTL) or ``{"kind": "pbr",
-    "base_color", "metallic", "roughness", "emission", "opacity"}`` (glTF),
-    colours as RGB tuples in [0, 1]; the simplifier turns them into
-    ``om.Material`` / ``om.PBRMaterial``.  A part's texture image, when the
-    file has one, is under ``"texture"`` as an (H, W, 4) uint8 array.  glTF
-    files are read with the full importer (``om.load_gltf``: every material
-    slot, Draco, sparse accessors), flattened to world coordinates; their
-    parts carry ``{"kind": "attributes", "attributes": [...]}``.
-    """
-
-    __slots__ = ("_path",)
-    _params = ("path",)
-    path = parameter("path", "Path of the mesh file.")
-
-    def __init__(self, path: str | os.PathLike | Any) -> None:
-        super().__init__(path=path)
-
-    def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-        path = p["path"]
-        if is_trimesh(path) or is_trimesh_scene(path):
-            return {"path": path}, {}
-        if not isinstance(path, (str, os.PathLike)):
-            raise ValueError(
-                f"MeshFile: path must be a file name (str or os.PathLike) or a trimesh mesh, got {type(path).__name__}"
-            )
-        if "\x00" in os.fspath(path):
-            raise ValueError("MeshFile: path must not contain a NUL character")
-        path = os.fspath(path)
-        if not os.path.exists(path):
-            raise FileNotFoundError(f"MeshFile: no such file {path!r}")
-        if not os.path.isfile(path):
-            raise ValueError(f"MeshFile: {path!r} is not a file")
-        if not path.lower().endswith(SUFFIXES):
-            raise ValueError(f"MeshFile: {path!r} has an unsupported extension (supported: {', '.join(SUFFIXES)})")
-        return {"path": path}, {}
-
-    def load(self) -> None:
-        """Parse the file now (otherwise done on first use); raises ValueError when it is malformed."""
-        self.parts()
-
-    def parts(self) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
-        """[(material parameters or None, TriangleSet)] per part, in file order; cached per version."""
-        return self._cached("parts", lambda: _load(self._path))
-
-    @property
-    def triangle_count(self) -> int:
-        return sum(ts.triangle_count for _, ts in self.parts())
-
-
-def _load(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a mesh file or trimesh object: ``[(material parameters or None, TriangleSet)]``."""
     if is_trimesh(path) or is_trimesh_scene(path):
         return _parts(path, "the trimesh object")
     if not os.path.exists(path):
@@ -218,12 +157,8 @@ def _material(mat: Any) -> dict[str, Any] | None:
 
 
 def _load_gltf(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
-    """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts.
-
-    Deliberate exception to the dependency rule, as for the simplifiers' lazy
-    attribute imports: the importer builds attributes and nodes.
-    """
-    from ..animation.gltf import GLTFImportError, flatten_gltf
+    """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts."""
+    from .gltf.reader import GLTFImportError, flatten_gltf
 
     try:
         flat = flatten_gltf(path)

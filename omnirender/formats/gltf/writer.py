@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import (
+from ...attributes import (
     AmbientLight,
     Background,
     BumpMap,
@@ -36,20 +36,20 @@ from ..attributes import (
     SpotLight,
     Texture,
 )
-from ..attributes.environment import is_scene_background
-from ..attributes.photometry import intensity_scale, phong_roughness
-from ..attributes.surface import appearance_key, engine_appearance
-from ..attributes.texturing import bake_layers
-from ..core import AttributePainter, ShapePainter, default_for
-from ..fileio import atomic_write
-from ..geometry.matrix import transform_points
-from ..geometry.trs import decomposable
-from ..scene import Node
-from ..shapes import InstanceSet, LineSet, PointSet, TriangleSet
-from .colors import srgb_to_linear
+from ...attributes.environment import is_scene_background
+from ...attributes.photometry import intensity_scale, phong_roughness
+from ...attributes.surface import appearance_key, engine_appearance
+from ...attributes.texturing import bake_layers
+from ...core import AttributePainter, ShapePainter, default_for
+from ...fileio import atomic_write
+from ...geometry.matrix import transform_points
+from ...geometry.trs import decomposable
+from ...scene import Node
+from ...shapes import InstanceSet, LineSet, PointSet, TriangleSet
+from ..colors import srgb_to_linear
+from ..walk import NodeTrackingEngine, track_surfaces
 from .glb import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, GLBBuilder
-from .gltf_instancing import INSTANCING_EXTENSION, Capture, write_instance_set
-from .walk import NodeTrackingEngine, track_surfaces
+from .instancing import INSTANCING_EXTENSION, Capture, write_instance_set
 
 __all__ = ["export", "to_bytes", "build", "GLTFEngine", "LIGHTS_EXTENSION", "INSTANCING_EXTENSION"]
 

@@ -45,15 +45,15 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import DirectionalLight, PBRMaterial, PointLight, SpotLight, Texture
-from ..attributes.photometry import srgb_to_linear
-from ..core.camera import Camera
-from ..core.transform import Matrix, Rotation, Scaling, Translation
-from ..geometry.trs import compose_trs
-from ..scene.node import Node
-from ..shapes import InstanceSet, LineSet, PointSet, TriangleSet
-from .animation import Animation
-from .tracks import Keyframes
+from ...animation.animation import Animation
+from ...animation.tracks import Keyframes
+from ...attributes import DirectionalLight, PBRMaterial, PointLight, SpotLight, Texture
+from ...attributes.photometry import srgb_to_linear
+from ...core.camera import Camera
+from ...core.transform import Matrix, Rotation, Scaling, Translation
+from ...geometry.trs import compose_trs
+from ...scene.node import Node
+from ...shapes import InstanceSet, LineSet, PointSet, TriangleSet
 
 __all__ = ["load_gltf", "GLTFImportError", "flatten_gltf", "SUPPORTED_EXTENSIONS", "light_from_gltf"]
 
@@ -740,7 +740,7 @@ def flatten_gltf(path: str | os.PathLike[str]) -> list[tuple[list[Any], Any]]:
     importer (:func:`load_gltf`), so Draco, sparse accessors, quantization and
     every material slot behave as in ``load_gltf``.
     """
-    from ..core.transform import Transform
+    from ...core.transform import Transform
 
     root = load_gltf(path, animation=None)
     out: list[tuple[list[Any], Any]] = []

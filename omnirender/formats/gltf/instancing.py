@@ -32,9 +32,9 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Color, PBRMaterial
-from ..geometry.trs import TRS, decomposable, decompose_trs
-from .colors import srgb_to_linear
+from ...attributes import Color, PBRMaterial
+from ...geometry.trs import TRS, decomposable, decompose_trs
+from ..colors import srgb_to_linear
 
 __all__ = ["INSTANCING_EXTENSION", "INSTANCE_COLOR", "COLOR_GROUPS", "Capture", "write_instance_set"]
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..attributes.environment import DEFAULT_BACKGROUND  # the page background without an om.Background
 from ..fileio import atomic_write
-from .gltf import build
+from .gltf.writer import build
 
 __all__ = ["export", "page", "ASSETS", "DEFAULT_BACKGROUND"]
 
