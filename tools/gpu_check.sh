@@ -83,10 +83,11 @@ case " $missing " in
     report=()
     [ -n "${OUT:-}" ] && report=(--junitxml "$OUT/tests.xml")
     # -p no:cacheprovider: the working tree may be read-only; -rfEs lists failures, errors and skip reasons
-    timeout "$TEST_SECONDS" "$PY" -m pytest tests/gl tests/compositing -q -rfEs -p no:cacheprovider \
+    # SIGINT: pytest stops, still printing its summary and writing the report
+    timeout -s INT -k 30 "$TEST_SECONDS" "$PY" -m pytest tests/gl tests/compositing -q -rfEs -p no:cacheprovider \
         "${parallel[@]}" "${report[@]}" --durations=10
     status=$?
-    [ "$status" -eq 124 ] && echo "gpu_check: the tests ran past ${TEST_SECONDS} s and were stopped"
+    { [ "$status" -eq 124 ] || [ "$status" -eq 137 ]; } && echo "gpu_check: the tests ran past ${TEST_SECONDS} s and were stopped"
     [ "$status" -ne 0 ] && failed=$((failed + 1))
     if [ -n "${OUT:-}" ] && [ -d tests/gl/actual ]; then
         cp -r tests/gl/actual "$OUT/actual" 2>/dev/null
@@ -99,7 +100,7 @@ echo "=== benchmarks: bench/gpu.sh (at most ${BENCH_SECONDS} s)"
 if [ -f bench/gpu.sh ]; then
     timeout "$BENCH_SECONDS" bash bench/gpu.sh
     status=$?
-    [ "$status" -eq 124 ] && echo "gpu_check: the benchmarks ran past ${BENCH_SECONDS} s and were stopped"
+    { [ "$status" -eq 124 ] || [ "$status" -eq 137 ]; } && echo "gpu_check: the benchmarks ran past ${BENCH_SECONDS} s and were stopped"
     [ "$status" -ne 0 ] && failed=$((failed + 1))
 else
     echo "gpu_check: bench/gpu.sh is not in this tree; no benchmarks"
