@@ -67,6 +67,7 @@ _LAZY_NAMES = {
     "render_frames": "animation",
     "video": "animation",
     "load_gltf": "formats.gltf",
+    "load_usd": "formats.usd",
 }
 
 __all__ = [

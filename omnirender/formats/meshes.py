@@ -47,7 +47,18 @@ def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         loaded = trimesh.load(path, process=False)
     except Exception as exc:
         raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
-    return _parts(loaded, repr(path))
+    parts = _parts(loaded, repr(path))
+    if str(path).lower().endswith(".obj") and not _names_materials(path):
+        # texture coordinates without a material library: trimesh makes up a grey material with a tiny
+        # placeholder image; the file has no appearance, so the shapes get the scene's (or the default)
+        parts = [(None, ts) for _, ts in parts]
+    return parts
+
+
+def _names_materials(path: str) -> bool:
+    """Whether an OBJ file names a material library (an ``mtllib`` line)."""
+    with open(path, "rb") as fh:
+        return any(line.lstrip().startswith(b"mtllib") for line in fh)
 
 
 def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
@@ -73,6 +84,7 @@ def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, Triangle
 
 
 def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
+    _consistent_winding(mesh)
     arrays = triangle_arrays(mesh)
     material = None
     visual = mesh.visual
@@ -87,6 +99,23 @@ def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
         if material is not None and arrays["texcoords"] is None:
             material.pop("texture", None)
     return material, TriangleSet(**arrays)
+
+
+def _consistent_winding(mesh: Any) -> None:
+    """Wind every face of a mesh without normals in the file the same way, outwards when it is closed.
+
+    Smooth normals are computed from the winding: faces wound against their
+    neighbours (common in OFF, PLY and STL files) would point their normals
+    inwards and darken in wedges, and a closed surface culls them in GL.
+    """
+    cache = getattr(mesh, "_cache", None)
+    if cache is not None and "vertex_normals" in cache:
+        return  # the file's normals decide
+    try:
+        if not mesh.is_winding_consistent:
+            mesh.fix_normals()
+    except Exception:  # pragma: no cover - a mesh trimesh cannot analyse keeps its winding
+        return
 
 
 def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:
