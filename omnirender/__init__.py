@@ -22,7 +22,7 @@ from .render import engines, export, exporters, register_engine, register_export
 from .scene import Node, Statistics, TraceEngine, Visitor, register_statistic, statistics, trace
 from .shapes import *  # noqa: F403
 from .shapes import __all__ as _shapes_all
-from .techniques import Hit, attribute_search, bounds, collisions, image_info, pick
+from .techniques import Hit, attribute_search, bounds, collisions, image_info, node_origin, pick, screen_corners
 
 __version__ = "0.1.0"
 
@@ -96,6 +96,8 @@ __all__ = [
     "attribute_search",
     "image_info",
     "Hit",
+    "screen_corners",
+    "node_origin",
 ]
 
 
@@ -113,3 +115,8 @@ def __getattr__(name: str) -> Any:
     close = difflib.get_close_matches(name, [*__all__, *_LAZY_MODULES, *_LAZY_NAMES], n=1)
     hint = f"; did you mean om.{close[0]}?" if close else ""
     raise AttributeError(f"module 'omnirender' has no attribute {name!r}{hint}")
+
+
+def __dir__() -> list[str]:
+    """Every public name, the lazily imported ones included (``dir(om)``, tab completion)."""
+    return sorted({*globals(), *_LAZY_MODULES, *_LAZY_NAMES})

@@ -304,10 +304,6 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
 
         if value is not None and not isinstance(value, Stereo):
             raise TypeError(f"GLEngine: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")
-        if value is not None and self._pipeline_technique is not None:
-            raise ValueError(
-                "GLEngine: stereo frames draw each eye with the forward pipeline; give pipeline='forward' with stereo"
-            )
         self._stereo = value
 
     @property

@@ -299,6 +299,69 @@ def test_toon_model_example(engines, tmp_path):
     assert (toon.array[..., :3].sum(axis=2) < 60).sum() > 50  # the dark rim outlines
 
 
+def test_the_geometry_stage_displaces_vertices(engines):
+    """guacamole's geometry stage (per vertex, before the G-buffer): a model moving each vertex 0.3 along its
+    normal draws a 0.5 sphere as the forward pipeline draws a 0.8 one (silhouette IoU >= 0.97), lit as one."""
+    inflate = om.gl.ShadingModel(
+        "inflate",
+        parameters={"amount": ("float", 0.3)},
+        gbuffer={"diffuse": "color"},
+        geometry="""
+void geometry(inout vec3 world, inout vec3 normal) {
+    world += normalize(normal) * material.amount;
+}""",
+        visibility="""
+void visibility(inout Surface s, inout GBuffer g, inout LBuffer l) {
+    g.diffuse = s.base.rgb;
+}""",
+        shading="""
+vec3 shading(Pixel p, GBuffer g, LBuffer l) {
+    return g.diffuse * max(dot(p.N, p.V), 0.0);
+}""",
+    )
+    forward, deferred = engines
+
+    def scene(radius: float, *model) -> om.Node:
+        s = om.Node("s", [om.Camera.look_at((0, 0, 5), (0, 0, 0), fov=40), om.Background((0, 0, 0))])
+        s.add(om.Node("ball", [*model, om.Material(diffuse=(1, 1, 1)), om.Tessellation(8), om.Sphere(radius=radius)]))
+        return s
+
+    displaced = deferred.render(scene(0.5, inflate(amount=0.3))).array[..., :3].sum(axis=-1) > 30
+    bigger = forward.render(scene(0.8)).array[..., :3].sum(axis=-1) > 30
+    smaller = forward.render(scene(0.5)).array[..., :3].sum(axis=-1) > 30
+    iou = (displaced & bigger).sum() / (displaced | bigger).sum()
+    assert iou >= 0.97 and displaced.sum() > 2 * smaller.sum()
+
+
+def test_integer_and_boolean_gbuffer_outputs_round_trip(engines):
+    """guacamole allows integer and boolean G-buffer outputs: a uint8 and a bool written in the visibility stage
+    read back exactly in the shading stage (right half band 200, left half band 7; the upper half flagged)."""
+    coded = om.gl.ShadingModel(
+        "coded",
+        gbuffer={"band": "uint8", "up": "bool", "big": "uint8"},
+        visibility="""
+void visibility(inout Surface s, inout GBuffer g, inout LBuffer l) {
+    g.band = s.world.x > 0.0 ? 200u : 7u;
+    g.up = s.world.y > 0.0;
+    g.big = 1000u;  // clamped to 255
+}""",
+        shading="""
+vec3 shading(Pixel p, GBuffer g, LBuffer l) {
+    return vec3(g.band == 200u ? 1.0 : 0.0, g.band == 7u ? 1.0 : 0.0, g.up && g.big == 255u ? 1.0 : 0.0);
+}""",
+    )
+    _, deferred = engines
+    s = om.Node("s", [om.Camera.look_at((0, 0, 5), (0, 0, 0), fov=40), om.Background((0, 0, 0))])
+    s.add(om.Node("box", [coded(), om.Box(size=(2, 2, 0.2))]))
+    rgb = deferred.render(s).array[..., :3].astype(int)
+    assert tuple(rgb[30, 80]) == (255, 0, 255) and tuple(rgb[66, 80]) == (255, 0, 0)  # right: up / down
+    assert tuple(rgb[30, 48]) == (0, 255, 255) and tuple(rgb[66, 48]) == (0, 255, 0)  # left: up / down
+    with pytest.raises(ValueError, match="int"):
+        om.gl.ShadingModel(
+            "bad", gbuffer={"x": "int"}, shading="vec3 shading(Pixel p, GBuffer g, LBuffer l) { return vec3(0.0); }"
+        )
+
+
 def test_see_through_model_example(engines):
     module = load_example("16_see_through.py")
     forward, deferred = engines

@@ -80,6 +80,33 @@ def test_pass_control_runs_on_replayed_frames(engine):
     assert passes_drawing(engine)[-2:] == [("opaque/Counted[0]/opaque", 1), ("opaque/Counted[1]/opaque", 1)]
 
 
+def test_a_technique_declining_passes_draws_only_the_others(engine):
+    """VRS pass protocol: prepare_pass returning False skips that pass (drawn nowhere, finish_pass not called),
+    on the first frame and on replayed ones."""
+
+    class Skipping(Counted):
+        __slots__ = ()
+
+        def prepare_pass(self, engine):
+            super().prepare_pass(engine)
+            return engine.current_pass in (1, 3)
+
+        def finish_pass(self, engine):
+            self.log.append(("finish", engine.current_pass))
+
+    log: list = []
+    scene = om.Node("scene", [camera(), om.Node("fx", [Skipping(4, log), om.Sphere()])])
+    for _ in range(2):
+        log.clear()
+        engine.render(scene)
+        assert [p for p in passes_drawing(engine) if "Skipping" in p[0]] == [
+            ("opaque/Skipping[1]/opaque", 1),
+            ("opaque/Skipping[3]/opaque", 1),
+        ]
+        assert [entry for entry in log if entry[0] == "finish"] == [("finish", 1), ("finish", 3)]
+        assert log.count("stop") == 1 and len([e for e in log if e[0] == "prepare"]) == 4
+
+
 def test_nested_techniques_nest_passes_as_draw_calls():
     from omnirender.gl import GLEngine
 

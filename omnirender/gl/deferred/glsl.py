@@ -150,9 +150,18 @@ def _outputs(layout: BufferLayout) -> str:
     return "\n".join(lines)
 
 
+#: Integer and flag outputs: stored as a byte's [0, 1] value (GLSL to store, GLSL to read back from ``{}``).
+_CODED = {
+    "uint8": ("(float(min({}, 255u)) / 255.0)", "uint(round({} * 255.0))"),
+    "bool": ("({} ? 1.0 : 0.0)", "({} > 0.5)"),
+}
+
+
 def _component(value: str, kind: str, index: int) -> str:
     """GLSL for component ``index`` of an output ``value`` of G-buffer type ``kind``, as stored."""
     glsl, size, _, srgb = G_TYPES[kind]
+    if kind in _CODED:
+        return _CODED[kind][0].format(value)
     if srgb:
         value = f"to_srgb({value})"
     return value if size == 1 else f"{value}[{index}]"
@@ -316,6 +325,8 @@ def _g_reads(layout: BufferLayout, model: ShadingModel) -> str:
         glsl, size, _, srgb = G_TYPES[kind]
         values = [_channel_value(c) for c in layout.channels[model.number][name]]
         value = values[0] if size == 1 else f"{glsl}({', '.join(values)})"
+        if kind in _CODED:
+            value = _CODED[kind][1].format(value)
         lines.append(f"    g.{name} = {f'to_linear({value})' if srgb else value};")
     lines += ["    return g;", "}"]
     return "\n".join(lines)

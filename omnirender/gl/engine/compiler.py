@@ -608,5 +608,5 @@ class DrawListCompiler:
 
     @property
     def scene_lights(self) -> list[tuple[Any, np.ndarray]]:
-        """The lights of the last pre-evaluated scene with their world matrices."""
-        return [] if self.declared is None else self.declared.lights
+        """The enabled lights of the last pre-evaluated scene with their world matrices."""
+        return [] if self.declared is None else [(light, m) for light, m in self.declared.lights if light.enabled]

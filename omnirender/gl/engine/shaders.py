@@ -147,16 +147,19 @@ uniform vec2 u_viewport_origin;  // its lower-left corner in window pixels
 float point_size;              // the diameter in pixels
 flat out vec3 v_sprite;          // the point's centre in window pixels and its radius
 #endif
+flat out float v_mirror;  // -1 under a mirroring model matrix (its triangles' winding is reversed), else 1
 PASS_VERTEX_CODE
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
 #ifdef POINTS
     vec3 normal = vec3(0.0, 0.0, 1.0);
+    v_mirror = 1.0;
 #else
     mat3 m = mat3(i_model);
     mat3 cof = mat3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
     vec3 normal = cof * in_normal;
-    if (dot(m[0], cof[0]) < 0.0) normal = -normal;
+    v_mirror = dot(m[0], cof[0]) < 0.0 ? -1.0 : 1.0;  // the sign of det(m)
+    if (v_mirror < 0.0) normal = -normal;
     float nn = dot(normal, normal);
     normal = nn > 0.0 ? normal * inversesqrt(nn) : vec3(0.0, 0.0, 1.0);
 #ifdef NORMAL_MAP
@@ -225,6 +228,7 @@ in vec4 v_color;
 #ifdef POINTS
 flat in vec3 v_sprite;
 #endif
+flat in float v_mirror;
 #ifdef UVS
 in vec2 v_uv0;
 #ifdef UV1
@@ -430,7 +434,8 @@ void main() {
     N = dot(N, N) > 0.0 ? normalize(N) : vec3(0.0, 0.0, 1.0);
 #else
     N = dot(v_normal, v_normal) > 0.0 ? normalize(v_normal) : vec3(0.0, 0.0, 1.0);
-    if (!gl_FrontFacing) N = -N;
+    // the side facing the eye: a mirroring model matrix reverses the winding, so its front faces rasterise as back
+    if (gl_FrontFacing == (v_mirror < 0.0)) N = -N;
 #ifdef NORMAL_MAP
     {   // tangent-space normal map (OpenGL convention: x along u, y along v, z out of the surface)
         vec3 t = v_tangent.xyz - N * dot(N, v_tangent.xyz);

@@ -140,6 +140,8 @@ class TextPainter(ShapePainter):
         engine.submit(geom, kind="text", extra=(shape.string, float(shape.size)), transparent=False)
 
 
+_STATE = (DepthTest(False), Blend())  # made once: state attributes are components
+
 #: glyph atlases by engine and text size (they go with their engine)
 _ATLASES: weakref.WeakKeyDictionary[Any, dict[int, Any]] = weakref.WeakKeyDictionary()
 
@@ -153,7 +155,7 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     atlases = _ATLASES.setdefault(engine, {})
     w, h = engine.target_size
     calls = 0
-    engine.apply_gl_state(DepthTest(False), Blend())  # over everything, blended "over"
+    engine.apply_gl_state(*_STATE)  # over everything, blended "over"
     clip = engine.frame_projection @ engine.frame_view
     for item in items:
         string, size = item.state.extra
