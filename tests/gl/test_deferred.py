@@ -11,7 +11,17 @@ import omnirender as om
 from omnirender.colorimetry import cielab, delta_e2000
 
 from .scenes import SCENES, stage
-from .test_references import ALLOWED, REFERENCES, SIZE, TOLERANCE
+from .test_references import (
+    ALIASED_ALLOWED,
+    ALLOWED,
+    MULTISAMPLED_ONLY,
+    RASTER_RULES,
+    REFERENCE_SAMPLES,
+    REFERENCES,
+    SIZE,
+    TOLERANCE,
+    mismatches,
+)
 from .test_techniques import load_example
 
 pytestmark = pytest.mark.gl
@@ -50,10 +60,14 @@ def test_every_reference_scene_renders_within_its_tolerance():
     failures = []
     try:
         for name in sorted(SCENES):
+            if engine.samples < REFERENCE_SAMPLES and name in MULTISAMPLED_ONLY:
+                continue  # as test_references skips it
             image = engine.render(SCENES[name]())
             expected = np.asarray(PILImage.open(REFERENCES / f"{name}.png").convert("RGBA"), np.int16)
-            bad = (np.abs(expected - image.array.astype(np.int16)).max(axis=2) > TOLERANCE).mean()
-            if bad > ALLOWED:
+            aliased = engine.samples < REFERENCE_SAMPLES  # the rules of test_references.compare
+            diff = mismatches(expected, image.array.astype(np.int16), aliased or name in RASTER_RULES)
+            bad = (diff > TOLERANCE).mean()
+            if bad > (ALIASED_ALLOWED if aliased else ALLOWED):
                 failures.append(f"{name}: {bad:.2%} of the pixels differ by more than {TOLERANCE}")
         passes = [p["name"] for p in engine.stats["passes"]]
     finally:
@@ -82,6 +96,7 @@ def many_lights(count: int = 32) -> om.Node:
     return s
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_agrees_with_forward_for_32_lights_of_every_type(engines):
     forward, deferred = engines
     scene = many_lights(32)
@@ -122,7 +137,8 @@ def test_deferred_at_the_top_of_a_scene_is_the_deferred_pipeline(engines):
     top = om.Node("root", [om.gl.Deferred(), scene])
     image = forward.render(top)
     drawn = {p["name"] for p in forward.stats["passes"] if p["draw_calls"]}
-    assert {"opaque/geometry", "opaque/lighting/lights", "opaque/shading"} <= drawn
+    assert {"opaque/geometry", "opaque/shading"} <= drawn
+    assert {"opaque/lighting/lights", "opaque/lighting"} & drawn  # lights in a sub-pass with multisampling
     assert np.abs(image.array.astype(int) - deferred.render(scene).array.astype(int)).max() <= 2
     assert_agree(forward.render(scene), image, "om.gl.Deferred at the top")
 
@@ -521,7 +537,7 @@ def single_sampled():
     deferred.release()
 
 
-@pytest.mark.parametrize("samples", [0, 4])
+@pytest.mark.parametrize("samples", [0, pytest.param(4, marks=pytest.mark.gl_needs(samples=4))])
 @pytest.mark.parametrize("name", [*ORTHO_SCENES, "mixed"])
 def test_orthographic_camera_agrees_with_forward(engines, single_sampled, samples, name):
     """Under an orthographic camera (linear depth: every surface lies in front of the full-screen passes' window

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from pixels import assert_rgb
 
 import omnirender as om
 
@@ -256,13 +257,13 @@ def test_flat_color_unlit_and_depth_only_shading(engine):
         return engine.render(scene, background=(0, 0, 0))
 
     flat = render(om.gl.Shader(flat_color=(1.0, 0.5, 0.0)))
-    assert tuple(flat.pixel(48, 36)[:3]) == (255, 128, 0)
-    assert tuple(flat.pixel(20, 36)[:3]) == (0, 0, 0)
+    assert_rgb(flat.pixel(48, 36), (255, 127.5, 0), tolerance=0.5)  # 0.5 * 255: 127 or 128 by the driver's rounding
+    assert_rgb(flat.pixel(20, 36), (0, 0, 0))
     unlit = render(om.gl.Shader(unlit=True))
     assert tuple(unlit.pixel(48, 36)[:3]) == pytest.approx((51, 204, 77), abs=1)  # the diffuse colour itself
-    assert tuple(unlit.pixel(40, 30)[:3]) == tuple(unlit.pixel(56, 44)[:3])  # no shading
+    assert_rgb(unlit.pixel(40, 30), unlit.pixel(56, 44))  # no shading
     depth = render(om.gl.Shader(depth_only=True))
-    assert np.isfinite(depth.depth[36, 48]) and tuple(depth.pixel(48, 36)[:3]) == (0, 0, 0)
+    assert np.isfinite(depth.depth[36, 48]) and max(depth.pixel(48, 36)[:3]) <= 1
 
 
 def test_state_overrides_and_fallbacks_apply_to_the_pass(engine):

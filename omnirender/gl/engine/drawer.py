@@ -304,8 +304,11 @@ class BatchDrawer:
                 u.value = (start, end, density, mode)
                 prog["u_fog_color"].value = color
         u = prog.get("u_viewport", None)
-        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+        if u is not None:  # lines, points and tessellated patches: half the target's size in pixels
             u.value = (self.state.target_size[0] / 2.0, self.state.target_size[1] / 2.0)
+            u = prog.get("u_viewport_origin", None)
+            if u is not None:  # points: the viewport's corner (a pass's viewport box)
+                u.value = tuple(float(v) for v in self.ctx.viewport[:2])
         if state.kind == "lines":
             prog["u_line_width"].value = float(state.value(LineWidth))
         for unit, (sampler, texture, srgb) in enumerate(state.textures):
