@@ -67,6 +67,7 @@ _LAZY_NAMES = {
     "render_frames": "animation",
     "video": "animation",
     "load_gltf": "animation",
+    "render_to_file": "tiling",
 }
 
 __all__ = [

@@ -93,8 +93,16 @@ _positive_float = _number(float, 0.0, True, "a positive number")
 _count = _number(int, 0, False, "a whole number >= 0")
 
 
-def _load(path: str, trusted: bool = False, size: tuple[int, int] = (4, 3)) -> Any:
-    """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``)."""
+def _load(path: str, trusted: bool | argparse.Namespace = False, size: tuple[int, int] = (4, 3)) -> Any:
+    """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``).
+
+    ``trusted`` is a flag or the parsed arguments (``--trusted``,
+    ``--allowed-root``, ``--strict``): the path policy of the file's references.
+    """
+    options = trusted if isinstance(trusted, argparse.Namespace) else None
+    trusted = bool(getattr(options, "trusted", False)) if options is not None else bool(trusted)
+    roots = list(getattr(options, "allowed_root", None) or [])
+    strict = bool(getattr(options, "strict", False))
     from .scene.mesh_scene import MESH_SUFFIXES
 
     p = Path(path)
@@ -111,10 +119,10 @@ def _load(path: str, trusted: bool = False, size: tuple[int, int] = (4, 3)) -> A
     if suffix in MESH_SUFFIXES:
         from .scene.mesh_scene import mesh_scene
 
-        return mesh_scene(p, aspect=size[0] / size[1])
+        return mesh_scene(p, aspect=size[0] / size[1], trusted=trusted, allowed_roots=roots, strict=strict)
     from .scene.files import load
 
-    return load(p, trusted=trusted)
+    return load(p, trusted=trusted, allowed_roots=roots)
 
 
 # -- sub-commands -----------------------------------------------------------
@@ -147,7 +155,7 @@ def _render(args: argparse.Namespace) -> int:
     ok, why = engine_status(args.engine, check=False)  # its packages; the engine itself says what else fails
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene, getattr(args, "trusted", False), args.size)
+    scene = _load(args.scene, args, args.size)
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -251,7 +259,7 @@ def _msaa_samples(spp: int) -> int:
 
 
 def _view(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, getattr(args, "trusted", False), args.size)
+    scene = _load(args.scene, args, args.size)
     from .viewer import view
 
     view(scene, size=args.size, title=f"omnirender - {Path(args.scene).name}", duration=args.duration)
@@ -264,14 +272,14 @@ def _export(args: argparse.Namespace) -> int:
     ext = Path(args.output).suffix.lower()
     if ext not in exporters():
         raise UsageError(f"cannot export to {args.output!r}: use one of {', '.join(exporters())}")
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, args)
     export(scene, args.output)
     print(args.output)
     return 0
 
 
 def _info(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, args)
     print(scene_report(scene, engines=not args.no_engines))
     return 0
 
@@ -429,6 +437,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--trusted",
         action="store_true",
         help="trust the scene file: allow raw renderer text (povray.Raw, radiance.Raw) and files outside its folder",
+    )
+    common.add_argument(
+        "--allowed-root",
+        action="append",
+        metavar="DIR",
+        help="a folder the file's references may lead into besides its own (repeatable)",
+    )
+    common.add_argument(
+        "--strict",
+        action="store_true",
+        help="fail instead of warning when a texture, material or extension of a mesh file cannot be used",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

@@ -8,6 +8,7 @@ mesh's bounds and the default key, fill and back lights placed for it.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -23,19 +24,28 @@ __all__ = ["mesh_scene", "MESH_SUFFIXES"]
 MESH_SUFFIXES = SUFFIXES
 
 
-def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3) -> Node:
+def mesh_scene(
+    mesh: str | os.PathLike[str] | Any,
+    aspect: float = 4 / 3,
+    *,
+    trusted: bool = False,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+    strict: bool = False,
+) -> Node:
     """A scene holding ``mesh`` (a mesh file or a trimesh object), a fitted camera and default lights.
 
     The camera looks at the mesh's bounding box from the front, a little
     above and to the right, so that the whole mesh shows in an image of
     width / height ``aspect``.  The file is read here (to measure it): a
-    malformed one raises ValueError naming it.
+    malformed one raises ValueError naming it.  ``trusted``, ``allowed_roots``
+    and ``strict`` are :class:`~omnirender.shapes.MeshFile`'s (the path
+    policy for the file's references, warnings as errors).
     """
     from ..attributes.lights import default_lights
     from ..shapes import MeshFile
     from ..techniques import bounds
 
-    shape = MeshFile(mesh)
+    shape = MeshFile(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
     shape.load()
     name = Path(os.fspath(mesh)).stem if isinstance(mesh, (str, os.PathLike)) else "mesh"
     body = Node(_node_name(name), [shape])
