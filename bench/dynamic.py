@@ -34,7 +34,7 @@ import numpy as np
 import omnirender as om
 from omnirender.attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from omnirender.gl import GLEngine
-from omnirender.gl.context import gl_renderer
+from omnirender.gl.engine.context import gl_renderer
 
 SIZE = (256, 256)
 
@@ -160,7 +160,7 @@ class HandInstanced:
     """
 
     def __init__(self, ctx: moderngl.Context, n: int, camera: om.Camera, background: tuple, shading: str) -> None:
-        from omnirender.gl.geometry import unit_mesh
+        from omnirender.gl.engine.geometry import unit_mesh
 
         self.ctx = ctx
         self.background = background
@@ -240,13 +240,13 @@ def bench_culling(n: int, frames: int) -> dict[str, float]:
     timed with culling (and front-to-back sorting) switched off, to show what
     culling itself saves.
     """
-    from omnirender.gl import renderer
+    from omnirender.gl.engine import drawer
 
     d = np.ceil(n ** (1 / 3)) * 1.5 / 2
     inside = om.Camera.look_at((0, 0, -0.3 * d), (0.1, 0.2, d), fov=50, near=0.1, far=d * 4)
     out: dict[str, list[float]] = {"outside": [], "inside": [], "unculled": []}
     visible = {}
-    sort_min = renderer.SORT_MIN
+    sort_min = drawer.SORT_MIN
     views = {}
     for label in out:  # one scene and engine per view, frames interleaved
         scene, _ = node_scene(n)
@@ -257,11 +257,11 @@ def bench_culling(n: int, frames: int) -> dict[str, float]:
     try:
         for frame in range(frames + 1):
             for label, (scene, engine) in views.items():
-                renderer.SORT_MIN = 10**12 if label == "unculled" else sort_min
+                drawer.SORT_MIN = 10**12 if label == "unculled" else sort_min
                 try:
                     elapsed = timed(lambda engine=engine, scene=scene: engine.render(scene, read_depth=False))
                 finally:
-                    renderer.SORT_MIN = sort_min
+                    drawer.SORT_MIN = sort_min
                 if frame:  # the first frame compiles
                     out[label].append(elapsed)
                 else:

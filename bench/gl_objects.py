@@ -36,7 +36,7 @@ import numpy as np
 
 import omnirender as om
 from omnirender.gl import GLEngine
-from omnirender.gl.context import gl_renderer
+from omnirender.gl.engine.context import gl_renderer
 
 VS = """
 #version 330
@@ -150,7 +150,7 @@ class HandWritten:
         self.ctx = ctx
         self.size = size
         self.fbo = ctx.simple_framebuffer(size, components=4)
-        from omnirender.gl.geometry import unit_mesh
+        from omnirender.gl.engine.geometry import unit_mesh
 
         g = unit_mesh("box")
         self.vbo = ctx.buffer(g.positions)

@@ -19,7 +19,7 @@ from _common import output_dir
 
 import omnirender as om
 from omnirender.gl import GLEngine
-from omnirender.gl.geometry import Geometry
+from omnirender.gl.engine.geometry import Geometry
 
 
 # --- the shape, its simplifier and a GL painter: under 40 lines ---------------------------------

@@ -12,13 +12,13 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from . import data, export
+from . import data, formats  # formats registers mesh readers, scene readers, exporters
 from .attributes import *  # noqa: F403
 from .attributes import __all__ as _attributes_all
 from .core import *  # noqa: F403
 from .core import __all__ as _core_all
 from .image import Image
-from .render import engines, exporters, register_engine, register_exporter, render
+from .render import engines, export, exporters, register_engine, register_exporter, render
 from .scene import Node, Statistics, TraceEngine, Visitor, register_statistic, statistics, trace
 from .shapes import *  # noqa: F403
 from .shapes import __all__ as _shapes_all
@@ -66,7 +66,7 @@ _LAZY_NAMES = {
     "turntable": "animation",
     "render_frames": "animation",
     "video": "animation",
-    "load_gltf": "animation",
+    "load_gltf": "formats.gltf",
     "render_to_file": "tiling",
 }
 
@@ -75,6 +75,7 @@ __all__ = [
     *_shapes_all,
     *_attributes_all,
     "data",
+    "formats",
     "Node",
     "Visitor",
     "trace",

@@ -103,20 +103,21 @@ def _load(path: str, trusted: bool | argparse.Namespace = False, size: tuple[int
     trusted = bool(getattr(options, "trusted", False)) if options is not None else bool(trusted)
     roots = list(getattr(options, "allowed_root", None) or [])
     strict = bool(getattr(options, "strict", False))
-    from .scene.mesh_scene import MESH_SUFFIXES
+    from .scene.mesh_scene import mesh_suffixes
 
+    mesh_exts = mesh_suffixes()
     p = Path(path)
     suffix = p.suffix.lower()
-    if suffix not in SCENE_EXTENSIONS + MESH_SUFFIXES:
+    if suffix not in SCENE_EXTENSIONS + mesh_exts:
         raise UsageError(
             f"{path}: unknown extension {p.suffix!r}; give a scene file ({', '.join(SCENE_EXTENSIONS)}) "
-            f"or a mesh file ({', '.join(MESH_SUFFIXES)})"
+            f"or a mesh file ({', '.join(mesh_exts)})"
         )
     if not p.exists():
         raise UsageError(f"scene file not found: {path}")
     if not p.is_file():
         raise UsageError(f"{path} is a folder, not a scene file")
-    if suffix in MESH_SUFFIXES:
+    if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
         return mesh_scene(p, aspect=size[0] / size[1], trusted=trusted, allowed_roots=roots, strict=strict)

@@ -351,7 +351,4 @@ register_engine(
     needs=(("pyradiance", "pyradiance"), _PILLOW), extra="radiance",
 )  # fmt: skip
 register_exporter(".pov", "omnirender.povray:export", "POV-Ray scene description")
-register_exporter(".glb", "omnirender.export.gltf:export", "glTF 2.0 binary")
-register_exporter(".rib", "omnirender.export.rib:export", "RenderMan RIB")
-register_exporter(".html", "omnirender.export.html:export", "self-contained web page (three.js, works offline)")
 register_exporter(".rad", "omnirender.radiance:export", "Radiance scene description (with .rtm meshes)")

@@ -1,5 +1,5 @@
-"""``om.rib``: RenderMan-specific attributes (the RIB exporter lives in :mod:`omnirender.export.rib`)."""
+"""``om.rib``: RenderMan-specific attributes (the RIB exporter lives in :mod:`omnirender.formats.rib`)."""
 
-from .export.rib import Surface
+from .formats.rib import Surface
 
 __all__ = ["Surface"]

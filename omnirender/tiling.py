@@ -354,7 +354,7 @@ def needs_tiles(engine: str, size: tuple[int, int], samples: Any) -> int | None:
     """
     if engine != "gl":
         return None
-    from .gl.context import MAX_SAMPLES_TOTAL
+    from .gl.engine.context import MAX_SAMPLES_TOTAL
 
     count = samples if isinstance(samples, int) and not isinstance(samples, bool) and samples > 0 else 1
     top = _gl_max_size()
@@ -366,7 +366,7 @@ def needs_tiles(engine: str, size: tuple[int, int], samples: Any) -> int | None:
 
 def _gl_max_size() -> int:
     from .gl import one_shot_context
-    from .gl.context import limits
+    from .gl.engine.context import limits
 
     try:
         ctx = one_shot_context()

@@ -14,7 +14,7 @@ import pytest
 from engines import require
 
 import omnirender as om
-from omnirender.animation.gltf import GLTFImportError
+from omnirender.formats.gltf import GLTFImportError, light_from_gltf
 
 pytest.importorskip("pygltflib")
 from gltf_files import halves, quad_file  # noqa: E402
@@ -219,7 +219,7 @@ def test_cameras_and_lights_come_from_the_file_with_physical_brightness(tmp_path
     # attenuation 1/d^2 with intensity I / pi gives the same at every distance
     assert light.quadratic == 1.0 and light.constant == 0.0
     assert light.intensity * light.attenuation(2.0) == pytest.approx(0.5)
-    spot = om.animation.gltf.light_from_gltf({"type": "spot", "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.5}})
+    spot = light_from_gltf({"type": "spot", "spot": {"innerConeAngle": 0.3, "outerConeAngle": 0.5}})
     assert spot.cutoff == pytest.approx(math.degrees(0.5)) and math.cos(0.3) ** spot.exponent == pytest.approx(0.5)
 
 

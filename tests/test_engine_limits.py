@@ -88,7 +88,7 @@ def test_every_engine_shows_the_later_of_two_backgrounds_in_a_node(engine, reque
 
 
 def test_exported_files_carry_the_later_background(tmp_path):
-    from omnirender.export import gltf
+    from omnirender.formats.gltf import writer as gltf
 
     _, engine = gltf.build(_two_backgrounds())
     assert engine.background.color[:3] == (0.0, 0.0, 1.0)

@@ -8,15 +8,12 @@
 - :func:`render_frames` on a local process pool, in this process, or on a Dask
   cluster (``workers=`` a ``distributed.Client`` or a scheduler address), with
   resume, one retry per frame and a progress bar; :func:`video` makes MP4/GIF.
-- :func:`load_gltf`: a glTF file as a scene graph with its node animations as
-  tracks.
 """
 
 from __future__ import annotations
 
 from .animation import Animation, AnimationError, animations, frame_times, parse_frames, scene_at, set_time
 from .frames import FrameFailure, FrameReport, FramesFailed, render_frames
-from .gltf import load_gltf
 from .orbit import ORBIT_PARAMETERS, Orbit, camera_path, orbit, turntable
 from .tracks import SETTERS, Keyframes, Track, register_setter
 from .video import video
@@ -43,5 +40,4 @@ __all__ = [
     "FrameFailure",
     "FramesFailed",
     "video",
-    "load_gltf",
 ]

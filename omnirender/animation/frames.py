@@ -92,15 +92,20 @@ class FramesFailed(RuntimeError):
 
 
 def load_scene(source: Any, trusted: bool = False) -> Any:
-    """A Node from ``source``: a Node itself, a scene file (.json/.yaml) or a glTF file (.glb/.gltf)."""
+    """A Node from ``source``: a Node itself, a scene file (.json/.yaml) or a file with a registered scene reader.
+
+    The readers (``.glb``/``.gltf`` through ``om.load_gltf``...) are registered
+    by :mod:`omnirender.formats` in :mod:`omnirender.scene.readers`.
+    """
     if hasattr(source, "walk"):
         return source
     if isinstance(source, (str, os.PathLike)):
         path = Path(source)
-        if path.suffix.lower() in (".glb", ".gltf"):
-            from .gltf import load_gltf
+        from ..scene.readers import scene_reader
 
-            return load_gltf(path)
+        reader = scene_reader(path)
+        if reader is not None:
+            return reader(path)
         from ..scene.files import load
 
         return load(path, trusted=trusted)

@@ -39,7 +39,7 @@ def target_name(owner: Any, role: str) -> str:
 
 def eye_distance(window: np.ndarray, projection: np.ndarray) -> np.ndarray:
     """Window depths in [0, 1] -> distances along the view axis of ``projection`` (inf where the depth is 1)."""
-    from ..gl.frame import ProjectionInfo
+    from ..gl.engine.frame import ProjectionInfo
 
     info = ProjectionInfo.of(projection)
     n, f = info.near, info.far
@@ -117,7 +117,7 @@ class Canvas:
     @property
     def depth_range(self) -> tuple[float, float]:
         """(near, far) distances of the pass's projection."""
-        from ..gl.frame import ProjectionInfo
+        from ..gl.engine.frame import ProjectionInfo
 
         info = ProjectionInfo.of(self.projection)
         return info.near, info.far
@@ -192,7 +192,7 @@ class Canvas:
     @contextmanager
     def preserved(self) -> Iterator[Any]:
         """Run a block that changes GL state and put back the state found (integration rule 4)."""
-        from ..gl.glstate import preserved_state
+        from ..gl.engine.glstate import preserved_state
 
         with preserved_state(self.framebuffer) as saved:
             yield saved

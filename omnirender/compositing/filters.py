@@ -156,7 +156,7 @@ class BufferDebugFilter(Filter):
         canvas.fullscreen("debug-depth", DEBUG_DEPTH, inputs, uniforms)
 
     def _stencil(self, canvas: Canvas) -> None:
-        from ..gl.glstate import stencil_bits
+        from ..gl.engine.glstate import stencil_bits
 
         if stencil_bits() == 0:
             log.warning("BufferDebugFilter: the framebuffer being drawn has no stencil buffer; nothing to show")

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..geometry.bounds import union
-from ..gl.techniques import GLTechnique
+from ..gl.engine.technique import GLTechnique
 from .canvas import Canvas
 
 __all__ = ["Renderer", "Filter", "RendererGroup", "NodeContent", "draw_all", "Bounds"]

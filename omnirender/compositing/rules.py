@@ -31,7 +31,7 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..gl import Target
-from ..gl.techniques import GLTechnique
+from ..gl.engine.technique import GLTechnique
 from .canvas import Canvas
 from .renderer import Filter, Renderer
 
@@ -128,7 +128,7 @@ class _Harness(GLTechnique):
         engine.set_pass(Pass("check-rules", custom=self._run))
 
     def _run(self, engine: Any, draw: Any) -> int:
-        from ..gl.glstate import capture_state
+        from ..gl.engine.glstate import capture_state
 
         canvas = Canvas(engine, draw)
         fbo = canvas.framebuffer
@@ -169,7 +169,7 @@ def _unusual(state: Any, size: tuple[int, int]) -> Any:
 
 def _fill(canvas: Canvas, pattern: dict[str, np.ndarray]) -> None:
     """Write the pattern's colour, depth and stencil into the framebuffer."""
-    from ..gl.glstate import preserved_state
+    from ..gl.engine.glstate import preserved_state
 
     name = "check-rules.pattern"
     target = canvas.copy(Target(name))
@@ -190,7 +190,7 @@ def _fill(canvas: Canvas, pattern: dict[str, np.ndarray]) -> None:
 
 
 def _read(canvas: Canvas) -> dict[str, np.ndarray]:
-    from ..gl.glstate import read_stencil
+    from ..gl.engine.glstate import read_stencil
 
     fbo = canvas.framebuffer
     w, h = canvas.size
@@ -256,7 +256,7 @@ def check_rules(
     framing its bounds); ``tolerance`` is the colour difference (0-255) below
     which a pixel counts as unchanged.
     """
-    from ..gl.engine import GLEngine
+    from ..gl.glengine import GLEngine
     from ..scene.node import Node
 
     if not isinstance(renderer, Renderer):

@@ -73,7 +73,7 @@ class SceneRenderer(Renderer):
 
     def engine(self, host: Any) -> Any:
         """The GL engine drawing this scene in frames of ``host`` (made on first use, on host's context)."""
-        from ..gl.engine import GLEngine
+        from ..gl.glengine import GLEngine
 
         found = self._engines.get(host)
         key = (self.mask, self.technique, self.on_missing)

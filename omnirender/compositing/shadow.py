@@ -26,7 +26,7 @@ import numpy as np
 from ..attributes.lights import DirectionalLight, LightSource
 from ..core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from ..gl import Clear, Target
-from ..gl.frame import ProjectionInfo
+from ..gl.engine.frame import ProjectionInfo
 from .canvas import EYE_DISTANCE, Canvas, fraction, target_name
 from .groups import draw_offscreen
 from .renderer import Bounds, Renderer, RendererGroup, draw_all

@@ -21,7 +21,7 @@ import os
 import threading
 from typing import Any
 
-from .attributes import (
+from .engine.attributes import (
     AlphaTest,
     Blend,
     ColorMask,
@@ -35,8 +35,8 @@ from .attributes import (
     StencilOp,
     StencilTest,
 )
-from .imagespace import PingPong
-from .passes import Clear, FullScreen, Pass, Shader, Target
+from .engine.imagespace import PingPong
+from .engine.passes import Clear, FullScreen, Pass, Shader, Target
 
 __all__ = [
     "render",
@@ -94,16 +94,16 @@ __all__ = [
 ]
 
 _LAZY = {
-    "GLEngine": "engine",
-    "ShadowMaps": "shadows",
-    "ShadowVolumes": "shadow_volumes",
-    "SurfaceStyle": "surface_style",
-    "PhongHighlight": "highlight",
-    "Supersample": "supersample",
+    "GLEngine": "glengine",
+    "ShadowMaps": "techniques.shadows",
+    "ShadowVolumes": "techniques.shadow_volumes",
+    "SurfaceStyle": "techniques.surface_style",
+    "PhongHighlight": "techniques.highlight",
+    "Supersample": "techniques.supersample",
     "Deferred": "deferred",
-    "Stereo": "stereo",
-    "RenderTexture": "render_texture",
-    "Refraction": "refraction",
+    "Stereo": "techniques.stereo",
+    "RenderTexture": "engine.render_texture",
+    "Refraction": "techniques.refraction",
     "ShadingModel": "deferred",
     "MaterialDescription": "deferred",
     "ShadingModelError": "deferred",
@@ -119,13 +119,13 @@ _LAZY = {
     "DepthOfField": "post",
     "ColorGrading": "post",
     "CustomEffect": "post",
-    "GLTechnique": "techniques",
-    "Forward": "techniques",
-    "FramebufferStack": "framebuffer",
-    "DepthSprite": "framebuffer",
-    "GLStateSnapshot": "glstate",
-    "capture_state": "glstate",
-    "preserved_state": "glstate",
+    "GLTechnique": "engine.technique",
+    "Forward": "techniques.forward",
+    "FramebufferStack": "engine.framebuffer",
+    "DepthSprite": "engine.framebuffer",
+    "GLStateSnapshot": "engine.glstate",
+    "capture_state": "engine.glstate",
+    "preserved_state": "engine.glstate",
 }
 _loaded = False
 
@@ -134,14 +134,8 @@ def _load() -> None:
     """Import the engine and register its painters (on first use)."""
     global _loaded
     if not _loaded:
-        from . import attribute_painters, painters  # noqa: F401
+        from . import painters  # noqa: F401  (registers them)
 
-        for name in ("text", "volume", "nurbs"):
-            try:
-                importlib.import_module(f".{name}", __name__)
-            except ModuleNotFoundError as exc:  # optional painters not written yet
-                if exc.name != f"{__name__}.{name}":
-                    raise
         _loaded = True
 
 
@@ -179,7 +173,7 @@ def one_shot_context() -> Any:
     """
     ctx = getattr(_one_shot, "ctx", None)
     if ctx is None or _one_shot.pid != os.getpid():
-        from .context import create_context
+        from .engine.context import create_context
 
         ctx = create_context()
         _one_shot.ctx, _one_shot.pid, _one_shot.programs = ctx, os.getpid(), None
@@ -189,7 +183,7 @@ def one_shot_context() -> Any:
 def _one_shot_programs(ctx: Any) -> Any:
     """The shader programs compiled in the one-shot context, kept with it (compiling anew grows the driver)."""
     if _one_shot.programs is None:
-        from .shaders import ProgramCache
+        from .engine.shaders import ProgramCache
 
         _one_shot.programs = ProgramCache(ctx)
     return _one_shot.programs
@@ -219,7 +213,7 @@ def render(
     GPU resources are released after each call.
     """
     _load()
-    from .engine import GLEngine
+    from .glengine import GLEngine
 
     read_depth = options.pop("read_depth", True)
     names = ("on_missing", "technique", "shadows", "pipeline", "stereo")
@@ -230,7 +224,7 @@ def render(
             "read_depth, on_missing, technique, shadows, pipeline and stereo (spp/quality are options of the "
             "mitsuba/povray engines)"
         )
-    from .context import check_samples_total
+    from .engine.context import check_samples_total
 
     if isinstance(samples, int) and not isinstance(samples, bool) and samples >= 0:
         check_samples_total(size, samples)  # a size no engine would accept costs no context

@@ -15,13 +15,10 @@ from typing import Any
 import numpy as np
 
 from ..core.camera import Camera
-from ..shapes.meshfile import SUFFIXES
+from ..shapes.files import mesh_suffixes
 from .node import Node
 
-__all__ = ["mesh_scene", "MESH_SUFFIXES"]
-
-#: File extensions read as meshes (``om.MeshFile``) rather than scene files.
-MESH_SUFFIXES = SUFFIXES
+__all__ = ["mesh_scene", "mesh_suffixes"]
 
 
 def mesh_scene(

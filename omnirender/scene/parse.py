@@ -142,8 +142,31 @@ def _json_depth_path(text: str, limit: int) -> str:
 
 
 def parse_yaml(text: str, limits: ParseLimits = LIMITS) -> Any:
-    """Parse YAML text safely (see the module docs); raises ParseError or ``yaml.YAMLError``."""
-    loader = _loader_class()(text)
+    """Parse YAML text safely (see the module docs); raises ParseError or ``yaml.YAMLError``.
+
+    libyaml's fast parser is used when PyYAML has it.  libyaml has limits of its own (newer
+    versions refuse flow collections nested 1000 deep, with their own wording, while scanning ahead
+    of the composer), so when it refuses a document the text is read again by PyYAML's pure-Python
+    parser, which has none: the composer's limits then decide, and a document nested too deep is
+    refused with omnirender's message and path whatever the installed PyYAML does.
+    """
+    import yaml
+
+    fast = _loader_class(pure=False)
+    try:
+        return _load(fast, text, limits)
+    except yaml.YAMLError as fast_error:
+        pure = _loader_class(pure=True)
+        if pure is fast:
+            raise
+        try:
+            return _load(pure, text, limits)
+        except yaml.YAMLError:
+            raise fast_error from None
+
+
+def _load(loader_class: type, text: str, limits: ParseLimits) -> Any:
+    loader = loader_class(text)
     loader.limits = limits
     try:
         return loader.get_single_data()
@@ -151,22 +174,27 @@ def parse_yaml(text: str, limits: ParseLimits = LIMITS) -> Any:
         loader.dispose()
 
 
-_LOADER: type | None = None
+_LOADERS: dict[bool, type] = {}
 
 
-def _loader_class() -> type:
-    global _LOADER
-    if _LOADER is not None:
-        return _LOADER
-    import yaml
+def _loader_class(pure: bool = False) -> type:
+    """The scene-file loader class: libyaml's parser unless ``pure`` (or libyaml is missing)."""
+    if pure in _LOADERS:
+        return _LOADERS[pure]
     from yaml.constructor import SafeConstructor
     from yaml.resolver import Resolver
 
+    parser_bases: tuple[type, ...]
     try:
+        if pure:
+            raise ImportError
         from yaml._yaml import CParser  # libyaml: much faster on big files
 
-        parser_bases: tuple[type, ...] = (CParser,)
-    except ImportError:  # pragma: no cover - depends on the PyYAML build
+        parser_bases = (CParser,)
+    except ImportError:
+        if not pure:  # pragma: no cover - depends on the PyYAML build
+            _LOADERS[False] = _loader_class(pure=True)
+            return _LOADERS[False]
         from yaml.parser import Parser
         from yaml.reader import Reader
         from yaml.scanner import Scanner
@@ -181,15 +209,15 @@ def _loader_class() -> type:
 
     class Loader(_LimitedComposer, *parser_bases, _Constructor, Resolver):  # type: ignore[misc]
         def __init__(self, stream: str) -> None:
-            for base in parser_bases:
-                base.__init__(self, stream)
+            parser_bases[0].__init__(self, stream)  # CParser or Reader take the text
+            for base in parser_bases[1:]:  # Scanner and Parser take nothing
+                base.__init__(self)
             _Constructor.__init__(self)
             Resolver.__init__(self)
             self.limits = LIMITS
 
     Loader.__name__ = "SceneYAMLLoader"
-    _LOADER = Loader
-    del yaml
+    _LOADERS[pure] = Loader
     return Loader
 
 

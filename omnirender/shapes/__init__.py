@@ -8,11 +8,11 @@ PointSets, so any engine can show any shape; painters are optional speed-ups.
 from . import simplifiers  # noqa: E402,F401  (registers the default simplifiers)
 from .base import DeclaredShape
 from .csg import CSG
+from .files import MeshFile
 from .grids import Heightfield, TransferFunction, Volume
 from .instances import InstanceId, InstanceSet
 from .lod import LevelOfDetail
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
-from .meshfile import MeshFile
 from .nurbs import NURBSSurface, TrimCurve
 from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
 from .text import Text

@@ -7,7 +7,7 @@ measured from the camera's eye to ``center`` (in the coordinates where the
 level-of-detail sits).
 
 The GL engine compiles every level once and picks one per frame at draw time
-(:class:`~omnirender.gl.painters.LevelOfDetailPainter`), also when only the
+(:class:`~omnirender.gl.painters.shapes.LevelOfDetailPainter`), also when only the
 camera moved.  Every other engine evaluates one level through the default
 simplifier: the finest, or with ``offline="distance"`` the one the engine's
 camera sees (engines without a camera take the finest).

@@ -29,9 +29,9 @@ from ..core import Engine, Matrix, Shape, ShapeSimplifier, Translation, default_
 from ..geometry import tessellate
 from ..geometry.isosurface import isosurface
 from ..geometry.matrix import align_y_matrix
+from .files import MeshFile
 from .grids import Heightfield, Volume
 from .meshes import Polygon, Polyline, TriangleSet
-from .meshfile import MeshFile
 from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
 from .text import Text
 

@@ -29,7 +29,7 @@ def _gl_engine_class() -> type:
     try:
         from ..gl import GLEngine
     except ImportError:
-        from ..gl.engine import GLEngine
+        from ..gl.glengine import GLEngine
     return GLEngine
 
 
@@ -97,7 +97,7 @@ class GLDriver:
         if not name.endswith("_2d"):
             return []
         if self._depth_off is None:
-            from ..gl.attributes import DepthTest
+            from ..gl.engine.attributes import DepthTest
 
             self._depth_off = [DepthTest(enabled=False)]
         return self._depth_off

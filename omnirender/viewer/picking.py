@@ -121,7 +121,7 @@ class PickHighlight:
 def _depth_lequal() -> list[Any]:
     """``gl.DepthTest(func="lequal")`` when the GL adapter is there (other engines ignore it)."""
     try:
-        from ..gl.attributes import DepthTest
+        from ..gl.engine.attributes import DepthTest
     except ImportError:
         return []
     return [DepthTest(enabled=True, func="lequal")]

@@ -95,7 +95,7 @@ class Viewer:
     @stereo.setter
     def stereo(self, value: Any) -> None:
         if value is not None:
-            from ..gl.stereo import Stereo
+            from ..gl.techniques.stereo import Stereo
 
             if not isinstance(value, Stereo):
                 raise TypeError(f"Viewer: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")

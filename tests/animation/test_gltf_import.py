@@ -10,7 +10,7 @@ import pytest
 
 import omnirender as om
 from omnirender.animation import scene_at
-from omnirender.animation.gltf import GLTFImportError
+from omnirender.formats.gltf import GLTFImportError
 
 pygltflib = pytest.importorskip("pygltflib")
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.export import gltf
+from omnirender.formats.gltf import writer as gltf
 
 trimesh = pytest.importorskip("trimesh")
 

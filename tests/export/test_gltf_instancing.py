@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.animation.gltf import GLTFImportError
 from omnirender.colorimetry import cielab, delta_e2000
-from omnirender.export import gltf
-from omnirender.export.gltf_instancing import COLOR_GROUPS, INSTANCE_COLOR, INSTANCING_EXTENSION
+from omnirender.formats.gltf import GLTFImportError
+from omnirender.formats.gltf import writer as gltf
+from omnirender.formats.gltf.instancing import COLOR_GROUPS, INSTANCE_COLOR, INSTANCING_EXTENSION
 from omnirender.geometry.trs import compose_trs
 
 _COUNT = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}

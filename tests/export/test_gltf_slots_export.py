@@ -68,7 +68,7 @@ def _json(glb: bytes) -> dict:
 
 def test_every_slot_alpha_mode_and_light_is_written():
     from omnirender.attributes.photometry import srgb_to_linear
-    from omnirender.export import gltf
+    from omnirender.formats.gltf import writer as gltf
 
     glb, _ = gltf.build(slots_scene())
     doc = _json(glb)
@@ -94,7 +94,7 @@ def test_every_slot_alpha_mode_and_light_is_written():
 
 
 def test_exported_slots_read_back():
-    from omnirender.export import gltf
+    from omnirender.formats.gltf import writer as gltf
 
     scene = slots_scene()
     glb = gltf.to_bytes(scene)

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.export import gltf, html
+from omnirender.formats import html
+from omnirender.formats.gltf import writer as gltf
 
 SIZE = (320, 240)
 BACKGROUND = (0.1, 0.12, 0.15)
@@ -60,7 +61,7 @@ def test_the_group_mask_and_light_units_reach_the_page(tmp_path):
     assert "debug" in names(full) and "debug" not in names(masked)
     lights = _glb_json(full["glb"])["extensions"]["KHR_lights_punctual"]["lights"]
     assert [li["extras"]["omnirender"]["attenuation"] for li in lights] == [[1.0, 0.0, 0.0]] * 2
-    assert html.DEFAULT_BACKGROUND == pytest.importorskip("omnirender.gl.engine").DEFAULT_BACKGROUND
+    assert html.DEFAULT_BACKGROUND == pytest.importorskip("omnirender.gl.glengine").DEFAULT_BACKGROUND
 
 
 def test_hostile_titles_cannot_break_out_of_the_page():

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.export import rib
+from omnirender.formats import rib
 
 _TOKEN = re.compile(
     r'"([^"]*)"|(\[)|(\])|([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(#[^\n]*)|(\S)'

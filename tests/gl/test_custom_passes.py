@@ -164,7 +164,7 @@ def test_an_engine_draws_into_another_engines_framebuffer_with_its_camera():
 
 
 def test_gl_state_snapshots_capture_restore_and_diff(engine):
-    from omnirender.gl.glstate import capture_state, preserved_state
+    from omnirender.gl.engine.glstate import capture_state, preserved_state
 
     with engine.current():
         before = capture_state()

@@ -20,7 +20,7 @@ def scene(x: float, color) -> om.Node:
 
 def test_push_draws_offscreen_and_pop_returns():
     from omnirender.gl import GLEngine
-    from omnirender.gl.framebuffer import FramebufferStack
+    from omnirender.gl.engine.framebuffer import FramebufferStack
 
     with GLEngine(size=(64, 48)) as e:
         main = e.render(scene(0, (1, 0, 0)))
@@ -41,7 +41,7 @@ def test_push_draws_offscreen_and_pop_returns():
 
 def test_depth_sprite_restores_colour_and_depth_consistently():
     from omnirender.gl import GLEngine
-    from omnirender.gl.framebuffer import DepthSprite
+    from omnirender.gl.engine.framebuffer import DepthSprite
 
     with GLEngine(size=(64, 48), samples=0) as e:
         first = e.render(scene(-0.5, (1, 0, 0)))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.gl.layout import ROW
+from omnirender.gl.engine.layout import ROW
 
 pytestmark = pytest.mark.gl
 

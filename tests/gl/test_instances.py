@@ -186,7 +186,8 @@ def test_gpu_memory_stays_bounded_over_ten_thousand_frames_of_resizing():
 
 def test_culling_leaves_the_picture_unchanged_and_culled_instances_come_back(monkeypatch):
     """Big batches draw only what their bounding spheres show; moving culled instances into view shows them."""
-    from omnirender.gl import GLEngine, renderer
+    from omnirender.gl import GLEngine
+    from omnirender.gl.engine import drawer
 
     rng = np.random.default_rng(2)
     positions = rng.uniform(-12, 12, (600, 3))
@@ -200,7 +201,7 @@ def test_culling_leaves_the_picture_unchanged_and_culled_instances_come_back(mon
         instances.touch()
         moved = e.render(scene, background=BLACK).array
         assert sum(p["items"] for p in e.stats["passes"] if p["name"] == "opaque") > drawn
-    monkeypatch.setattr(renderer, "SORT_MIN", 10**9)  # neither sorted nor culled
+    monkeypatch.setattr(drawer, "SORT_MIN", 10**9)  # neither sorted nor culled
     assert np.array_equal(moved, fresh(scene))
     positions *= 4.0
     instances.touch()
@@ -208,7 +209,8 @@ def test_culling_leaves_the_picture_unchanged_and_culled_instances_come_back(mon
 
 
 def test_culling_applies_to_plain_nodes_too(monkeypatch):
-    from omnirender.gl import GLEngine, renderer
+    from omnirender.gl import GLEngine
+    from omnirender.gl.engine import drawer
 
     rng = np.random.default_rng(4)
     scene = om.Node("scene", [om.Camera.look_at((0, 0, 6), (0, 0, 0), fov=40)])
@@ -224,7 +226,7 @@ def test_culling_applies_to_plain_nodes_too(monkeypatch):
             t.offset = tuple(0.25 * c for c in t.offset)
         moved = e.render(scene, background=BLACK).array
         assert e.stats["compiled"] is False
-    monkeypatch.setattr(renderer, "SORT_MIN", 10**9)
+    monkeypatch.setattr(drawer, "SORT_MIN", 10**9)
     assert np.array_equal(moved, fresh(scene))
 
 

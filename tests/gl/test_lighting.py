@@ -95,8 +95,8 @@ def test_text_is_drawn_at_the_projected_position(engine):
 
 
 def test_out_of_memory_becomes_a_clear_error():
-    from omnirender.gl.context import GLError
-    from omnirender.gl.resources import gpu_call
+    from omnirender.gl.engine.context import GLError
+    from omnirender.gl.engine.resources import gpu_call
 
     def fail(*args, **kwargs):
         raise RuntimeError("GL_OUT_OF_MEMORY")

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.gl.render_texture import PipelineCycleError
+from omnirender.gl.engine.render_texture import PipelineCycleError
 
 HUES = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 

@@ -60,7 +60,7 @@ def test_two_identical_renders_are_byte_identical(engine):
 
 
 def test_out_of_range_indices_raise_naming_node(engine):
-    from omnirender.gl.geometry import validate_mesh
+    from omnirender.gl.engine.geometry import validate_mesh
 
     with pytest.raises(ValueError, match="out of range"):
         validate_mesh(np.zeros((3, 3), np.float32), np.array([0, 1, 3], np.uint32), "TriangleSet", "/scene/bad")
@@ -78,7 +78,7 @@ def test_bad_size_raises():
 
 
 def test_replacing_a_mesh_every_frame_keeps_buffers_bounded(engine):
-    from omnirender.gl.resources import live_buffers
+    from omnirender.gl.engine.resources import live_buffers
 
     scene = om.Node("scene")
     scene.add(om.Camera.look_at(eye=(0, 0, 4)))
@@ -132,7 +132,7 @@ def test_bad_geometry_through_the_engine_names_the_node(engine):
     with pytest.raises(ValueError, match="finite"):
         mesh.vertices = arr
     # the engine itself refuses non-finite data even if it reaches a painter
-    from omnirender.gl.geometry import validate_mesh
+    from omnirender.gl.engine.geometry import validate_mesh
 
     with pytest.raises(ValueError, match=r"/scene/bad.*vertex 1"):
         validate_mesh(arr, None, "TriangleSet", "/scene/bad")
@@ -310,7 +310,7 @@ def test_textures_of_replaced_attributes_are_released(engine):
         holder.add(om.Texture(image.copy()))
         holder.add(om.Box())
         engine.render(scene, read_depth=False)
-        assert len(engine._textures) == 1
+        assert engine.drawer.texture_count() == 1
 
 
 def test_transparent_shape_over_transparent_background_keeps_its_opacity(engine):

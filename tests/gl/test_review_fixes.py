@@ -67,7 +67,7 @@ def test_plain_shapes_after_a_special_state_shape_are_drawn_after_it(engine):
 
 def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
     """An animated clip plane through a transparent sphere and a per-frame texture / draw style leak nothing."""
-    from omnirender.gl.resources import live_buffers
+    from omnirender.gl.engine.resources import live_buffers
 
     scene = om.Node("scene")
     scene.add(om.Camera.look_at(eye=(0, 0, 4)))
@@ -86,7 +86,7 @@ def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
         holder.add(om.DrawStyle(line_width=float(frame + 1)))
         holder.add(om.Box(center=(0.5, 0, 0)))
         engine.render(scene, read_depth=False)
-        counts.append((engine.live_buffers(), live_buffers(engine.ctx), len(engine._transient)))
+        counts.append((engine.live_buffers(), live_buffers(engine.ctx), engine.drawer.live_buffers()))
     assert max(c[0] for c in counts[5:]) <= counts[5][0], counts
     assert max(c[1] for c in counts[5:]) <= counts[5][1], counts
     assert max(c[2] for c in counts) <= 4, counts  # two shapes, each in the blended pass and the depth pass
@@ -149,7 +149,7 @@ TRIANGLE = np.array([(0, 0, 0), (1, 0, 0), (0, 1, 0)], np.float32)
     ],
 )
 def test_custom_painters_cannot_send_bad_geometry_to_the_driver(monkeypatch, positions, indices, message):
-    from omnirender.gl.geometry import Geometry
+    from omnirender.gl.engine.geometry import Geometry
 
     uploads = []
     original = Geometry.upload

@@ -20,7 +20,7 @@ import pytest
 
 import omnirender as om
 from omnirender.attributes.photometry import srgb_to_linear
-from omnirender.gl.lighting import GLOBAL_AMBIENT
+from omnirender.gl.engine.lighting import GLOBAL_AMBIENT
 
 pytestmark = pytest.mark.gl
 

@@ -73,7 +73,7 @@ def test_maps_are_reused_while_casters_and_lights_stay(engine):
 
 
 def test_a_directional_light_map_is_fitted_to_the_casters():
-    from omnirender.gl.shadows import ShadowMaps, ShadowPlan
+    from omnirender.gl.techniques.shadows import ShadowMaps, ShadowPlan
 
     light = om.DirectionalLight(direction=(0, -1, 0))
     plan = ShadowPlan(ShadowMaps(), [(light, np.eye(4))], (np.array([-1.0, 0, -2]), np.array([1.0, 1, 2])))
@@ -85,7 +85,7 @@ def test_a_directional_light_map_is_fitted_to_the_casters():
 
 
 def test_point_light_faces_that_see_no_caster_are_not_drawn():
-    from omnirender.gl.shadows import ShadowMaps, ShadowPlan
+    from omnirender.gl.techniques.shadows import ShadowMaps, ShadowPlan
 
     plan = ShadowPlan(ShadowMaps(), [(om.PointLight(position=(0, 5, 0)), np.eye(4))],
                       (np.array([-1.0, 0, -1]), np.array([1.0, 1, 1])))  # fmt: skip
@@ -112,7 +112,7 @@ def test_shadow_volumes_shadow_and_leave_the_stencil_clear(engine):
     assert map_passes(engine) == []  # the whole frame has exact shadows: no maps
     names = [p["name"] for p in engine.stats["passes"]]
     assert any(n.endswith("volume[0].back") for n in names) and any(n.endswith("lit[0]") for n in names)
-    from omnirender.gl.attributes import StencilTest
+    from omnirender.gl.engine.attributes import StencilTest
 
     # stencil invariability: a shape that draws only where the stencil is 0 still draws everywhere afterwards
     probe = om.Node("probe", [StencilTest(True, "equal", 0), om.Material(diffuse=(0, 0, 0), emission=(0, 1, 0)),

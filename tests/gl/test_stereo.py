@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
-from omnirender.gl.stereo import disparity_pixels
+from omnirender.gl.techniques.stereo import disparity_pixels
 
 W, H = 240, 180
 SEPARATION, CONVERGENCE, FOV = 0.2, 4.0, 40.0

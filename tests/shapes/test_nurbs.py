@@ -196,7 +196,7 @@ def test_gpu_tessellation_stays_within_its_error_bound():
     (measured on its depth against the exactly evaluated surface; a fine mesh measures the method's own error),
     and the silhouette agrees with a fine mesh's."""
     from omnirender.gl import GLEngine
-    from omnirender.gl.nurbs import error_bound
+    from omnirender.gl.painters.nurbs import error_bound
 
     s = bumpy([hole()])
     engine = GLEngine(size=(240, 180), samples=0, shadows=False)

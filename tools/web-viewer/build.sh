@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 npm ci --no-audit --no-fund --ignore-scripts
-out=../../omnirender/export/assets
+out=../../omnirender/formats/assets
 mkdir -p "$out"
 npx --no-install esbuild viewer.js --bundle --minify --format=iife --global-name=OmniRenderViewer \
   --target=es2020 --legal-comments=inline --log-level=warning --outfile="$out/three_viewer.min.js"

@@ -100,7 +100,7 @@ def capture_light_field(
 
 def _gl_images(scene: Any, cameras: list[Camera], size: tuple[int, int], options: dict[str, Any]) -> Any:
     """The views rendered by one GL engine (``om.render`` would make a context per view), over transparent black."""
-    from ...gl.engine import GLEngine
+    from ...gl.glengine import GLEngine
     from ...render import _check_size
     from ...scene.node import Node
 

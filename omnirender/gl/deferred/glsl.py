@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import re
 
-from ..shaders import MAX_LIGHTS, SRGB_GLSL
-from ..shadow_glsl import MAPS_CORE
+from ..engine.shaders import MAX_LIGHTS, SRGB_GLSL
+from ..engine.shadow_glsl import MAPS_CORE
 from .layout import BufferLayout, Channel
 from .models import G_TYPES, L_TYPES, PARAM_TYPES, STAGES, ShadingModel, ShadingModelError
 

@@ -27,7 +27,7 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-from ..passes import FORMATS, Target
+from ..engine.passes import FORMATS, Target
 from .models import G_TYPES, L_TYPES, ShadingModel
 
 __all__ = ["BufferLayout", "FIXED_SPARE", "GBUFFER", "Channel", "LIGHT_FORMATS"]

@@ -40,9 +40,9 @@ import numpy as np
 
 from ...attributes.photometry import linear_rgb
 from ...core.component import MonoAttribute
-from ..layout import PBR as _PBR_NUMBER
-from ..layout import PHONG as _PHONG_NUMBER
-from ..layout import UNLIT as _UNLIT_NUMBER
+from ..engine.layout import PBR as _PBR_NUMBER
+from ..engine.layout import PHONG as _PHONG_NUMBER
+from ..engine.layout import UNLIT as _UNLIT_NUMBER
 
 __all__ = [
     "ShadingModel",

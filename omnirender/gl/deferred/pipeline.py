@@ -30,14 +30,15 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
-from ..context import clear_stencil_bits, frame_has_stencil, sample_positions, set_masks, sharing_depth
-from ..drawlist import DrawItem
-from ..layout import ROW
-from ..passes import Clear, Pass, Shader, Target
-from ..shadows import ATLAS
-from ..state import FillMode, MirrorState
-from ..techniques import Forward, GLTechnique
+from ..engine.attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
+from ..engine.context import clear_stencil_bits, frame_has_stencil, sample_positions, set_masks, sharing_depth
+from ..engine.drawlist import DrawItem
+from ..engine.layout import ROW
+from ..engine.passes import Clear, Pass, Shader, Target
+from ..engine.state import FillMode, MirrorState
+from ..engine.technique import GLTechnique
+from ..techniques.forward import Forward
+from ..techniques.shadows import ATLAS
 from .glsl import (
     FOG_SLOTS,
     depth_program,
@@ -152,15 +153,15 @@ class DeferredRenderer:
     @classmethod
     def of(cls, engine: Any) -> DeferredRenderer:
         """The engine's deferred renderer (made on first use, released with the engine)."""
-        found = getattr(engine, "_deferred", None)
+        found = engine.deferred_renderer
         if found is None:
-            found = engine._deferred = cls(engine)
+            found = engine.deferred_renderer = cls(engine)
         return found
 
     # -- what the frame holds ----------------------------------------------------------------------
     def update(self, engine: Any, technique: Deferred) -> None:
         """Models, fogs and whether selections are needed: recomputed when the draw list changed."""
-        key = (id(engine._root), engine.draw_list_version, technique.light_format)
+        key = (id(engine.root_scope), engine.draw_list_version, technique.light_format)
         if key == self._frame_key:
             return
         self._frame_key = key
@@ -258,7 +259,7 @@ class DeferredRenderer:
                                   *lighting_program(single, "point", False, 0, {}))  # fmt: skip
                 self._program(engine, ("check-shade", model.number), *shading_program(single, 0, {}))
                 probe = engine.programs  # the geometry pass's mesh program, with the visibility stage
-                from ..passes import Composed
+                from ..engine.passes import Composed
 
                 composed = Composed().then(
                     Pass("check", shader=Shader(surface=surface_snippet(single), vertex=vertex_snippet(single)))

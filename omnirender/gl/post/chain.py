@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from ..passes import Clear, FullScreen, Pass, Target
-from ..techniques import GLTechnique
+from ..engine.passes import Clear, FullScreen, Pass, Target
+from ..engine.technique import GLTechnique
 from . import glsl
 from .effects import STAGES, Effect, EffectFrame
 
@@ -150,7 +150,7 @@ class PostProcess(GLTechnique):
         top = len(engine.technique_frames) <= 1
         proj = engine.frame_projection
         camera = {"u_proj": tuple(proj.T.ravel()), "u_inv_proj": tuple(np.linalg.inv(proj).T.ravel())}
-        background = engine.clear_color(getattr(engine, "_frame_background", None))  # draw(background=...) wins
+        background = engine.clear_color(engine.frame_background)  # draw(background=...) wins
         clear = Clear(color=background, depth=1.0)
         drawn_by = "pipeline" if top else "engine"
         samples = int(getattr(engine, "samples", 0) or 0)

@@ -23,7 +23,7 @@ from ...attributes._params import Param, Parameterised, check_choice, check_numb
 from ...attributes.environment import Fog
 from ...attributes.photometry import linear_rgb
 from ...core.component import RenderingComponent
-from ..passes import FullScreen, Pass, Target
+from ..engine.passes import FullScreen, Pass, Target
 from . import glsl
 
 __all__ = [
@@ -247,7 +247,7 @@ class DepthFog(Effect):
         return self._fog.factor(distance)
 
     def passes(self, frame: EffectFrame) -> list[Pass]:
-        from ..compiler import FOG_MODES
+        from ..engine.compiler import FOG_MODES
 
         fog = self._fog
         uniforms = {"u_fog": (fog.start, fog.end, fog.density, FOG_MODES[fog.mode]),
@@ -463,7 +463,7 @@ def _snippet(owner: str, value: Any) -> str:
 
 
 def _uniforms(owner: str, value: Any) -> dict[str, Any]:
-    from ..passes import _pairs
+    from ..engine.passes import _pairs
 
     if not isinstance(value, Mapping):
         raise ValueError(f"{owner}: uniforms must map uniform names to numbers, got {value!r:.60}")

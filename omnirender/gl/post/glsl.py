@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..shaders import FOG_GLSL
+from ..engine.shaders import FOG_GLSL
 
 __all__ = [
     "PRELUDE",

@@ -1,0 +1,349 @@
+"""Mesh files (OBJ, PLY, STL, OFF through trimesh; glTF/GLB through the glTF importer) as ``om.MeshFile`` parts.
+
+:func:`read_mesh` is the reader :class:`~omnirender.shapes.MeshFile` calls
+(registered by :mod:`omnirender.formats`) the first time a file is used.
+Trimesh is imported only then, so declaring a MeshFile needs no extra package.
+
+Mesh files are untrusted input.  The files a mesh file names (an OBJ's
+``mtllib`` and texture maps, a PLY's ``TextureFile``, a glTF's buffers and
+images) are resolved by the path policy (:mod:`omnirender.core.paths`): inside
+the mesh file's folder or ``allowed_roots``, unless ``trusted=True``.  Decoded
+sizes obey :mod:`omnirender.core.limits`.  What cannot be used (a missing
+material library or texture, a remote URL, a decompression bomb, a texture map
+kind the reader does not import) is dropped with a
+:class:`~omnirender.core.drops.DroppedContentWarning` naming the file, or
+raises with ``strict=True``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from typing import Any
+
+import numpy as np
+
+from ..core.drops import report_drop
+from ..core.limits import ResourceLimitError, check_count, check_image_size
+from ..core.paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError
+from ..shapes.meshes import TriangleSet
+from ..shapes.trimeshes import is_trimesh, is_trimesh_scene, triangle_arrays
+from .obj import read_plain_obj
+
+__all__ = ["read_mesh", "SUFFIXES"]
+
+SUFFIXES = (".obj", ".ply", ".stl", ".off", ".gltf", ".glb")
+
+
+def read_mesh(
+    path: Any, *, policy: PathPolicy | None = None, strict: bool = False
+) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a mesh file or trimesh object: ``[(material parameters or None, TriangleSet)]``.
+
+    ``policy`` (the path policy of :mod:`omnirender.core.paths`, default: the
+    file's folder only) governs the files the mesh file names; ``strict``
+    turns warnings about content left out into errors.
+    """
+    policy = policy or PathPolicy()
+    if is_trimesh(path) or is_trimesh_scene(path):
+        return _parts(path, "the trimesh object", strict)
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"MeshFile: no such file {path!r}")
+    if path.lower().endswith((".gltf", ".glb")):
+        return _load_gltf(path, policy, strict)
+    if str(path).lower().endswith(".obj"):
+        try:
+            plain = read_plain_obj(path)
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: cannot load {path!r}: {exc}") from None
+        if plain is not None:  # a plain OBJ file: no trimesh import needed
+            try:
+                return [(None, TriangleSet(**plain))]
+            except ValueError as exc:
+                raise ValueError(f"MeshFile: {path!r} holds invalid geometry: {exc}") from None
+    try:
+        import trimesh
+    except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
+        raise ValueError(f"MeshFile: loading {path!r} needs trimesh (pip install omnirender[mesh]): {exc}") from None
+    _check_header(path)
+    resolver = _PolicyResolver(path, policy, strict)
+    try:
+        loaded = trimesh.load(path, process=False, resolver=resolver)
+    except (UntrustedReferenceError, ResourceLimitError):
+        raise
+    except Exception as exc:
+        resolver.finish()  # a refused reference explains the failure better
+        raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
+    resolver.finish()
+    return _parts(loaded, repr(path), strict)
+
+
+_PLY_COUNT = re.compile(rb"^element\s+(\S+)\s+(\S+)", re.MULTILINE)
+_OFF_COUNTS = re.compile(rb"^\s*(?:[A-Z]*OFF)?\s*(\d+)\s+(\d+)", re.MULTILINE)
+
+
+def _check_header(path: str) -> None:
+    """Refuse a PLY or OFF file whose header announces more elements than the limits or the file can hold."""
+    lower = path.lower()
+    if not lower.endswith((".ply", ".off")):
+        return
+    with open(path, "rb") as fh:
+        head = fh.read(4096)
+    size = os.path.getsize(path)
+    source = f"MeshFile {path!r}"
+    if lower.endswith(".ply"):
+        end = head.find(b"end_header")
+        for name, count in _PLY_COUNT.findall(head[: end if end >= 0 else len(head)]):
+            if not count.isdigit():
+                raise ValueError(f"{source}: the PLY header's element {name.decode(errors='replace')!r} has no count")
+            n = int(count)
+            check_count(source, f"the PLY element {name.decode(errors='replace')!r}", n, "vertices")
+            if n > size:  # every element takes at least one byte
+                raise ValueError(
+                    f"{source}: the PLY header announces {n:,} {name.decode(errors='replace')} elements "
+                    f"but the file holds only {size:,} bytes (truncated or corrupt)"
+                )
+        return
+    lines = [ln for ln in head.splitlines() if ln.strip() and not ln.lstrip().startswith(b"#")]
+    text = b"\n".join(lines[:2])
+    match = _OFF_COUNTS.search(text.replace(b"OFF", b"OFF ", 1))
+    if match:
+        vertices, faces = int(match.group(1)), int(match.group(2))
+        check_count(source, "the OFF header", vertices, "vertices")
+        check_count(source, "the OFF header", 3 * faces, "indices")
+        if vertices + faces > size:
+            raise ValueError(
+                f"{source}: the OFF header announces {vertices:,} vertices and {faces:,} faces but the file holds "
+                f"only {size:,} bytes (truncated or corrupt)"
+            )
+
+
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp", ".dds", ".ppm")
+#: MTL statements naming texture maps that the OBJ reader does not import (only ``map_Kd`` is).
+_UNREAD_MAPS = re.compile(
+    r"^\s*(map_ka|map_ks|map_ns|map_d|map_bump|bump|disp|decal|refl|norm|map_pr|map_pm|map_ps|map_ke|map_aat)\s+(.+)$",
+    re.IGNORECASE | re.MULTILINE,
+)
+
+
+class _PolicyResolver:
+    """The files trimesh asks for (``mtllib``, texture maps), read under the path policy.
+
+    Trimesh swallows every exception a resolver raises (an unreadable
+    material just disappears), so refusals and drops are recorded here and
+    reported by :meth:`finish` after the load: a refused path raises, a
+    missing or unusable file warns (or raises when ``strict``).
+    """
+
+    def __init__(self, path: str, policy: PathPolicy, strict: bool) -> None:
+        self.file_path = path
+        self.file_name = os.path.basename(path)
+        self.parent = os.path.dirname(os.path.abspath(path))
+        self.policy = policy
+        self.strict = strict
+        self.refused: list[UntrustedReferenceError | ResourceLimitError] = []
+        self.drops: list[str] = []
+
+    def __getitem__(self, name: str) -> bytes:
+        return self.get(name)
+
+    def __contains__(self, name: str) -> bool:
+        return False
+
+    def keys(self) -> list[str]:
+        return []
+
+    def write(self, name: str, data: Any) -> None:  # pragma: no cover - loading never writes
+        raise OSError("MeshFile: loading a mesh file never writes files")
+
+    def namespaced(self, namespace: str) -> _PolicyResolver:
+        return self
+
+    def get(self, name: str) -> bytes:
+        kind = "material library" if str(name).strip().lower().endswith(".mtl") else "texture"
+        try:
+            full = self.policy.resolve(name, self.file_path, f"the {kind}")
+        except RemoteReferenceError as exc:
+            self.drops.append(f"{kind} {name!r} dropped: {exc.reason}")
+            raise OSError(exc.reason) from None
+        except UntrustedReferenceError as exc:
+            self.refused.append(exc)
+            raise OSError(str(exc)) from None
+        try:
+            with open(full, "rb") as fh:
+                data = fh.read()
+        except OSError as exc:
+            self.drops.append(f"{kind} {name!r} dropped: cannot read {os.fspath(full)!r} ({exc.strerror or exc})")
+            raise
+        if kind == "texture":
+            self._check_image(name, data)
+        else:
+            self._note_unread_maps(name, data)
+        return data
+
+    def _check_image(self, name: str, data: bytes) -> None:
+        from PIL import Image as PILImage
+
+        try:
+            import io
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                with PILImage.open(io.BytesIO(data)) as img:
+                    width, height = img.size
+        except Exception as exc:
+            if type(exc).__name__ == "DecompressionBombError":  # Pillow refuses beyond twice its own limit
+                message = f"texture {name!r} dropped: it is a decompression bomb ({exc}; see MAX_IMAGE_PIXELS)"
+            else:
+                message = f"texture {name!r} dropped: not a readable image ({type(exc).__name__})"
+            self.drops.append(message)
+            raise OSError(message) from None
+        try:
+            check_image_size(f"MeshFile {self.file_path!r}", f"the texture {name!r}", width, height)
+        except ResourceLimitError as exc:
+            self.drops.append(f"texture {name!r} dropped: {width}x{height} pixels is beyond the image limits ({exc})")
+            raise OSError(str(exc)) from None
+
+    def _note_unread_maps(self, name: str, data: bytes) -> None:
+        text = data.decode("utf-8", errors="replace")
+        for key, value in _UNREAD_MAPS.findall(text):
+            self.drops.append(
+                f"{key} {value.strip()!r} in material library {name!r} dropped: the OBJ reader imports only map_Kd "
+                "(diffuse colour) textures"
+            )
+
+    def finish(self) -> None:
+        """Raise the first refused reference; report every drop (warnings, or an error when strict)."""
+        if self.refused:
+            raise self.refused[0]
+        drops, self.drops = self.drops, []
+        for message in dict.fromkeys(drops):
+            report_drop(f"MeshFile {self.file_path!r}", message, strict=self.strict, stacklevel=6)
+
+
+def _parts(loaded: Any, path: str, strict: bool = False) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a loaded trimesh object (a Trimesh, or a Scene's meshes with their transforms)."""
+    if is_trimesh_scene(loaded):
+        try:
+            meshes = loaded.dump(concatenate=False)
+        except Exception as exc:
+            raise ValueError(f"MeshFile: cannot load {path}: {type(exc).__name__}: {exc}") from None
+    else:
+        meshes = [loaded]
+    parts = []
+    for mesh in meshes:
+        if not is_trimesh(mesh) or len(mesh.faces) == 0:
+            continue  # point clouds, paths and empty geometry carry no triangles
+        try:
+            parts.append(_part(mesh, path, strict))
+        except ValueError as exc:
+            raise ValueError(f"MeshFile: {path} holds invalid geometry: {exc}") from None
+    if not parts:
+        raise ValueError(f"MeshFile: {path} contains no triangles (empty or not a mesh file)")
+    return parts
+
+
+def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, Any] | None, TriangleSet]:
+    arrays = triangle_arrays(mesh)
+    material = None
+    visual = mesh.visual
+    kind = getattr(visual, "kind", None)
+    if kind == "face":
+        fc = np.asarray(visual.face_colors, dtype=np.float32) / 255.0
+        if len(np.unique(fc, axis=0)) == 1:  # one colour for all: a material, shared vertices kept
+            material = {"kind": "phong", "diffuse": tuple(float(c) for c in fc[0, :3]), "opacity": float(fc[0, 3])}
+            arrays["colors"] = None
+    elif kind != "vertex" and (kind == "texture" or hasattr(visual, "material")):
+        material = _material(getattr(visual, "material", None), path, strict)
+        if material is not None and arrays["texcoords"] is None and material.pop("texture", None) is not None:
+            report_drop(f"MeshFile {path}", "texture dropped: the mesh has no texture coordinates", strict=strict)
+    return material, TriangleSet(**arrays)
+
+
+def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:
+    if value is None:
+        return default
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 3:
+        return default
+    if a.max() > 1.0 or a.dtype.kind in "iu":
+        a = a / 255.0
+    return tuple(float(x) for x in np.clip(a[:3], 0.0, 1.0))
+
+
+def _alpha(value: Any) -> float:
+    if value is None:
+        return 1.0
+    a = np.asarray(value, dtype=np.float64).reshape(-1)
+    if a.size < 4:
+        return 1.0
+    return float(np.clip(a[3] / 255.0 if a.max() > 1.0 else a[3], 0.0, 1.0))
+
+
+def _texture(image: Any, path: str, strict: bool) -> np.ndarray | None:
+    if image is None:
+        return None
+    try:
+        check_image_size(f"MeshFile {path}", "a texture", *map(int, image.size))
+        return np.asarray(image.convert("RGBA"), dtype=np.uint8)
+    except Exception as exc:
+        name = getattr(image, "info", {}).get("file_path", "a texture")
+        report_drop(
+            f"MeshFile {path}",
+            f"texture {name!r} dropped: cannot decode it ({type(exc).__name__}: {exc})",
+            strict=strict,
+        )
+        return None
+
+
+def _material(mat: Any, path: str = "", strict: bool = False) -> dict[str, Any] | None:
+    if mat is None:
+        return None
+    name = type(mat).__name__
+    if name == "PBRMaterial":
+        base = getattr(mat, "baseColorFactor", None)
+        out: dict[str, Any] = {
+            "kind": "pbr",
+            "base_color": _rgb(base, (1.0, 1.0, 1.0)),
+            "metallic": float(mat.metallicFactor) if mat.metallicFactor is not None else 1.0,
+            "roughness": float(mat.roughnessFactor) if mat.roughnessFactor is not None else 1.0,
+            "emission": _rgb(getattr(mat, "emissiveFactor", None), (0.0, 0.0, 0.0)),
+            "opacity": _alpha(base),
+        }
+        tex = _texture(getattr(mat, "baseColorTexture", None), path, strict)
+    elif name == "SimpleMaterial":
+        diffuse = getattr(mat, "diffuse", None)
+        glossiness = getattr(mat, "glossiness", None)
+        shininess = float(glossiness) if glossiness is not None else 1.0
+        # MTL's Ns 0 (common in exported files with Ks 1) means "no highlight", as importers such as Blender read
+        # it (roughness 1): a Phong lobe that wide would whiten the whole surface
+        specular = _rgb(getattr(mat, "specular", None), (0.0, 0.0, 0.0)) if shininess >= 1.0 else (0.0, 0.0, 0.0)
+        out = {
+            "kind": "phong",
+            "ambient": _rgb(getattr(mat, "ambient", None), (0.2, 0.2, 0.2)),
+            "diffuse": _rgb(diffuse, (0.8, 0.8, 0.8)),
+            "specular": specular,
+            "shininess": max(shininess, 1.0),
+            "opacity": _alpha(diffuse),
+        }
+        tex = _texture(getattr(mat, "image", None), path, strict)
+    else:
+        return None
+    if tex is not None:
+        out["texture"] = tex
+    return out
+
+
+def _load_gltf(path: str, policy: PathPolicy, strict: bool) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts."""
+    from .gltf.reader import GLTFImportError, flatten_gltf
+
+    try:
+        flat = flatten_gltf(path, trusted=policy.trusted, allowed_roots=policy.allowed_roots, strict=strict)
+    except GLTFImportError as exc:
+        raise ValueError(f"MeshFile: {exc}") from None
+    parts = [({"kind": "attributes", "attributes": attrs} if attrs else None, ts) for attrs, ts in flat]
+    if not parts:
+        raise ValueError(f"MeshFile: {path!r} contains no triangles (empty or not a mesh file)")
+    return parts

@@ -1,0 +1,468 @@
+"""OpenGL contexts: a headless EGL context by default, limits, and raw GL entry points.
+
+moderngl does not expose stencil functions; those few calls go through the
+process's libOpenGL (GLVND dispatches them to the current context).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+from typing import Any
+
+__all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError"]
+
+
+class GLError(RuntimeError):
+    """An OpenGL failure reported with a readable explanation (out of memory, no context)."""
+
+
+def create_context(require: int = 330) -> Any:
+    """A headless OpenGL context (EGL), at least version ``require`` (330 = OpenGL 3.3 core)."""
+    try:
+        import moderngl
+    except ImportError as exc:  # pragma: no cover - depends on the installation
+        raise GLError(f"GLEngine: moderngl is not installed ({exc}); pip install 'omnirender[gl]'") from None
+    try:
+        return moderngl.create_standalone_context(backend="egl", require=require)
+    except Exception as exc:
+        raise GLError(
+            f"GLEngine: cannot create a headless OpenGL {require // 100}.{require % 100 // 10} context through EGL "
+            f"({exc}); install Mesa's EGL (libegl1, libgl1-mesa-dri) or pass context= a moderngl context"
+        ) from None
+
+
+def gl_renderer() -> str:
+    """The name of the OpenGL implementation a headless context gets here ("unknown" without one).
+
+    Benchmarks print it next to their figures (llvmpipe and a GPU differ by orders of magnitude).
+    """
+    try:
+        ctx = create_context()
+    except GLError:
+        return "unknown"
+    try:
+        return str(ctx.info.get("GL_RENDERER", "unknown"))
+    finally:
+        ctx.release()
+
+
+def limits(ctx: Any) -> tuple[int, int]:
+    """(max renderbuffer size, max viewport dimension) of the context."""
+    info = ctx.info
+    rb = int(info.get("GL_MAX_RENDERBUFFER_SIZE", 4096))
+    vp = info.get("GL_MAX_VIEWPORT_DIMS", (rb, rb))
+    return rb, int(min(vp))
+
+
+#: Most samples (pixels times the multisampling count) a GL engine's framebuffers hold: 8 bytes each.
+MAX_SAMPLES_TOTAL = 1 << 28
+
+
+def check_samples_total(size: Any, samples: int = 0) -> tuple[int, int]:
+    """``size`` as (w, h) ints, or ValueError when zero, negative or (with ``samples`` multisampling)
+    above :data:`MAX_SAMPLES_TOTAL` samples in all; needs no context (checked before creating one)."""
+    from ...options import check_image_size
+
+    w, h = check_image_size("GLEngine", size)
+    if w * h * max(1, samples) > MAX_SAMPLES_TOTAL:
+        raise ValueError(
+            f"GLEngine: size {w}x{h} with {max(1, samples)} sample(s) per pixel needs {w * h * max(1, samples):,} "
+            f"samples, more than the {MAX_SAMPLES_TOTAL:,} (2 GiB of colour and depth) this engine allocates; "
+            "render a smaller image, with fewer samples=, or in tiles (om.render(..., tile=2048))"
+        )
+    return w, h
+
+
+def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
+    """:func:`check_samples_total`, and ValueError above the driver's maximum framebuffer size."""
+    w, h = check_samples_total(size, samples)
+    rb, vp = limits(ctx)
+    top = min(rb, vp)
+    if w > top or h > top:
+        raise ValueError(
+            f"GLEngine: size {w}x{h} exceeds this driver's maximum framebuffer size {top}x{top} "
+            f"(GL_MAX_RENDERBUFFER_SIZE / GL_MAX_VIEWPORT_DIMS); om.render(scene, size=...) renders such an "
+            "image in tiles (omnirender.tiling), or render a smaller one"
+        )
+    return w, h
+
+
+_STENCIL_FUNCS = {
+    "never": 0x0200,
+    "less": 0x0201,
+    "equal": 0x0202,
+    "lequal": 0x0203,
+    "greater": 0x0204,
+    "notequal": 0x0205,
+    "gequal": 0x0206,
+    "always": 0x0207,
+}
+_STENCIL_OPS = {
+    "keep": 0x1E00,
+    "zero": 0,
+    "replace": 0x1E01,
+    "incr": 0x1E02,
+    "decr": 0x1E03,
+    "invert": 0x150A,
+    "incr_wrap": 0x8507,
+    "decr_wrap": 0x8508,
+}
+GL_STENCIL_TEST = 0x0B90
+
+_u, _i, _f, _d, _b = ctypes.c_uint, ctypes.c_int, ctypes.c_float, ctypes.c_double, ctypes.c_ubyte
+_pi, _pu, _pf, _pb = ctypes.POINTER(_i), ctypes.POINTER(_u), ctypes.POINTER(_f), ctypes.POINTER(_b)
+#: The GL entry points moderngl lacks: name -> (argument types, result type).
+_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
+    "glGenFramebuffers": ([_i, _pu], None),
+    "glGenRenderbuffers": ([_i, _pu], None),
+    "glDeleteRenderbuffers": ([_i, _pu], None),
+    "glBindFramebuffer": ([_u, _u], None),
+    "glBindRenderbuffer": ([_u, _u], None),
+    "glRenderbufferStorageMultisample": ([_u, _i, _u, _i, _i], None),
+    "glFramebufferRenderbuffer": ([_u, _u, _u, _u], None),
+    "glCheckFramebufferStatus": ([_u], _u),
+    "glBlitFramebuffer": ([_i, _i, _i, _i, _i, _i, _i, _i, _u, _u], None),
+    "glClearStencil": ([_i], None),
+    "glClear": ([_u], None),
+    "glClearDepth": ([_d], None),
+    "glFinish": ([], None),
+    "glGetIntegerv": ([_u, _pi], None),
+    "glGetFloatv": ([_u, _pf], None),
+    "glGetBooleanv": ([_u, _pb], None),
+    "glIsEnabled": ([_u], _b),
+    "glEnable": ([_u], None),
+    "glDisable": ([_u], None),
+    "glColorMask": ([_b, _b, _b, _b], None),
+    "glDepthMask": ([_b], None),
+    "glTexParameteri": ([_u, _u, _i], None),
+    "glViewport": ([_i, _i, _i, _i], None),
+    "glScissor": ([_i, _i, _i, _i], None),
+    "glDepthFunc": ([_u], None),
+    "glBlendFuncSeparate": ([_u, _u, _u, _u], None),
+    "glBlendEquationSeparate": ([_u, _u], None),
+    "glBlendColor": ([_f, _f, _f, _f], None),
+    "glCullFace": ([_u], None),
+    "glFrontFace": ([_u], None),
+    "glPolygonMode": ([_u, _u], None),
+    "glPolygonOffset": ([_f, _f], None),
+    "glLineWidth": ([_f], None),
+    "glPointSize": ([_f], None),
+    "glDepthRange": ([_d, _d], None),
+    "glStencilFuncSeparate": ([_u, _u, _i, _u], None),
+    "glStencilOpSeparate": ([_u, _u, _u, _u], None),
+    "glStencilMaskSeparate": ([_u, _u], None),
+    "glSampleCoverage": ([_f, _b], None),
+    "glProvokingVertex": ([_u], None),
+    "glReadPixels": ([_i, _i, _i, _i, _u, _u, ctypes.c_void_p], None),
+    "glPixelStorei": ([_u, _i], None),
+    "glGenTextures": ([_i, _pu], None),
+    "glDeleteTextures": ([_i, _pu], None),
+    "glBindTexture": ([_u, _u], None),
+    "glDeleteFramebuffers": ([_i, _pu], None),
+    "glTexImage2D": ([_u, _i, _i, _i, _i, _i, _u, _u, ctypes.c_void_p], None),
+    "glFramebufferTexture2D": ([_u, _u, _u, _u, _i], None),
+    "glGetFramebufferAttachmentParameteriv": ([_u, _u, _u, _pi], None),
+    "glDrawBuffers": ([_i, _pu], None),
+    "glGetMultisamplefv": ([_u, _u, _pf], None),
+    "glSampleMaski": ([_u, _u], None),
+}
+
+
+class RawGL:
+    """The handful of GL calls moderngl lacks (stencil state), loaded from libOpenGL/libGL."""
+
+    _lib: Any = None
+
+    def __init__(self) -> None:
+        if RawGL._lib is None:
+            for name in ("OpenGL", "GL"):
+                path = ctypes.util.find_library(name)
+                if path:
+                    try:
+                        RawGL._lib = ctypes.CDLL(path)
+                        break
+                    except OSError:
+                        continue
+        lib = RawGL._lib
+        self.available = lib is not None
+        if lib is not None:
+            self._func = lib.glStencilFunc
+            self._func.argtypes = [ctypes.c_uint, ctypes.c_int, ctypes.c_uint]
+            self._op = lib.glStencilOp
+            self._op.argtypes = [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]
+            self._mask = lib.glStencilMask
+            self._mask.argtypes = [ctypes.c_uint]
+            for name, (args, result) in _SIGNATURES.items():
+                fn = getattr(lib, name)
+                fn.argtypes = args
+                fn.restype = result
+                setattr(self, name, fn)
+
+    def _require(self) -> None:
+        if not self.available:
+            raise GLError("GLEngine: StencilTest needs libOpenGL/libGL to set stencil state, which was not found")
+
+    def stencil_test(self, ctx: Any, test: tuple | None) -> None:
+        """Enable the stencil test with ``(func, ref, mask)``, or disable it (None)."""
+        if test is None:
+            ctx.disable_direct(GL_STENCIL_TEST)
+            return
+        self._require()
+        func, ref, mask = test
+        ctx.enable_direct(GL_STENCIL_TEST)
+        self._func(_STENCIL_FUNCS[func], int(ref), int(mask) & 0xFFFFFFFF)
+
+    def stencil_op(self, fail: str, zfail: str, zpass: str, write_mask: int) -> None:
+        """glStencilOp and glStencilMask (the write mask)."""
+        if not self.available:
+            return  # without libGL there is no stencil test either; the default op changes nothing
+        self._op(_STENCIL_OPS[fail], _STENCIL_OPS[zfail], _STENCIL_OPS[zpass])
+        self._mask(int(write_mask) & 0xFFFFFFFF)
+
+
+GL_FRAMEBUFFER = 0x8D40
+GL_RENDERBUFFER = 0x8D41
+GL_COLOR_ATTACHMENT0 = 0x8CE0
+GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
+GL_DEPTH24_STENCIL8 = 0x88F0
+GL_FRAMEBUFFER_COMPLETE = 0x8CD5
+GL_STENCIL_BUFFER_BIT = 0x400
+GL_FRAMEBUFFER_BINDING = 0x8CA6
+
+
+def depth_stencil_framebuffer(ctx: Any, raw: RawGL, color: Any, size: tuple[int, int], samples: int) -> Any:
+    """A framebuffer with ``color`` (a moderngl renderbuffer) and a 24/8 depth-stencil renderbuffer, or None.
+
+    moderngl offers no stencil attachment; the framebuffer is built with raw GL
+    calls and wrapped with ``ctx.detect_framebuffer``.  Returns None when the
+    raw entry points are unavailable or the driver rejects the format.
+    """
+    if not raw.available:
+        return None
+    try:
+        previous = ctypes.c_int(0)
+        raw.glGetIntegerv(GL_FRAMEBUFFER_BINDING, ctypes.byref(previous))
+        fbo = ctypes.c_uint(0)
+        rbo = ctypes.c_uint(0)
+        raw.glGenFramebuffers(1, ctypes.byref(fbo))
+        raw.glGenRenderbuffers(1, ctypes.byref(rbo))
+        raw.glBindRenderbuffer(GL_RENDERBUFFER, rbo.value)
+        raw.glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH24_STENCIL8, size[0], size[1])
+        raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color.glo)
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, rbo.value)
+        ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+        raw.glBindFramebuffer(GL_FRAMEBUFFER, previous.value)
+        if not ok:
+            raw.glDeleteRenderbuffers(1, ctypes.byref(rbo))
+            return None
+        wrapped = ctx.detect_framebuffer(fbo.value)
+        return wrapped, rbo.value
+    except Exception:  # pragma: no cover - depends on the driver
+        return None
+
+
+def delete_renderbuffer(raw: RawGL, rbo: int) -> None:
+    """Delete a renderbuffer made by :func:`depth_stencil_framebuffer`."""
+    if raw.available:
+        name = ctypes.c_uint(rbo)
+        raw.glDeleteRenderbuffers(1, ctypes.byref(name))
+
+
+GL_TEXTURE_2D = 0x0DE1
+GL_DEPTH_STENCIL = 0x84F9
+GL_UNSIGNED_INT_24_8 = 0x84FA
+GL_NEAREST = 0x2600
+GL_CLAMP_TO_EDGE = 0x812F
+
+
+def depth_stencil_target(ctx: Any, raw: RawGL, colors: list[Any], size: tuple[int, int]) -> tuple | None:
+    """A framebuffer of moderngl colour textures and a 24/8 depth-stencil *texture*, or None.
+
+    Returns (framebuffer, depth texture wrapped for sampling, release function).
+    moderngl makes depth textures without stencil; offscreen passes that need
+    both (shadow volumes into a float target) get this one, built with raw GL.
+    """
+    if not raw.available:
+        return None
+    previous = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_FRAMEBUFFER_BINDING, ctypes.byref(previous))
+    tex = ctypes.c_uint(0)
+    fbo = ctypes.c_uint(0)
+    raw.glGenTextures(1, ctypes.byref(tex))
+    raw.glBindTexture(GL_TEXTURE_2D, tex.value)
+    raw.glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH24_STENCIL8, size[0], size[1], 0, GL_DEPTH_STENCIL,
+                     GL_UNSIGNED_INT_24_8, None)  # fmt: skip
+    for pname, value in ((0x2801, GL_NEAREST), (0x2800, GL_NEAREST), (0x2802, GL_CLAMP_TO_EDGE),
+                         (0x2803, GL_CLAMP_TO_EDGE)):  # fmt: skip
+        raw.glTexParameteri(GL_TEXTURE_2D, pname, value)
+    raw.glBindTexture(GL_TEXTURE_2D, 0)
+    raw.glGenFramebuffers(1, ctypes.byref(fbo))
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+    for i, color in enumerate(colors):
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, GL_TEXTURE_2D, color.glo, 0)
+    raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_TEXTURE_2D, tex.value, 0)
+    ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, previous.value)
+
+    def release() -> None:
+        raw.glDeleteFramebuffers(1, ctypes.byref(fbo))
+        raw.glDeleteTextures(1, ctypes.byref(tex))
+
+    if not ok:
+        release()
+        return None
+    wrapped = ctx.detect_framebuffer(fbo.value)
+    depth = ctx.external_texture(tex.value, size, 1, 0, "f4")
+    return wrapped, depth, release
+
+
+def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth: bool | None = None) -> None:
+    """Set colour and depth write masks (raw GL when available: moderngl ignores them on detected framebuffers)."""
+    if raw.available:
+        if color is not None:
+            raw.glColorMask(*(1 if c else 0 for c in color))
+        if depth is not None:
+            raw.glDepthMask(1 if depth else 0)
+        return
+    if color is not None:
+        fbo.color_mask = tuple(bool(c) for c in color)
+    if depth is not None:
+        fbo.depth_mask = bool(depth)
+
+
+def clear_stencil_bits(raw: RawGL, bits: int) -> None:
+    """Set the stencil ``bits`` of the bound framebuffer to 0, keeping the others (scissor test off)."""
+    if raw.available:
+        raw.glDisable(0x0C11)
+        raw._mask(int(bits) & 0xFF)
+        raw.glClearStencil(0)
+        raw.glClear(GL_STENCIL_BUFFER_BIT)
+        raw._mask(0xFF)
+
+
+def clear_depth(raw: RawGL, value: float = 1.0) -> None:
+    """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off)."""
+    raw.glDisable(0x0C11)
+    raw.glDepthMask(1)
+    raw.glClearDepth(float(value))
+    raw.glClear(GL_DEPTH_BUFFER_BIT)
+
+
+def clear_stencil(raw: RawGL, value: int = 0) -> None:
+    """Clear the stencil buffer of the bound framebuffer (every bit: glClear obeys the stencil write mask)."""
+    if raw.available:
+        raw._mask(0xFF)
+        raw.glClearStencil(int(value))
+        raw.glClear(GL_STENCIL_BUFFER_BIT)
+
+
+GL_READ_FRAMEBUFFER = 0x8CA8
+GL_DRAW_FRAMEBUFFER = 0x8CA9
+GL_DRAW_FRAMEBUFFER_BINDING = 0x8CA6
+GL_READ_FRAMEBUFFER_BINDING = 0x8CAA
+GL_COLOR_BUFFER_BIT = 0x4000
+GL_DEPTH_BUFFER_BIT = 0x100
+GL_NEAREST = 0x2600
+
+
+def blit(raw: RawGL, source: Any, target: Any, size: tuple[int, int], color: bool, depth: bool) -> None:
+    """Copy colour (the read buffer to the draw buffers) and/or depth of framebuffer ``source`` into ``target``.
+
+    Both are moderngl framebuffers of ``size``; a multisampled source is resolved.  The framebuffer
+    bindings are restored afterwards (moderngl's idea of the bound framebuffer stays true).
+    """
+    previous_draw, previous_read = ctypes.c_int(0), ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(previous_draw))
+    raw.glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, ctypes.byref(previous_read))
+    raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, source.glo)
+    raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, target.glo)
+    bits = (GL_COLOR_BUFFER_BIT if color else 0) | (GL_DEPTH_BUFFER_BIT if depth else 0)
+    w, h = size
+    raw.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, bits, GL_NEAREST)
+    raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, previous_draw.value)
+    raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, previous_read.value)
+
+
+GL_DEPTH_ATTACHMENT = 0x8D00
+GL_STENCIL_ATTACHMENT = 0x8D20
+GL_ATTACHMENT_OBJECT_TYPE = 0x8CD0
+GL_ATTACHMENT_OBJECT_NAME = 0x8CD1
+GL_TEXTURE = 0x1702
+GL_TEXTURE_2D_MULTISAMPLE = 0x9100
+GL_SAMPLE_POSITION = 0x8E50
+
+
+def _attachment(raw: RawGL, point: int) -> tuple[int, int]:
+    """(object type, name) attached at ``point`` of the bound draw framebuffer (type 0: nothing)."""
+    kind, name = ctypes.c_int(0), ctypes.c_int(0)
+    raw.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, point, GL_ATTACHMENT_OBJECT_TYPE, ctypes.byref(kind))
+    if kind.value:
+        raw.glGetFramebufferAttachmentParameteriv(GL_DRAW_FRAMEBUFFER, point, GL_ATTACHMENT_OBJECT_NAME,
+                                                  ctypes.byref(name))  # fmt: skip
+    return kind.value, name.value
+
+
+def sharing_depth(ctx: Any, raw: RawGL, colors: list[Any], samples: int) -> tuple[Any, Any, bool] | None:
+    """A framebuffer of moderngl colour textures sharing the depth (and stencil) of the framebuffer bound now.
+
+    Returns (framebuffer, release function, whether it has a stencil), or None when the bound
+    framebuffer is the default one or has no depth attachment (its buffers cannot be shared).
+    Passes that test against another pass's depth without sampling it use it (no feedback loop).
+    """
+    if not raw.available:
+        return None
+    bound = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+    if bound.value == 0:
+        return None
+    depth = _attachment(raw, GL_DEPTH_ATTACHMENT)
+    if not depth[0]:
+        return None
+    stencil = _attachment(raw, GL_STENCIL_ATTACHMENT)
+    target = GL_TEXTURE_2D_MULTISAMPLE if samples > 1 else GL_TEXTURE_2D
+    fbo = ctypes.c_uint(0)
+    raw.glGenFramebuffers(1, ctypes.byref(fbo))
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, fbo.value)
+    for i, color in enumerate(colors):
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, target, color.glo, 0)
+    shared = stencil == depth
+    point = GL_DEPTH_STENCIL_ATTACHMENT if shared else GL_DEPTH_ATTACHMENT
+    if depth[0] == GL_RENDERBUFFER:
+        raw.glFramebufferRenderbuffer(GL_FRAMEBUFFER, point, GL_RENDERBUFFER, depth[1])
+    else:
+        raw.glFramebufferTexture2D(GL_FRAMEBUFFER, point, target, depth[1], 0)
+    buffers = (ctypes.c_uint * max(len(colors), 1))(*(GL_COLOR_ATTACHMENT0 + i for i in range(len(colors))))
+    raw.glDrawBuffers(len(colors), buffers)
+    ok = raw.glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE
+    raw.glBindFramebuffer(GL_FRAMEBUFFER, bound.value)
+
+    def release() -> None:
+        raw.glDeleteFramebuffers(1, ctypes.byref(fbo))
+
+    if not ok:
+        release()
+        return None
+    wrapped = ctx.detect_framebuffer(fbo.value)
+    _ = ctx.error  # moderngl's detection queries attachments that are not there: a harmless error to drop
+    return wrapped, release, shared
+
+
+def sample_positions(raw: RawGL, samples: int) -> list[tuple[float, float]]:
+    """The sample positions (in [0, 1] within a pixel) of the multisampled framebuffer bound now."""
+    out = []
+    value = (ctypes.c_float * 2)()
+    for k in range(samples):
+        raw.glGetMultisamplefv(GL_SAMPLE_POSITION, k, value)
+        out.append((float(value[0]), float(value[1])))
+    return out
+
+
+def frame_has_stencil(raw: RawGL) -> bool:
+    """Whether the framebuffer bound now (not the default one) has a stencil attachment."""
+    if not raw.available:
+        return False
+    bound = ctypes.c_int(0)
+    raw.glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, ctypes.byref(bound))
+    return bound.value != 0 and _attachment(raw, GL_STENCIL_ATTACHMENT)[0] != 0

@@ -1,0 +1,518 @@
+"""Issuing the draws of one (composed) pass: instanced batches, sorted transparency, overlays.
+
+The :class:`BatchDrawer` draws the items of a scope that a pass selects:
+opaque batches (one instanced call per geometry and state; big batches are
+sorted front to back and culled to the frame's view, and only changed rows
+are uploaded), transparent items back to front with blending on and depth
+writes off (closed transparent shapes: back faces, then front faces), then
+overlays (text).  What a pass changes (state overrides, shader features,
+camera) is applied per draw from the :class:`~.passes.Composed` pass.
+
+It is one of the engine's collaborators: it reads the pass's camera and
+target from the :class:`~.frame_state.FrameState`, names targets through
+:class:`~.targets.FrameTargets`, counts into the :class:`~.report.PassReport`,
+and uses only the public API of the engine facade it is given (lights,
+geometry uploads, render textures, the batches a pass mask keeps).
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Any
+
+import numpy as np
+
+from ..techniques.shadows import ATLAS, SHADOW_UNIT
+from .attributes import Blend, CullFace, DepthMask
+from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, uniform_material
+from .frame_state import FrameState
+from .geometry import Geometry
+from .layout import ROW
+from .lighting import LightUniforms
+from .passes import Composed
+from .pipelines import apply_sampling
+from .renderer import item_filter
+from .report import PassReport
+from .resources import gpu_call
+from .shaders import instance_fields
+from .state import LineWidth, ShadowingState, defaults
+from .targets import FrameTargets
+
+__all__ = ["BatchDrawer", "SORT_MIN", "PASS_INPUT_UNIT"]
+
+_GL_CLIP_DISTANCE0 = 0x3000
+#: First texture unit of a pass's Shader inputs (after the shadow atlas; units below are the materials').
+PASS_INPUT_UNIT = SHADOW_UNIT + 1
+#: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
+SORT_MIN = 64
+_TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
+_MODEL = ROW.slice("model")
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
+_OVER = ("src_alpha", "one_minus_src_alpha", "add")
+_MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
+                      ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
+_GL_SRGB8_ALPHA8 = 0x8C43
+_TRIANGLES_ADJACENCY = 0x000C
+_GL_RGBA8 = 0x8058
+
+
+class BatchDrawer:
+    """Draws what a pass selects of a scope; owns the transient buffers, textures and custom-kind drawers."""
+
+    def __init__(
+        self, engine: Any, state: FrameState, targets: FrameTargets, report: PassReport, drawers: dict[str, Any]
+    ) -> None:
+        #: the engine facade: custom-kind drawers get it, and its public API gives lights, uploads and batches
+        self.engine = engine
+        self.ctx = engine.ctx
+        self.raw = engine.raw
+        self.programs = engine.programs
+        self.state = state
+        self.targets = targets
+        self.report = report
+        #: drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind
+        self.drawers = drawers
+        #: clip distances enabled now
+        self.nclip = 0
+        self._transient: dict[Any, tuple[Any, ...]] = {}
+        self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
+        self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
+
+    def draw_items(self, scope: Scope, composed: Composed, nested: Any) -> int:
+        """Draw the items of ``scope`` that ``composed`` selects; ``nested(scope)`` runs a nested technique scope.
+
+        Order: opaque batches and nested scopes as they were met, then
+        transparent items back to front, then overlays.
+        """
+        classes = composed.classes
+        calls = 0
+        parts = scope.parts or []
+        filtered = self.engine.filtered_batches(scope, composed) if (composed.masks or composed.selects) else None
+        if "opaque" in classes or composed.scopes:
+            for index, part in enumerate(parts):
+                if isinstance(part, Scope):
+                    if composed.scopes is True:
+                        calls += nested(part)
+                    continue
+                if "opaque" in classes:
+                    batches = part.batches if filtered is None else filtered[index]
+                    for batch in batches:
+                        calls += self._draw_batch(batch, composed)
+        others: list[DrawItem] | None = None
+        if "transparent" in classes or "overlay" in classes:
+            others = [it for part in parts if isinstance(part, Segment) for it in part.others]
+            if filtered is not None:
+                keep = item_filter(composed)
+                others = [it for it in others if keep(it)]
+        if "transparent" in classes and others:
+            calls += self._draw_transparent([it for it in others if it.transparent and not it.state.overlay], composed)
+        if "overlay" in classes and others:
+            for it in others:
+                if it.state.overlay:
+                    drawer = self.drawers.get(it.state.kind)
+                    if drawer is not None:
+                        made = drawer(self.engine, [it], it.state)
+                        self.state.applier.forget()
+                        self.report.count(made, 1)
+                        calls += made
+        return calls
+
+    def _features(self, state: DrawState, uniform: bool, highlight: bool, composed: Composed, single: bool) -> tuple:
+        """Program features of a draw: the state's, the lights, the material sharing, the pass's shading."""
+        features = state.features
+        shading = composed.shading()
+        if state.kind in ("mesh", "points"):
+            lit = not any(name in ("DEPTH_ONLY", "FLAT_COLOR", "UNLIT") for name, _ in shading)
+            if lit:
+                if not any(name == "PASS_SURFACE" for name, _ in shading):  # a surface pass lights nothing itself
+                    features = features + (("LIGHTS", self._lights_for(state.switch).types),)
+                plan = self.state.shadow_plan
+                if plan is not None and state.raster[ShadowingState.index][1]:
+                    if not any(name == "SHADOWS_OFF" for name, _ in shading):
+                        features = features + plan.features()
+            if self.state.ortho:
+                features = features + (("ORTHO", True),)
+            if not uniform:
+                features = features + (("INSTANCE_MATERIAL", True),)
+            elif single:
+                features = features + (("SINGLE", True),)
+        if highlight:
+            features = features + (("HIGHLIGHT", True),)
+        if self.state.linear_output:
+            features = features + (("LINEAR_OUTPUT", True),)
+        return features + shading
+
+    def _draw_batch(self, batch: Batch, composed: Composed) -> int:
+        state = batch.state
+        drawer = self.drawers.get(state.kind)
+        if drawer is not None:
+            calls = drawer(self.engine, batch.items, state)
+            self.state.applier.forget()
+            self.report.count(calls, len(batch.items))
+            return calls
+        n = len(batch.rows)
+        if not n:
+            return 0  # an instance set with no visible instance
+        highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        single = n == 1 and batch.uniform and state.kind == "mesh"
+        features = self._features(state, batch.uniform, highlight, composed, single)
+        prog = self.programs.get(state.kind, features, state.code)
+        fields = instance_fields(state.kind, dict(features))
+        if fields and batch.buffer is not None and batch.layout is not None and batch.layout.names() != fields:
+            batch.release()  # a variant reads other fields: re-pack
+        if fields and (batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None):
+            batch.release()
+            batch.layout = ROW.subset(fields)
+            batch.buffer = gpu_call(
+                self.ctx.buffer, reserve=max(n, 1) * batch.layout.stride * 4, dynamic=True, what="instance data"
+            )
+            batch.capacity = max(n, 1)
+            batch.dirty = (0, n)
+        volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
+        vao = batch.vaos.get(id(prog))
+        if vao is None:
+            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume)
+        if fields:
+            columns = self._columns(batch.layout)
+            if n >= SORT_MIN and not state.special:
+                # big batches: opaque instances front to back (early depth tests skip hidden fragments) and
+                # culled to the frame's view: the buffer holds the visible ones first, then the rest, so
+                # passes from other cameras (shadow maps, mirrors) draw them all from the same buffer; changed
+                # rows are rewritten where they lie unless culling has to be done again
+                own_view = self.state.view_key == self.state.frame_view_key
+                stale = batch.position is None or len(batch.position) != n
+                view_key = self.state.view_key
+                if stale or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n))):
+                    visible = self._cull(batch) if own_view else None
+                    z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
+                    if visible is None:
+                        order = np.argsort(-z, kind="stable")
+                        batch.drawn = n
+                    else:
+                        seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
+                        order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
+                        batch.drawn = len(seen)
+                    batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.position = np.empty(n, np.int64)
+                    batch.position[order] = np.arange(n)
+                    batch.sorted_for = self.state.view_key if own_view else None
+                    batch.dirty = None
+                elif batch.dirty is not None:
+                    lo, hi = batch.dirty
+                    where = batch.position[lo:hi]
+                    first, last = int(where.min()), int(where.max()) + 1
+                    order = np.empty(n, np.int64)
+                    order[batch.position] = np.arange(n)
+                    data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
+                    batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
+                    batch.dirty = None
+                if own_view:
+                    n = batch.drawn
+                    if not n:
+                        return 0
+            elif batch.dirty is not None:
+                lo, hi = batch.dirty
+                data = np.ascontiguousarray(batch.rows[lo:hi][:, columns])
+                batch.buffer.write(data.tobytes(), offset=lo * batch.layout.stride * 4)
+                batch.dirty = None
+        else:
+            row = batch.rows[0]
+            prog["i_model"].write(row[_MODEL].tobytes())
+            u = prog.get("i_color", None)
+            if u is not None:
+                u.write(row[ROW.slice("color")].tobytes())
+        self._apply_raster(composed.raster(state.raster, defaults()), state)
+        self._set_uniforms(prog, state, composed)
+        if batch.uniform:
+            self._set_material(prog, batch.rows[0])
+        vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
+        self.report.count(1, n)
+        return 1
+
+    def _cull(self, batch: Batch) -> np.ndarray | None:
+        """Which instances' bounding spheres meet the view frustum (None: all of them)."""
+        rows = batch.rows
+        b0, b1 = batch.geometry.bounds
+        center = np.append((b0 + b1) / 2.0, 1.0)
+        radius = float(np.linalg.norm(b1 - b0)) / 2.0
+        mt = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
+        centers = center @ mt  # (n, 4): M @ center
+        scale = np.sqrt((mt[:, :3, :3] ** 2).sum(axis=2)).max(axis=1)
+        clip = self.state.proj @ self.state.view
+        planes = np.array([clip[3] + clip[0], clip[3] - clip[0], clip[3] + clip[1], clip[3] - clip[1],
+                           clip[3] + clip[2], clip[3] - clip[2]])  # fmt: skip
+        planes /= np.linalg.norm(planes[:, :3], axis=1)[:, None]
+        distance = centers @ planes.T  # (n, 6) signed distances of the centres
+        visible = (distance > -(radius * scale)[:, None]).all(axis=1)
+        return None if visible.all() else visible
+
+    def _columns(self, layout: Any) -> np.ndarray:
+        key = layout.names()
+        cols = self._column_cache.get(key)
+        if cols is None:
+            cols = self._column_cache[key] = layout.columns(ROW)
+        return cols
+
+    def _vao(
+        self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False
+    ) -> Any:
+        self.engine.upload(geometry)
+        content = geometry.content(program)
+        if buffer is not None and layout is not None:
+            fmt, names = layout.vertex_format()
+            content.append((buffer, fmt, *names))
+        index = geometry.buffers.get("index") if kind != "points" else None
+        if adjacency:
+            index = geometry.adjacency_buffer(self.ctx)
+        return self.ctx.vertex_array(program, content, index_buffer=index, index_element_size=4, skip_errors=True)
+
+    def _mode(self, geometry: Geometry, kind: str) -> int:
+        ctx = self.ctx
+        if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
+            return ctx.PATCHES
+        if kind == "points" or geometry.mode == "points":
+            return ctx.POINTS
+        if geometry.mode == "lines":
+            return ctx.LINES
+        return ctx.TRIANGLES
+
+    def _set_material(self, prog: Any, row: np.ndarray) -> None:
+        for name, field in _MATERIAL_UNIFORMS:
+            u = prog.get(name, None)
+            if u is not None:
+                u.write(row[ROW.slice(field)].tobytes())
+
+    def light_order(self) -> list[Any]:
+        """The lights of the pass being drawn in shader order (index i is light i of the light loops)."""
+        return self._lights_for(None).order
+
+    def _lights_for(self, switch: Any) -> LightUniforms:
+        key = id(switch)
+        lu = self.state.lights.get(key)
+        if lu is None:
+            lights = self.engine.scene_lights
+            if switch is not None:
+                lights = [(light, m) for light, m in lights if switch.allows(light)]
+            lu = LightUniforms(lights, self.state.view, headlight=not self.engine.scene_lights)
+            self.state.lights[key] = lu
+        return lu
+
+    def _set_uniforms(self, prog: Any, state: DrawState, composed: Composed) -> None:
+        for name, data in self.state.uniforms.items():
+            u = prog.get(name, None)
+            if u is not None:
+                u.write(data)
+        lights = self._lights_for(state.switch)
+        lights.apply(prog)
+        if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
+            self.state.shadow_plan.apply(prog, self.targets.named(ATLAS).depth, lights.order)
+        if state.clip:
+            prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
+        if state.fog is not None:
+            color, start, end, density, mode = state.fog
+            u = prog.get("u_fog", None)
+            if u is not None:
+                u.value = (start, end, density, mode)
+                prog["u_fog_color"].value = color
+        u = prog.get("u_viewport", None)
+        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+            u.value = (self.state.target_size[0] / 2.0, self.state.target_size[1] / 2.0)
+        if state.kind == "lines":
+            prog["u_line_width"].value = float(state.value(LineWidth))
+        for unit, (sampler, texture, srgb) in enumerate(state.textures):
+            u = prog.get(sampler, None)
+            if u is not None:
+                self.texture(texture, srgb).use(unit)
+                u.value = unit
+        for name, value in state.uniforms:
+            u = prog.get(name, None)
+            if u is not None:
+                if isinstance(value, tuple) and len(value) > 4:  # arrays (NURBS trimming edges): as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
+        for name, value in composed.uniforms().items():
+            u = prog.get(name, None)
+            if u is not None:
+                if isinstance(value, tuple) and len(value) > 4:  # arrays and matrices: written as float32
+                    u.write(np.asarray(value, np.float32)[: u.array_length * u.dimension].tobytes())
+                else:
+                    u.value = value
+        inputs = composed.inputs()
+        if inputs:
+            for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
+                u = prog.get(uniform, None)
+                if u is not None:
+                    if isinstance(source, tuple):
+                        name, attachment = source
+                        target = self.targets.named(name)
+                        texture = target.depth if attachment == "depth" else target.texture(attachment)
+                    else:
+                        texture = self.texture(source)  # an om.Texture of the pass
+                    texture.use(unit)
+                    u.value = unit
+
+    def _apply_raster(self, raster: tuple, state: DrawState) -> None:
+        self.state.applier.apply(raster)
+        nclip = len(state.clip)
+        if self.nclip != nclip:
+            for i in range(6):
+                if i < nclip:
+                    self.ctx.enable_direct(_GL_CLIP_DISTANCE0 + i)
+                else:
+                    self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
+            self.nclip = nclip
+
+    def texture(self, attr: Any, srgb: bool = True) -> Any:
+        """The GL texture of an ``om.Texture``: sRGB colour data, or linear data (normal, roughness maps)."""
+        if getattr(attr, "rendered", False):  # an om.gl.RenderTexture: its pipeline's last image
+            return self.engine.pipelines().texture(attr)
+        key = (id(attr), srgb)
+        entry = self._textures.get(key)
+        if entry is not None and entry[0]() is attr and entry[1] == attr.version:
+            return entry[2]
+        if entry is not None:
+            entry[2].release()
+        img = np.ascontiguousarray(attr.image_array()[::-1])
+        h, w = img.shape[:2]
+        # GL_SRGB8_ALPHA8: texture images are display (sRGB) values; the GPU decodes them before filtering
+        # and mipmapping, so minified and magnified textures average light, not encoded values
+        internal = _GL_SRGB8_ALPHA8 if srgb else _GL_RGBA8
+        tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=internal, what="a texture")
+        if attr.mipmap:
+            tex.build_mipmaps()
+        apply_sampling(self.ctx, self.raw, tex, attr)
+        self._textures[key] = (weakref.ref(attr), attr.version, tex)
+        return tex
+
+    # -- transparent items -------------------------------------------------------------
+    def _draw_transparent(self, items: list[DrawItem], composed: Composed) -> int:
+        """Back to front (blending on where nothing else is set, depth writes off); closed shapes back faces first."""
+        if not items:
+            return 0
+        if any(it.instances is not None for it in items):  # an instance set's instances sort one by one
+            parts = [it.rows() for it in items]
+            owners = [it for it, part in zip(items, parts, strict=True) for _ in range(len(part))]
+            rows = np.concatenate(parts)
+            items = owners
+        else:
+            rows = np.stack([it.row for it in items])
+        if not len(rows):
+            return 0
+        centers = np.array([(it.geometry.bounds[0] + it.geometry.bounds[1]) / 2.0 for it in items])
+        mats = rows[:, _MODEL].reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
+        world = np.einsum("nij,nj->ni", mats[:, :3, :3], centers) + mats[:, :3, 3]
+        z = world @ self.state.view[2, :3] + self.state.view[2, 3]
+        order = np.argsort(z, kind="stable")  # most negative z (farthest) first
+        runs: list[tuple[Any, DrawState, list[int]]] = []
+        for i in order:
+            it = items[i]
+            if (
+                runs
+                and runs[-1][0] is it.geometry
+                and runs[-1][1] is it.state
+                and not _two_faced(it.geometry, it.state)
+            ):
+                # instances of a two-faced run would draw all back faces, then all front faces: a nearer
+                # instance's back faces would then land under a farther one's front faces, so those runs
+                # hold one instance each
+                runs[-1][2].append(int(i))
+            else:
+                runs.append((it.geometry, it.state, [int(i)]))
+        calls = 0
+        for geometry, state, indices in runs:
+            drawer = self.drawers.get(state.kind)
+            if drawer is not None:
+                made = drawer(self.engine, [items[i] for i in indices], state)
+                self.state.applier.forget()
+                self.report.count(made, len(indices))
+                calls += made
+                continue
+            data = rows[indices]
+            uniform = uniform_material(data)
+            highlight = bool((data[:, _HIGHLIGHT_ON] > 0.0).any())
+            features = self._features(state, uniform, highlight, composed, False)
+            prog = self.programs.get(state.kind, features, state.code)
+            layout = ROW.subset(instance_fields(state.kind, dict(features)))
+            buf, vao = self._transient_vao(geometry, state, prog, layout, len(indices))
+            buf.write(np.ascontiguousarray(data[:, self._columns(layout)]).tobytes())
+            if uniform:
+                self._set_material(prog, data[0])
+            raster = list(composed.raster(state.raster, defaults()))
+            if raster[Blend.index] is None:
+                raster[Blend.index] = _OVER
+            if DepthMask.index not in composed.state:
+                raster[DepthMask.index] = False
+            self._set_uniforms(prog, state, composed)
+            mode = self._mode(geometry, state.kind)
+            if _two_faced(geometry, state):
+                # back faces first, then front faces: closed transparent shapes blend correctly
+                for face in ("front", "back"):
+                    raster[CullFace.index] = face
+                    self._apply_raster(tuple(raster), state)
+                    vao.render(mode, instances=len(indices))
+                    self.report.count(1, len(indices))
+                    calls += 1
+            else:
+                self._apply_raster(tuple(raster), state)
+                vao.render(mode, instances=len(indices))
+                self.report.count(1, len(indices))
+                calls += 1
+        return calls
+
+    def _transient_vao(self, geometry: Geometry, state: DrawState, prog: Any, layout: Any, n: int) -> tuple[Any, Any]:
+        key = (id(geometry), id(state), id(prog))
+        entry = self._transient.get(key)
+        if entry is not None and entry[2] >= n and geometry.buffers is not None:
+            return entry[0], entry[1]
+        if entry is not None:
+            entry[1].release()
+            entry[0].release()
+        capacity = max(n, 4)
+        buf = gpu_call(self.ctx.buffer, reserve=capacity * layout.stride * 4, dynamic=True, what="instance data")
+        vao = self._vao(geometry, prog, buf, state.kind, layout)
+        self._transient[key] = (buf, vao, capacity, geometry, state)
+        return buf, vao
+
+    # -- resources ---------------------------------------------------------------------
+    def sweep(self, items: list[DrawItem]) -> None:
+        """Release the transient buffers and textures that the draw list ``items`` no longer uses."""
+        drawn = {(id(it.geometry), id(it.state)) for it in items if it.transparent}
+        for key in list(self._transient):
+            if key[:2] not in drawn:
+                buf, vao, *_ = self._transient.pop(key)
+                vao.release()
+                buf.release()
+        if self._textures:
+            live = {(id(t), srgb) for it in items for _, t, srgb in it.state.textures}
+            for key in [k for k in self._textures if k not in live]:
+                self._textures.pop(key)[2].release()
+
+    def disable_clip_planes(self) -> None:
+        """State preservation: no clip distance stays enabled after a frame."""
+        for i in range(self.nclip):
+            self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
+        self.nclip = 0
+
+    def live_buffers(self) -> int:
+        """Transient instance buffers held now (for leak checks)."""
+        return len(self._transient)
+
+    def texture_count(self) -> int:
+        """GL textures of ``om.Texture`` attributes held now (for leak checks)."""
+        return len(self._textures)
+
+    def release(self) -> None:
+        for buf, vao, *_ in self._transient.values():
+            vao.release()
+            buf.release()
+        self._transient.clear()
+        for entry in self._textures.values():
+            entry[2].release()
+        self._textures.clear()
+
+
+def _two_faced(geometry: Geometry, state: DrawState) -> bool:
+    """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
+    return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"

@@ -1,0 +1,529 @@
+"""The GL frame: techniques run their passes at draw time, every frame, over the compiled scopes.
+
+Drawing a frame runs the engine's technique (``om.gl.Forward`` by default:
+opaque, transparent, overlay) over the root scope.  A technique met in a node
+compiled into a nested scope; whenever a pass draws items, the nested scopes
+among them run *their* technique: ``start``, then for as long as
+``needs_pass``: ``prepare_pass`` (which describes the pass with
+``engine.set_pass(Pass(...))``), the pass, ``finish_pass``, ``next_pass``;
+finally ``stop``.  Each pass of a nested technique draws its items through the
+engine's technique again, so a nested technique's passes see opaque,
+transparent and overlay items drawn the usual way.  Pass state is kept in the
+engine's technique frames, so shared technique instances nest correctly, and
+all of this happens on replayed frames too: the compiled scopes are cached,
+the passes are not.
+
+Every executed pass is recorded in ``engine.stats["passes"]``: its path of
+names, technique, nesting depth, draw calls, instances and (with
+``GLEngine(timing=True)``) GPU time from timer queries.  Offscreen targets
+are made from their :class:`~.passes.Target` descriptions, kept while later
+frames describe the same targets and released when no pass uses them any more
+(:mod:`.targets`).
+
+The :class:`FrameRunner` is one of the engine's collaborators (three.js's
+``WebGLRenderer`` is assembled the same way): it is made once per engine and
+handed the :class:`~.frame_state.FrameState` it writes, the
+:class:`~.drawer.BatchDrawer` that draws items, the
+:class:`~.targets.FrameTargets` and the :class:`~.report.PassReport`.  It
+uses the engine facade only through its public API (techniques get the facade
+in every call).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..techniques.mirrors import Mirrors, mirror_items
+from ..techniques.shadows import ShadowPlan, caster_bounds, frame_settings
+from .context import GLError, blit, clear_depth, clear_stencil, set_masks
+from .drawer import BatchDrawer
+from .drawlist import Scope
+from .frame_state import FrameState, ProjectionInfo
+from .imagespace import FullScreenPrograms, RenderTarget
+from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target
+from .report import PassRecord, PassReport
+from .state import GLCalls, RasterApplier, defaults
+from .targets import FrameTargets
+
+__all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
+
+_GL_SCISSOR_TEST = 0x0C11
+
+
+class FrameRunner:
+    """Runs a frame: the stages before the frame technique, the techniques' passes over the compiled scopes
+    (nested ones included), the stages after it; binds targets, clears, draws full-screen passes."""
+
+    def __init__(
+        self, engine: Any, state: FrameState, drawer: BatchDrawer, targets: FrameTargets, report: PassReport
+    ) -> None:
+        #: the engine facade: techniques get it in every call; only its public API is used here
+        self.engine = engine
+        self.ctx = engine.ctx
+        self.raw = engine.raw
+        self.state = state
+        self.drawer = drawer
+        self.targets = targets
+        self.report = report
+        self.fullscreen_programs = FullScreenPrograms(self.ctx)
+        self._requests: list[Any] = []
+        self._shadow_cache: Any = None
+        self._shadow_drawn: Any = None
+        self._caster_bounds: Any = None
+        self._mirrors: Any = None
+        self._warned_mirrors = False
+
+    def placements_changed(self) -> None:
+        """Items moved or the draw list changed: shadow casters' bounds and mirror planes are found again."""
+        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
+        self._mirrors = None  # mirror planes follow their transforms
+
+    # -- what techniques call (through the engine) -----------------------------------
+    def set_pass(self, description: Pass) -> None:
+        """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""
+        if not isinstance(description, Pass):
+            raise TypeError(f"GLEngine.set_pass needs an om.gl.Pass, got {type(description).__name__}")
+        if not self._requests:
+            raise RuntimeError(
+                "GLEngine.set_pass: no pass is being prepared; call it from a technique's prepare_pass while the "
+                "engine draws a frame"
+            )
+        self._requests[-1] = description
+
+    def forget_gl_state(self) -> None:
+        """A drawer changed GL state itself: the next draw applies its state in full."""
+        self.state.applier.forget()
+
+    def reset_gl_state(self) -> None:
+        """Every GL state kind at its default; the next draw applies its state in full."""
+        applier = self.state.applier
+        applier.forget()
+        applier.apply(defaults())
+        applier.forget()
+
+    @property
+    def current_framebuffer(self) -> Any:
+        """The framebuffer being drawn into while a frame is drawn (None outside a frame)."""
+        return self.state.applier.gl.framebuffer if self.state.drawing else None
+
+    # -- the frame ---------------------------------------------------------------------
+    def draw(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
+        """Draw the installed scopes into ``framebuffer`` (else the engine's): every stage and technique pass."""
+        engine, ctx, state = self.engine, self.ctx, self.state
+        engine.prepare_pipelines()  # render textures first: their engines use the context
+        fbo = engine.framebuffer if framebuffer is None else framebuffer
+        size = tuple(engine.size) if framebuffer is None else tuple(framebuffer.size)
+        _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
+        fbo.use()
+        ctx.viewport = (0, 0, *size)
+        state.target_size = size
+        state.linear_output = False
+        state.applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
+        self.drawer.nclip = 0
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        state.background = background
+        if clear:
+            fbo.clear(*engine.clear_color(background), depth=1.0)
+            if engine.has_stencil and not engine.pushed_targets and framebuffer is None:
+                clear_stencil(self.raw, 0)
+        ctx.enable(ctx.PROGRAM_POINT_SIZE)
+        camera, view, proj = self._frame_camera(override, size)
+        state.camera = camera
+        state.set_camera(view, proj, camera.is_orthographic)
+        state.frame_view_key = state.view_key  # the frame's own view: the one batches are culled for
+        state.frame_view = state.view
+        self.report.begin_frame(engine.timing)
+        self.targets.begin_frame(tuple(engine.size))
+        installed = engine.root_scope
+        root = installed if installed is not None else Scope()
+        state.shadow_plan = None
+        state.drawing = True
+        try:
+            calls = self._shadow_map_passes(root, installed is not None)
+            stereo = engine.stereo
+            if stereo is None:
+                technique, scope = engine.frame_technique, root
+                whole = root.entries[0] if len(root.entries) == 1 else None
+                if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
+                    technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
+                calls += self.run(technique, scope, Composed(), item_level=True)
+                calls += self._mirror_passes(root, installed is not None)
+            else:  # each eye's pass draws the scene through the engine's technique
+                calls += self.run(stereo, root, Composed(), item_level=False)
+                if installed is not None and not self._warned_mirrors and mirror_items(root.all_items()):
+                    self._warned_mirrors = True
+                    warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
+                                  "stage reflects one eye)", stacklevel=4)  # fmt: skip
+        finally:
+            state.drawing = False
+            self.report.close()
+            self._restore_defaults(fbo, size)
+        self.targets.release_unused()
+        stats = engine.stats
+        stats["draw_calls"] = calls
+        stats["passes"] = self.report.finish()
+        stats["batches"] = sum(len(p.batches) for s in (installed.walk() if installed else [])
+                               for p in (s.parts or []) if not isinstance(p, Scope))  # fmt: skip
+        stats["items"] = engine.item_count if installed is not None else 0
+        err = ctx.error
+        if err != "GL_NO_ERROR":
+            if "OUT_OF_MEMORY" in err:
+                raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
+            raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
+
+    def _shadow_map_passes(self, root: Scope, installed: bool) -> int:
+        """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
+        engine = self.engine
+        settings = frame_settings(root if installed else None, engine.shadows)
+        if settings is None:
+            return 0
+        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
+        if not lights:
+            return 0
+        if self._caster_bounds is None:
+            self._caster_bounds = (caster_bounds(root),)
+        bounds = self._caster_bounds[0]
+        if bounds is None:
+            return 0
+        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+        plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
+        if plan is None:
+            plan = ShadowPlan(settings, lights, bounds)
+            self._shadow_cache = (key, plan, plan.technique())
+        technique = self._shadow_cache[2]
+        if technique is None:
+            return 0
+        self.state.shadow_plan = plan
+        drawn = (key, self._caster_bounds, tuple(engine.size))
+        last = self._shadow_drawn
+        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
+        if fresh and self.targets.keep(plan.target, self.state.target_size):
+            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
+        calls = self.run(technique, root, Composed(), item_level=True)
+        self._shadow_drawn = drawn
+        return calls
+
+    def _mirror_passes(self, root: Scope, installed: bool) -> int:
+        """The mirror stage (:mod:`..techniques.mirrors`) after the frame's technique; returns the draw calls made."""
+        if self._mirrors is None:
+            self._mirrors = mirror_items(root.all_items()) if installed else []
+        if not self._mirrors:
+            return 0
+        engine = self.engine
+        if not engine.has_stencil or engine.pushed_targets:
+            if not self._warned_mirrors:
+                self._warned_mirrors = True
+                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
+                              "surfaces here", stacklevel=5)  # fmt: skip
+            return 0
+        state = self.state
+        technique = Mirrors.plan(self._mirrors, state.view, state.proj, engine.clear_color(state.background))
+        return self.run(technique, root, Composed(), item_level=False)
+
+    def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:
+        """(camera, view, projection) of a frame: the scene's, or ``override`` (validated ``(view, Camera|proj)``)."""
+        if override is None:
+            camera, view, _ = self.engine.camera_matrices()
+            return camera, view, camera.projection_matrix(size[0] / size[1])
+        view, proj = override
+        if isinstance(proj, np.ndarray):
+            return ProjectionInfo.of(proj), view, proj
+        return proj, view, proj.projection_matrix(size[0] / size[1])
+
+    # -- techniques and passes ---------------------------------------------------------------
+    def run(self, technique: Any, scope: Scope, outer: Composed, item_level: bool) -> int:
+        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included)."""
+        engine = self.engine
+        engine.enter_technique(technique)
+        calls = 0
+        try:
+            technique.start(engine)
+            try:
+                while technique.needs_pass(engine):
+                    index = engine.current_pass
+                    self._requests.append(None)
+                    try:
+                        technique.prepare_pass(engine)
+                    finally:
+                        description = self._requests.pop()
+                    if description is None:
+                        description = Pass(f"{type(technique).__name__}[{index}]")
+                    calls += self._execute(technique, description, scope, outer, item_level)
+                    technique.finish_pass(engine)
+                    technique.next_pass(engine)
+            finally:
+                technique.stop(engine)
+        finally:
+            engine.leave_technique(technique)
+        return calls
+
+    def _execute(self, technique: Any, description: Pass, scope: Scope, outer: Composed, item_level: bool) -> int:
+        composed = outer.then(description)
+        state = self.state
+        record = PassRecord(
+            name="/".join(composed.names),
+            technique=type(technique).__name__,
+            depth=len(self.engine.technique_frames),
+            draw_calls=0,
+            items=0,
+            target=description.target.name if description.target is not None else None,
+            gpu_ms=None,
+        )
+        self.report.add(record)
+        saved_target = self._bind_target(description.target) if description.target is not None else None
+        saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
+        saved_camera = None
+        if description.front_face != "ccw":
+            self.ctx.front_face = description.front_face
+        if description.camera is not None:
+            saved_camera = state.camera_state()
+            view, proj = description.camera
+            if not isinstance(proj, np.ndarray):  # an om.Camera: its projection for this target's aspect
+                proj = proj.projection_matrix(state.target_size[0] / state.target_size[1])
+                ortho = description.camera[1].is_orthographic
+            else:
+                ortho = bool(abs(proj[3, 3] - 1.0) < 1e-9)
+            state.set_camera(view, proj, ortho)
+        self.report.enter(record)
+        try:
+            if description.clear is not None:
+                self._clear(description.clear)
+            root = self.engine.root_scope
+            source = root if description.source == "scene" and root is not None else scope
+            if description.fullscreen is not None:
+                calls = self._fullscreen(description.fullscreen, composed)
+            elif description.custom is not None:
+                calls = self._custom(technique, description.custom, source, composed, item_level)
+            else:
+                calls = self._draw_scope(source, composed, item_level, description.technique)
+        finally:
+            self.report.leave()
+            if saved_camera is not None:
+                state.set_camera(*saved_camera)
+            if saved_viewport is not None:
+                self._restore_viewport(saved_viewport)
+            if description.front_face != "ccw":
+                self.ctx.front_face = "ccw"
+            if saved_target is not None:
+                self._unbind_target(saved_target)
+        return calls
+
+    def _nested(self, scope: Scope, composed: Composed) -> int:
+        return self.run(scope.technique, scope, composed, item_level=False)
+
+    def _draw_scope(self, scope: Scope, composed: Composed, item_level: bool, technique: str | None = None) -> int:
+        """What a pass that draws items draws: the scope's items (and nested scopes), or them through the
+        engine's technique when the pass is a nested technique's; with ``scopes="items"`` every item below,
+        without running the nested techniques; with ``technique`` ("engine", "pipeline") through that one."""
+        if composed.scopes == "items":
+            return sum(self.drawer.draw_items(s, composed, None) for s in scope.walk())
+        engine = self.engine
+        if technique is not None:
+            runner = engine.frame_technique if technique == "pipeline" else engine.technique
+            return self.run(runner, scope, composed, item_level=True)
+        if item_level:
+            return self.drawer.draw_items(scope, composed, lambda child: self._nested(child, composed))
+        return self.run(engine.technique, scope, composed, item_level=True)
+
+    def _custom(self, technique: Any, custom: Any, scope: Scope, composed: Composed, item_level: bool) -> int:
+        """A custom pass: ``custom(engine, draw)``; ``draw()`` draws what the pass selects, ``draw(Pass)`` nests."""
+        calls = 0
+
+        def draw(nested: Pass | None = None) -> int:
+            nonlocal calls
+            if nested is None:
+                made = self._draw_scope(scope, composed, item_level)
+            elif isinstance(nested, Pass):
+                made = self._execute(technique, nested, scope, composed, item_level)
+            else:
+                raise TypeError(f"draw() takes an om.gl.Pass or nothing, got {nested!r:.60}")
+            calls += made
+            return made
+
+        applier = self.state.applier
+        fbo, size = applier.gl.framebuffer, applier.gl.size
+        try:
+            own = custom(self.engine, draw)
+        finally:
+            # the code may have changed any GL state and binding: the next draw applies its state in full
+            applier.forget()
+            fbo.use()
+            self.ctx.viewport = (0, 0, *size)
+        if own is not None and (isinstance(own, bool) or not isinstance(own, int)):
+            raise TypeError(f"a custom pass returns the draw calls it made itself (an int) or None, got {own!r:.60}")
+        return calls + (own or 0)
+
+    def copy_framebuffer(self, description: Target) -> RenderTarget:
+        """Copy colour and depth of the framebuffer being drawn into the frame's offscreen target ``description``
+        (see ``GLEngine.copy_framebuffer``)."""
+        if not isinstance(description, Target):
+            raise TypeError(f"GLEngine.copy_framebuffer needs an om.gl.Target, got {description!r:.60}")
+        if len(description.colors) > 1:
+            raise ValueError(
+                f"GLEngine.copy_framebuffer: target {description.name!r} has {len(description.colors)} colour "
+                "attachments; a copy fills one (give colors=('color',) or colors=() for depth only)"
+            )
+        if not self.state.drawing:
+            raise RuntimeError("GLEngine.copy_framebuffer: no frame is being drawn; call it from a custom pass")
+        source = self.current_framebuffer
+        size = tuple(source.size)
+        target = self.targets.get(description, self.state.target_size, size)
+        self.ctx.disable_direct(_GL_SCISSOR_TEST)
+        blit(self.raw, source, target.fbo, size, bool(description.colors), description.depth)
+        self.state.applier.forget()
+        return target
+
+    # -- targets ------------------------------------------------------------------------
+    def _bind_target(self, description: Target) -> tuple:
+        state = self.state
+        target = self.targets.get(description, state.target_size)
+        applier = state.applier
+        saved = (applier.gl.framebuffer, state.target_size, state.linear_output)
+        applier.forget()
+        target.fbo.use()
+        self.ctx.viewport = (0, 0, *target.size)
+        applier.gl.framebuffer = target.fbo
+        applier.gl.size = target.size
+        state.target_size = target.size
+        state.linear_output = description.dtype != "f1"
+        return saved
+
+    def _unbind_target(self, saved: tuple) -> None:
+        fbo, size, linear = saved
+        state = self.state
+        applier = state.applier
+        applier.forget()
+        fbo.use()
+        self.ctx.viewport = (0, 0, *size)
+        applier.gl.framebuffer = fbo
+        applier.gl.size = size
+        state.target_size = size
+        state.linear_output = linear
+
+    def _set_viewport(self, box: tuple[int, int, int, int]) -> tuple:
+        """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound target."""
+        saved = (self.ctx.viewport, self.state.target_size)
+        self.ctx.viewport = box
+        self.state.target_size = (box[2], box[3])
+        return saved
+
+    def _restore_viewport(self, saved: tuple) -> None:
+        self.ctx.viewport, self.state.target_size = saved
+
+    def _clear(self, clear: Any) -> None:
+        ctx = self.ctx
+        fbo = self.state.applier.gl.framebuffer
+        self.state.applier.forget()
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        ctx.scissor = None
+        if clear.color is None and clear.depth is not None and self.raw.available:
+            # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
+            # clear colour would be lost), so clear only the depth buffer with a raw call
+            fbo.use()
+            clear_depth(self.raw, float(clear.depth))
+            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        elif clear.color is not None or clear.depth is not None:
+            color = clear.color
+            if color is not None and self.state.linear_output:
+                from ...attributes.photometry import linear_rgb
+
+                color = (*linear_rgb(color), color[3])
+            if color is None:
+                set_masks(ctx, self.raw, fbo, color=(False, False, False, False))
+                color = (0.0, 0.0, 0.0, 0.0)
+            if clear.depth is None:
+                set_masks(ctx, self.raw, fbo, depth=False)
+                fbo.depth_mask = False  # moderngl applies the framebuffer's own depth mask when it clears
+            fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            fbo.depth_mask = True
+            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        if clear.stencil is not None:
+            clear_stencil(self.raw, int(clear.stencil))
+            self.state.applier.forget()  # the stencil write mask was reset to clear every bit
+
+    # -- image-space passes --------------------------------------------------------------
+    def _fullscreen(self, effect: FullScreen, composed: Composed) -> int:
+        """Draw one full-screen triangle shaded by ``effect`` into the current target."""
+        ctx = self.ctx
+        programs: FullScreenPrograms = self.fullscreen_programs
+        prog, vao = programs.get(effect, self.state.linear_output)
+        unit = 0
+        for uniform, name, attachment in effect.inputs:
+            target = self.targets.named(name)
+            texture = target.depth if attachment == "depth" else target.texture(attachment)
+            if texture is None:
+                raise ValueError(
+                    f"FullScreen: target {name!r} has no depth texture; make it with Target(..., depth=True)"
+                )
+            texture.use(unit)
+            u = prog.get(uniform, None)
+            if u is not None:
+                u.value = unit
+            unit += 1
+        for uniform, image in effect.textures:
+            u = prog.get(uniform, None)
+            if u is not None:
+                self.drawer.texture(image, srgb=False).use(unit)
+                u.value = unit
+                unit += 1
+        for name, value in effect.uniforms:
+            u = prog.get(name, None)
+            if u is None:
+                continue
+            if isinstance(value, tuple) and u.array_length > 1:  # arrays: the values in order, zeros after
+                data = np.zeros(u.array_length * u.dimension, np.float32)
+                data[: len(value)] = value[: data.size]
+                u.write(data.tobytes())
+            else:
+                u.value = value
+        u = prog.get("u_resolution", None)
+        if u is not None:
+            u.value = tuple(float(v) for v in self.state.target_size)
+        # the pass's GL state (a stencil test, a scissor, a colour mask), then what the triangle needs
+        self.state.applier.forget()
+        self.state.applier.apply(composed.raster(defaults(), defaults()))
+        self.state.applier.forget()
+        ctx.disable(ctx.CULL_FACE)
+        ctx.wireframe = False
+        ctx.polygon_offset = (0.0, 0.0)
+        if effect.depth:
+            ctx.enable(ctx.DEPTH_TEST)
+            ctx.depth_func = DEPTH_FUNCS[effect.depth_test or "always"]
+            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, color=(True, True, True, True), depth=True)
+        else:
+            ctx.disable(ctx.DEPTH_TEST)
+            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, depth=False)
+        if effect.blend:
+            ctx.enable(ctx.BLEND)
+            ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
+        else:
+            ctx.disable(ctx.BLEND)
+        vao.render(ctx.TRIANGLES, vertices=3)
+        self.state.applier.forget()
+        self.report.count(1, 0)
+        return 1
+
+    def _restore_defaults(self, fbo: Any = None, size: tuple[int, int] | None = None) -> None:
+        """State preservation: leave the context as a plain moderngl user expects it, ``fbo`` bound."""
+        ctx = self.ctx
+        applier = self.state.applier
+        applier.apply(defaults())
+        applier.forget()
+        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
+        ctx.enable(ctx.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.wireframe = False
+        ctx.polygon_offset = (0.0, 0.0)
+        ctx.scissor = None
+        fbo = self.engine.framebuffer if fbo is None else fbo
+        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        self.drawer.disable_clip_planes()
+        fbo.use()
+        ctx.viewport = (0, 0, *(self.engine.size if size is None else size))
+
+    def release(self) -> None:
+        self.fullscreen_programs.release()

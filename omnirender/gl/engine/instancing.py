@@ -1,0 +1,109 @@
+"""Instance rows: the one rule that turns an ``InstanceSet``'s arrays into rows of the named layout.
+
+The compile uses it when it meets an instance set (``submit_instances``), and
+the fast path uses it when only the application's arrays changed
+(``instances.touch()``): the new rows replace the old ones in the instance
+set's batch, with no traversal.  Both go through :func:`instance_rows`, so a
+moved instance renders the same either way.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...attributes.photometry import srgb_to_linear
+from .layout import PBR, ROW
+
+__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours"]
+
+_MODEL = ROW.slice("model")
+_COLOR = ROW.slice("color")
+_ALPHA = ROW.at("color", "alpha")
+_FOLLOWS_COLOR = ROW.at("ambient", "follows_color")
+_SHADING_MODEL = ROW.at("emission", "model")
+
+
+#: The colour an instance set's shape is captured under when the set has colours.  Parts that show it take
+#: the instances' colours, as an ``om.Color`` before the shape would colour them; parts with their own
+#: material (a mesh file's, a node's ``Material`` after the colour) keep it, as in every other engine.
+PROBE = (0.1234567, 0.7654321, 0.3456789)
+_PROBE_LINEAR = srgb_to_linear(PROBE).astype(np.float32)
+
+
+def takes_instance_colours(row: np.ndarray) -> bool:
+    """Whether a part captured under :data:`PROBE` shows it (its colour follows the context)."""
+    return bool(np.array_equal(row[_COLOR.start : _COLOR.start + 3], _PROBE_LINEAR))
+
+
+class InstanceRows:
+    """Rows of one template drawn once per instance, with what decides how they may be drawn."""
+
+    __slots__ = ("rows", "models", "transparent", "mirrored")
+
+    def __init__(self, rows: np.ndarray, models: np.ndarray, transparent: bool, mirrored: bool) -> None:
+        #: (N, ROW.stride) float32 rows
+        self.rows = rows
+        #: (N, 4, 4) matrices after the chain: instance matrix @ template local
+        self.models = models
+        #: some instance's colour is translucent (or the template is)
+        self.transparent = transparent
+        #: some instance's matrix mirrors (a negative determinant): face culling must be off
+        self.mirrored = mirrored
+
+
+def set_arrays(shape: Any) -> tuple[np.ndarray, np.ndarray | None, bool]:
+    """The visible instances' (N, 4, 4) matrices, (N, 4) colours or None, and whether any may mirror."""
+    matrices = shape.matrices()
+    colors = shape.color_array()
+    visible = shape.visible_array()
+    if visible is not None:
+        matrices = matrices[visible]
+        colors = colors[visible] if colors is not None else None
+    return matrices, colors, shape.may_mirror()
+
+
+def instance_rows(
+    row: np.ndarray,
+    local: np.ndarray | None,
+    transparent: bool,
+    model: np.ndarray,
+    matrices: np.ndarray,
+    colors: np.ndarray | None,
+    may_mirror: bool,
+) -> InstanceRows:
+    """Rows for ``matrices`` (after ``model``, the chain's matrix) of the template ``row`` and ``local``.
+
+    ``colors`` (display RGBA) replace the template's colour as ``om.Color``
+    would (ambient follows it for Phong materials) when the template was
+    captured showing :data:`PROBE`; other templates keep their material.  Determinants are taken
+    only when ``may_mirror`` (positions and positive scales never mirror).
+    """
+    n = len(matrices)
+    models = matrices if local is None else matrices @ local
+    world = models if _is_identity(model) else model @ models
+    rows = np.empty((n, ROW.stride), np.float32)
+    rows[:] = row
+    rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(n, 16)
+    if colors is not None and takes_instance_colours(row):
+        rows[:, _COLOR.start : _COLOR.start + 3] = srgb_to_linear(colors[:, :3])
+        rows[:, _ALPHA] = colors[:, 3] * row[_ALPHA]
+        if int(row[_SHADING_MODEL]) != PBR:
+            rows[:, _FOLLOWS_COLOR] = 1.0
+        transparent = transparent or bool((rows[:, _ALPHA] < 1.0).any())
+    may_mirror = may_mirror or model_mirrors(model) or (local is not None and model_mirrors(local))
+    mirrored = bool(n) and may_mirror and bool((np.linalg.det(world[:, :3, :3]) < 0.0).any())
+    return InstanceRows(rows, models, transparent, mirrored)
+
+
+def model_mirrors(m: np.ndarray) -> bool:
+    """Whether the matrix ``m`` mirrors (a negative determinant)."""
+    return bool(np.linalg.det(m[:3, :3]) < 0.0)
+
+
+def _is_identity(m: np.ndarray) -> bool:
+    return bool((m == _EYE).all())
+
+
+_EYE = np.eye(4)

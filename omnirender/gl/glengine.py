@@ -1,0 +1,755 @@
+"""The OpenGL engine: context, framebuffers, and the frame loop (compile, then draw).
+
+Rendering is COMPILE then DRAW (DESIGN.md, performance model).  Compiling
+runs the core interpreter over the scene once: painters append draw items to
+scopes instead of issuing GL calls, and every technique met in a node opens a
+nested scope (:mod:`.compiler`).  The items are cached per node and version,
+so a frame whose scene did not change replays the GPU batches without any
+traversal, and a frame where one subtree changed recompiles only that subtree
+and rewrites only the changed instance rows.  Drawing runs the techniques'
+passes at draw time, every frame (:mod:`.frame`): the default technique
+``Forward`` draws opaque batches, transparent items sorted back to front and
+2D overlays; nested techniques run their own passes over what they scope
+(:mod:`.renderer` draws the items of one pass).  This module owns the
+context, the targets, cameras and resources.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import weakref
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+
+from ..attributes import Tessellation
+from ..attributes.environment import DEFAULT_BACKGROUND  # the clear colour without an om.Background (shared)
+from ..core.camera import Camera
+from ..core.component import ChangeJournal
+from ..core.engine import Engine
+from ..core.technique import Technique
+from ..image import Image
+from .deferred.materials import MaterialTable
+from .deferred.pipeline import Deferred
+from .engine.compiler import DrawListCompiler
+from .engine.context import (
+    GLError,
+    RawGL,
+    check_samples_total,
+    check_size,
+    create_context,
+    delete_renderbuffer,
+    depth_stencil_framebuffer,
+)
+from .engine.drawer import BatchDrawer
+from .engine.drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
+from .engine.dynamic import TransformUpdater
+from .engine.frame import FrameRunner
+from .engine.frame_state import FrameState
+from .engine.geometry import Geometry, GeometryCache, unit_mesh
+from .engine.imagespace import RenderTarget
+from .engine.layout import ROW
+from .engine.passes import Pass, Target, _camera
+from .engine.renderer import BatchRenderer
+from .engine.report import PassReport
+from .engine.resources import gpu_call
+from .engine.shaders import ProgramCache
+from .engine.state import defaults, kinds
+from .engine.targets import FrameTargets
+from .engine.technique import GLTechnique
+from .techniques.forward import Forward
+
+__all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
+
+#: The frame pipelines of ``GLEngine(pipeline=...)``.
+PIPELINES = ("forward", "deferred")
+
+
+class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
+    """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
+
+    ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
+    renders frame after frame, keeping GPU resources between frames.
+    ``samples=0`` turns multisampling off.  ``technique`` replaces the default
+    :class:`~.techniques.Forward` technique (the passes every frame and every
+    nested technique pass draws items with); ``timing=True`` measures each
+    pass's GPU time with timer queries (``engine.stats["passes"]``);
+    ``shadows=False`` turns shadow maps off (they are on by default, see
+    :class:`~.shadows.ShadowMaps`); ``pipeline="deferred"`` (or an
+    ``om.gl.Deferred(...)``) shades every frame with the deferred pipeline;
+    ``stereo`` (an ``om.gl.Stereo``) draws every frame as a stereo pair.
+
+    OpenGL version: every shader and call is OpenGL 3.3 core, also when the
+    context offers 4.x.  The 4.x features that would pay off here are not
+    reachable or not needed: moderngl 5 exposes neither base-instance draws
+    (4.2, which would let transparent instances of one mesh share a buffer
+    while drawn one by one) nor immutable buffer storage (4.4), multi-draw
+    indirect (4.3) only saves calls that instancing already saves, and
+    ``#version 450`` shaders would add nothing the 3.3 shaders use.  One code
+    path keeps macOS (3.3/4.1) and software renderers identical to the tested one.
+
+    Colour spaces: lighting, fog and texture filtering happen in linear light
+    (textures are GL_SRGB8_ALPHA8, so the GPU decodes them before filtering and
+    mipmapping); fragment shaders encode their result to sRGB for the 8-bit
+    colour buffer.  Blending of transparent shapes therefore mixes sRGB-encoded
+    values (as most real-time renderers with 8-bit targets do): a 50% surface
+    gives the encoded average of the two colours, slightly darker than the
+    linear-light mix a path tracer computes.
+    """
+
+    service = "gl.paint"
+    uses_camera_mask = True
+    #: Drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind.
+    _default_drawers: dict[str, Any] = {}
+
+    def __init__(
+        self,
+        size: tuple[int, int] = (640, 480),
+        samples: int = 4,
+        context: Any = None,
+        *,
+        background: Any = None,
+        technique: Technique | None = None,
+        on_missing: str = "raise",
+        mask: Any = None,
+        timing: bool = False,
+        programs: ProgramCache | None = None,
+        shadows: bool = True,
+        pipeline: Any = "forward",
+        stereo: Any = None,
+    ) -> None:
+        importlib.import_module(f"{__package__}.painters")  # painters register on first use (plug-ins: see its doc)
+        if technique is not None and not isinstance(technique, Technique):
+            raise TypeError(f"GLEngine: technique must be an om.Technique (e.g. om.gl.Forward()), got {technique!r}")
+        if not isinstance(pipeline, Deferred) and pipeline not in PIPELINES:
+            raise ValueError(
+                f"GLEngine: pipeline must be one of {PIPELINES} or an om.gl.Deferred(...), got {pipeline!r:.60}"
+            )
+        super().__init__(technique=technique or Forward(), on_missing=on_missing, mask=mask)
+        #: "forward" or "deferred" (om.gl.Deferred runs every frame; nested techniques still draw forward)
+        self._pipeline = "deferred" if isinstance(pipeline, Deferred) else pipeline
+        self._pipeline_technique = (
+            pipeline if isinstance(pipeline, Deferred) else (Deferred() if pipeline == "deferred" else None)
+        )
+        #: the engine's deferred renderer (made by the deferred pipeline on first use), or None
+        self.deferred_renderer: Any = None
+        self.stereo = stereo
+        #: render textures (chained pipelines): the frame engine's PipelineSet, or its host's in a pipeline
+        self._pipelines: Any = None
+        self._pipelines_scanned = -1
+        #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
+        self.draw_list_version = 0
+        #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
+        self.timing = bool(timing)
+        if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
+            raise ValueError(f"GLEngine: samples must be a whole number >= 0 (0 = no multisampling), got {samples!r}")
+        check_samples_total(size, int(samples))  # before a context exists: a bad size costs nothing
+        #: draw shadow maps for lights that cast shadows (om.gl.ShadowMaps in a scene refines this)
+        self.shadows = bool(shadows)
+        self.ctx = context if context is not None else create_context()
+        self._own_context = context is None
+        if samples & (samples - 1):  # OpenGL drivers take 1, 2, 4, 8, 16 ... (moderngl: "invalid samples")
+            raise ValueError(f"GLEngine: samples must be 0 or a power of two (1, 2, 4, 8, 16), got {samples}")
+        self._samples = min(int(samples), int(self.ctx.max_samples)) if samples else 0
+        self._size = check_size(size, self.ctx, self._samples)
+        self.background = background
+        # compiled shader programs; a cache given by the caller (for its context) outlives this engine
+        self._own_programs = programs is None
+        self.programs = ProgramCache(self.ctx) if programs is None else programs
+        self.geometry_cache = GeometryCache()
+        self.raw = RawGL()
+        self._units: dict[tuple[str, int], Geometry] = {}
+        self._targets: dict[str, Any] = {}
+        self._target_stack: list[Any] = []
+        self._preevaluated = False
+        self._make_targets()
+        # compile state
+        self._immediate = Scope()  # what painters submit outside a compile (the viewer's frames)
+        self._scope: Scope = self._immediate
+        self._root: Scope | None = None
+        self._compile_frames: list[list[Any]] = []
+        self._group_path: list[tuple[frozenset[str], ...]] = [()]
+        self._technique_path: tuple[Any, ...] = ()
+        self._node_cache: dict[int, Any] = {}
+        #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
+        self._occurrences: dict[tuple[int, int], int] = {}
+        self._next_occurrence = 0
+        self._prune_limit = 4096
+        self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
+        self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
+        self._move_plan: Any = None  # dynamic.MovePlan of the installed items, made on the first move
+        self._full_key: Any = None
+        self._surface: list[Any] = []
+        self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
+        self._state_dirty = True
+        self._surface_dirty = True
+        self._state_base: tuple = ()
+        self._states: dict[tuple, DrawState] = {}
+        self._surface_row = np.zeros(ROW.stride, np.float32)
+        self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        #: the material descriptions of compiled items by id (the deferred pipeline's material table)
+        self.material_table = MaterialTable()
+        self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
+        self._texset: Any = None
+        self._point_size = 1.0
+        self._blend_on = False
+        self._alpha_tested = False
+        self._auto_cull = True
+        self._fill = "filled"
+        self._kinds_seen = len(kinds())
+        # draw state
+        self._batch_pool: dict[tuple, Batch] = {}
+        self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
+        self._bounds: tuple[np.ndarray, np.ndarray] | None = None
+        self._defaults = defaults()
+        self.stats: dict[str, Any] = {}
+        with self.current():
+            self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
+            info = self.ctx.info
+            #: largest 2D texture side and 3D texture side this GPU accepts (checked before creating textures)
+            self.max_texture_size = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
+            self.max_texture_size_3d = int(info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
+        self._checked_textures: dict[int, tuple[Any, int]] = {}
+        # the frame side's collaborators, made once and handed to each other (three.js's WebGLRenderer is
+        # assembled the same way): what the pass sees, its targets, its report, the drawer, the frame runner
+        self.frame_state = FrameState(self._size)
+        self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
+        self.pass_report = PassReport(self.ctx)
+        self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
+        self.frame_runner = FrameRunner(self, self.frame_state, self.drawer, self.frame_targets, self.pass_report)
+
+    def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
+        """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
+
+        Without this check the driver reports a bare GL_INVALID_VALUE at draw time.
+        """
+        if max(shape) > limit:
+            where = f" in node {self.node_path}" if self.node_path else ""
+            dims = "x".join(str(int(d)) for d in shape)
+            raise ValueError(
+                f"{what}{where}: {dims} is larger than this GPU allows ({limit} per side); "
+                f"resize or downsample it to at most {limit} per side"
+            )
+
+    def unit_geometry(self, kind: str) -> Geometry:
+        """The shared unit mesh of ``kind`` at the active Tessellation level (native painters use it)."""
+        tessellation = self.mono(Tessellation)
+        level = tessellation.level if tessellation is not None else Tessellation.DEFAULT_LEVEL
+        geom = self._units.get((kind, level))
+        if geom is None:
+            geom = self._units[(kind, level)] = unit_mesh(kind, level)
+        return geom
+
+    # -- targets -----------------------------------------------------------
+    @contextlib.contextmanager
+    def current(self) -> Iterator[Any]:
+        """Make the engine's context current for GL calls (and leave it current afterwards).
+
+        moderngl's ``with ctx:`` restores the previously current context on exit,
+        which breaks when nested on the same context; an engine that owns its
+        context therefore only makes it current.  A wrapped context (a window's)
+        is assumed to be current already.
+        """
+        if getattr(self, "_released", False):
+            raise RuntimeError(
+                "GLEngine: this engine was released (engine.release()) and its GPU resources are gone; "
+                "create a new GLEngine to render again"
+            )
+        if self._own_context:
+            self.ctx.mglo.__enter__()
+        yield self.ctx
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels; assigning resizes the framebuffers."""
+        return self._size
+
+    @size.setter
+    def size(self, value: tuple[int, int]) -> None:
+        value = check_size(value, self.ctx, self._samples)
+        if value != self._size:
+            self._size = value
+            self._make_targets()
+
+    @property
+    def samples(self) -> int:
+        """Multisample count (0: off)."""
+        return self._samples
+
+    @property
+    def frame_technique(self) -> Technique:
+        """The technique a frame runs over the whole scene: the deferred pipeline's, or :attr:`technique`.
+
+        Nested techniques' passes always draw their items with :attr:`technique` (forward).
+        """
+        return self._pipeline_technique or self.technique
+
+    @property
+    def stereo(self) -> Any:
+        """The frame's :class:`~.stereo.Stereo` technique (two eyes with off-axis projections), or None."""
+        return self._stereo
+
+    @stereo.setter
+    def stereo(self, value: Any) -> None:
+        from .techniques.stereo import Stereo
+
+        if value is not None and not isinstance(value, Stereo):
+            raise TypeError(f"GLEngine: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")
+        if value is not None and self._pipeline_technique is not None:
+            raise ValueError(
+                "GLEngine: stereo frames draw each eye with the forward pipeline; give pipeline='forward' with stereo"
+            )
+        self._stereo = value
+
+    @property
+    def pipeline(self) -> Any:
+        """``"forward"``, or the engine's :class:`~.deferred.DeferredRenderer` (``describe()``, ``memory()``)
+        once a deferred frame was drawn or the engine was made with ``pipeline="deferred"``."""
+        if self._pipeline == "deferred" or self.deferred_renderer is not None:
+            from .deferred.pipeline import DeferredRenderer
+
+            return DeferredRenderer.of(self)
+        return "forward"
+
+    def _make_targets(self) -> None:
+        with self.current():
+            self._create_targets()
+            # releasing a detected (raw) framebuffer may leave a harmless GL error behind: drop it
+            err = self.ctx.error
+            if "OUT_OF_MEMORY" in err:
+                raise GLError(f"GLEngine: out of memory creating {self._size[0]}x{self._size[1]} framebuffers")
+
+    def _release_targets(self) -> None:
+        seen = set()
+        for obj in self._targets.values():
+            if id(obj) not in seen:
+                seen.add(id(obj))
+                obj.release()
+        self._targets.clear()
+        rbo = getattr(self, "_stencil_rbo", None)
+        if rbo is not None:  # made with raw GL calls: moderngl does not know it (each one leaked its pixels)
+            delete_renderbuffer(self.raw, rbo)
+            self._stencil_rbo = None
+
+    def _create_targets(self) -> None:
+        self._release_targets()
+        ctx, size = self.ctx, self._size
+        t = self._targets
+        t["color"] = gpu_call(ctx.renderbuffer, size, 4, what="the colour buffer")
+        t["depth"] = gpu_call(ctx.depth_renderbuffer, size, what="the depth buffer")
+        t["fbo"] = ctx.framebuffer(t["color"], t["depth"])
+        if self._samples:
+            t["ms_color"] = gpu_call(ctx.renderbuffer, size, 4, samples=self._samples, what="the colour buffer")
+            target = "ms_fbo"
+            color = t["ms_color"]
+        else:
+            target = "draw_fbo"
+            color = t["color"]
+        # draw into a framebuffer with a depth-stencil attachment (StencilTest needs it); fall back to depth only
+        made = depth_stencil_framebuffer(ctx, self.raw, color, size, self._samples)
+        if made is not None:
+            t[target] = made[0]
+            self._stencil_rbo = made[1]
+            self.has_stencil = True
+            if not self._samples:
+                t["fbo"].release()
+                t["fbo"] = made[0]  # draw and read the same framebuffer: no copy per frame
+        else:
+            if self._samples:
+                t["ms_depth"] = gpu_call(ctx.depth_renderbuffer, size, samples=self._samples, what="the depth buffer")
+                t[target] = ctx.framebuffer(color, t["ms_depth"])
+            else:
+                t[target] = t["fbo"]
+            self.has_stencil = False
+
+    @property
+    def framebuffer(self) -> Any:
+        """The framebuffer drawn into (multisampled when samples > 0)."""
+        if self._target_stack:
+            return self._target_stack[-1].fbo
+        return self._targets["ms_fbo" if self._samples else "draw_fbo"]
+
+    # -- compile -------------------------------------------------------------
+    def render(
+        self,
+        scene: Any = None,
+        *,
+        mask: Any = None,
+        background: Any = None,
+        read_depth: bool = True,
+    ) -> Image:
+        """Compile (if the scene changed) and draw ``scene``; returns an :class:`om.Image`.
+
+        Without a scene, draws what was evaluated into the engine directly
+        (``engine.push(...)``, ``engine.eval(shape)``, ...) and clears that list;
+        such a frame uses the camera and lights of the last ``engine.run(root)``
+        (the viewer's way), else the auto-fit camera and a headlight.
+        """
+        with self.current():
+            if scene is not None:
+                self.compile(scene, mask=mask)
+            else:
+                # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
+                self._journal.drain()  # nothing compiled to update in place: forget what changed
+                self._install(self._immediate)
+                self._move_plan = None
+                self._immediate = Scope()
+                self._scope = self._immediate
+                self._compiled = None
+                if not self._preevaluated:
+                    # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
+                    self.camera = None
+                    self.declared = None
+            self._preevaluated = False
+            self.draw(background=background)
+            return self.read(read_depth=read_depth)
+
+    @property
+    def draw_items(self) -> list[DrawItem]:
+        """Every compiled draw item of the installed frame, in compile order (nested scopes included)."""
+        return [] if self._root is None else self._root.all_items()
+
+    @property
+    def batches(self) -> list[Batch]:
+        """The instanced batches of opaque items of every installed scope."""
+        from .engine.drawlist import Segment
+
+        return [b for scope in self.scopes for part in (scope.parts or []) if isinstance(part, Segment)
+                for b in part.batches]  # fmt: skip
+
+    @property
+    def scopes(self) -> list[Scope]:
+        """The installed root scope and every technique scope below it, depth first."""
+        return [] if self._root is None else self._root.walk()
+
+    def scene_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """World-space (min, max) of the compiled draw list, or None when it is empty."""
+        if self._bounds is not None:
+            return self._bounds
+        self._bounds = world_bounds(item for item in self.draw_items if not item.state.overlay)
+        return self._bounds
+
+    def camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
+        """(camera, view, projection) of the scene's camera (else the auto-fit one) at the engine's size."""
+        w, h = self._size
+        aspect = w / h
+        if self.camera is not None:
+            camera, world = self.camera
+            view = camera.view_matrix() @ np.linalg.inv(world)
+        else:
+            camera = self.default_camera()
+            view = camera.view_matrix()
+        return camera, view, camera.projection_matrix(aspect)
+
+    def default_camera(self) -> Camera:
+        """Auto-fit: look at the compiled scene's bounds from +z (``Camera.fitted``, as every engine does)."""
+        return Camera.fitted(self.scene_bounds(), self._size)
+
+    def view_matrix(self) -> np.ndarray | None:
+        if self.camera is None:
+            return None
+        return super().view_matrix()
+
+    def clear_color(self, background: Any = None) -> tuple[float, float, float, float]:
+        """The sRGB clear colour: ``background`` argument, scene Background, engine default."""
+        bg = background if background is not None else self.background
+        if bg is None and self.scene_background is not None:
+            bg = self.scene_background
+        if bg is None:
+            return DEFAULT_BACKGROUND
+        color = _background_color(getattr(bg, "color", bg))
+        if len(color) == 3:
+            color = (*color, 1.0)
+        # a display (sRGB) colour, like every colour in a scene: cleared as it is
+        return tuple(float(min(max(c, 0.0), 1.0)) for c in color[:4])  # type: ignore[return-value]
+
+    def live_buffers(self) -> int:
+        """GPU buffers this engine holds now (geometry, instance data, transient), for leak checks."""
+        n = sum(len(g.buffers) for g in self._uploaded_set if g.buffers is not None)
+        n += sum(1 for b in self._batch_pool.values() if b.buffer is not None)
+        n += sum(1 for s in self.scopes for group in s.filtered.values() for bs in group.values() for b in bs
+                 if b.buffer is not None)  # fmt: skip
+        n += self.drawer.live_buffers()
+        return n
+
+    def release(self) -> None:
+        """Free every GPU resource (and the context when the engine created it); calling it again does nothing."""
+        if getattr(self, "_released", False):
+            return
+        with self.current():
+            # Mesa's llvmpipe leaks the queued work of a texture deleted before the work ran (0.7 MB for a
+            # shadow atlas, every one-shot render): finish the queue before anything is freed
+            if hasattr(self.ctx.mglo, "finish"):  # not when the context (a host engine's) is already gone
+                self.ctx.finish()
+            self._release()
+        if self._own_context:
+            self.ctx.release()
+        self._released = True
+
+    def _release(self) -> None:
+        if self._pipelines is not None:
+            if self._pipelines.host is self:
+                self._pipelines.release()
+            self._pipelines = None
+        if self.deferred_renderer is not None:
+            self.deferred_renderer.release()
+            self.deferred_renderer = None
+        self.material_table.release()
+        for batch in self._batch_pool.values():
+            batch.release()
+        self._batch_pool.clear()
+        for scope in self.scopes:
+            for group in scope.filtered.values():
+                for batches in group.values():
+                    for batch in batches:
+                        batch.release()
+        self.drawer.release()
+        for g in list(self._uploaded_set):
+            g.release()
+        self.frame_targets.release()
+        self.frame_runner.release()
+        self.pass_report.release()
+        if self._own_programs:
+            self.programs.release()
+        self._release_targets()
+        self._root = None
+        self._node_cache.clear()
+        self._compiled = None
+
+    # -- the installed draw list -------------------------------------------------------------
+    @property
+    def root_scope(self) -> Scope | None:
+        """The installed root scope (None before the first frame)."""
+        return self._root
+
+    @property
+    def item_count(self) -> int:
+        """How many draw items the installed list holds (nested scopes included)."""
+        return self._item_count if self._root is not None else 0
+
+    # -- framebuffers pushed by a FramebufferStack ----------------------------------------------
+    @property
+    def pushed_targets(self) -> int:
+        """How many offscreen targets a :class:`~.engine.framebuffer.FramebufferStack` pushed (0: the engine's own)."""
+        return len(self._target_stack)
+
+    def push_target(self, target: Any) -> None:
+        """Draw into ``target`` (an ``OffscreenTarget``) until :meth:`pop_target`."""
+        self._target_stack.append(target)
+
+    def pop_target(self) -> Any:
+        """Stop drawing into the last pushed target and hand it back (RuntimeError when none is pushed)."""
+        if not self._target_stack:
+            raise RuntimeError("FramebufferStack.pop: nothing was pushed (unbalanced push/pop)")
+        return self._target_stack.pop()
+
+    # -- chained pipelines ----------------------------------------------------------------
+    def pipelines(self) -> Any:
+        """The frame's chained pipelines (:class:`~.engine.pipelines.PipelineSet`, made on first use)."""
+        if self._pipelines is None:
+            from .engine.pipelines import PipelineSet
+
+            self._pipelines = PipelineSet(self)
+        return self._pipelines
+
+    def share_pipelines(self, pipelines: Any) -> None:
+        """Use ``pipelines`` (a host engine's) as this engine's: a render texture's engine draws the others."""
+        self._pipelines = pipelines
+
+    def prepare_pipelines(self) -> None:
+        """Draw the render textures the frame reads, in dependency order (only the frame engine does)."""
+        if self._pipelines is None:
+            if self._pipelines_scanned == self.draw_list_version:
+                return
+            self._pipelines_scanned = self.draw_list_version
+            from .engine.pipelines import PipelineSet
+
+            if not PipelineSet.used_by(self):
+                return
+        pipelines = self.pipelines()
+        if pipelines.host is self:
+            pipelines.prepare()
+
+    def pipeline_image(self, texture: Any) -> Any:
+        """The last image of the render texture ``texture`` as this engine drew it (an ``om.Image``)."""
+        return self.pipelines().image(texture)
+
+    # -- drawing (the frame runner and the drawer do it) ------------------------------------------
+    @classmethod
+    def register_drawer(cls, kind: str, drawer: Any) -> None:
+        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes)."""
+        cls._default_drawers[kind] = drawer
+
+    def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
+        """Draw the installed scopes into the framebuffer: the engine technique's passes and every nested one.
+
+        ``clear=False`` draws over what the framebuffer holds (compositing several renderers).
+        ``camera`` (an ``om.Camera`` or ``(view, projection)`` 4x4 matrices) replaces the scene's camera
+        for this frame; ``framebuffer`` (a moderngl framebuffer on this engine's context, e.g. another
+        engine's :attr:`current_framebuffer`) is drawn into instead of the engine's own.  Together they
+        let one engine draw its scene into a frame another engine is composing, seen by that frame's camera.
+        """
+        if framebuffer is not None and not hasattr(framebuffer, "use"):
+            raise TypeError(f"GLEngine.draw: framebuffer must be a moderngl Framebuffer, got {framebuffer!r:.60}")
+        override = None if camera is None else _camera(camera, "GLEngine.draw")
+        with self.current():
+            self.frame_runner.draw(background, clear, override, framebuffer)
+
+    def set_pass(self, description: Pass) -> None:
+        """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""
+        self.frame_runner.set_pass(description)
+
+    def target(self, name: str) -> RenderTarget:
+        """The offscreen target ``name`` of the current frame (its ``texture(attachment)``, ``depth``, arrays)."""
+        return self.frame_targets.named(name)
+
+    def count(self, calls: int, instances: int) -> None:
+        """Add draw calls and instances to the pass being drawn (drawers of custom kinds may call it)."""
+        self.pass_report.count(calls, instances)
+
+    def forget_gl_state(self) -> None:
+        """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
+        self.frame_runner.forget_gl_state()
+
+    def reset_gl_state(self) -> None:
+        """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
+        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        self.frame_runner.reset_gl_state()
+
+    @property
+    def current_framebuffer(self) -> Any:
+        """The framebuffer being drawn into: the pass's offscreen target while a frame is drawn, else the engine's."""
+        drawing = self.frame_runner.current_framebuffer
+        return self.framebuffer if drawing is None else drawing
+
+    def copy_framebuffer(self, description: Target) -> RenderTarget:
+        """Copy colour and depth of :attr:`current_framebuffer` into the frame's offscreen target ``description``.
+
+        The target (made at the current framebuffer's size, kept while later frames copy into it) is then
+        read by :class:`FullScreen` inputs by its name, like a pass's; multisampling is resolved.  Custom
+        passes and drawers use it to read what is already drawn (a filter, a merge by depth, the depth a
+        volume's rays stop at).  The scissor test is switched off for the copy.
+        """
+        return self.frame_runner.copy_framebuffer(description)
+
+    def light_order(self) -> list[Any]:
+        """The lights of the pass being drawn in shader order (index i is light i of the light loops)."""
+        return self.drawer.light_order()
+
+    # -- what the pass being drawn sees ---------------------------------------------------
+    @property
+    def eye_position(self) -> np.ndarray:
+        """World position of the frame's own camera (the same in every pass: shadow maps and mirrors included)."""
+        return np.linalg.inv(self.frame_state.frame_view)[:3, 3]
+
+    @property
+    def frame_view(self) -> np.ndarray:
+        """World-to-eye matrix of the pass being drawn (drawers use it)."""
+        return self.frame_state.view
+
+    @property
+    def frame_projection(self) -> np.ndarray:
+        """Projection matrix of the pass being drawn."""
+        return self.frame_state.proj
+
+    @property
+    def frame_camera(self) -> Any:
+        """The ``om.Camera`` of the frame (its near and far planes, projection kind)."""
+        return self.frame_state.camera
+
+    @property
+    def frame_eye(self) -> np.ndarray:
+        """World position of the eye of the pass being drawn."""
+        return np.linalg.inv(self.frame_state.view)[:3, 3]
+
+    @property
+    def frame_orthographic(self) -> bool:
+        """Whether the pass being drawn uses an orthographic projection."""
+        return self.frame_state.ortho
+
+    @property
+    def target_size(self) -> tuple[int, int]:
+        """Size of the framebuffer being drawn into."""
+        return self.frame_state.target_size
+
+    @property
+    def linear_output(self) -> bool:
+        """Whether the framebuffer being drawn into holds linear light (a float target), not display values."""
+        return self.frame_state.linear_output
+
+    @property
+    def frame_shadows(self) -> Any:
+        """The frame's shadow maps (a :class:`~.techniques.shadows.ShadowPlan`: faces per light, uniforms), or None."""
+        return self.frame_state.shadow_plan
+
+    @property
+    def frame_background(self) -> Any:
+        """The ``background`` given to the frame's :meth:`draw` (None: the scene's or the engine's)."""
+        return self.frame_state.background
+
+    # -- read back -------------------------------------------------------------
+    def read(self, read_depth: bool = True) -> Image:
+        """Resolve multisampling and read the image (colour, and eye-space depth unless ``read_depth=False``)."""
+        with self.current():
+            return self._read(read_depth)
+
+    def _read(self, read_depth: bool) -> Image:
+        if self.raw.available:
+            # wait for the GPU through ctypes, which releases the GIL (moderngl's resolve and read would wait
+            # holding it): other Python threads (an application loop beside render threads) run meanwhile
+            self.raw.glFinish()
+        t = self._targets
+        drawn = self.framebuffer
+        if self._target_stack:
+            fbo = drawn
+        else:
+            if drawn is not t["fbo"]:
+                self.ctx.copy_framebuffer(t["fbo"], drawn)
+            fbo = t["fbo"]
+        w, h = self._size
+        data = fbo.read(components=4, alignment=1)
+        array = np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1]
+        depth = None
+        if read_depth:
+            raw = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4", alignment=1), np.float32).reshape(
+                h, w
+            )[::-1]
+            depth = self.linear_depth(raw)
+        return Image(np.ascontiguousarray(array), depth, engine="gl", info=dict(self.stats))
+
+    def linear_depth(self, raw: np.ndarray) -> np.ndarray:
+        """Window depth in [0, 1] -> eye-space distance along the view axis (inf for the far plane)."""
+        camera = self.frame_state.camera
+        if camera is None:
+            camera = self.camera_matrices()[0]
+        n, f = camera.near, camera.far
+        d = raw.astype(np.float64)
+        if camera.is_orthographic:
+            z = n + d * (f - n)
+        else:
+            ndc = 2.0 * d - 1.0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = 2.0 * f * n / ((f + n) - ndc * (f - n))
+        out = z.astype(np.float32)
+        out[raw >= 1.0] = np.inf
+        return out
+
+    def __enter__(self) -> GLEngine:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.release()
+
+
+def _background_color(value: Any) -> tuple[float, ...]:
+    """``value`` as 3 or 4 finite numbers; ValueError naming the fix otherwise."""
+    fix = "give 3 or 4 numbers in [0, 1] (sRGB), e.g. background=(1, 1, 1), or an om.Background"
+    try:
+        color = tuple(float(c) for c in value)
+    except (TypeError, ValueError):
+        raise ValueError(f"GLEngine: background must be an RGB(A) colour, got {value!r:.60}; {fix}") from None
+    if len(color) not in (3, 4) or not all(0.0 <= c <= 1.0 for c in color):  # NaN fails too
+        raise ValueError(f"GLEngine: background must be 3 or 4 numbers in [0, 1], got {value!r:.60}; {fix}")
+    return color

@@ -1,0 +1,126 @@
+"""Attribute painters of the GL engine: they only mark what the next draw item must re-read.
+
+Material, PBRMaterial and Color go on one surface stack so the innermost of
+them decides (a Color inside a Material tints it; a Material inside a Color
+replaces it).  Raster-state attributes (every ``om.gl.GLState`` subclass,
+through the base class) mark the interned draw state dirty.
+Clip planes are captured in world coordinates where they are added (OpenGL's
+glClipPlane semantics).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ...attributes import (
+    BumpMap,
+    ClipPlane,
+    Color,
+    DrawStyle,
+    Fog,
+    Highlight,
+    Material,
+    Mirror,
+    MultiTexture,
+    PBRMaterial,
+    Shadowing,
+    Texture,
+)
+from ...core.handler import AttributePainter, registry
+from ...core.light import LightSwitch
+from ..engine import attributes as glattr
+from ..glengine import GLEngine
+
+__all__ = ["SurfacePainter", "StatePainter", "ClipPlanePainter", "MAX_CLIP_PLANES"]
+
+MAX_CLIP_PLANES = 6
+
+
+class SurfacePainter(AttributePainter):
+    """Material, PBRMaterial, Color: the surface stack."""
+
+    __slots__ = ()
+    service = "gl.paint"
+
+    def exec(self, attribute: Any, engine: GLEngine) -> None:
+        engine._surface.append(attribute)
+        engine._surface_dirty = True
+
+    def unexec(self, attribute: Any, engine: GLEngine) -> None:
+        surface = engine._surface
+        for i in range(len(surface) - 1, -1, -1):
+            if surface[i] is attribute:
+                del surface[i]
+                break
+        engine._surface_dirty = True
+
+
+class HighlightPainter(AttributePainter):
+    __slots__ = ()
+    service = "gl.paint"
+    target = Highlight
+
+    def exec(self, attribute: Any, engine: GLEngine) -> None:
+        engine._surface_dirty = True
+
+    unexec = exec
+
+
+class StatePainter(AttributePainter):
+    """Raster state (draw style, texture, fog, light switch, GL attributes): re-read on the next draw item."""
+
+    __slots__ = ()
+    service = "gl.paint"
+
+    def exec(self, attribute: Any, engine: GLEngine) -> None:
+        engine._state_dirty = True
+        engine._surface_dirty = True
+
+    unexec = exec
+
+
+class ClipPlanePainter(AttributePainter):
+    """Capture the plane in world coordinates; at most six at a time (gl_ClipDistance[0..5])."""
+
+    __slots__ = ()
+    service = "gl.paint"
+    target = ClipPlane
+
+    def exec(self, attribute: ClipPlane, engine: GLEngine) -> None:
+        if len(engine._clips) >= MAX_CLIP_PLANES:
+            raise ValueError(
+                f"ClipPlane in node {engine.node_path}: at most {MAX_CLIP_PLANES} clip planes can be active at once "
+                f"in the GL engine; remove one"
+            )
+        plane = attribute.world_plane(engine.model_matrix())
+        engine._clips.append((attribute, tuple(float(x) for x in plane)))
+        engine._state_dirty = True
+
+    def unexec(self, attribute: ClipPlane, engine: GLEngine) -> None:
+        clips = engine._clips
+        for i in range(len(clips) - 1, -1, -1):
+            if clips[i][0] is attribute:
+                del clips[i]
+                break
+        engine._state_dirty = True
+
+
+def _register() -> None:
+    for target in (Material, PBRMaterial, Color):
+        cls = type(f"SurfacePainter_{target.__name__}", (SurfacePainter,), {"__slots__": (), "target": target})
+        registry.register(cls(), [GLEngine])
+    # every GL state attribute, also one defined later, through the base class (handler look-up walks the MRO)
+    state_targets = (DrawStyle, Texture, MultiTexture, BumpMap, Fog, LightSwitch, Shadowing, Mirror, glattr.GLState)
+    for target in state_targets:
+        cls = type(f"StatePainter_{target.__name__}", (StatePainter,), {"__slots__": (), "target": target})
+        registry.register(cls(), [GLEngine])
+    registry.register(HighlightPainter(), [GLEngine])
+    from ..deferred.models import MaterialDescription
+
+    registry.register(type("MaterialDescriptionPainter", (HighlightPainter,), {"__slots__": (),
+                                                                                "target": MaterialDescription})(),
+                      [GLEngine])  # fmt: skip
+    registry.register(ClipPlanePainter(), [GLEngine])
+
+
+_register()

@@ -1,0 +1,339 @@
+"""Shadow maps in the GL engine: on by default, as in the offline engines.
+
+Every frame whose scene has lights with ``casts_shadows`` starts with the
+shadow-map passes (:class:`ShadowPlan`): one depth-only pass per map face into
+a single depth atlas (a comparison texture), drawing every opaque item of the
+scene that casts shadows (``om.Shadowing(cast=...)``), nested technique
+scopes included, from the light's camera:
+
+* directional lights: an orthographic camera fitted to the bounds of the
+  shadow casters;
+* spot lights: a perspective camera over the cone (cut-off up to 65 degrees;
+  wider spots are treated as point lights);
+* point lights: six 90-degree faces of a cube; faces that cannot see a caster
+  are not drawn.
+
+Lit shaders then look each light up in its face (``SHADOW_MAPS``, see
+:mod:`.shadow_glsl`) with percentage-closer filtering, normal offset and depth
+bias, for every item that receives shadows.  :class:`ShadowMaps` is the
+technique that sets these for the subgraph after it: ``ShadowMaps(enabled=False)``
+at the top of the root node switches shadow maps off for the whole frame (no
+map is drawn), elsewhere it keeps shadows off the subgraph; ``softness``,
+``bias`` and ``normal_offset`` apply to the receivers it scopes; the first
+ShadowMaps of the scene sets the map ``resolution``.  ``GLEngine(shadows=False)``
+turns them off for every frame.  Other engines ignore the technique (they
+always have shadows).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
+from ..engine.drawlist import Scope, world_bounds
+from ..engine.passes import Clear, Pass, Shader, Target
+from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
+from ..engine.state import casts_shadows
+from ..engine.technique import GLTechnique
+
+__all__ = ["ShadowMaps", "ShadowPlan", "ATLAS", "SHADOW_UNIT", "caster_bounds"]
+
+#: Name of the frame's shadow-map atlas target.
+ATLAS = "shadow-atlas"
+#: Texture unit of the atlas (units 0-7 are the materials').
+SHADOW_UNIT = 8
+#: Cube faces of a point light: the axis each looks along, and its up vector.
+_CUBE = (
+    ((1, 0, 0), (0, -1, 0)),
+    ((-1, 0, 0), (0, -1, 0)),
+    ((0, 1, 0), (0, 0, 1)),
+    ((0, -1, 0), (0, 0, -1)),
+    ((0, 0, 1), (0, -1, 0)),
+    ((0, 0, -1), (0, -1, 0)),
+)
+#: Spots wider than this get a cube of faces: one perspective map would stretch too far.
+_MAX_SPOT_CUTOFF = 65.0
+
+
+def _positive(owner: str, name: str, value: Any, minimum: float = 0.0) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < minimum:
+        raise ValueError(f"{owner}: {name} must be a number >= {minimum}, got {value!r}")
+    return float(value)
+
+
+class ShadowMaps(GLTechnique):
+    """Shadow-map settings for the subgraph after it (GL; other engines ignore it).
+
+    ``enabled=False`` keeps shadow maps off these receivers (at the top of the
+    root node: off for the whole frame).  ``resolution`` (pixels per map
+    side) is taken from the scene's first ShadowMaps.  ``softness`` is the
+    radius of percentage-closer filtering in map texels (0: hard shadows),
+    ``bias`` the depth bias and ``normal_offset`` the offset along the
+    surface normal, both in map texels: they keep lit surfaces from shadowing
+    themselves (acne) without detaching shadows from their casters
+    (peter-panning).
+    """
+
+    __slots__ = ("enabled", "resolution", "softness", "bias", "normal_offset")
+
+    @property
+    def deferred_inline(self) -> bool:
+        """Whether the deferred pipeline shades what it scopes through the G-buffer (with the frame's filter and
+        bias): yes while it receives shadows; ``enabled=False`` keeps its subgraph in the forward passes."""
+        return self.enabled
+
+    def __init__(
+        self,
+        enabled: bool = True,
+        resolution: int = 512,
+        softness: float = 1.0,
+        bias: float = 2.0,
+        normal_offset: float = 3.0,
+    ) -> None:
+        super().__init__(passes=1)
+        if not isinstance(enabled, bool):
+            raise ValueError(f"ShadowMaps: enabled must be True or False, got {enabled!r}")
+        if isinstance(resolution, bool) or not isinstance(resolution, int) or not 16 <= resolution <= 8192:
+            raise ValueError(
+                f"ShadowMaps: resolution must be a whole number of pixels in [16, 8192], got {resolution!r}"
+            )
+        self.enabled = enabled
+        self.resolution = resolution
+        self.softness = _positive("ShadowMaps", "softness", softness)
+        self.bias = _positive("ShadowMaps", "bias", bias)
+        self.normal_offset = _positive("ShadowMaps", "normal_offset", normal_offset)
+
+    def style(self) -> tuple[float, float, float]:
+        """The ``u_shadow_style`` uniform: softness, bias, normal offset (texels)."""
+        return (self.softness, self.bias, self.normal_offset)
+
+    def prepare_pass(self, engine: Any) -> None:
+        if self.enabled:
+            shader = Shader(uniforms={"u_shadow_style": self.style()}, defines={"SHADOW_PCF": pcf_mode(self.softness)})
+        else:
+            shader = Shader(defines={"SHADOWS_OFF": True})
+        engine.set_pass(Pass("shadows" if self.enabled else "no-shadows", shader=shader))
+
+
+class _Face:
+    """One map of the atlas: a light camera (view, projection), its tile, texel size, whether it is drawn."""
+
+    __slots__ = ("view", "proj", "texel", "drawn", "tile")
+
+    def __init__(self, view: np.ndarray, proj: np.ndarray, texel: tuple[float, float], drawn: bool = True) -> None:
+        self.view, self.proj, self.texel, self.drawn = view, proj, texel, drawn
+        self.tile: tuple[int, int] | None = None  # (column, row) in the atlas
+
+
+class _MapPasses(GLTechnique):
+    """The depth passes that draw a frame's shadow maps (run by the engine before its technique)."""
+
+    __slots__ = ("descriptions",)
+
+    def __init__(self, descriptions: list[Pass]) -> None:
+        super().__init__(passes=len(descriptions))
+        object.__setattr__(self, "descriptions", tuple(descriptions))
+
+    def prepare_pass(self, engine: Any) -> None:
+        engine.set_pass(self.descriptions[engine.current_pass])
+
+
+class ShadowPlan:
+    """The shadow maps of one frame: faces per light, the atlas, the passes and the shader uniforms."""
+
+    def __init__(self, settings: ShadowMaps, lights: list[tuple[Any, np.ndarray]], bounds: Any) -> None:
+        self.settings = settings
+        self.faces: list[_Face] = []
+        #: id(light) -> (first face, face count)
+        self.light_faces: dict[int, tuple[int, int]] = {}
+        lo, hi = bounds
+        for light, matrix in lights:
+            faces = _light_faces(light, matrix, lo, hi, settings.resolution)
+            if not faces:
+                continue
+            if len(self.faces) + len(faces) > MAX_SHADOW_FACES:
+                warnings.warn(
+                    f"GLEngine: more than {MAX_SHADOW_FACES} shadow-map faces (a point light takes 6); the shadows "
+                    "of the remaining lights are left out; set casts_shadows=False on lights that need none",
+                    stacklevel=4,
+                )
+                break
+            self.light_faces[id(light)] = (len(self.faces), len(faces))
+            self.faces.extend(faces)
+        drawn = [f for f in self.faces if f.drawn]
+        r = settings.resolution
+        cols = max(1, math.ceil(math.sqrt(len(drawn))))
+        rows = max(1, math.ceil(len(drawn) / cols))
+        self.target = Target(ATLAS, colors=(), depth=True, size=(cols * r, rows * r))
+        for k, face in enumerate(drawn):
+            face.tile = (k % cols, k // cols)
+        self.cols, self.rows = cols, rows
+        self._arrays()
+
+    def __len__(self) -> int:
+        return len(self.faces)
+
+    def features(self) -> tuple[tuple[str, Any], ...]:
+        """The program features of a receiver in this frame (a ShadowMaps pass may override the filter)."""
+        return (("SHADOW_MAPS", len(self.faces)), ("SHADOW_PCF", pcf_mode(self.settings.softness)))
+
+    def technique(self) -> _MapPasses | None:
+        """The depth passes, or None when no face needs drawing."""
+        r = self.settings.resolution
+        passes = []
+        for k, face in enumerate(self.faces):
+            if face.tile is None:
+                continue
+            col, row = face.tile
+            passes.append(
+                Pass(
+                    f"shadow-map[{k}]",
+                    items="opaque",
+                    select=casts_shadows,
+                    scopes="items",
+                    source="scene",
+                    target=self.target,
+                    viewport=(col * r, row * r, r, r),
+                    clear=Clear(color=None, depth=1.0) if not passes else None,
+                    camera=(face.view, face.proj),
+                    shader=Shader(depth_only=True),
+                )
+            )
+        return _MapPasses(passes) if passes else None
+
+    def _arrays(self) -> None:
+        n = len(self.faces)
+        self.matrices = np.zeros((n, 4, 4), np.float32)
+        self.tiles = np.zeros((n, 4), np.float32)
+        self.texels = np.zeros((n, 2), np.float32)
+        for k, face in enumerate(self.faces):
+            self.matrices[k] = (face.proj @ face.view).T
+            self.texels[k] = face.texel
+            if face.tile is not None:
+                col, row = face.tile
+                r = self.settings.resolution
+                self.tiles[k] = (col * r, row * r, r, r)
+        self.style = np.asarray(self.settings.style(), np.float32)
+
+    def light_array(self, order: list[Any], size: int) -> np.ndarray:
+        """``u_lshadow``: (first face, count, 0, 0) for the lights of a light-uniform set, in its order."""
+        out = np.zeros((size, 4), np.float32)
+        for i, light in enumerate(order[:size]):
+            found = self.light_faces.get(id(light))
+            if found is not None:
+                out[i, :2] = found
+        return out
+
+    def apply(self, program: Any, atlas: Any, order: list[Any]) -> None:
+        """Bind the atlas and write the shadow uniforms a program reads."""
+        atlas.use(SHADOW_UNIT)
+        program["u_shadow_atlas"].value = SHADOW_UNIT
+        for name, data in (("u_shadow_mat", self.matrices), ("u_shadow_tile", self.tiles),
+                           ("u_shadow_texel", self.texels), ("u_shadow_style", self.style)):  # fmt: skip
+            u = program.get(name, None)
+            if u is not None:  # the compiler may trim arrays to the elements a variant reads
+                u.write(data[: u.array_length].tobytes() if data.ndim > 1 else data.tobytes())
+        u = program.get("u_lshadow", None)
+        if u is not None:
+            u.write(self.light_array(order, u.array_length).tobytes())
+
+
+def frame_settings(root: Scope | None, enabled: bool) -> ShadowMaps | None:
+    """The frame's shadow-map settings: the scene's first ShadowMaps, else the defaults; None when off."""
+    if not enabled or root is None:
+        return None
+    from .shadow_volumes import ShadowVolumes
+
+    if len(root.entries) == 1 and isinstance(root.entries[0], Scope):
+        if isinstance(root.entries[0].technique, ShadowVolumes):
+            return None  # the whole scene has exact shadow volumes: no maps needed
+    for scope in root.walk():
+        if isinstance(scope.technique, ShadowMaps):
+            whole = len(root.entries) == 1 and root.entries[0] is scope
+            if not scope.technique.enabled and whole:
+                return None
+            return scope.technique
+    return _DEFAULT
+
+
+_DEFAULT = ShadowMaps()
+
+
+def caster_bounds(root: Scope) -> tuple[np.ndarray, np.ndarray] | None:
+    """World (min, max) of the items that cast shadows, or None when there are none."""
+    return world_bounds(item for item in root.all_items() if not item.transparent and casts_shadows(item))
+
+
+def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+
+
+def _up_for(axis: np.ndarray) -> np.ndarray:
+    return np.array([0.0, 1.0, 0.0]) if abs(axis[1]) < 0.95 else np.array([1.0, 0.0, 0.0])
+
+
+def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: int) -> list[_Face]:
+    """The map faces of one light over the casters' bounds [lo, hi] (empty: the light casts no shadows)."""
+    from ...attributes import DirectionalLight, PointLight, SpotLight
+
+    if not getattr(light, "casts_shadows", False):
+        return []
+    corners = _corners(lo, hi)
+    center = (lo + hi) / 2.0
+    radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 1e-6)
+    if isinstance(light, DirectionalLight):
+        d = light.world_direction(matrix)
+        view = look_at_matrix(center - d * 2.0 * radius, center, _up_for(d))
+        eye = corners @ view[:3, :3].T + view[:3, 3]
+        half_x = max(float(np.abs(eye[:, 0]).max()), 1e-6) * 1.02
+        half_y = max(float(np.abs(eye[:, 1]).max()), 1e-6) * 1.02
+        depth = -eye[:, 2]
+        near, far = float(depth.min()) - 0.01 * radius, float(depth.max()) + 0.01 * radius
+        proj = orthographic_matrix(2.0 * half_y, half_x / half_y, near, far)
+        return [_Face(view, proj, (2.0 * max(half_x, half_y) / resolution, 0.0))]
+    if not isinstance(light, (PointLight, SpotLight)):
+        return []
+    p = light.world_position(matrix)
+    rel = corners - p
+    far = float(np.linalg.norm(rel, axis=1).max()) * 1.01
+    gap = np.maximum(np.maximum(lo - p, p - hi), 0.0)
+    near = max(float(np.linalg.norm(gap)) * 0.95, far * 2e-3)
+    if near >= far:
+        near = far * 0.5
+    if isinstance(light, SpotLight) and light.cutoff <= _MAX_SPOT_CUTOFF:
+        axis = light.world_direction(matrix)
+        fov = min(2.0 * light.cutoff + 2.0, 179.0)
+        view = look_at_matrix(p, p + axis, _up_for(axis))
+        texel = 2.0 * math.tan(math.radians(fov) / 2.0) / resolution
+        return [_Face(view, perspective_matrix(fov, 1.0, near, far), (0.0, texel))]
+    rlo, rhi = lo - p, hi - p
+    faces = []
+    texel = 2.0 / resolution  # 90 degrees: the face is 2 units wide at distance 1
+    for axis, up in _CUBE:
+        a = np.asarray(axis, np.float64)
+        view = look_at_matrix(p, p + a, up)
+        faces.append(_Face(view, perspective_matrix(90.0, 1.0, near, far), (0.0, texel), _sees(a, rlo, rhi)))
+    return faces
+
+
+def _sees(axis: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether the cube face along ``axis`` may see part of the box [lo, hi] (relative to the light).
+
+    Conservative: the face sees the points whose coordinate along its axis is
+    positive and at least the other two coordinates' magnitudes.
+    """
+    k = int(np.argmax(np.abs(axis)))
+    sign = axis[k]
+    reach = hi[k] if sign > 0 else -lo[k]
+    if reach <= 0.0:
+        return False
+    for j in range(3):
+        if j != k:
+            nearest = 0.0 if lo[j] <= 0.0 <= hi[j] else min(abs(lo[j]), abs(hi[j]))
+            if nearest > reach:
+                return False
+    return True

@@ -1,0 +1,146 @@
+"""Stereo: two eyes with off-axis projections, packed side by side, top and bottom, as an anaglyph, or one eye.
+
+``om.gl.Stereo(mode, eye_separation, convergence)`` is a GL technique.  Given
+to an engine (``GLEngine(stereo=...)``, ``om.render(scene, engine="gl",
+stereo=...)``, ``om.Viewer(stereo=...)``) it runs over the whole frame; put
+into a node it draws the subgraph after it that way.  Each eye is a pass with
+a camera override (the issue-9 pass description): the eyes sit
+``eye_separation`` apart along the camera's x axis, both look along the
+camera's axis (no toe-in, so no vertical parallax), and each frustum is
+sheared so that both see the same window at the ``convergence`` distance:
+points there have no disparity, nearer ones cross (left image to the right),
+farther ones diverge up to ``eye_separation`` on that window at infinity.
+
+The horizontal disparity of a point at distance ``d`` on an eye image ``w``
+pixels wide is ``x_left - x_right = e w / (2 tan(fov_x / 2)) (1/d - 1/c)``
+pixels (:func:`disparity_pixels`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ..engine.attributes import ColorMask
+from ..engine.passes import Clear, Pass
+from ..engine.technique import GLTechnique
+
+__all__ = ["Stereo", "MODES", "eye_matrices", "disparity_pixels"]
+
+#: How the two eyes are packed into the image.
+MODES = ("side-by-side", "top-bottom", "anaglyph", "left", "right")
+#: Colour masks of the anaglyph's eyes: red for the left eye, green and blue (cyan) for the right.
+ANAGLYPH_MASKS = (ColorMask(True, False, False, True), ColorMask(False, True, True, True))
+
+
+def eye_matrices(
+    view: np.ndarray, proj: np.ndarray, aspect: float, sign: float, separation: float, convergence: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(view, projection) of one eye (``sign`` -1 left, +1 right) from the centre camera's matrices.
+
+    ``proj`` is a symmetric perspective projection (its vertical field and near/far planes are kept);
+    ``aspect`` is the eye image's width / height.  The eye is moved by ``sign * separation / 2`` along the
+    camera's x axis and its frustum sheared so that the plane at ``convergence`` is shared by both eyes.
+    """
+    a, b = float(proj[2, 2]), float(proj[2, 3])
+    near, far = b / (a - 1.0), b / (a + 1.0)
+    top = near / float(proj[1, 1])
+    right = top * aspect
+    offset = sign * separation / 2.0
+    shift = offset * near / convergence  # the frustum moves against the eye: the convergence window stays put
+    left_edge, right_edge = -right - shift, right - shift
+    p = np.zeros((4, 4))
+    p[0, 0] = 2.0 * near / (right_edge - left_edge)
+    p[0, 2] = (right_edge + left_edge) / (right_edge - left_edge)
+    p[1, 1] = near / top
+    p[2, 2] = (far + near) / (near - far)
+    p[2, 3] = 2.0 * far * near / (near - far)
+    p[3, 2] = -1.0
+    move = np.eye(4)
+    move[0, 3] = -offset
+    return move @ view, p
+
+
+def disparity_pixels(distance: float, width: int, fov_x: float, separation: float, convergence: float) -> float:
+    """Predicted ``x_left - x_right`` in pixels of a point ``distance`` in front of the eyes (on the axis)
+    on eye images ``width`` pixels wide with horizontal field ``fov_x`` (degrees)."""
+    half = math.tan(math.radians(fov_x) / 2.0)
+    return separation * width / (2.0 * half) * (1.0 / distance - 1.0 / convergence)
+
+
+def _positive(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise ValueError(f"Stereo: {name} must be a finite number > 0 (world units), got {value!r}")
+    return float(value)
+
+
+class Stereo(GLTechnique):
+    """Stereo pairs with off-axis projections (see the module docstring).
+
+    ``mode``: ``"side-by-side"`` (left eye in the left half), ``"top-bottom"``
+    (left eye on top), ``"anaglyph"`` (red left, cyan right), ``"left"`` or
+    ``"right"`` (one eye over the whole image).  ``eye_separation``: the
+    distance between the eyes in world units; ``convergence``: the distance of
+    the zero-parallax plane from the eyes (None: the camera's distance to its
+    ``center``).  Each eye keeps the camera's vertical field of view; its
+    aspect is that of its half of the image.  Needs a perspective camera.
+    """
+
+    __slots__ = ("mode", "eye_separation", "convergence")
+
+    def __init__(self, mode: str = "side-by-side", eye_separation: float = 0.065, convergence: float | None = None):
+        if mode not in MODES:
+            raise ValueError(f"Stereo: mode must be one of {MODES}, got {mode!r}")
+        super().__init__(passes=1 if mode in ("left", "right") else 2)
+        self.mode = mode
+        self.eye_separation = _positive("eye_separation", eye_separation)
+        self.convergence = None if convergence is None else _positive("convergence", convergence)
+
+    def eyes(self) -> tuple[float, ...]:
+        """The signs of the eyes drawn, in pass order (-1 left, +1 right)."""
+        return {"left": (-1.0,), "right": (1.0,)}.get(self.mode, (-1.0, 1.0))
+
+    def viewport(self, sign: float, size: tuple[int, int]) -> tuple[int, int, int, int] | None:
+        """The pixel rectangle of an eye in a frame of ``size`` (None: the whole frame)."""
+        w, h = size
+        if self.mode == "side-by-side":
+            half = w // 2
+            return (0, 0, half, h) if sign < 0 else (half, 0, w - half, h)
+        if self.mode == "top-bottom":
+            half = h // 2
+            return (0, h - half, w, half) if sign < 0 else (0, 0, w, h - half)
+        return None
+
+    def convergence_for(self, engine: Any) -> float:
+        """The convergence distance used with ``engine``'s frame camera."""
+        if self.convergence is not None:
+            return self.convergence
+        camera = engine.frame_camera
+        eye, center = getattr(camera, "eye", None), getattr(camera, "center", None)
+        if eye is None or center is None:
+            raise ValueError("Stereo: give convergence= when the frame's camera is given as matrices")
+        eye_world = engine.eye_position
+        # the camera's centre of interest, through the transforms above the camera (the view matrix holds them)
+        d = float(np.linalg.norm(np.subtract(center, eye)))
+        return d if d > 0 else float(np.linalg.norm(eye_world))
+
+    def prepare_pass(self, engine: Any) -> None:
+        proj = engine.frame_projection
+        if abs(proj[3, 3] - 1.0) < 1e-9:
+            raise ValueError(
+                "Stereo: the camera is orthographic; stereo needs a perspective camera (om.Camera.look_at)"
+            )
+        sign = self.eyes()[engine.current_pass]
+        size = engine.target_size
+        box = self.viewport(sign, size)
+        w, h = (box[2], box[3]) if box is not None else size
+        view, p = eye_matrices(engine.frame_view, proj, w / h, sign, self.eye_separation, self.convergence_for(engine))
+        name = "left eye" if sign < 0 else "right eye"
+        if self.mode == "anaglyph":
+            mask = ANAGLYPH_MASKS[engine.current_pass]
+            clear = Clear(color=None, depth=1.0) if engine.current_pass == 1 else None
+            engine.set_pass(Pass(name, camera=(view, p), state=(mask,), clear=clear))
+        else:
+            engine.set_pass(Pass(name, camera=(view, p), viewport=box))
