@@ -224,9 +224,10 @@ def render(
     _check_scene(f"om.render(engine={engine!r})", scene)
     _warn_if_empty(f"om.render(engine={engine!r})", scene)
     if tile is None and engine == "gl" and max(size) > 4096:
-        from .tiling import needs_tiles
+        from .tiling import MAX_TILED_PIXELS, needs_tiles
 
-        tile = needs_tiles(engine, size, options.get("samples", 4))
+        if size[0] * size[1] <= MAX_TILED_PIXELS:  # larger: refused before any context is made
+            tile = needs_tiles(engine, size, options.get("samples", 4))
     if tile is not None:
         from .tiling import render_tiled
 

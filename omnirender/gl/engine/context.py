@@ -69,7 +69,8 @@ def check_samples_total(size: Any, samples: int = 0) -> tuple[int, int]:
         raise ValueError(
             f"GLEngine: size {w}x{h} with {max(1, samples)} sample(s) per pixel needs {w * h * max(1, samples):,} "
             f"samples, more than the {MAX_SAMPLES_TOTAL:,} (2 GiB of colour and depth) this engine allocates; "
-            "render a smaller image, with fewer samples=, or in tiles (om.render(..., tile=2048))"
+            "render a smaller image, with fewer samples=, in tiles (om.render(..., tile=2048)), or into a "
+            "file tile by tile (om.render_to_file)"
         )
     return w, h
 
