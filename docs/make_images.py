@@ -1,7 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
 Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
-     [deferred] [postfx] [pipelines]
+     [deferred] [postfx] [pipelines] [assets]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -232,6 +232,45 @@ def pipeline_images() -> None:
     print("wrote", HERE / "stereo_demo.png")
 
 
+def usd_images() -> None:
+    """Example 19: a USD stage in the four engines."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "examples" / "19_usd.py"), tmp], check=True, cwd=ROOT,
+                       stdout=subprocess.DEVNULL)  # fmt: skip
+        shutil.copy(Path(tmp) / "19-usd.png", HERE / "example_19-usd.png")
+        print("wrote", HERE / "example_19-usd.png")
+
+
+def asset_suite_images(size: tuple[int, int] = (128, 96)) -> None:
+    """The cross-engine asset suite (tests/asset_suite.py) as a contact sheet: one row per asset, one column per
+    engine, each engine's IoU / mean CIEDE2000 against GL under its picture (asset_suite.png)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from asset_suite import ASSETS, OPTIONS, asset_scene, compare, write_assets
+
+    names = {"gl": "OpenGL", "povray": "POV-Ray", "mitsuba": "Mitsuba 3", "radiance": "Radiance"}
+    engines = [n for n, (ok, _) in om.engines().items() if ok and n in names]
+    w, h = size
+    label, head, row_h = 150, 20, h + 14
+    sheet = Image.new("RGB", (label + w * len(engines), head + row_h * len(ASSETS)), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for j, name in enumerate(engines):
+        draw.text((label + j * w + 6, 4), names[name], fill=(0, 0, 0))
+    with tempfile.TemporaryDirectory() as tmp:
+        files = write_assets(Path(tmp))
+        for i, (asset, path) in enumerate(files.items()):
+            y = head + i * row_h
+            draw.text((6, y + h // 2 - 6), asset, fill=(0, 0, 0))
+            images = {n: om.render(asset_scene(path, size), engine=n, size=size, **OPTIONS.get(n, {})) for n in engines}
+            for j, name in enumerate(engines):
+                sheet.paste(Image.fromarray(images[name].rgb, "RGB"), (label + j * w, y))
+                if name != "gl" and "gl" in images:
+                    iou, de = compare(images[name], images["gl"])
+                    draw.text((label + j * w + 4, y + h), f"IoU {iou:.3f}  dE {de:.1f}", fill=(0, 0, 0))
+                    print(f"{asset:24s} {name:9s} IoU {iou:.3f} mean dE2000 {de:.1f}")
+    sheet.save(HERE / "asset_suite.png")
+    print("wrote", HERE / "asset_suite.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -242,6 +281,8 @@ SECTIONS = {
     "postfx": postfx_images,
     "deferred": deferred_images,
     "pipelines": pipeline_images,
+    "usd": usd_images,
+    "assets": asset_suite_images,
 }
 
 if __name__ == "__main__":

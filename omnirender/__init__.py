@@ -68,6 +68,7 @@ _LAZY_NAMES = {
     "video": "animation",
     "load_gltf": "formats.gltf",
     "render_to_file": "tiling",
+    "load_usd": "formats.usd",
 }
 
 __all__ = [

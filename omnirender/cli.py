@@ -49,6 +49,7 @@ exit codes: 0 success, 1 the work failed (bad scene file, engine missing or fail
 IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 #: Scene-file extensions (mesh files are read too, see :func:`_load`).
 SCENE_EXTENSIONS = (".json", ".yaml", ".yml")
+USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")  # stages: loaded whole (cameras, lights), not as meshes
 #: What the exit codes mean (also in ``omnirender --help``).
 EXIT_CODES = {
     0: "success",
@@ -117,6 +118,11 @@ def _load(path: str, trusted: bool | argparse.Namespace = False, size: tuple[int
         raise UsageError(f"scene file not found: {path}")
     if not p.is_file():
         raise UsageError(f"{path} is a folder, not a scene file")
+    if suffix in USD_SUFFIXES:  # a whole stage: its cameras and lights, framed like a mesh when it has none
+        from .formats.usd import load_usd
+        from .scene.mesh_scene import framed
+
+        return framed(load_usd(p, trusted=trusted), aspect=size[0] / size[1])
     if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
@@ -189,10 +195,11 @@ def _animate(args: argparse.Namespace) -> int:
         raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
     if not Path(args.scene).is_file():
         raise UsageError(f"scene file not found: {args.scene}")
-    if Path(args.scene).suffix.lower() not in SCENE_EXTENSIONS + (".glb", ".gltf"):
+    if Path(args.scene).suffix.lower() not in SCENE_EXTENSIONS + (".glb", ".gltf") + USD_SUFFIXES:
         raise UsageError(
             f"{args.scene}: unknown extension {Path(args.scene).suffix!r}; give a scene file "
-            f"({', '.join(SCENE_EXTENSIONS)}) or an animated glTF file (.glb, .gltf)"
+            f"({', '.join(SCENE_EXTENSIONS)}), an animated glTF file (.glb, .gltf) or a USD stage "
+            f"({', '.join(USD_SUFFIXES)})"
         )
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("give either --workers (local processes) or --scheduler (a Dask cluster), not both")
@@ -456,7 +463,10 @@ def build_parser() -> argparse.ArgumentParser:
         return sub.add_parser(name, help=help, parents=[common])
 
     p = command("render", help="render a scene file to an image")
-    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
+    p.add_argument(
+        "scene",
+        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
+    )
     p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
     p.add_argument("-o", "--output", help="image file (.png, .jpg...; default SCENE-ENGINE.png)")
     p.add_argument("--size", type=_size, default=(800, 600), help="image size WxH (default 800x600)")
@@ -465,7 +475,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_render)
 
     p = command("animate", help="render the frames of an animated scene (locally or on Dask) and make a video")
-    p.add_argument("scene", help="scene file (.json, .yaml) with an om.Animation, or an animated .glb/.gltf")
+    p.add_argument(
+        "scene", help="scene file (.json, .yaml) with an om.Animation, an animated .glb/.gltf or a USD stage"
+    )
     p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
     p.add_argument("-o", "--output", help="video (.mp4, .gif...) or frame pattern (frames/%%05d.png)")
     p.add_argument("--frames", help="frame numbers: 0-119, 0-119:2 or 3,5,8 (default: the whole animation)")
@@ -482,18 +494,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_animate)
 
     p = command("view", help="open a scene file in an interactive window")
-    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
+    p.add_argument(
+        "scene",
+        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
+    )
     p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
     p.add_argument("--duration", type=float, help="close the window after this many seconds (demos, tests)")
     p.set_defaults(func=_view)
 
-    p = command("export", help="write a scene file in another format (.glb, .pov, .rib)")
-    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
+    p = command("export", help="write a scene file in another format (.glb, .usda, .usdc, .usdz, .pov, .rib)")
+    p.add_argument(
+        "scene",
+        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
+    )
     p.add_argument("output", help="output file; the extension chooses the format")
     p.set_defaults(func=_export)
 
     p = command("info", help="print the node tree with paths, statistics, bounds and capable engines")
-    p.add_argument("scene", help="scene file (.json, .yaml) or mesh file (.obj, .ply, .stl, .off, .glb, .gltf)")
+    p.add_argument(
+        "scene",
+        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
+    )
     p.add_argument("--no-engines", action="store_true", help="skip checking which engines can render it")
     p.set_defaults(func=_info)
 

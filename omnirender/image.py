@@ -21,10 +21,19 @@ class Image:
     float32 eye-space distance along the viewing axis (``inf`` where nothing
     was drawn) or None when the engine cannot tell; ``hdr`` is (H, W, 3 or 4)
     float32 linear radiance for physically based engines, else None.
-    ``info`` holds engine-specific facts (timings, sample counts, file names).
+    ``coverage`` is (H, W) float32 in [0, 1], the fraction of each pixel
+    covered by shapes (whatever the background), or None (then the depth or
+    the alpha channel tells).  ``info`` holds engine-specific facts (timings,
+    sample counts, file names).
+
+    Every engine gives the same meaning to :attr:`mask` (the pixels shapes
+    cover, with or without an ``om.Background``) and paints the same default
+    background (:data:`~omnirender.attributes.environment.DEFAULT_BACKGROUND`,
+    opaque) when the scene has none; ``om.Background((0, 0, 0, 0))`` asks for
+    a transparent one.
     """
 
-    __slots__ = ("array", "depth", "hdr", "engine", "info")
+    __slots__ = ("array", "depth", "hdr", "engine", "info", "coverage")
 
     def __init__(
         self,
@@ -33,6 +42,7 @@ class Image:
         hdr: np.ndarray | None = None,
         engine: str = "",
         info: dict[str, Any] | None = None,
+        coverage: np.ndarray | None = None,
     ) -> None:
         array = np.asarray(array)
         if array.ndim != 3 or array.shape[2] not in (3, 4) or array.dtype != np.uint8:
@@ -56,7 +66,12 @@ class Image:
                     f"Image: hdr must be ({array.shape[0]}, {array.shape[1]}, 3|4) floats (linear radiance), "
                     f"got {hdr.shape} {hdr.dtype}"
                 )
+        if coverage is not None:
+            coverage = np.asarray(coverage, dtype=np.float32)
+            if coverage.shape != array.shape[:2]:
+                raise ValueError(f"Image: coverage must be {array.shape[:2]}, got {coverage.shape}")
         self.array = array
+        self.coverage = coverage
         self.depth = depth
         self.hdr = hdr
         self.engine = engine
@@ -82,7 +97,13 @@ class Image:
 
     @property
     def mask(self) -> np.ndarray:
-        """(H, W) bool: where something was drawn (finite depth, else alpha > 0)."""
+        """(H, W) bool: the pixels shapes cover, whatever the background.
+
+        From the engine's ``coverage`` (pixels at least half covered, as a
+        rasteriser's pixel-centre sample decides), else the finite depth, else alpha > 0.
+        """
+        if self.coverage is not None:
+            return self.coverage >= 0.5
         if self.depth is not None:
             return np.isfinite(self.depth)
         return self.array[:, :, 3] > 0

@@ -165,3 +165,20 @@ def test_changing_an_operand_changes_the_csg_and_its_mesh():
 def test_povray_writes_native_csg():
     text, _ = om.povray.scene_sdl(scene("sphere-minus-box"), (80, 60))
     assert "difference {" in text and "sphere {" in text and "box {" in text and "mesh2" not in text
+
+
+@pytest.mark.gl
+def test_sphere_minus_translated_box_has_a_normal_everywhere():
+    """Issue 23: the boolean's zero-area slivers reached TriangleSet with zero normals and GL refused the mesh."""
+    from omnirender.geometry.boolean import crease_normals, mesh_boolean
+    from omnirender.shapes.csg_simplifier import operand_triangles
+
+    box = om.Node("box", [om.Translation(0.6, 0.6, 0.6), om.Box(size=(1.2, 1.2, 1.2))])
+    csg = om.CSG("difference", om.Sphere(radius=1), box)
+    a, b = (operand_triangles(op, 3) for op in csg.operands())
+    v, f = mesh_boolean("difference", a, b)
+    _, faces, normals = crease_normals(v, f)
+    assert len(faces) and np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    s = om.Node("s", [om.Camera.look_at((2, 2, 3)), om.DirectionalLight(direction=(-1, -1, -1)), csg])
+    img = om.render(s, engine="gl", size=(80, 60))
+    assert 0.1 < img.mask.mean() < 0.6

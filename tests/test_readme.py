@@ -113,3 +113,28 @@ def test_render_threads_example_runs(tmp_path, monkeypatch):
     clients = namespace["clients"]
     assert all(c.error is None and c.frames >= 1 for c in clients)
     assert all(c.last.frame == 10 for c in clients)  # both drew the last snapshot before they stopped
+
+
+@pytest.mark.gl
+def test_frame_stage_example_runs(tmp_path, monkeypatch, capsys):
+    """The README's stage of one's own: it joins the frame where it was added and darkens the corners."""
+    import numpy as np
+
+    import omnirender as om
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("### A stage of your own in every GL frame"), "README.md", "exec"), {"__name__": "__main__"})
+    assert "'mirrors', 'dark edges', 'stereo'" in capsys.readouterr().out
+    from PIL import Image
+
+    image = np.asarray(Image.open(tmp_path / "stage.png").convert("RGB"), float)
+    plain = om.gl.render(om.Node("scene", [om.PointLight(position=(2, 3, 4)), om.Sphere()]), (160, 120)).array[..., :3]
+    assert image[:6, :6, :3].mean() < 0.7 * plain[:6, :6, :3].mean()  # the corners darkened by the stage
+    assert abs(image[60, 80, :3].mean() - plain[60, 80, :3].mean()) < 8  # the centre about as it was
+
+
+def test_usd_example_runs(tmp_path, monkeypatch):
+    pytest.importorskip("pxr")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(_block("### OpenUSD stages"), "README.md", "exec"), {})
+    assert "def Sphere" in (tmp_path / "ball.usda").read_text()

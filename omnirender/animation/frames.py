@@ -105,7 +105,10 @@ def load_scene(source: Any, trusted: bool = False) -> Any:
 
         reader = scene_reader(path)
         if reader is not None:
-            return reader(path)
+            import inspect
+
+            takes_trust = "trusted" in inspect.signature(reader).parameters
+            return reader(path, trusted=trusted) if takes_trust else reader(path)
         from ..scene.files import load
 
         return load(path, trusted=trusted)

@@ -33,13 +33,23 @@ __all__ = [
     "PickId",
     "Collidable",
     "DEFAULT_BACKGROUND",
+    "shown_background",
     "is_scene_background",
 ]
 
-#: The background of a scene without an ``om.Background`` (sRGB display values, opaque), shared by every
-#: engine that must draw one: the GL engine's clear colour, the web page, a stand-alone ``.pov`` file.
-#: Offline renders keep a transparent background there instead (alpha 0), to be composited by the caller.
+#: The background of a scene without an ``om.Background`` (sRGB display values, opaque), the same in every
+#: engine: the GL engine's clear colour, POV-Ray's, Mitsuba's and Radiance's pictures, the web page, a
+#: stand-alone ``.pov`` file.  ``om.Background((0, 0, 0, 0))`` asks for a transparent one; ``Image.mask``
+#: marks the pixels shapes cover either way.
 DEFAULT_BACKGROUND = (0.16, 0.16, 0.17, 1.0)
+
+
+def shown_background(background: Any) -> tuple[float, ...]:
+    """The RGBA display colour an engine paints behind the shapes: the ``om.Background``'s or the default."""
+    if background is None:
+        return DEFAULT_BACKGROUND
+    color = tuple(float(c) for c in getattr(background, "color", background))
+    return color if len(color) == 4 else (*color[:3], 1.0)
 
 
 class ClipPlane(Parameterised, PolyAttribute):

@@ -15,7 +15,9 @@ everywhere.  The rules:
    ``baseColorFactor``.  ``MultiTexture`` layers are blended over it in order.
 3. Per-vertex colours replace a Phong material's diffuse colour (OpenGL's
    colour material) and multiply a PBR material's base colour (glTF's
-   ``COLOR_0``).
+   ``COLOR_0``).  Their alpha follows the alpha mode (:func:`vertex_rgba`):
+   ignored by an ``"opaque"`` PBR material, cut at the cutoff by ``"mask"``,
+   multiplied into the opacity otherwise.
 4. Ambient light (GL's global ambient 0.2 plus the lights' ambient terms,
    :func:`~.photometry.ambient_total`) is reflected with the *ambient
    reflectance*: a Phong material's ``ambient`` colour, or the base colour
@@ -44,7 +46,7 @@ import numpy as np
 
 from ..core import AttributePainter, default_for
 from .appearance import BumpMap, Color, Material, MultiTexture, PBRMaterial, Texture
-from .photometry import linear_rgb
+from .photometry import linear_rgb, srgb_to_linear
 
 __all__ = [
     "Appearance",
@@ -270,6 +272,30 @@ def resolve_appearance(
     )
 
 
+def vertex_rgba(app: Appearance, colors: Any) -> np.ndarray:
+    """Linear RGBA per-vertex colours as rule 3 applies them: (N, 3 or 4) sRGB display values in, (N, 4) out.
+
+    RGB replaces (Phong) or multiplies (PBR) the base colour.  Alpha: an
+    ``"opaque"`` PBR material ignores it (glTF: the alpha of ``COLOR_0`` is
+    coverage only when the material says so), ``"mask"`` makes it 1 at or
+    above the cutoff and 0 below, otherwise it multiplies the opacity.
+    """
+    c = np.asarray(colors, dtype=np.float64)
+    out = np.ones((len(c), 4), np.float64)
+    out[:, :3] = srgb_to_linear(np.clip(c[:, :3], 0.0, 1.0))
+    if app.vertex_colors == "multiply":
+        out[:, :3] *= np.asarray(app.base, np.float64)
+    a = c[:, 3] if c.shape[1] > 3 else np.ones(len(c))
+    if app.model == "pbr" and app.alpha_mode == "opaque":
+        a = np.ones(len(c))
+    elif app.model == "pbr" and app.alpha_mode == "mask":
+        a = (a * app.alpha >= app.alpha_cutoff).astype(np.float64)
+    else:
+        a = a * app.alpha
+    out[:, 3] = a
+    return out
+
+
 class SurfaceTracker(AttributePainter):
     """Keeps ``engine.surface_stack`` (a list) in activation order."""
 
@@ -326,4 +352,4 @@ def _without_textures(app: Appearance) -> Appearance:
     )
 
 
-__all__ += ["engine_appearance"]
+__all__ += ["engine_appearance", "vertex_rgba"]

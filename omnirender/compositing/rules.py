@@ -31,6 +31,16 @@ import numpy as np
 
 from ..core.camera import Camera
 from ..gl import Target
+from ..gl.engine.glenum import (
+    GL_ALWAYS,
+    GL_FRONT,
+    GL_FRONT_AND_BACK,
+    GL_LEQUAL,
+    GL_ONE,
+    GL_SCISSOR_TEST,
+    GL_STENCIL_BUFFER_BIT,
+    GL_ZERO,
+)
 from ..gl.engine.technique import GLTechnique
 from .canvas import Canvas
 from .renderer import Filter, Renderer
@@ -48,7 +58,6 @@ RULES = {
 _CELL = 6  # pattern cell size in pixels
 
 #: What the found state differs in (harmless for a renderer that sets the state it needs).
-_GL_ONE, _GL_ZERO, _GL_LEQUAL, _GL_ALWAYS, _GL_FRONT = 1, 0, 0x0203, 0x0207, 0x0404
 
 _RESTORE = """
 uniform sampler2D u_color;
@@ -149,20 +158,20 @@ def _unusual(state: Any, size: tuple[int, int]) -> Any:
     w, h = size
     return state.replace(
         blend=True,
-        blend_src_rgb=_GL_ONE,
-        blend_dst_rgb=_GL_ZERO,
-        blend_src_alpha=_GL_ONE,
-        blend_dst_alpha=_GL_ZERO,
+        blend_src_rgb=GL_ONE,
+        blend_dst_rgb=GL_ZERO,
+        blend_src_alpha=GL_ONE,
+        blend_dst_alpha=GL_ZERO,
         blend_color=(0.1, 0.2, 0.3, 0.4),
-        depth_func=_GL_LEQUAL,
+        depth_func=GL_LEQUAL,
         scissor_test=True,
         scissor_box=(0, 0, w, h),
         polygon_offset_fill=True,
         stencil_test=True,
-        stencil_func=_GL_ALWAYS,
-        stencil_back_func=_GL_ALWAYS,
+        stencil_func=GL_ALWAYS,
+        stencil_back_func=GL_ALWAYS,
         cull_face=False,
-        cull_face_mode=_GL_FRONT,
+        cull_face_mode=GL_FRONT,
         depth_clamp=True,
     )
 
@@ -180,13 +189,13 @@ def _fill(canvas: Canvas, pattern: dict[str, np.ndarray]) -> None:
     stencil = pattern["stencil"]
     h = stencil.shape[0]
     with preserved_state(canvas.framebuffer):
-        raw.glEnable(0x0C11)  # GL_SCISSOR_TEST
-        raw.glStencilMaskSeparate(0x0408, 0xFF)
+        raw.glEnable(GL_SCISSOR_TEST)
+        raw.glStencilMaskSeparate(GL_FRONT_AND_BACK, 0xFF)
         for y in range(0, h, _CELL):
             for x in range(0, stencil.shape[1], _CELL):
                 raw.glScissor(x, h - y - _CELL, _CELL, _CELL)
                 raw.glClearStencil(int(stencil[y, x]))
-                raw.glClear(0x400)  # GL_STENCIL_BUFFER_BIT
+                raw.glClear(GL_STENCIL_BUFFER_BIT)
 
 
 def _read(canvas: Canvas) -> dict[str, np.ndarray]:

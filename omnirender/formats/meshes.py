@@ -75,7 +75,18 @@ def read_mesh(
         resolver.finish()  # a refused reference explains the failure better
         raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
     resolver.finish()
-    return _parts(loaded, repr(path), strict)
+    parts = _parts(loaded, repr(path), strict)
+    if str(path).lower().endswith(".obj") and not _names_materials(path):
+        # texture coordinates without a material library: trimesh makes up a grey material with a tiny
+        # placeholder image; the file has no appearance, so the shapes get the scene's (or the default)
+        parts = [(None, ts) for _, ts in parts]
+    return parts
+
+
+def _names_materials(path: str) -> bool:
+    """Whether an OBJ file names a material library (an ``mtllib`` line)."""
+    with open(path, "rb") as fh:
+        return any(line.lstrip().startswith(b"mtllib") for line in fh)
 
 
 _PLY_COUNT = re.compile(rb"^element\s+(\S+)\s+(\S+)", re.MULTILINE)
@@ -245,6 +256,7 @@ def _parts(loaded: Any, path: str, strict: bool = False) -> list[tuple[dict[str,
 
 
 def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, Any] | None, TriangleSet]:
+    _consistent_winding(mesh)
     arrays = triangle_arrays(mesh)
     material = None
     visual = mesh.visual
@@ -259,6 +271,23 @@ def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, An
         if material is not None and arrays["texcoords"] is None and material.pop("texture", None) is not None:
             report_drop(f"MeshFile {path}", "texture dropped: the mesh has no texture coordinates", strict=strict)
     return material, TriangleSet(**arrays)
+
+
+def _consistent_winding(mesh: Any) -> None:
+    """Wind every face of a mesh without normals in the file the same way, outwards when it is closed.
+
+    Smooth normals are computed from the winding: faces wound against their
+    neighbours (common in OFF, PLY and STL files) would point their normals
+    inwards and darken in wedges, and a closed surface culls them in GL.
+    """
+    cache = getattr(mesh, "_cache", None)
+    if cache is not None and "vertex_normals" in cache:
+        return  # the file's normals decide
+    try:
+        if not mesh.is_winding_consistent:
+            mesh.fix_normals()
+    except Exception:  # pragma: no cover - a mesh trimesh cannot analyse keeps its winding
+        return
 
 
 def _rgb(value: Any, default: tuple[float, float, float]) -> tuple[float, float, float]:

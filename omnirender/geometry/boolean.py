@@ -70,10 +70,16 @@ def crease_normals(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An unshared mesh (3 vertices per triangle) with normals smoothed within ``crease`` degrees.
 
-    Returns (vertices, triangles, normals).
+    Returns (vertices, triangles, normals).  Triangles without area (a
+    boolean's slivers of collinear corners) draw nothing and have no normal:
+    they are left out, so every normal has a direction.
     """
     v = np.asarray(vertices, np.float64)
     f = np.asarray(indices, np.int64)
+    if len(f):
+        e1, e2 = v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]
+        scale = float(np.ptp(v, axis=0).max()) if len(v) else 0.0
+        f = f[np.linalg.norm(np.cross(e1, e2), axis=1) > 1e-12 * max(scale, 1e-300) ** 2]
     n_faces = len(f)
     if not n_faces:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros((0, 3))
@@ -93,5 +99,8 @@ def crease_normals(
         faces = corner_face[corners]
         similar = unit[faces] @ unit[faces].T >= limit  # (k, k): which neighbours each corner averages
         normals[corners] = similar.astype(np.float64) @ weighted[faces]
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+    length = np.linalg.norm(normals, axis=1)
+    flat = length <= 1e-300  # opposite faces cancelling at a vertex: the corner takes its own face's normal
+    normals[flat] = unit[corner_face[flat]]
+    normals[~flat] /= length[~flat, None]
     return v[corner_vertex], np.arange(n_faces * 3).reshape(-1, 3), normals

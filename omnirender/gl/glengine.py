@@ -56,10 +56,14 @@ from .engine.renderer import BatchRenderer
 from .engine.report import PassReport
 from .engine.resources import gpu_call
 from .engine.shaders import ProgramCache
+from .engine.stages import FrameStage, PipelinesStage, StageList, TechniqueStage
 from .engine.state import defaults, kinds
 from .engine.targets import FrameTargets
 from .engine.technique import GLTechnique
 from .techniques.forward import Forward
+from .techniques.mirrors import MirrorStage
+from .techniques.shadows import ShadowMapStage
+from .techniques.stereo import StereoStage
 
 __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
 
@@ -218,7 +222,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
         self.pass_report = PassReport(self.ctx)
         self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
-        self.frame_runner = FrameRunner(self, self.frame_state, self.drawer, self.frame_targets, self.pass_report)
+        stages = StageList([PipelinesStage(), ShadowMapStage(), TechniqueStage(), MirrorStage(), StereoStage()])
+        self.frame_runner = FrameRunner(
+            self, self.frame_state, self.drawer, self.frame_targets, self.pass_report, stages
+        )
 
     def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
         """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
@@ -579,7 +586,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     # -- drawing (the frame runner and the drawer do it) ------------------------------------------
     @classmethod
     def register_drawer(cls, kind: str, drawer: Any) -> None:
-        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes)."""
+        """Draw items of ``kind`` with ``drawer(engine, items, state) -> draw calls`` (text, volumes).
+
+        A drawer sets the GL state it needs with :meth:`apply_gl_state`; one that makes GL state calls of its
+        own calls :meth:`forget_gl_state` after them."""
         cls._default_drawers[kind] = drawer
 
     def draw(self, background: Any = None, clear: bool = True, camera: Any = None, framebuffer: Any = None) -> None:
@@ -597,6 +607,22 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         with self.current():
             self.frame_runner.draw(background, clear, override, framebuffer)
 
+    @property
+    def stages(self) -> StageList:
+        """The stages every frame runs, in order (``engine.stages.names()``: pipelines, shadow maps,
+        technique, mirrors, stereo); see :mod:`~.engine.stages`."""
+        return self.frame_runner.stages
+
+    def add_stage(self, stage: FrameStage, *, before: str | None = None, after: str | None = None) -> None:
+        """Run ``stage`` (an :class:`om.gl.FrameStage`) in every frame, before or after the stage named so
+        (last without either): a technique of the application's joins the frame without editing it."""
+        self.frame_runner.stages.add(stage, before=before, after=after)
+        stage.changed()
+
+    def remove_stage(self, stage: FrameStage | str) -> FrameStage:
+        """Take ``stage`` (or the stage of that name) out of every frame; returns it."""
+        return self.frame_runner.stages.remove(stage)
+
     def set_pass(self, description: Pass) -> None:
         """Describe the pass being prepared (call it from a technique's ``prepare_pass``)."""
         self.frame_runner.set_pass(description)
@@ -613,9 +639,32 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         """Tell the engine a drawer changed GL state itself: the next draw applies its state in full."""
         self.frame_runner.forget_gl_state()
 
+    def apply_gl_state(self, *states: Any) -> None:
+        """Set GL state from a drawer: ``engine.apply_gl_state(om.gl.DepthTest(False), om.gl.Blend())`` makes
+        those states current through the engine's state applier (which then knows what GL holds: nothing
+        needs resetting afterwards).  Other states stay as the pass set them."""
+        self.frame_runner.apply_gl_state(*states)
+
+    def default_gl_state(self) -> None:
+        """Put every GL state kind at its default through the engine's state applier (no blending, culling,
+        stencil, scissor, wireframe, offset); with :meth:`apply_gl_state` after it, a drawer or a custom pass
+        sets exactly the state it needs and the engine keeps knowing what GL holds."""
+        self.frame_runner.default_gl_state()
+
+    def sample_mask(self, sample: int | None) -> None:
+        """From a custom pass: the draws that follow write only sample ``sample`` of a multisampled target
+        (``None``: every sample again), through the engine's state applier."""
+        self.frame_runner.sample_mask(sample)
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """From a custom pass: draw into ``framebuffer`` (a moderngl framebuffer of ``size`` pixels) through the
+        engine's state applier (moderngl's ``use()`` resets masks and scissor behind the engine's back)."""
+        self.frame_runner.bind_framebuffer(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),
-        for drawers that set the few states they need themselves; the next draw applies its state in full."""
+        for code that then sets the few states it needs with raw GL calls; the next draw applies its state in
+        full.  (Engine code uses :meth:`default_gl_state` and :meth:`apply_gl_state` instead.)"""
         self.frame_runner.reset_gl_state()
 
     @property

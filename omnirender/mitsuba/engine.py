@@ -295,10 +295,8 @@ class MitsubaEngine(Engine):
         if raw:
             out["raw"] = True
         if texture is not None and texture.transformed:
-            # Mitsuba flips v after to_uv (1 - v): conjugate the transform with that flip
-            flip = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, 1.0]])
-            m3 = flip @ texture.uv_matrix() @ flip
-            out["to_uv"] = mitsuba().ScalarTransform3f(m3.tolist())
+            # the rows are flipped above, so Mitsuba's coordinates are omnirender's: the transform applies as is
+            out["to_uv"] = mitsuba().ScalarTransform3f(texture.uv_matrix().tolist())
         return out
 
     def _normal_bitmap(self, texture: Texture, scale: float) -> dict[str, Any]:
@@ -313,7 +311,7 @@ class MitsubaEngine(Engine):
         """``tex.image_array()``; a missing or unreadable image file raises naming the node and the fix."""
         return tex.image_in("MitsubaEngine", self.node_path)
 
-    def current_area_emitter(self, texcoords: bool = True, glow: np.ndarray | None = None) -> Any:
+    def current_area_emitter(self, texcoords: bool = True, glow: np.ndarray | None = None, share: float = 1.0) -> Any:
         """The area emitter of the next shape: its emission plus GL's ambient term, or ``om.mitsuba.Emitter("area")``.
 
         The ambient light every engine adds (GL's global ambient plus the
@@ -321,7 +319,11 @@ class MitsubaEngine(Engine):
         surface itself, as POV-Ray's ``ambient`` and GL's ambient term are: no
         environment lights the scene, so Phong materials reflect their own
         ambient colour and shadowed parts are as bright as in GL.  The emitter
-        is sampled rarely (``sampling_weight``), so the lights keep the samples.
+        is sampled rarely (``sampling_weight``), so the lights keep the samples;
+        ``share`` is the fraction of a vertex-coloured mesh this group of faces
+        is (its emitters together keep one emitter's weight: many groups
+        each with the full weight took the samples from the lights, speckling
+        the surface).
         """
         areas = [e for e in self.poly(Emitter) if e.is_area]
         if areas:
@@ -337,9 +339,8 @@ class MitsubaEngine(Engine):
                 return None
             self.has_area_emitters = True
             radiance = convert.rgb(value, linearize=False)
-            return self.instantiate(
-                {"type": "area", "radiance": radiance, "sampling_weight": AMBIENT_SAMPLING_WEIGHT}, "area emitter"
-            )
+            weight = AMBIENT_SAMPLING_WEIGHT * max(float(share), 1e-6)
+            return self.instantiate({"type": "area", "radiance": radiance, "sampling_weight": weight}, "area emitter")
         key = ("emitter", self._appearance_key(texcoords))
         plugin = self._bsdfs.get(key, _MISSING)
         if plugin is _MISSING:

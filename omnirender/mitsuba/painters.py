@@ -249,7 +249,7 @@ class TriangleSetPainter(ShapePainter):
                     texcoords=None if texcoords is None else texcoords[keep],
                     colors=linear[keep],
                     bsdf=bsdf,
-                    emitter=engine.current_area_emitter(uv, glow=glow[keep]),
+                    emitter=engine.current_area_emitter(uv, glow=glow[keep], share=len(group) / len(faces)),
                 )
             return
         name = engine.unique_name("mesh")

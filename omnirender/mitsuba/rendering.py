@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.environment import shown_background
 from ..core.camera import Camera
 from ..image import Image, develop
 from ..options import SizeLimits, check_image_size, check_integer, check_real
@@ -85,7 +86,7 @@ def render(
     premultiplied = bool(chosen.get("hide_emitters", False)) or not engine.has_environment()
     hdr = np.concatenate([data[:, :, :3], alpha[..., None]], axis=2)
     camera, _ = engine.camera_or_default()
-    image = develop(hdr, background=engine.background, premultiplied=premultiplied)
+    image = develop(hdr, background=shown_background(engine.background), premultiplied=premultiplied)
     dmap = eye_depth(hits[:, :, 4 if hits.shape[2] > 4 else 0], alpha, camera, size) if depth else None
     info = {
         "spp": spp,
@@ -96,7 +97,7 @@ def render(
         "coverage_seconds": time.perf_counter() - t2,
         "shapes": len(engine.shapes),
     }
-    return Image(image, depth=dmap, hdr=hdr, engine="mitsuba", info=info)
+    return Image(image, depth=dmap, hdr=hdr, engine="mitsuba", info=info, coverage=alpha)
 
 
 def _render(mi_scene: Any, spp: int, seed: int, progress: bool | None, size: tuple[int, int]) -> np.ndarray:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.environment import shown_background
 from ..fileio import atomic_path
 from ..image import Image
 from ..options import SizeLimits, check_image_size, check_timeout
@@ -133,11 +134,8 @@ def _locate_error(exc: POVRayError, texts: dict[str, str], keep: Any) -> None:
     exc.args = (message,)
 
 
-def _background(engine: POVRayEngine) -> np.ndarray | None:
-    bg = engine.background
-    if bg is None:
-        return None
-    c = np.asarray(bg.color, dtype=np.float64)
+def _background(engine: POVRayEngine) -> np.ndarray:
+    c = np.asarray(shown_background(engine.background), dtype=np.float64)
     return np.array([*c[:3], c[3] if len(c) > 3 else 1.0])
 
 
@@ -254,8 +252,9 @@ def render(
         render_seconds = time.perf_counter() - t0
     if array.shape[:2] != (h, w):
         raise POVRayError(f"POV-Ray wrote a {array.shape[1]}x{array.shape[0]} image, expected {w}x{h}")
+    cover = array[:, :, 3].astype(np.float32) / 255.0
     bg = _background(engine)
-    if bg is not None and bg[3] > 0:
+    if bg[3] > 0:
         # straight-alpha "over": the objects over the background colour
         alpha = array[:, :, 3:4].astype(np.float64) / 255.0
         bg_rgb = np.clip(bg[:3], 0.0, 1.0) * 255.0
@@ -269,4 +268,4 @@ def render(
         "antialias": bool(antialias),
         "objects": len(engine.objects),
     }
-    return Image(array, depth=depth_map, engine="povray", info=info)
+    return Image(array, depth=depth_map, engine="povray", info=info, coverage=cover)

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..attributes.photometry import srgb_to_linear
-from ..attributes.surface import Appearance, appearance_key, engine_appearance
+from ..attributes.surface import Appearance, appearance_key, engine_appearance, vertex_rgba
 from ..attributes.texturing import bake_layers, channel_mean, luminance, normal_to_height, scaled_image
 from . import sdl
 from .attributes import Finish, Normal, Pigment
@@ -150,9 +150,12 @@ def _texture_body(engine: Any, app: Appearance, uv: bool) -> str:
     lit = " ".join(p for p in (pigment, normal, _finish_text(engine, items)) if p)
     if not emissive:
         return lit
-    glow = _image_file(engine, app.emissive_texture, np.append(_rgb_display(app.emission), 1.0), "emissive")
+    et = app.emissive_texture
+    glow = _image_file(engine, et, np.append(_rgb_display(app.emission), 1.0), "emissive")
+    once = " once" if _clamps(et) else ""
     self_lit = (
-        f"pigment {{ uv_mapping image_map {{ png {sdl.file_name(glow)} interpolate 2 }} }} "
+        f"pigment {{ uv_mapping image_map {{ png {sdl.file_name(glow)}{_interpolation(et)}{once} }}"
+        f"{_uv_transform(et, engine)} }} "
         "finish { ambient 0 diffuse 0 emission 2 }"
     )
     return f"average texture_map {{ [1 {lit}] [1 {self_lit}] }}"
@@ -168,11 +171,14 @@ def _cut_out(engine: Any, app: Appearance) -> str:
 
     tex = app.texture
     alpha = tex.image_in("POV-Ray", engine.node_path)[:, :, 3].astype(np.float64) / 255.0 * app.alpha
-    mask = np.where(alpha >= app.alpha_cutoff, 255, 0).astype(np.uint8)
-    name = engine.resource(("mask", id(tex), tex.version, app.alpha_cutoff), np.repeat(mask[:, :, None], 3, 2), ".png")
+    mask = np.repeat(np.where(alpha >= app.alpha_cutoff, 255, 0).astype(np.uint8)[:, :, None], 3, 2)
+    clamp = _clamps(tex)
+    name = engine.resource(
+        ("mask", id(tex), tex.version, app.alpha_cutoff), _clamp_padded(mask) if clamp else mask, ".png"
+    )
     opaque = _texture_body(engine, replace(app, alpha_mode="opaque"), True)
-    once = " once" if tex.wrap == "clamp" else ""
-    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)}{once} }}{_uv_transform(tex)}"
+    once = " once" if clamp else ""
+    pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)}{once} }}{_uv_transform(tex, engine)}"
     return f"{pattern} texture_map {{ [0.5 {_CLEAR}] [0.5 {opaque}] }}"
 
 
@@ -213,14 +219,8 @@ def finish_name(engine: Any) -> str:
 
 
 def vertex_colors(engine: Any, colors: np.ndarray) -> np.ndarray:
-    """Linear RGBA per-vertex colours as the appearance model applies them (replace or multiply the base)."""
-    lin = np.asarray(colors, dtype=np.float64).copy()
-    lin[:, :3] = srgb_to_linear(lin[:, :3])
-    app = engine_appearance(engine, texcoords=False)
-    if app.vertex_colors == "multiply":
-        lin[:, :3] *= np.asarray(app.base)
-        lin[:, 3] *= app.alpha if app.alpha_mode == "blend" else 1.0
-    return lin
+    """Linear RGBA per-vertex colours as the appearance model applies them (``surface.vertex_rgba``)."""
+    return vertex_rgba(engine_appearance(engine, texcoords=False), colors)
 
 
 def _normal(engine: Any, app: Appearance, uv: bool) -> str:
@@ -258,7 +258,8 @@ def _image_file(
             f"POV-Ray: the Texture image {path!r} in node {engine.node_path or '/'} does not exist; "
             "check the path or pass an array (om.Texture(numpy_array))"
         )
-    plain = not layers and mode == "blend" and np.allclose(factor, 1.0, atol=1e-6)
+    clamp = _clamps(texture, layers)
+    plain = not layers and mode == "blend" and np.allclose(factor, 1.0, atol=1e-6) and not clamp
     if plain and path is not None and _suffix(path) != "":
         return engine.resource(("path", path), path, suffix=_suffix(path))
     key = (role, id(texture), getattr(texture, "version", 0), tuple(np.round(factor, 6)), mode, cutoff)
@@ -275,6 +276,8 @@ def _image_file(
             image[:, :, 3] = np.where(image[:, :, 3] >= 255 * cutoff, 255, 0)
         else:
             image[:, :, 3] = 255
+    if clamp:
+        image = _clamp_padded(image)
     return engine.resource(key, image, ".png")
 
 
@@ -284,18 +287,54 @@ def _image_pigment(engine: Any, app: Appearance, base: np.ndarray) -> str:
     mode = app.alpha_mode if app.model == "pbr" else "blend"
     name = _image_file(engine, tex, factor, "base", app.layers, mode, app.alpha_cutoff)
     kind = {".png": "png", ".jpg": "jpeg", ".jpeg": "jpeg", ".tga": "tga"}[_suffix(name)]
-    filt = tex.filter if tex is not None else "linear"
-    interpolate = " interpolate 2" if filt == "linear" else ""
-    once = " once" if tex is not None and tex.wrap == "clamp" and not app.layers else ""
-    transform = _uv_transform(tex) if tex is not None and not app.layers else ""
+    interpolate = _interpolation(tex)
+    once = " once" if _clamps(tex, app.layers) else ""
+    transform = _uv_transform(tex, engine) if tex is not None and not app.layers else ""
     return f"pigment {{ uv_mapping image_map {{ {kind} {sdl.file_name(name)}{interpolate}{once} }}{transform} }}"
 
 
-def _uv_transform(texture: Any) -> str:
-    """POV-Ray's pattern transform for a texture transform (the pattern maps the looked-up coordinates back)."""
-    if not texture.transformed:
+def _interpolation(texture: Any) -> str:
+    """POV-Ray's image interpolation for the texture's filter (bilinear, or none for ``"nearest"``)."""
+    return " interpolate 2" if texture is None or texture.filter == "linear" else ""
+
+
+#: A clamped texture's image is extended by this fraction of its size on every side with its edge texels
+#: (POV-Ray's ``once`` leaves the outside transparent; OpenGL's CLAMP_TO_EDGE repeats the edge), at most
+#: CLAMP_PAD_PIXELS texels: looked-up coordinates in [-1, 2] show the edge, as in every other engine.
+CLAMP_PAD = 1.0
+CLAMP_PAD_PIXELS = 1024
+
+
+def _clamps(texture: Any, layers: tuple = ()) -> bool:
+    return texture is not None and texture.wrap == "clamp" and not layers
+
+
+def _pad(size: int) -> int:
+    return min(int(round(size * CLAMP_PAD)), CLAMP_PAD_PIXELS)
+
+
+def _clamp_padded(image: np.ndarray) -> np.ndarray:
+    """The image with :func:`_pad` edge texels added on every side."""
+    h, w = image.shape[:2]
+    return np.pad(image, ((_pad(h), _pad(h)), (_pad(w), _pad(w)), (0, 0)), mode="edge")
+
+
+def _uv_transform(texture: Any, engine: Any = None) -> str:
+    """POV-Ray's pattern transform for a texture transform (the pattern maps the looked-up coordinates back).
+
+    A clamped texture's image is padded (:func:`_clamp_padded`): the looked-up coordinates are mapped into
+    the padded image too.
+    """
+    m = texture.uv_matrix()
+    if texture.wrap == "clamp" and engine is not None:
+        h, w = texture.image_in("POV-Ray", engine.node_path).shape[:2]
+        ph, pw = _pad(h), _pad(w)
+        into = np.array([[w / (w + 2 * pw), 0.0, pw / (w + 2 * pw)], [0.0, h / (h + 2 * ph), ph / (h + 2 * ph)],
+                         [0.0, 0.0, 1.0]])  # fmt: skip
+        m = into @ m
+    elif not texture.transformed:
         return ""
-    m = np.linalg.inv(texture.uv_matrix())
+    m = np.linalg.inv(m)
     full = np.eye(4)
     full[:2, :2], full[:2, 3] = m[:2, :2], m[:2, 2]
     return " " + sdl.matrix(full)

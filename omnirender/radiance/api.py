@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes.environment import shown_background
 from ..attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from ..fileio import atomic_path
 from ..image import Image, develop
@@ -154,7 +155,7 @@ def render(
     the scene like the GL engine.  ``exposure`` scales the radiance before
     it is encoded as sRGB (for scenes in physical units, e.g. ``1 / L`` under
     a sky of radiance ``L``); ``.hdr`` keeps the physical values.  The image has sRGB in ``.array`` (the
-    background transparent unless an ``om.Background`` sets it), linear
+    background the scene's ``om.Background`` or the shared default), linear
     radiance (W/sr/m^2, premultiplied by coverage) and alpha in ``.hdr`` and
     the eye-space depth in ``.depth`` (inf on the background).
     """
@@ -192,7 +193,7 @@ def render(
     radiance, rot, through = _passes(scene, engine, view, args, deadline, progress, keep, timings, engine_options)
     hdr, depth = _film(engine, radiance, rot, through, k)
     shown = hdr if exposure == 1.0 else np.concatenate([hdr[:, :, :3] * float(exposure), hdr[:, :, 3:]], axis=2)
-    array = develop(shown, None if engine.background is None else engine.background.color)
+    array = develop(shown, shown_background(engine.background))
     info = {
         **timings,
         "oversample": k,
@@ -200,7 +201,7 @@ def render(
         "pictures": len(engine.pictures),
         "options": " ".join(chosen.arguments()),
     }
-    return Image(array, depth=depth, hdr=hdr, engine="radiance", info=info)
+    return Image(array, depth=depth, hdr=hdr, engine="radiance", info=info, coverage=hdr[:, :, 3])
 
 
 def _passes(

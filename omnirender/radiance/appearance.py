@@ -28,7 +28,7 @@ Each distinct combination is written once and shared by the shapes using it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -175,10 +175,15 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
             sink,
         )
     else:
-        look = resolve_look(material, color, vertex)
+        # emission as the appearance model resolves it (emissive strength included), modulated by the
+        # emissive texture where the surface has texture coordinates
+        look = replace(resolve_look(material, color, vertex), emission=_rgb(resolved.emission))
+        glow_pattern = "void"
+        if uv and resolved.emissive_texture is not None and max(look.emission) > 0.0 and not engine.coverage:
+            glow_pattern = _texture_pattern(engine, resolved.emissive_texture, sink)
         if engine.coverage:  # black and unlit: only what the surface lets through counts
             look = Look("plastic", (0.0, 0.0, 0.0), 0.0, 0.0, look.opacity, (0.0, 0.0, 0.0))
-        ident = _look_chain(engine, look, pattern, key, sink)
+        ident = _look_chain(engine, look, pattern, key, sink, glow_pattern)
     if texture is not None and resolved.alpha_mode != "opaque" and _texture_image(engine, texture)[:, :, 3].min() < 255:
         cutoff = resolved.alpha_cutoff if resolved.alpha_mode == "mask" else None
         ident = _alpha_cutout(engine, texture, ident, key, sink, cutoff)
@@ -186,20 +191,22 @@ def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: li
     return ident
 
 
-def _look_chain(engine: Any, look: Look, pattern: str, key: Any, sink: list[str] | None) -> str:
+def _look_chain(
+    engine: Any, look: Look, pattern: str, key: Any, sink: list[str] | None, glow_pattern: str = "void"
+) -> str:
     owner = engine.owner()
     emits = max(look.emission) > 0.0
     reflects = max(look.rgb) > 0.0 or look.spec > 0.0
     if emits and not reflects:
         ident = engine.declare(
-            ("glow", key), "m", lambda i: rad.primitive("void", "glow", i, (), [*look.emission, 0]), sink
+            ("glow", key), "m", lambda i: rad.primitive(glow_pattern, "glow", i, (), [*look.emission, 0]), sink
         )
     elif emits:
         w = EMISSION_WEIGHT
         glow = engine.declare(
             ("glow", key),
             "m",
-            lambda i: rad.primitive("void", "glow", i, (), [*(e / w for e in look.emission), 0]),
+            lambda i: rad.primitive(glow_pattern, "glow", i, (), [*(e / w for e in look.emission), 0]),
             sink,
         )
         body = engine.declare(
@@ -245,8 +252,13 @@ def _uv_expressions(texture: Texture, image: np.ndarray) -> tuple[str, str]:
     h, w = image.shape[:2]
     short = float(min(w, h))
     wrap = WRAP[texture.wrap]
-    u = wrap.format(c="Lu") + f"*{rad.number(w / short)}"
-    v = wrap.format(c="Lv") + f"*{rad.number(h / short)}"
+    cu, cv = "Lu", "Lv"
+    if texture.transformed:  # the texture transform (glTF's KHR_texture_transform) before the wrap
+        (a, b, c), (d, e, f) = texture.uv_matrix()[:2].tolist()
+        n = rad.number
+        cu, cv = f"({n(a)}*Lu+{n(b)}*Lv+{n(c)})", f"({n(d)}*Lu+{n(e)}*Lv+{n(f)})"
+    u = wrap.format(c=cu) + f"*{rad.number(w / short)}"
+    v = wrap.format(c=cv) + f"*{rad.number(h / short)}"
     return u, v
 
 

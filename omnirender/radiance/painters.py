@@ -23,8 +23,9 @@ import numpy as np
 
 from ..attributes import Background, ClipPlane, DrawStyle, Fog, LightSource
 from ..attributes.environment import is_scene_background
+from ..attributes.photometry import linear_to_srgb
 from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
-from ..attributes.surface import engine_appearance, track_surfaces
+from ..attributes.surface import engine_appearance, track_surfaces, vertex_rgba
 from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..geometry.pixels import pixel_size
@@ -287,8 +288,9 @@ class TriangleSetPainter(ShapePainter):
 
 
 def _textured(engine: RadianceEngine) -> bool:
-    """Whether the appearance has a base colour texture (an ``om.Texture`` or a PBR material's)."""
-    return engine_appearance(engine).texture is not None
+    """Whether the appearance samples a texture Radiance draws (base colour, an ``om.Texture``, emissive)."""
+    app = engine_appearance(engine)
+    return app.texture is not None or app.emissive_texture is not None
 
 
 def _appearance_key(engine: RadianceEngine) -> tuple:
@@ -333,7 +335,11 @@ def _mesh_obj(
     if not with_colors:
         return obj_text(vertices, faces, normals, texcoords, owner=engine.owner()), None
     materials: list[str] = []
-    unique, groups = face_colors(colors, faces)
+    # the appearance model's vertex colours (multiplied into a PBR base, alpha by the alpha mode), as display
+    # values: the look of each face replaces the base colour with them
+    rgba = vertex_rgba(engine_appearance(engine, texcoords=textured), colors)
+    rgba[:, :3] = linear_to_srgb(rgba[:, :3])
+    unique, groups = face_colors(rgba, faces)
     names = [modifier(engine, uv=textured, vertex_rgba=c, sink=materials) for c in unique]
     return obj_text(vertices, faces, normals, texcoords, groups, names, engine.owner()), "".join(materials)
 

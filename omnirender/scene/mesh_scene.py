@@ -2,7 +2,9 @@
 
 Trimesh and PyVista users expect to point a viewer at a mesh file; a mesh
 has no camera or lights, so :func:`mesh_scene` adds a camera fitted to the
-mesh's bounds and the default key, fill and back lights placed for it.
+mesh's bounds and the default key, fill and back lights placed for it.  A
+glTF file with a camera is shown as ``om.load_gltf`` reads it: through its
+camera, lit by its lights (or by the default lights placed for that camera).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from ..core.camera import Camera
 from ..shapes.files import mesh_suffixes
 from .node import Node
 
-__all__ = ["mesh_scene", "mesh_suffixes"]
+__all__ = ["mesh_scene", "mesh_suffixes", "framed"]
 
 
 def mesh_scene(
@@ -42,6 +44,10 @@ def mesh_scene(
     from ..shapes import MeshFile
     from ..techniques import bounds
 
+    if isinstance(mesh, (str, os.PathLike)) and str(mesh).lower().endswith((".glb", ".gltf")):
+        kept = _gltf_scene(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
+        if kept is not None:
+            return kept
     shape = MeshFile(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
     shape.load()
     name = Path(os.fspath(mesh)).stem if isinstance(mesh, (str, os.PathLike)) else "mesh"
@@ -52,6 +58,48 @@ def mesh_scene(
     camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
     eye_to_world = np.linalg.inv(camera.view_matrix())
     return Node("scene", [camera, *default_lights(eye_to_world), body])
+
+
+def _gltf_scene(path: str | os.PathLike[str], **policy: Any) -> Node | None:
+    """A glTF file with a camera as ``om.load_gltf`` reads it: its camera, its lights (default lights placed
+    for its camera when it has none); None when it has no camera (then it is framed like any mesh)."""
+    from ..attributes.lights import default_lights
+    from .readers import scene_reader
+
+    load_gltf = scene_reader(path)  # the registered glTF importer (formats/ registers it)
+    if load_gltf is None:
+        return None
+    scene = load_gltf(path, animation=None, **policy)  # trusted, allowed_roots, strict
+    declared = scene.declarations()
+    if declared.camera is None:
+        return None
+    if declared.lights:
+        return scene
+    camera, world = declared.camera
+    eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    return Node("scene", [*default_lights(eye_to_world), scene])
+
+
+def framed(scene: Node, aspect: float = 4 / 3) -> Node:
+    """``scene`` as the command line shows a file: its own camera and lights, else a camera fitted to its
+    bounds (as :func:`mesh_scene` places it) and default lights placed for the camera."""
+    from ..attributes.lights import default_lights
+    from ..techniques import bounds
+
+    declared = scene.declarations()
+    if declared.camera is not None and declared.lights:
+        return scene
+    if declared.camera is None:
+        box = bounds(scene)
+        if box is None:
+            raise ValueError(f"{scene.name}: nothing to look at")
+        camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
+        eye_to_world = np.linalg.inv(camera.view_matrix())
+        lights = [] if declared.lights else default_lights(eye_to_world)
+        return Node("scene", [camera, *lights, scene])
+    camera, world = declared.camera
+    eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
+    return Node("scene", [*default_lights(eye_to_world), scene])
 
 
 def _node_name(stem: str) -> str:

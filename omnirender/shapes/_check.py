@@ -169,13 +169,14 @@ def colors(owner: str, name: str, value: Any, count: int) -> np.ndarray | None:
 def normals(owner: str, name: str, value: Any, count: int) -> np.ndarray:
     """Per-vertex normals as a read-only (count, 3) float32 array of unit vectors; zero-length ones are refused."""
     n = float_array(owner, name, value, (3,), count=count)
-    length = np.sqrt(np.einsum("ij,ij->i", n.astype(np.float64), n.astype(np.float64)))
+    length = np.sqrt(np.einsum("ij,ij->i", n, n, dtype=np.float64))  # float64 sums, no float64 copies of n
     if length.size and length.min() < 1e-12:
         bad = int(np.argmin(length))
         raise ValueError(
             f"{owner}: {name} must have non-zero length (row {bad} is {n[bad].tolist()}); give a direction, "
             "or normals=None to compute smooth normals"
         )
-    out = (n / length[:, None]).astype(np.float32)
+    out = n * (1.0 / length).astype(np.float32)[:, None] if n.dtype == np.float32 else (n / length[:, None])
+    out = out.astype(np.float32, copy=False)
     out.setflags(write=False)
     return out

@@ -322,3 +322,23 @@ def test_18_portal(tmp_path):
     assert (monitor[..., 0].astype(int) - monitor[..., 1] > 60).sum() > 30
     ball = img[275:355, 318:400].astype(int)  # the glass ball: the torus and the portal's lawn refracted
     assert (ball[..., 0] - ball[..., 1] > 60).sum() > 30 and (ball[..., 1] - ball[..., 0] > 30).sum() > 30
+
+
+@pytest.mark.slow
+@pytest.mark.gl
+@pytest.mark.povray
+@pytest.mark.mitsuba
+@pytest.mark.radiance
+def test_19_usd(tmp_path):
+    pytest.importorskip("pxr")
+    from omnirender.formats.usd.writer import validate
+
+    run_example("19_usd.py", tmp_path)
+    img = check_image(tmp_path / "19-usd.png")
+    assert validate(tmp_path / "19-robot-again.usdz") == []
+    panels = (img.shape[1] + 4) // 324
+    assert panels == 4
+    for i in range(panels):  # the robot's orange body in the middle of every engine's picture
+        body = img[95:120, i * 324 + 150 : i * 324 + 170]
+        orange = (body[..., 0] > 150) & (body[..., 1] < 150) & (body[..., 2] < 90)
+        assert orange.mean() > 0.5, i

@@ -16,12 +16,10 @@ import omnirender.gl as gl
 
 GL = pathlib.Path(gl.__file__).parent
 
-#: edges from the engine to a technique that the frame stages (issue 22, step 3) remove; none may be added
+#: edges from the engine to a technique that are still to go (the compiler reads the deferred pipeline's material
+#: descriptions); none may be added
 KNOWN_INWARD = {
     ("omnirender.gl.engine.compiler", "omnirender.gl.deferred.models"),
-    ("omnirender.gl.engine.frame", "omnirender.gl.techniques.mirrors"),
-    ("omnirender.gl.engine.frame", "omnirender.gl.techniques.shadows"),
-    ("omnirender.gl.engine.drawer", "omnirender.gl.techniques.shadows"),
 }
 
 

@@ -64,6 +64,7 @@ def test_colours_lights_and_background():
 def test_transparent_background_and_mask():
     s = om.Node("s")
     s.add(om.Camera.look_at(eye=(0, 0, 5), fov=40))
+    s.add(om.Background((0, 0, 0, 0)))
     s.add(om.Sphere(radius=1))
     img = _render(s)
     assert img.pixel(0, 0)[3] == 0 and img.mask[50, 80] and not img.mask[0, 0]
@@ -205,8 +206,8 @@ def test_every_conversion_parses_and_renders():
     img = _render(s, size=(64, 48), antialias=True)
     # clipped sphere: nothing of it above y = 0.5 + 1 - its cap; the top of the image is fog-coloured background
     assert img.mask.mean() > 0.3
-    top = img.pixel(32, 1)
-    assert top[3] == 0  # the background stays transparent (no om.Background)
+    assert not img.mask[1, 32]  # the background is not fogged into the mask
+    assert img.pixel(32, 1)[3] == 255  # the shared default background (no om.Background)
 
 
 @pytest.mark.parametrize("ortho", [False, True], ids=["perspective", "orthographic"])

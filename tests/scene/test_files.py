@@ -303,7 +303,7 @@ def _doc(*contents) -> str:
         (_doc({"node": "a/b"}), r"root.contents\[0\].node", "name"),
         (_doc({"node": "a", "groups": "g"}), r"root.contents\[0\].groups", "list of group names"),
         (_doc({"type": "nosuchpkg.Thing"}), r"root.contents\[0\].type", "no omnirender package 'nosuchpkg'"),
-        (_doc({"type": "export.Thing"}), r"root.contents\[0\].type", "defines no component 'Thing'"),
+        (_doc({"type": "formats.Thing"}), r"root.contents\[0\].type", "defines no component 'Thing'"),
         (_doc({"type": "../evil"}), r"root.contents\[0\].type", "invalid type name"),
         (_doc({"type": "MeshFile", "path": "missing.obj"}), r"root.contents\[0\].path", "no such file"),
         (

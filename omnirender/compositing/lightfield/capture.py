@@ -71,7 +71,8 @@ def capture_light_field(
     ``om.Camera`` s in world coordinates); ``engine`` must give images with
     depth (``"gl"``, ``"mitsuba"``); other ``options`` go to ``om.render``.  GL
     views are rendered over transparent black (colour premultiplied by
-    coverage); images of other engines (straight alpha) are premultiplied.
+    coverage); images of other engines, rendered with a transparent
+    ``om.Background`` (straight alpha), are premultiplied.
     """
     from ...render import render
     from ...scene.node import Node
@@ -85,7 +86,12 @@ def capture_light_field(
     if engine == "gl":
         images = _gl_images(scene, cameras, size, options)
     else:
-        images = (render(Node.transient([camera, scene]), engine=engine, size=size, **options) for camera in cameras)
+        from ...attributes.environment import Background
+
+        clear = Background((0.0, 0.0, 0.0, 0.0))  # declared first: it wins over the scene's own
+        images = (
+            render(Node.transient([camera, clear, scene]), engine=engine, size=size, **options) for camera in cameras
+        )
     views = []
     for camera, image in zip(cameras, images, strict=False):
         if image.depth is None:

@@ -30,13 +30,25 @@ from typing import Any
 
 import numpy as np
 
-from ..engine.attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
-from ..engine.context import clear_stencil_bits, frame_has_stencil, sample_positions, set_masks, sharing_depth
+from ..engine.attributes import (
+    Blend,
+    ColorMask,
+    CullFace,
+    DepthClamp,
+    DepthMask,
+    DepthTest,
+    ScissorTest,
+    StencilOp,
+    StencilTest,
+)
+from ..engine.context import clear_stencil_value, frame_has_stencil, sample_positions, sharing_depth
 from ..engine.drawlist import DrawItem
+from ..engine.glenum import GL_SAMPLES
 from ..engine.layout import ROW
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.state import FillMode, MirrorState
 from ..engine.technique import GLTechnique
+from ..engine.units import MATERIAL_TABLE
 from ..techniques.forward import Forward
 from ..techniques.shadows import ATLAS
 from .glsl import (
@@ -55,17 +67,15 @@ from .proxies import ATTRIBUTES, FULLSCREEN, STRIDE, LightTable, proxy_meshes
 
 __all__ = ["Deferred", "DeferredRenderer", "in_gbuffer", "TABLE_UNIT"]
 
-#: Texture unit of the material table in the geometry pass (units 0-7 materials, 8 shadows, 9+ pass inputs).
-TABLE_UNIT = 15
+#: Texture unit of the material table in the geometry pass (the table of units: ``engine/units.py``).
+TABLE_UNIT = MATERIAL_TABLE
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _SHADED_KINDS = ("mesh", "points")
 #: GL state kinds an item may set and still go through the G-buffer (the rest keep it in the forward passes).
 _REJECTING = (Blend, ColorMask, DepthMask, DepthTest, StencilTest, StencilOp)
-_GL_SAMPLES = 0x80A9
 #: Stencil bits the pipeline marks in the frame for the lighting and shading passes (cleared after shading):
 #: where the G-buffer's surface is the one seen, and pixels whose samples are lit one by one (edges).
 _WON, _EDGE = 0x40, 0x80
-_GL_DEPTH_CLAMP = 0x864F
 
 
 def _inline(technique: Any) -> bool:
@@ -112,20 +122,31 @@ class Deferred(GLTechnique):
     """
 
     __slots__ = ("light_format",)
-    PASS_NAMES = ("geometry", "lighting", "shading", "opaque", "transparent", "transparent depth", "overlay")
+    #: The passes of a deferred frame, in order, as data (like ``Forward.PASSES``): the G-buffer, lighting,
+    #: shading and forward-opaque passes are described per frame by the :class:`DeferredRenderer` method
+    #: named here (they depend on the frame's buffer layout and samples), the rest are ``Forward``'s passes
+    #: for what the G-buffer does not hold.
+    PASSES: tuple[tuple[str, str | Pass], ...] = (
+        ("geometry", "geometry_pass"),
+        ("lighting", "lighting_pass"),
+        ("shading", "shading_pass"),
+        ("opaque", "forward_opaque_pass"),
+        *((p.name, p) for p in Forward.PASSES[1:]),
+    )
+    PASS_NAMES = tuple(name for name, _ in PASSES)
 
     def __init__(self, light_format: str = "f2") -> None:
-        super().__init__(passes=len(self.PASS_NAMES))
+        super().__init__(passes=len(self.PASSES))
         if light_format not in LIGHT_FORMATS:
             raise ValueError(f"Deferred: light_format must be one of {LIGHT_FORMATS}, got {light_format!r}")
         #: the L-buffer's texel format: "f2" (half floats) or "r11g11b10f" (compact: 16 bytes per Phong pixel)
         self.light_format = light_format
 
+    def start(self, engine: Any) -> None:
+        DeferredRenderer.of(engine).begin(engine, self)
+
     def prepare_pass(self, engine: Any) -> None:
-        renderer = DeferredRenderer.of(engine)
-        if engine.current_pass == 0:
-            renderer.update(engine, self)
-        engine.set_pass(renderer.describe_pass(self, engine, engine.current_pass))
+        engine.set_pass(DeferredRenderer.of(engine).describe_pass(self, engine, engine.current_pass))
 
 
 class DeferredRenderer:
@@ -202,48 +223,60 @@ class DeferredRenderer:
         self._fog_uniforms = {"u_fogs": tuple(table.ravel().tolist()), "u_fog_colors": tuple(colors.ravel().tolist())}
         self._passes.clear()
 
+    def begin(self, engine: Any, technique: Deferred) -> None:
+        """A run of ``technique`` starts: the frame's models and fogs, each new model compiled once, the
+        material table bound for the geometry pass."""
+        self.update(engine, technique)
+        self._check_models(engine)
+        engine.material_table.texture(engine.ctx).use(TABLE_UNIT)
+
     def describe_pass(self, technique: Deferred, engine: Any, index: int) -> Pass:
-        """The description of pass ``index`` of ``technique`` in this frame."""
+        """The description of pass ``index`` of ``technique`` in this frame (``Deferred.PASSES[index]``)."""
         frame_level = len(engine.technique_frames) == 1
-        if index == 0:
-            self._check_models(engine)
-            engine.material_table.texture(engine.ctx).use(TABLE_UNIT)
         samples = current_samples(engine)
         key = (index, samples, frame_level)
         found = self._passes.get(key)
         if found is not None:
             return found
-        all_in, others = self._summary if frame_level else (False, True)
-        name = Deferred.PASS_NAMES[index]
-        layout = self.layout
-        assert layout is not None
-        if index == 0:
-            shader = Shader(
-                surface=surface_snippet(layout),
-                vertex=vertex_snippet(layout),
-                uniforms={**self._fog_uniforms, "u_materials": TABLE_UNIT},
-            )
-            made = Pass(
-                name,
-                items="opaque",
-                select=None if all_in else in_gbuffer,
-                scopes="items",
-                target=layout.target(samples),
-                clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0),
-                shader=shader,
-            )
-        elif index == 1:
-            made = Pass(name, items="none", scopes=False, custom=self.lighting)
-        elif index == 2:
-            made = Pass(name, items="none", scopes=False, custom=self.shading)
-        elif index == 3:
-            made = (
-                Pass(name, items="opaque", select=forward_drawn) if others else Pass(name, items="none", scopes=False)
-            )
+        name, how = technique.PASSES[index]
+        if isinstance(how, Pass):
+            made = how
         else:
-            made = Forward.PASSES[index - 3]
+            all_in, others = self._summary if frame_level else (False, True)
+            made = getattr(self, how)(name, samples, all_in, others)
         self._passes[key] = made
         return made
+
+    def geometry_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The G-buffer pass: the opaque items the G-buffer holds (every item below, nested scopes' too)."""
+        layout = self.layout
+        assert layout is not None
+        shader = Shader(
+            surface=surface_snippet(layout),
+            vertex=vertex_snippet(layout),
+            uniforms={**self._fog_uniforms, "u_materials": TABLE_UNIT},
+        )
+        return Pass(
+            name,
+            items="opaque",
+            select=None if all_in else in_gbuffer,
+            scopes="items",
+            target=layout.target(samples),
+            clear=Clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0),
+            shader=shader,
+        )
+
+    def lighting_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The light proxies into the L-buffer (:meth:`lighting`)."""
+        return Pass(name, items="none", scopes=False, custom=self.lighting)
+
+    def shading_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The full-screen shading of the G- and L-buffers into the frame (:meth:`shading`)."""
+        return Pass(name, items="none", scopes=False, custom=self.shading)
+
+    def forward_opaque_pass(self, name: str, samples: int, all_in: bool, others: bool) -> Pass:
+        """The opaque items the G-buffer does not hold, drawn forward (nothing when it holds them all)."""
+        return Pass(name, items="opaque", select=forward_drawn) if others else Pass(name, items="none", scopes=False)
 
     def _check_models(self, engine: Any) -> None:
         """Compile each new model's stages once, before any frame uses them: errors name model, stage and line."""
@@ -378,7 +411,7 @@ class DeferredRenderer:
         assert layout is not None
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
-        engine.reset_gl_state()
+        engine.default_gl_state()
         stencil = frame_has_stencil(engine.raw)
         if samples > 1:
             self._fit(engine, samples)  # the sample positions are those of the frame bound now
@@ -398,12 +431,12 @@ class DeferredRenderer:
         frame = engine.current_framebuffer
         shared = self._shared(engine, gbuffer, frame)
         fbo = shared[0] if shared is not None else self._plain_light_fbo(engine, gbuffer)
-        fbo.use()
-        engine.ctx.viewport = (0, 0, *gbuffer.size)
+        size = engine.target_size
+        engine.bind_framebuffer(fbo, gbuffer.size)
         try:
             calls += self._draw_lights(engine, fbo, depth_test=shared is not None)
         finally:
-            frame.use()
+            engine.bind_framebuffer(frame, size)
         return calls
 
     def _lights_pass(self, engine: Any, draw: Any) -> int:
@@ -416,14 +449,10 @@ class DeferredRenderer:
         ctx = engine.ctx
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
-        engine.reset_gl_state()
-        set_masks(ctx, engine.raw, fbo, color=(True, True, True, True), depth=False)
-        ctx.enable(ctx.BLEND)
-        ctx.blend_func = (ctx.ONE, ctx.ONE)
-        ctx.blend_equation = ctx.FUNC_ADD
-        ctx.cull_face = "front"  # back faces: one fragment per pixel, also with the camera inside the proxy
-        ctx.depth_func = ">="  # the proxy's back face behind the surface: the surface may be inside
-        ctx.enable_direct(_GL_DEPTH_CLAMP)
+        engine.default_gl_state()
+        # lights add up; the proxies' back faces (one fragment per pixel, also with the camera inside a proxy)
+        # behind the surface ("gequal": the surface may be inside), not clipped by the far plane
+        engine.apply_gl_state(DepthMask(False), Blend(True, "one", "one"), DepthClamp(True))
         defines = self._frame_defines(engine)
         plan = engine.frame_shadows
         if plan is not None:
@@ -434,8 +463,8 @@ class DeferredRenderer:
         try:
             for kind, proxy, rows in table.instances(engine.frame_view):
                 fullscreen = proxy == FULLSCREEN
-                (ctx.disable if fullscreen else ctx.enable)(ctx.CULL_FACE)
-                (ctx.enable if depth_test and not fullscreen else ctx.disable)(ctx.DEPTH_TEST)
+                engine.apply_gl_state(CullFace("none" if fullscreen else "front"),
+                                      DepthTest(depth_test and not fullscreen, "gequal"))  # fmt: skip
                 key = ("lighting", layout.key, kind, fullscreen, samples, tuple(sorted(defines.items())))
                 prog = self._program(engine, key, *lighting_program(layout, kind, fullscreen, samples, defines))
                 self._bind_buffers(engine, prog, gbuffer, ambient=False, extra=extra)
@@ -447,8 +476,7 @@ class DeferredRenderer:
                 calls += 1
                 lights += len(rows)
         finally:
-            ctx.disable_direct(_GL_DEPTH_CLAMP)
-            engine.reset_gl_state()
+            engine.default_gl_state()
         engine.count(calls, lights)
         self.stats["lights"] = lights
         return calls
@@ -457,11 +485,8 @@ class DeferredRenderer:
         """Per pixel of a multisampled G-buffer: the centre's depth, whether it is an edge (:func:`pixels_program`)."""
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
-        engine.reset_gl_state()
-        ctx = engine.ctx
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "1"  # always: the pass writes every pixel's nearest depth
-        set_masks(ctx, engine.raw, engine.current_framebuffer, depth=True)
+        engine.default_gl_state()
+        engine.apply_gl_state(DepthTest(True, "always"))  # the pass writes every pixel's nearest depth
         prog = self._program(engine, ("pixels", samples), *pixels_program(samples))
         self._bind_buffers(engine, prog, gbuffer, ambient=False)
         vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
@@ -476,22 +501,17 @@ class DeferredRenderer:
         samples = gbuffer.description.samples
         prog = self._program(engine, ("depth", samples), *depth_program(samples))
         self._bind_buffers(engine, prog, gbuffer, ambient=False)
-        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(False, False, False, False), depth=True)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
+        states = [ColorMask(False, False, False, False), DepthMask(True), DepthTest(True, "less")]
         if stencil:
-            engine.raw.stencil_test(ctx, ("always", _WON, _WON))
-            engine.raw.stencil_op("keep", "keep", "replace", _WON)
+            states += [StencilTest(True, "always", _WON, _WON), StencilOp("keep", "keep", "replace", _WON)]
+        engine.apply_gl_state(*states)
         vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
         draws = range(samples) if samples > 1 else (None,)
         for k in draws:
             _mask_sample(engine, prog, k)
             vao.render(ctx.TRIANGLES, instances=1)
         _mask_sample(engine, prog, None)
-        engine.raw.stencil_test(ctx, None)
-        engine.raw.stencil_op("keep", "keep", "keep", 0xFF)
-        set_masks(ctx, engine.raw, engine.current_framebuffer, color=(True, True, True, True), depth=True)
-        engine.reset_gl_state()
+        engine.default_gl_state()
         engine.count(len(draws), 0)
         return len(draws)
 
@@ -544,24 +564,21 @@ class DeferredRenderer:
         defines = self._frame_defines(engine)
         if engine.linear_output:
             defines["LINEAR_OUTPUT"] = True
-        engine.reset_gl_state()
-        fbo = engine.current_framebuffer
-        set_masks(ctx, engine.raw, fbo, color=(True, True, True, True), depth=False)
+        engine.default_gl_state()
         # The full-screen triangle lies at window depth 0.5: the default depth test ("less") would keep only
         # surfaces behind that depth (all but the nearest under a perspective camera, none under an
         # orthographic one, whose depth is linear).  Where the G-buffer's surface is seen is decided by the
         # stencil marks, the G-buffer depth written by the fragment, or the edge blending below, never by it.
-        ctx.disable(ctx.DEPTH_TEST)
+        states: list[Any] = [DepthMask(False), DepthTest(False)]
         if stencil:  # the depth pass marked the samples where the G-buffer's surface won
             defines["STENCIL_MARKED"] = True
-            engine.raw.stencil_test(ctx, ("equal", _WON, _WON))
+            states.append(StencilTest(True, "equal", _WON, _WON))
         elif samples <= 1:  # where the G-buffer's depth is the frame's
             defines["FRAG_DEPTH"] = True
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = "=="
+            states[1] = DepthTest(True, "equal")
         else:  # edges blend their samples' mean over the samples no surface covers
-            ctx.enable(ctx.BLEND)
-            ctx.blend_func = (ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
+            states.append(Blend(True, "one", "one_minus_src_alpha"))
+        engine.apply_gl_state(*states)
         extra: dict[str, Any] = {}
         if samples > 1:
             extra["u_pixels"] = engine.target(_PIXELS.name).texture("pixel")
@@ -581,10 +598,11 @@ class DeferredRenderer:
             vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
             vao.render(ctx.TRIANGLES, instances=1)
         finally:
-            engine.raw.stencil_test(ctx, None)
-            if stencil:  # the marks go again: the stencil is as the frame had it
-                clear_stencil_bits(engine.raw, _WON)
-            engine.reset_gl_state()
+            engine.apply_gl_state(StencilTest(False))
+            if stencil:  # the marks go again: the stencil is as the frame had it (only those bits cleared)
+                engine.apply_gl_state(ScissorTest(enabled=False), StencilOp(write_mask=_WON))
+                clear_stencil_value(engine.raw, 0)
+            engine.default_gl_state()
         engine.count(1, 0)
         return 1
 
@@ -620,7 +638,6 @@ class DeferredRenderer:
         self._programs.clear()
 
 
-_GL_SAMPLE_MASK = 0x8E51
 #: The per-pixel centre depth and edge flag of a multisampled G-buffer, and the lights of its edge samples.
 _PIXELS = Target("deferred.pixels", colors=("pixel",), formats=("rg32f",), depth=True, relative="enclosing")
 _LIGHTS = "deferred.lights"
@@ -628,14 +645,12 @@ _LIGHTS = "deferred.lights"
 
 def _mask_sample(engine: Any, prog: Any, k: int | None) -> None:
     """Let only sample ``k`` be written and tell ``prog`` which sample it reads (None: one draw, every sample)."""
+    engine.sample_mask(k)
     if k is None:
-        engine.ctx.disable_direct(_GL_SAMPLE_MASK)
         u = prog.get("u_sample", None)
         if u is not None:
             u.value = 0
         return
-    engine.ctx.enable_direct(_GL_SAMPLE_MASK)
-    engine.raw.glSampleMaski(0, 1 << k)
     prog["u_sample"].value = k
 
 
@@ -645,5 +660,5 @@ def current_samples(engine: Any) -> int:
     if not raw.available:
         return 0
     value = ctypes.c_int(0)
-    raw.glGetIntegerv(_GL_SAMPLES, ctypes.byref(value))
+    raw.glGetIntegerv(GL_SAMPLES, ctypes.byref(value))
     return int(value.value) if value.value > 1 else 0

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...core.component import MonoAttribute
+from .glenum import GL_DEPTH_CLAMP
 from .state import GLCalls, StateKind, register_kind
 
 __all__ = [
@@ -155,6 +156,7 @@ class DepthMask(_Switch, GLState):
 
     __slots__ = ("enabled",)
     default = True
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
@@ -259,6 +261,7 @@ class ColorMask(GLState):
 
     __slots__ = ("red", "green", "blue", "alpha")
     default = (True, True, True, True)
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     def __init__(self, red: bool = True, green: bool = True, blue: bool = True, alpha: bool = True) -> None:
         super().__init__()
@@ -339,6 +342,7 @@ class ScissorTest(GLState):
 
     __slots__ = ("enabled", "box")
     default = None
+    framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
 
     def __init__(self, box: tuple[int, int, int, int] = (0, 0, 1, 1), enabled: bool = True) -> None:
         super().__init__()
@@ -414,9 +418,6 @@ class DepthClamp(_Switch, GLState):
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
         if value:
-            gl.ctx.enable_direct(_GL_DEPTH_CLAMP)
+            gl.ctx.enable_direct(GL_DEPTH_CLAMP)
         else:
-            gl.ctx.disable_direct(_GL_DEPTH_CLAMP)
-
-
-_GL_DEPTH_CLAMP = 0x864F
+            gl.ctx.disable_direct(GL_DEPTH_CLAMP)

@@ -10,6 +10,55 @@ import ctypes
 import ctypes.util
 from typing import Any
 
+from .glenum import (
+    GL_ALWAYS,
+    GL_ATTACHMENT_OBJECT_NAME,
+    GL_ATTACHMENT_OBJECT_TYPE,
+    GL_CLAMP_TO_EDGE,
+    GL_COLOR_ATTACHMENT0,
+    GL_COLOR_BUFFER_BIT,
+    GL_DECR,
+    GL_DECR_WRAP,
+    GL_DEPTH24_STENCIL8,
+    GL_DEPTH_ATTACHMENT,
+    GL_DEPTH_BUFFER_BIT,
+    GL_DEPTH_STENCIL,
+    GL_DEPTH_STENCIL_ATTACHMENT,
+    GL_DRAW_FRAMEBUFFER,
+    GL_DRAW_FRAMEBUFFER_BINDING,
+    GL_EQUAL,
+    GL_FRAMEBUFFER,
+    GL_FRAMEBUFFER_BINDING,
+    GL_FRAMEBUFFER_COMPLETE,
+    GL_GEQUAL,
+    GL_GREATER,
+    GL_INCR,
+    GL_INCR_WRAP,
+    GL_INVERT,
+    GL_KEEP,
+    GL_LEQUAL,
+    GL_LESS,
+    GL_NEAREST,
+    GL_NEVER,
+    GL_NOTEQUAL,
+    GL_READ_FRAMEBUFFER,
+    GL_READ_FRAMEBUFFER_BINDING,
+    GL_RENDERBUFFER,
+    GL_REPLACE,
+    GL_SAMPLE_POSITION,
+    GL_SCISSOR_TEST,
+    GL_STENCIL_ATTACHMENT,
+    GL_STENCIL_BUFFER_BIT,
+    GL_STENCIL_TEST,
+    GL_TEXTURE_2D,
+    GL_TEXTURE_2D_MULTISAMPLE,
+    GL_TEXTURE_MAG_FILTER,
+    GL_TEXTURE_MIN_FILTER,
+    GL_TEXTURE_WRAP_S,
+    GL_TEXTURE_WRAP_T,
+    GL_UNSIGNED_INT_24_8,
+)
+
 __all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError"]
 
 
@@ -90,26 +139,25 @@ def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
 
 
 _STENCIL_FUNCS = {
-    "never": 0x0200,
-    "less": 0x0201,
-    "equal": 0x0202,
-    "lequal": 0x0203,
-    "greater": 0x0204,
-    "notequal": 0x0205,
-    "gequal": 0x0206,
-    "always": 0x0207,
+    "never": GL_NEVER,
+    "less": GL_LESS,
+    "equal": GL_EQUAL,
+    "lequal": GL_LEQUAL,
+    "greater": GL_GREATER,
+    "notequal": GL_NOTEQUAL,
+    "gequal": GL_GEQUAL,
+    "always": GL_ALWAYS,
 }
 _STENCIL_OPS = {
-    "keep": 0x1E00,
+    "keep": GL_KEEP,
     "zero": 0,
-    "replace": 0x1E01,
-    "incr": 0x1E02,
-    "decr": 0x1E03,
-    "invert": 0x150A,
-    "incr_wrap": 0x8507,
-    "decr_wrap": 0x8508,
+    "replace": GL_REPLACE,
+    "incr": GL_INCR,
+    "decr": GL_DECR,
+    "invert": GL_INVERT,
+    "incr_wrap": GL_INCR_WRAP,
+    "decr_wrap": GL_DECR_WRAP,
 }
-GL_STENCIL_TEST = 0x0B90
 
 _u, _i, _f, _d, _b = ctypes.c_uint, ctypes.c_int, ctypes.c_float, ctypes.c_double, ctypes.c_ubyte
 _pi, _pu, _pf, _pb = ctypes.POINTER(_i), ctypes.POINTER(_u), ctypes.POINTER(_f), ctypes.POINTER(_b)
@@ -222,16 +270,6 @@ class RawGL:
         self._mask(int(write_mask) & 0xFFFFFFFF)
 
 
-GL_FRAMEBUFFER = 0x8D40
-GL_RENDERBUFFER = 0x8D41
-GL_COLOR_ATTACHMENT0 = 0x8CE0
-GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
-GL_DEPTH24_STENCIL8 = 0x88F0
-GL_FRAMEBUFFER_COMPLETE = 0x8CD5
-GL_STENCIL_BUFFER_BIT = 0x400
-GL_FRAMEBUFFER_BINDING = 0x8CA6
-
-
 def depth_stencil_framebuffer(ctx: Any, raw: RawGL, color: Any, size: tuple[int, int], samples: int) -> Any:
     """A framebuffer with ``color`` (a moderngl renderbuffer) and a 24/8 depth-stencil renderbuffer, or None.
 
@@ -271,13 +309,6 @@ def delete_renderbuffer(raw: RawGL, rbo: int) -> None:
         raw.glDeleteRenderbuffers(1, ctypes.byref(name))
 
 
-GL_TEXTURE_2D = 0x0DE1
-GL_DEPTH_STENCIL = 0x84F9
-GL_UNSIGNED_INT_24_8 = 0x84FA
-GL_NEAREST = 0x2600
-GL_CLAMP_TO_EDGE = 0x812F
-
-
 def depth_stencil_target(ctx: Any, raw: RawGL, colors: list[Any], size: tuple[int, int]) -> tuple | None:
     """A framebuffer of moderngl colour textures and a 24/8 depth-stencil *texture*, or None.
 
@@ -295,8 +326,8 @@ def depth_stencil_target(ctx: Any, raw: RawGL, colors: list[Any], size: tuple[in
     raw.glBindTexture(GL_TEXTURE_2D, tex.value)
     raw.glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH24_STENCIL8, size[0], size[1], 0, GL_DEPTH_STENCIL,
                      GL_UNSIGNED_INT_24_8, None)  # fmt: skip
-    for pname, value in ((0x2801, GL_NEAREST), (0x2800, GL_NEAREST), (0x2802, GL_CLAMP_TO_EDGE),
-                         (0x2803, GL_CLAMP_TO_EDGE)):  # fmt: skip
+    for pname, value in ((GL_TEXTURE_MIN_FILTER, GL_NEAREST), (GL_TEXTURE_MAG_FILTER, GL_NEAREST),
+                         (GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE), (GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE)):  # fmt: skip
         raw.glTexParameteri(GL_TEXTURE_2D, pname, value)
     raw.glBindTexture(GL_TEXTURE_2D, 0)
     raw.glGenFramebuffers(1, ctypes.byref(fbo))
@@ -336,16 +367,24 @@ def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth:
 def clear_stencil_bits(raw: RawGL, bits: int) -> None:
     """Set the stencil ``bits`` of the bound framebuffer to 0, keeping the others (scissor test off)."""
     if raw.available:
-        raw.glDisable(0x0C11)
+        raw.glDisable(GL_SCISSOR_TEST)
         raw._mask(int(bits) & 0xFF)
         raw.glClearStencil(0)
         raw.glClear(GL_STENCIL_BUFFER_BIT)
         raw._mask(0xFF)
 
 
+def clear_stencil_value(raw: RawGL, value: int = 0) -> None:
+    """Clear the stencil buffer of the bound framebuffer to ``value`` under the state set now (write mask, scissor:
+    the caller sets them through the state applier)."""
+    if raw.available:
+        raw.glClearStencil(int(value))
+        raw.glClear(GL_STENCIL_BUFFER_BIT)
+
+
 def clear_depth(raw: RawGL, value: float = 1.0) -> None:
     """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off)."""
-    raw.glDisable(0x0C11)
+    raw.glDisable(GL_SCISSOR_TEST)
     raw.glDepthMask(1)
     raw.glClearDepth(float(value))
     raw.glClear(GL_DEPTH_BUFFER_BIT)
@@ -357,15 +396,6 @@ def clear_stencil(raw: RawGL, value: int = 0) -> None:
         raw._mask(0xFF)
         raw.glClearStencil(int(value))
         raw.glClear(GL_STENCIL_BUFFER_BIT)
-
-
-GL_READ_FRAMEBUFFER = 0x8CA8
-GL_DRAW_FRAMEBUFFER = 0x8CA9
-GL_DRAW_FRAMEBUFFER_BINDING = 0x8CA6
-GL_READ_FRAMEBUFFER_BINDING = 0x8CAA
-GL_COLOR_BUFFER_BIT = 0x4000
-GL_DEPTH_BUFFER_BIT = 0x100
-GL_NEAREST = 0x2600
 
 
 def blit(raw: RawGL, source: Any, target: Any, size: tuple[int, int], color: bool, depth: bool) -> None:
@@ -384,15 +414,6 @@ def blit(raw: RawGL, source: Any, target: Any, size: tuple[int, int], color: boo
     raw.glBlitFramebuffer(0, 0, w, h, 0, 0, w, h, bits, GL_NEAREST)
     raw.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, previous_draw.value)
     raw.glBindFramebuffer(GL_READ_FRAMEBUFFER, previous_read.value)
-
-
-GL_DEPTH_ATTACHMENT = 0x8D00
-GL_STENCIL_ATTACHMENT = 0x8D20
-GL_ATTACHMENT_OBJECT_TYPE = 0x8CD0
-GL_ATTACHMENT_OBJECT_NAME = 0x8CD1
-GL_TEXTURE = 0x1702
-GL_TEXTURE_2D_MULTISAMPLE = 0x9100
-GL_SAMPLE_POSITION = 0x8E50
 
 
 def _attachment(raw: RawGL, point: int) -> tuple[int, int]:

@@ -22,11 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from ..techniques.shadows import ATLAS, SHADOW_UNIT
 from .attributes import Blend, CullFace, DepthMask
 from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, uniform_material
 from .frame_state import FrameState
 from .geometry import Geometry
+from .glenum import GL_RGBA8, GL_SRGB8_ALPHA8, GL_TRIANGLES_ADJACENCY
 from .layout import ROW
 from .lighting import LightUniforms
 from .passes import Composed
@@ -37,12 +37,12 @@ from .resources import gpu_call
 from .shaders import instance_fields
 from .state import LineWidth, ShadowingState, defaults
 from .targets import FrameTargets
+from .units import PASS_INPUTS
 
 __all__ = ["BatchDrawer", "SORT_MIN", "PASS_INPUT_UNIT"]
 
-_GL_CLIP_DISTANCE0 = 0x3000
-#: First texture unit of a pass's Shader inputs (after the shadow atlas; units below are the materials').
-PASS_INPUT_UNIT = SHADOW_UNIT + 1
+#: First texture unit of a pass's Shader inputs (the table of units: :mod:`.units`).
+PASS_INPUT_UNIT = PASS_INPUTS
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
@@ -51,9 +51,6 @@ _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _OVER = ("src_alpha", "one_minus_src_alpha", "add")
 _MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
                       ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
-_GL_SRGB8_ALPHA8 = 0x8C43
-_TRIANGLES_ADJACENCY = 0x000C
-_GL_RGBA8 = 0x8058
 
 
 class BatchDrawer:
@@ -72,8 +69,6 @@ class BatchDrawer:
         self.report = report
         #: drawers for draw-item kinds that are not plain instanced geometry (text, volumes), by kind
         self.drawers = drawers
-        #: clip distances enabled now
-        self.nclip = 0
         self._transient: dict[Any, tuple[Any, ...]] = {}
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
@@ -112,7 +107,6 @@ class BatchDrawer:
                     drawer = self.drawers.get(it.state.kind)
                     if drawer is not None:
                         made = drawer(self.engine, [it], it.state)
-                        self.state.applier.forget()
                         self.report.count(made, 1)
                         calls += made
         return calls
@@ -147,7 +141,6 @@ class BatchDrawer:
         drawer = self.drawers.get(state.kind)
         if drawer is not None:
             calls = drawer(self.engine, batch.items, state)
-            self.state.applier.forget()
             self.report.count(calls, len(batch.items))
             return calls
         n = len(batch.rows)
@@ -225,7 +218,7 @@ class BatchDrawer:
         self._set_uniforms(prog, state, composed)
         if batch.uniform:
             self._set_material(prog, batch.rows[0])
-        vao.render(_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
+        vao.render(GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
         self.report.count(1, n)
         return 1
 
@@ -306,7 +299,8 @@ class BatchDrawer:
         lights = self._lights_for(state.switch)
         lights.apply(prog)
         if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
-            self.state.shadow_plan.apply(prog, self.targets.named(ATLAS).depth, lights.order)
+            plan = self.state.shadow_plan
+            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -341,28 +335,26 @@ class BatchDrawer:
                     u.value = value
         inputs = composed.inputs()
         if inputs:
-            for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
-                u = prog.get(uniform, None)
-                if u is not None:
-                    if isinstance(source, tuple):
-                        name, attachment = source
-                        target = self.targets.named(name)
-                        texture = target.depth if attachment == "depth" else target.texture(attachment)
-                    else:
-                        texture = self.texture(source)  # an om.Texture of the pass
-                    texture.use(unit)
-                    u.value = unit
+            self._bind_inputs(prog, inputs)
+
+    def _bind_inputs(self, prog: Any, inputs: dict[str, Any]) -> None:
+        """Bind a pass's Shader inputs (targets of the frame by name, or textures) from :data:`PASS_INPUT_UNIT`."""
+        for unit, (uniform, source) in enumerate(sorted(inputs.items(), key=lambda p: p[0]), start=PASS_INPUT_UNIT):
+            u = prog.get(uniform, None)
+            if u is not None:
+                if isinstance(source, tuple):
+                    name, attachment = source
+                    target = self.targets.named(name)
+                    texture = target.depth if attachment == "depth" else target.texture(attachment)
+                else:
+                    texture = self.texture(source)  # an om.Texture of the pass
+                texture.use(unit)
+                u.value = unit
 
     def _apply_raster(self, raster: tuple, state: DrawState) -> None:
-        self.state.applier.apply(raster)
-        nclip = len(state.clip)
-        if self.nclip != nclip:
-            for i in range(6):
-                if i < nclip:
-                    self.ctx.enable_direct(_GL_CLIP_DISTANCE0 + i)
-                else:
-                    self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
-            self.nclip = nclip
+        applier = self.state.applier
+        applier.apply(raster)
+        applier.clip_planes(len(state.clip))
 
     def texture(self, attr: Any, srgb: bool = True) -> Any:
         """The GL texture of an ``om.Texture``: sRGB colour data, or linear data (normal, roughness maps)."""
@@ -378,7 +370,7 @@ class BatchDrawer:
         h, w = img.shape[:2]
         # GL_SRGB8_ALPHA8: texture images are display (sRGB) values; the GPU decodes them before filtering
         # and mipmapping, so minified and magnified textures average light, not encoded values
-        internal = _GL_SRGB8_ALPHA8 if srgb else _GL_RGBA8
+        internal = GL_SRGB8_ALPHA8 if srgb else GL_RGBA8
         tex = gpu_call(self.ctx.texture, (w, h), 4, img.tobytes(), internal_format=internal, what="a texture")
         if attr.mipmap:
             tex.build_mipmaps()
@@ -425,7 +417,6 @@ class BatchDrawer:
             drawer = self.drawers.get(state.kind)
             if drawer is not None:
                 made = drawer(self.engine, [items[i] for i in indices], state)
-                self.state.applier.forget()
                 self.report.count(made, len(indices))
                 calls += made
                 continue
@@ -488,12 +479,6 @@ class BatchDrawer:
             live = {(id(t), srgb) for it in items for _, t, srgb in it.state.textures}
             for key in [k for k in self._textures if k not in live]:
                 self._textures.pop(key)[2].release()
-
-    def disable_clip_planes(self) -> None:
-        """State preservation: no clip distance stays enabled after a frame."""
-        for i in range(self.nclip):
-            self.ctx.disable_direct(_GL_CLIP_DISTANCE0 + i)
-        self.nclip = 0
 
     def live_buffers(self) -> int:
         """Transient instance buffers held now (for leak checks)."""

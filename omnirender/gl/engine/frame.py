@@ -31,34 +31,39 @@ in every call).
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
 
-from ..techniques.mirrors import Mirrors, mirror_items
-from ..techniques.shadows import ShadowPlan, caster_bounds, frame_settings
-from .context import GLError, blit, clear_depth, clear_stencil, set_masks
+from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, ScissorTest, StencilOp
+from .context import GLError, blit, clear_depth, clear_stencil
 from .drawer import BatchDrawer
 from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
-from .passes import DEPTH_FUNCS, Composed, FullScreen, Pass, Target
+from .passes import Composed, FullScreen, Pass, Target
 from .report import PassRecord, PassReport
-from .state import GLCalls, RasterApplier, defaults
+from .stages import StageList
+from .state import FillMode, GLCalls, RasterApplier, defaults
 from .targets import FrameTargets
 
 __all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
 
-_GL_SCISSOR_TEST = 0x0C11
+_OVER = ("src_alpha", "one_minus_src_alpha", "add")  # blending of a full-screen pass with blend=True
 
 
 class FrameRunner:
-    """Runs a frame: the stages before the frame technique, the techniques' passes over the compiled scopes
-    (nested ones included), the stages after it; binds targets, clears, draws full-screen passes."""
+    """Runs a frame: its stages (:mod:`.stages`) in order, each running techniques' passes over the compiled
+    scopes (nested techniques included); binds targets, clears, draws full-screen passes."""
 
     def __init__(
-        self, engine: Any, state: FrameState, drawer: BatchDrawer, targets: FrameTargets, report: PassReport
+        self,
+        engine: Any,
+        state: FrameState,
+        drawer: BatchDrawer,
+        targets: FrameTargets,
+        report: PassReport,
+        stages: StageList,
     ) -> None:
         #: the engine facade: techniques get it in every call; only its public API is used here
         self.engine = engine
@@ -69,17 +74,15 @@ class FrameRunner:
         self.targets = targets
         self.report = report
         self.fullscreen_programs = FullScreenPrograms(self.ctx)
+        #: the frame's stages, in order
+        self.stages = stages
         self._requests: list[Any] = []
-        self._shadow_cache: Any = None
-        self._shadow_drawn: Any = None
-        self._caster_bounds: Any = None
-        self._mirrors: Any = None
-        self._warned_mirrors = False
 
     def placements_changed(self) -> None:
-        """Items moved or the draw list changed: shadow casters' bounds and mirror planes are found again."""
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
-        self._mirrors = None  # mirror planes follow their transforms
+        """Items moved or the draw list changed: every stage forgets what it derived from placements
+        (shadow casters' bounds, mirror planes)."""
+        for stage in self.stages:
+            stage.changed()
 
     # -- what techniques call (through the engine) -----------------------------------
     def set_pass(self, description: Pass) -> None:
@@ -97,6 +100,30 @@ class FrameRunner:
         """A drawer changed GL state itself: the next draw applies its state in full."""
         self.state.applier.forget()
 
+    def apply_gl_state(self, *states: Any) -> None:
+        """Make the GL state attributes ``states`` (``om.gl.DepthTest(False)``, ``om.gl.Blend()``, ...) current,
+        through the applier (the other states stay as they are)."""
+        values = {}
+        for state in states:
+            if not hasattr(state, "capture") or getattr(type(state), "index", -1) < 0:
+                raise TypeError(
+                    f"GLEngine.apply_gl_state takes GL state attributes (om.gl.Blend(), ...), got {state!r:.60}"
+                )
+            values[type(state).index] = state.capture()
+        self.state.applier.override(values)
+
+    def default_gl_state(self) -> None:
+        """Every GL state kind at its default, through the applier."""
+        self.state.applier.apply(defaults())
+
+    def sample_mask(self, sample: int | None) -> None:
+        """Draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        self.state.applier.sample_mask(sample)
+
+    def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """Draw into ``framebuffer`` (of ``size``) until the pass binds another, through the applier."""
+        self.state.applier.bind(framebuffer, size)
+
     def reset_gl_state(self) -> None:
         """Every GL state kind at its default; the next draw applies its state in full."""
         applier = self.state.applier
@@ -113,23 +140,22 @@ class FrameRunner:
     def draw(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
         """Draw the installed scopes into ``framebuffer`` (else the engine's): every stage and technique pass."""
         engine, ctx, state = self.engine, self.ctx, self.state
-        engine.prepare_pipelines()  # render textures first: their engines use the context
+        stages = tuple(self.stages)
+        for stage in stages:
+            stage.prepare(engine)  # e.g. render textures first: their engines use the context
         fbo = engine.framebuffer if framebuffer is None else framebuffer
         size = tuple(engine.size) if framebuffer is None else tuple(framebuffer.size)
         _ = ctx.error  # errors of earlier, foreign GL calls are not this frame's
-        fbo.use()
-        ctx.viewport = (0, 0, *size)
         state.target_size = size
         state.linear_output = False
-        state.applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
-        self.drawer.nclip = 0
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+        state.applier = applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
+        applier.begin(fbo, size)
         state.background = background
         if clear:
             fbo.clear(*engine.clear_color(background), depth=1.0)
+            applier.reassert()  # moderngl's clear set the framebuffer's own masks
             if engine.has_stencil and not engine.pushed_targets and framebuffer is None:
-                clear_stencil(self.raw, 0)
-        ctx.enable(ctx.PROGRAM_POINT_SIZE)
+                clear_stencil(self.raw, 0)  # the default stencil write mask (every bit) is set
         camera, view, proj = self._frame_camera(override, size)
         state.camera = camera
         state.set_camera(view, proj, camera.is_orthographic)
@@ -141,22 +167,10 @@ class FrameRunner:
         root = installed if installed is not None else Scope()
         state.shadow_plan = None
         state.drawing = True
+        calls = 0
         try:
-            calls = self._shadow_map_passes(root, installed is not None)
-            stereo = engine.stereo
-            if stereo is None:
-                technique, scope = engine.frame_technique, root
-                whole = root.entries[0] if len(root.entries) == 1 else None
-                if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
-                    technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
-                calls += self.run(technique, scope, Composed(), item_level=True)
-                calls += self._mirror_passes(root, installed is not None)
-            else:  # each eye's pass draws the scene through the engine's technique
-                calls += self.run(stereo, root, Composed(), item_level=False)
-                if installed is not None and not self._warned_mirrors and mirror_items(root.all_items()):
-                    self._warned_mirrors = True
-                    warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
-                                  "stage reflects one eye)", stacklevel=4)  # fmt: skip
+            for stage in stages:
+                calls += stage.draw(self, root)
         finally:
             state.drawing = False
             self.report.close()
@@ -174,56 +188,6 @@ class FrameRunner:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
             raise GLError(f"GLEngine: OpenGL reported {err} while drawing")
 
-    def _shadow_map_passes(self, root: Scope, installed: bool) -> int:
-        """Draw the frame's shadow maps (when lights cast shadows); returns the draw calls made."""
-        engine = self.engine
-        settings = frame_settings(root if installed else None, engine.shadows)
-        if settings is None:
-            return 0
-        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
-        if not lights:
-            return 0
-        if self._caster_bounds is None:
-            self._caster_bounds = (caster_bounds(root),)
-        bounds = self._caster_bounds[0]
-        if bounds is None:
-            return 0
-        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
-               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
-        plan = self._shadow_cache[1] if self._shadow_cache is not None and self._shadow_cache[0] == key else None
-        if plan is None:
-            plan = ShadowPlan(settings, lights, bounds)
-            self._shadow_cache = (key, plan, plan.technique())
-        technique = self._shadow_cache[2]
-        if technique is None:
-            return 0
-        self.state.shadow_plan = plan
-        drawn = (key, self._caster_bounds, tuple(engine.size))
-        last = self._shadow_drawn
-        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
-        if fresh and self.targets.keep(plan.target, self.state.target_size):
-            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
-        calls = self.run(technique, root, Composed(), item_level=True)
-        self._shadow_drawn = drawn
-        return calls
-
-    def _mirror_passes(self, root: Scope, installed: bool) -> int:
-        """The mirror stage (:mod:`..techniques.mirrors`) after the frame's technique; returns the draw calls made."""
-        if self._mirrors is None:
-            self._mirrors = mirror_items(root.all_items()) if installed else []
-        if not self._mirrors:
-            return 0
-        engine = self.engine
-        if not engine.has_stencil or engine.pushed_targets:
-            if not self._warned_mirrors:
-                self._warned_mirrors = True
-                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
-                              "surfaces here", stacklevel=5)  # fmt: skip
-            return 0
-        state = self.state
-        technique = Mirrors.plan(self._mirrors, state.view, state.proj, engine.clear_color(state.background))
-        return self.run(technique, root, Composed(), item_level=False)
-
     def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:
         """(camera, view, projection) of a frame: the scene's, or ``override`` (validated ``(view, Camera|proj)``)."""
         if override is None:
@@ -235,8 +199,15 @@ class FrameRunner:
         return proj, view, proj.projection_matrix(size[0] / size[1])
 
     # -- techniques and passes ---------------------------------------------------------------
-    def run(self, technique: Any, scope: Scope, outer: Composed, item_level: bool) -> int:
-        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included)."""
+    def run(self, technique: Any, scope: Scope, outer: Composed | None = None, item_level: bool = True) -> int:
+        """Run ``technique``'s passes over ``scope``; returns the draw calls made (nested passes included).
+
+        ``outer`` is the pass the technique runs in (its state, masks and shader features apply to every
+        pass of the technique; none for a stage's own techniques); ``item_level=False`` runs the technique's
+        item passes through the engine's technique (what a nested technique's passes do).
+        """
+        if outer is None:
+            outer = Composed()
         engine = self.engine
         engine.enter_technique(technique)
         calls = 0
@@ -278,7 +249,7 @@ class FrameRunner:
         saved_viewport = self._set_viewport(description.viewport) if description.viewport is not None else None
         saved_camera = None
         if description.front_face != "ccw":
-            self.ctx.front_face = description.front_face
+            state.applier.front_face(description.front_face)
         if description.camera is not None:
             saved_camera = state.camera_state()
             view, proj = description.camera
@@ -307,7 +278,7 @@ class FrameRunner:
             if saved_viewport is not None:
                 self._restore_viewport(saved_viewport)
             if description.front_face != "ccw":
-                self.ctx.front_face = "ccw"
+                state.applier.front_face("ccw")
             if saved_target is not None:
                 self._unbind_target(saved_target)
         return calls
@@ -349,10 +320,10 @@ class FrameRunner:
         try:
             own = custom(self.engine, draw)
         finally:
-            # the code may have changed any GL state and binding: the next draw applies its state in full
+            # the application's code may have changed any GL state and binding: the next draw applies its
+            # state in full (the one place the frame cannot know what GL holds)
             applier.forget()
-            fbo.use()
-            self.ctx.viewport = (0, 0, *size)
+            applier.bind(fbo, size)
         if own is not None and (isinstance(own, bool) or not isinstance(own, int)):
             raise TypeError(f"a custom pass returns the draw calls it made itself (an int) or None, got {own!r:.60}")
         return calls + (own or 0)
@@ -372,22 +343,22 @@ class FrameRunner:
         source = self.current_framebuffer
         size = tuple(source.size)
         target = self.targets.get(description, self.state.target_size, size)
-        self.ctx.disable_direct(_GL_SCISSOR_TEST)
+        self.state.applier.override({ScissorTest.index: None})  # a blit obeys the scissor test
         blit(self.raw, source, target.fbo, size, bool(description.colors), description.depth)
-        self.state.applier.forget()
         return target
 
     # -- targets ------------------------------------------------------------------------
+    def keep_target(self, description: Target) -> bool:
+        """Keep the offscreen target of ``description`` from the last frame in this one, unchanged (False when
+        it is gone: draw it again)."""
+        return self.targets.keep(description, self.state.target_size)
+
     def _bind_target(self, description: Target) -> tuple:
         state = self.state
         target = self.targets.get(description, state.target_size)
         applier = state.applier
         saved = (applier.gl.framebuffer, state.target_size, state.linear_output)
-        applier.forget()
-        target.fbo.use()
-        self.ctx.viewport = (0, 0, *target.size)
-        applier.gl.framebuffer = target.fbo
-        applier.gl.size = target.size
+        applier.bind(target.fbo, target.size)
         state.target_size = target.size
         state.linear_output = description.dtype != "f1"
         return saved
@@ -395,55 +366,47 @@ class FrameRunner:
     def _unbind_target(self, saved: tuple) -> None:
         fbo, size, linear = saved
         state = self.state
-        applier = state.applier
-        applier.forget()
-        fbo.use()
-        self.ctx.viewport = (0, 0, *size)
-        applier.gl.framebuffer = fbo
-        applier.gl.size = size
+        state.applier.bind(fbo, size)
         state.target_size = size
         state.linear_output = linear
 
     def _set_viewport(self, box: tuple[int, int, int, int]) -> tuple:
         """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound target."""
         saved = (self.ctx.viewport, self.state.target_size)
-        self.ctx.viewport = box
+        self.state.applier.viewport(box)
         self.state.target_size = (box[2], box[3])
         return saved
 
     def _restore_viewport(self, saved: tuple) -> None:
-        self.ctx.viewport, self.state.target_size = saved
+        self.state.applier.viewport(saved[0])
+        self.state.target_size = saved[1]
 
     def _clear(self, clear: Any) -> None:
-        ctx = self.ctx
-        fbo = self.state.applier.gl.framebuffer
-        self.state.applier.forget()
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        ctx.scissor = None
+        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit, no scissor)."""
+        applier = self.state.applier
+        fbo = applier.gl.framebuffer
         if clear.color is None and clear.depth is not None and self.raw.available:
             # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
             # clear colour would be lost), so clear only the depth buffer with a raw call
-            fbo.use()
+            applier.override({ScissorTest.index: None, DepthMask.index: True})
             clear_depth(self.raw, float(clear.depth))
-            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
         elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self.state.linear_output:
                 from ...attributes.photometry import linear_rgb
 
                 color = (*linear_rgb(color), color[3])
-            if color is None:
-                set_masks(ctx, self.raw, fbo, color=(False, False, False, False))
-                color = (0.0, 0.0, 0.0, 0.0)
-            if clear.depth is None:
-                set_masks(ctx, self.raw, fbo, depth=False)
-                fbo.depth_mask = False  # moderngl applies the framebuffer's own depth mask when it clears
-            fbo.clear(*color, depth=1.0 if clear.depth is None else float(clear.depth))
+            writes = color is not None
+            applier.override({ColorMask.index: (writes,) * 4, DepthMask.index: clear.depth is not None,
+                              ScissorTest.index: None})  # fmt: skip
+            fbo.depth_mask = clear.depth is not None  # moderngl applies the framebuffer's own depth mask when it clears
+            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth))
             fbo.depth_mask = True
-            set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
+            applier.reassert()  # GL holds the masks the applier set again
         if clear.stencil is not None:
+            ops = applier.value(StencilOp)
+            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: None})  # glClear obeys both
             clear_stencil(self.raw, int(clear.stencil))
-            self.state.applier.forget()  # the stencil write mask was reset to clear every bit
 
     # -- image-space passes --------------------------------------------------------------
     def _fullscreen(self, effect: FullScreen, composed: Composed) -> int:
@@ -484,46 +447,32 @@ class FrameRunner:
         if u is not None:
             u.value = tuple(float(v) for v in self.state.target_size)
         # the pass's GL state (a stencil test, a scissor, a colour mask), then what the triangle needs
-        self.state.applier.forget()
-        self.state.applier.apply(composed.raster(defaults(), defaults()))
-        self.state.applier.forget()
-        ctx.disable(ctx.CULL_FACE)
-        ctx.wireframe = False
-        ctx.polygon_offset = (0.0, 0.0)
+        raster = list(composed.raster(defaults(), defaults()))
+        raster[CullFace.index] = "none"
+        raster[FillMode.index] = False
+        raster[PolygonOffset.index] = None
         if effect.depth:
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = DEPTH_FUNCS[effect.depth_test or "always"]
-            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, color=(True, True, True, True), depth=True)
+            raster[DepthTest.index] = effect.depth_test or "always"
+            raster[ColorMask.index] = (True, True, True, True)
+            raster[DepthMask.index] = True
         else:
-            ctx.disable(ctx.DEPTH_TEST)
-            set_masks(ctx, self.raw, self.state.applier.gl.framebuffer, depth=False)
-        if effect.blend:
-            ctx.enable(ctx.BLEND)
-            ctx.blend_func = (ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA)
-        else:
-            ctx.disable(ctx.BLEND)
+            raster[DepthTest.index] = None
+            raster[DepthMask.index] = False
+        raster[Blend.index] = _OVER if effect.blend else None
+        applier = self.state.applier
+        applier.apply(tuple(raster))
+        applier.clip_planes(0)  # the triangle's vertex shader writes no clip distance
         vao.render(ctx.TRIANGLES, vertices=3)
-        self.state.applier.forget()
         self.report.count(1, 0)
         return 1
 
     def _restore_defaults(self, fbo: Any = None, size: tuple[int, int] | None = None) -> None:
         """State preservation: leave the context as a plain moderngl user expects it, ``fbo`` bound."""
-        ctx = self.ctx
         applier = self.state.applier
-        applier.apply(defaults())
-        applier.forget()
-        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.depth_func = "<"
-        ctx.wireframe = False
-        ctx.polygon_offset = (0.0, 0.0)
-        ctx.scissor = None
-        fbo = self.engine.framebuffer if fbo is None else fbo
-        set_masks(ctx, self.raw, fbo, color=(True, True, True, True), depth=True)
-        self.drawer.disable_clip_planes()
-        fbo.use()
-        ctx.viewport = (0, 0, *(self.engine.size if size is None else size))
+        applier.restore_defaults()
+        applier.bind(self.engine.framebuffer if fbo is None else fbo, self.engine.size if size is None else size)
 
     def release(self) -> None:
         self.fullscreen_programs.release()
+        for stage in self.stages:
+            stage.release()

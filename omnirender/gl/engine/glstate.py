@@ -26,85 +26,150 @@ from typing import Any
 import numpy as np
 
 from .context import GLError, RawGL
+from .glenum import (
+    GL_ATTACHMENT_OBJECT_TYPE,
+    GL_ATTACHMENT_STENCIL_SIZE,
+    GL_BACK,
+    GL_BLEND,
+    GL_BLEND_COLOR,
+    GL_BLEND_DST_ALPHA,
+    GL_BLEND_DST_RGB,
+    GL_BLEND_EQUATION_ALPHA,
+    GL_BLEND_EQUATION_RGB,
+    GL_BLEND_SRC_ALPHA,
+    GL_BLEND_SRC_RGB,
+    GL_CLIP_DISTANCE0,
+    GL_COLOR_LOGIC_OP,
+    GL_COLOR_WRITEMASK,
+    GL_CULL_FACE,
+    GL_CULL_FACE_MODE,
+    GL_DEPTH_CLAMP,
+    GL_DEPTH_FUNC,
+    GL_DEPTH_RANGE,
+    GL_DEPTH_TEST,
+    GL_DEPTH_WRITEMASK,
+    GL_DITHER,
+    GL_DRAW_FRAMEBUFFER,
+    GL_DRAW_FRAMEBUFFER_BINDING,
+    GL_FRAMEBUFFER_SRGB,
+    GL_FRONT,
+    GL_FRONT_AND_BACK,
+    GL_FRONT_FACE,
+    GL_LINE_WIDTH,
+    GL_MULTISAMPLE,
+    GL_PACK_ALIGNMENT,
+    GL_POINT_SIZE,
+    GL_POLYGON_MODE,
+    GL_POLYGON_OFFSET_FACTOR,
+    GL_POLYGON_OFFSET_FILL,
+    GL_POLYGON_OFFSET_LINE,
+    GL_POLYGON_OFFSET_POINT,
+    GL_POLYGON_OFFSET_UNITS,
+    GL_PRIMITIVE_RESTART,
+    GL_PROGRAM_POINT_SIZE,
+    GL_PROVOKING_VERTEX,
+    GL_RASTERIZER_DISCARD,
+    GL_READ_FRAMEBUFFER,
+    GL_READ_FRAMEBUFFER_BINDING,
+    GL_SAMPLE_ALPHA_TO_COVERAGE,
+    GL_SAMPLE_COVERAGE,
+    GL_SAMPLE_COVERAGE_INVERT,
+    GL_SAMPLE_COVERAGE_VALUE,
+    GL_SCISSOR_BOX,
+    GL_SCISSOR_TEST,
+    GL_STENCIL,
+    GL_STENCIL_ATTACHMENT,
+    GL_STENCIL_BACK_FAIL,
+    GL_STENCIL_BACK_FUNC,
+    GL_STENCIL_BACK_PASS_DEPTH_FAIL,
+    GL_STENCIL_BACK_PASS_DEPTH_PASS,
+    GL_STENCIL_BACK_REF,
+    GL_STENCIL_BACK_VALUE_MASK,
+    GL_STENCIL_BACK_WRITEMASK,
+    GL_STENCIL_FAIL,
+    GL_STENCIL_FUNC,
+    GL_STENCIL_INDEX,
+    GL_STENCIL_PASS_DEPTH_FAIL,
+    GL_STENCIL_PASS_DEPTH_PASS,
+    GL_STENCIL_REF,
+    GL_STENCIL_TEST,
+    GL_STENCIL_VALUE_MASK,
+    GL_STENCIL_WRITEMASK,
+    GL_UNSIGNED_BYTE,
+    GL_VIEWPORT,
+)
 
 __all__ = ["GLStateSnapshot", "capture_state", "preserved_state", "read_stencil", "stencil_bits"]
 
 # capabilities (glIsEnabled / glEnable / glDisable)
 _CAPS = {
-    "blend": 0x0BE2,
-    "cull_face": 0x0B44,
-    "depth_test": 0x0B71,
-    "stencil_test": 0x0B90,
-    "scissor_test": 0x0C11,
-    "polygon_offset_fill": 0x8037,
-    "polygon_offset_line": 0x2A02,
-    "polygon_offset_point": 0x2A01,
-    "depth_clamp": 0x864F,
-    "multisample": 0x809D,
-    "sample_alpha_to_coverage": 0x809E,
-    "sample_coverage": 0x80A0,
-    "program_point_size": 0x8642,
-    "framebuffer_srgb": 0x8DB9,
-    "rasterizer_discard": 0x8C89,
-    "dither": 0x0BD0,
-    "color_logic_op": 0x0BF2,
-    "primitive_restart": 0x8F9D,
-    **{f"clip_distance{i}": 0x3000 + i for i in range(8)},
+    "blend": GL_BLEND,
+    "cull_face": GL_CULL_FACE,
+    "depth_test": GL_DEPTH_TEST,
+    "stencil_test": GL_STENCIL_TEST,
+    "scissor_test": GL_SCISSOR_TEST,
+    "polygon_offset_fill": GL_POLYGON_OFFSET_FILL,
+    "polygon_offset_line": GL_POLYGON_OFFSET_LINE,
+    "polygon_offset_point": GL_POLYGON_OFFSET_POINT,
+    "depth_clamp": GL_DEPTH_CLAMP,
+    "multisample": GL_MULTISAMPLE,
+    "sample_alpha_to_coverage": GL_SAMPLE_ALPHA_TO_COVERAGE,
+    "sample_coverage": GL_SAMPLE_COVERAGE,
+    "program_point_size": GL_PROGRAM_POINT_SIZE,
+    "framebuffer_srgb": GL_FRAMEBUFFER_SRGB,
+    "rasterizer_discard": GL_RASTERIZER_DISCARD,
+    "dither": GL_DITHER,
+    "color_logic_op": GL_COLOR_LOGIC_OP,
+    "primitive_restart": GL_PRIMITIVE_RESTART,
+    **{f"clip_distance{i}": GL_CLIP_DISTANCE0 + i for i in range(8)},
 }
 # integer states: name -> (enum, count)
 _INTS = {
-    "draw_framebuffer": (0x8CA6, 1),
-    "read_framebuffer": (0x8CAA, 1),
-    "viewport": (0x0BA2, 4),
-    "scissor_box": (0x0C10, 4),
-    "depth_func": (0x0B74, 1),
-    "blend_src_rgb": (0x80C9, 1),
-    "blend_dst_rgb": (0x80C8, 1),
-    "blend_src_alpha": (0x80CB, 1),
-    "blend_dst_alpha": (0x80CA, 1),
-    "blend_equation_rgb": (0x8009, 1),
-    "blend_equation_alpha": (0x883D, 1),
-    "cull_face_mode": (0x0B45, 1),
-    "front_face": (0x0B46, 1),
-    "polygon_mode": (0x0B40, 2),
-    "stencil_func": (0x0B92, 1),
-    "stencil_ref": (0x0B97, 1),
-    "stencil_value_mask": (0x0B93, 1),
-    "stencil_fail": (0x0B94, 1),
-    "stencil_pass_depth_fail": (0x0B95, 1),
-    "stencil_pass_depth_pass": (0x0B96, 1),
-    "stencil_writemask": (0x0B98, 1),
-    "stencil_back_func": (0x8800, 1),
-    "stencil_back_ref": (0x8CA3, 1),
-    "stencil_back_value_mask": (0x8CA4, 1),
-    "stencil_back_fail": (0x8801, 1),
-    "stencil_back_pass_depth_fail": (0x8802, 1),
-    "stencil_back_pass_depth_pass": (0x8803, 1),
-    "stencil_back_writemask": (0x8CA5, 1),
-    "provoking_vertex": (0x8E4F, 1),
+    "draw_framebuffer": (GL_DRAW_FRAMEBUFFER_BINDING, 1),
+    "read_framebuffer": (GL_READ_FRAMEBUFFER_BINDING, 1),
+    "viewport": (GL_VIEWPORT, 4),
+    "scissor_box": (GL_SCISSOR_BOX, 4),
+    "depth_func": (GL_DEPTH_FUNC, 1),
+    "blend_src_rgb": (GL_BLEND_SRC_RGB, 1),
+    "blend_dst_rgb": (GL_BLEND_DST_RGB, 1),
+    "blend_src_alpha": (GL_BLEND_SRC_ALPHA, 1),
+    "blend_dst_alpha": (GL_BLEND_DST_ALPHA, 1),
+    "blend_equation_rgb": (GL_BLEND_EQUATION_RGB, 1),
+    "blend_equation_alpha": (GL_BLEND_EQUATION_ALPHA, 1),
+    "cull_face_mode": (GL_CULL_FACE_MODE, 1),
+    "front_face": (GL_FRONT_FACE, 1),
+    "polygon_mode": (GL_POLYGON_MODE, 2),
+    "stencil_func": (GL_STENCIL_FUNC, 1),
+    "stencil_ref": (GL_STENCIL_REF, 1),
+    "stencil_value_mask": (GL_STENCIL_VALUE_MASK, 1),
+    "stencil_fail": (GL_STENCIL_FAIL, 1),
+    "stencil_pass_depth_fail": (GL_STENCIL_PASS_DEPTH_FAIL, 1),
+    "stencil_pass_depth_pass": (GL_STENCIL_PASS_DEPTH_PASS, 1),
+    "stencil_writemask": (GL_STENCIL_WRITEMASK, 1),
+    "stencil_back_func": (GL_STENCIL_BACK_FUNC, 1),
+    "stencil_back_ref": (GL_STENCIL_BACK_REF, 1),
+    "stencil_back_value_mask": (GL_STENCIL_BACK_VALUE_MASK, 1),
+    "stencil_back_fail": (GL_STENCIL_BACK_FAIL, 1),
+    "stencil_back_pass_depth_fail": (GL_STENCIL_BACK_PASS_DEPTH_FAIL, 1),
+    "stencil_back_pass_depth_pass": (GL_STENCIL_BACK_PASS_DEPTH_PASS, 1),
+    "stencil_back_writemask": (GL_STENCIL_BACK_WRITEMASK, 1),
+    "provoking_vertex": (GL_PROVOKING_VERTEX, 1),
 }
 _FLOATS = {
-    "blend_color": (0x8005, 4),
-    "polygon_offset_factor": (0x8038, 1),
-    "polygon_offset_units": (0x2A00, 1),
-    "line_width": (0x0B21, 1),
-    "point_size": (0x0B11, 1),
-    "depth_range": (0x0B70, 2),
-    "sample_coverage_value": (0x80AA, 1),
+    "blend_color": (GL_BLEND_COLOR, 4),
+    "polygon_offset_factor": (GL_POLYGON_OFFSET_FACTOR, 1),
+    "polygon_offset_units": (GL_POLYGON_OFFSET_UNITS, 1),
+    "line_width": (GL_LINE_WIDTH, 1),
+    "point_size": (GL_POINT_SIZE, 1),
+    "depth_range": (GL_DEPTH_RANGE, 2),
+    "sample_coverage_value": (GL_SAMPLE_COVERAGE_VALUE, 1),
 }
-_BOOLS = {"depth_writemask": (0x0B72, 1), "color_writemask": (0x0C23, 4), "sample_coverage_invert": (0x80AB, 1)}
+_BOOLS = {
+    "depth_writemask": (GL_DEPTH_WRITEMASK, 1),
+    "color_writemask": (GL_COLOR_WRITEMASK, 4),
+    "sample_coverage_invert": (GL_SAMPLE_COVERAGE_INVERT, 1),
+}
 
-_GL_FRAMEBUFFER = 0x8D40
-_GL_DRAW_FRAMEBUFFER = 0x8CA9
-_GL_READ_FRAMEBUFFER = 0x8CA8
-_GL_FRONT, _GL_BACK, _GL_FRONT_AND_BACK = 0x0404, 0x0405, 0x0408
-_GL_STENCIL_INDEX, _GL_UNSIGNED_BYTE = 0x1901, 0x1401
-_GL_STENCIL = 0x1802
-_GL_ATTACHMENT_STENCIL_SIZE = 0x8217
-_GL_ATTACHMENT_OBJECT_TYPE = 0x8CD0
-_GL_STENCIL_ATTACHMENT = 0x8D20
-_GL_DEPTH_STENCIL_ATTACHMENT = 0x821A
-_GL_PACK_ALIGNMENT = 0x0D05
 
 _RAW: RawGL | None = None
 
@@ -172,8 +237,8 @@ class GLStateSnapshot(Mapping):
         fbo = self.framebuffer
         if fbo is not None and getattr(fbo, "glo", None) == v["draw_framebuffer"]:
             fbo.use()  # through moderngl, which remembers the bound framebuffer (it sets masks: restored below)
-        gl.glBindFramebuffer(_GL_DRAW_FRAMEBUFFER, v["draw_framebuffer"])
-        gl.glBindFramebuffer(_GL_READ_FRAMEBUFFER, v["read_framebuffer"])
+        gl.glBindFramebuffer(GL_DRAW_FRAMEBUFFER, v["draw_framebuffer"])
+        gl.glBindFramebuffer(GL_READ_FRAMEBUFFER, v["read_framebuffer"])
         for name, enum in _CAPS.items():
             (gl.glEnable if v[name] else gl.glDisable)(enum)
         gl.glViewport(*v["viewport"])
@@ -186,14 +251,14 @@ class GLStateSnapshot(Mapping):
         gl.glBlendColor(*v["blend_color"])
         gl.glCullFace(v["cull_face_mode"])
         gl.glFrontFace(v["front_face"])
-        gl.glPolygonMode(_GL_FRONT_AND_BACK, v["polygon_mode"][0])
+        gl.glPolygonMode(GL_FRONT_AND_BACK, v["polygon_mode"][0])
         gl.glPolygonOffset(v["polygon_offset_factor"], v["polygon_offset_units"])
         gl.glLineWidth(v["line_width"])
         gl.glPointSize(v["point_size"])
         gl.glDepthRange(*v["depth_range"])
         gl.glSampleCoverage(v["sample_coverage_value"], 1 if v["sample_coverage_invert"] else 0)
         gl.glProvokingVertex(v["provoking_vertex"])
-        for face, prefix in ((_GL_FRONT, "stencil"), (_GL_BACK, "stencil_back")):
+        for face, prefix in ((GL_FRONT, "stencil"), (GL_BACK, "stencil_back")):
             gl.glStencilFuncSeparate(face, v[f"{prefix}_func"], v[f"{prefix}_ref"], v[f"{prefix}_value_mask"])
             gl.glStencilOpSeparate(
                 face, v[f"{prefix}_fail"], v[f"{prefix}_pass_depth_fail"], v[f"{prefix}_pass_depth_pass"]
@@ -237,18 +302,18 @@ def stencil_bits() -> int:
     gl = _gl()
     draw = _read(gl.glGetIntegerv, _INTS["draw_framebuffer"][0], 1, ctypes.c_int)
     if draw == 0:
-        attachment = _GL_STENCIL
+        attachment = GL_STENCIL
     else:
         kind = ctypes.c_int(0)
         gl.glGetFramebufferAttachmentParameteriv(
-            _GL_DRAW_FRAMEBUFFER, _GL_STENCIL_ATTACHMENT, _GL_ATTACHMENT_OBJECT_TYPE, ctypes.byref(kind)
+            GL_DRAW_FRAMEBUFFER, GL_STENCIL_ATTACHMENT, GL_ATTACHMENT_OBJECT_TYPE, ctypes.byref(kind)
         )
         if kind.value == 0:  # GL_NONE: nothing attached
             return 0
-        attachment = _GL_STENCIL_ATTACHMENT
+        attachment = GL_STENCIL_ATTACHMENT
     bits = ctypes.c_int(0)
     gl.glGetFramebufferAttachmentParameteriv(
-        _GL_DRAW_FRAMEBUFFER, attachment, _GL_ATTACHMENT_STENCIL_SIZE, ctypes.byref(bits)
+        GL_DRAW_FRAMEBUFFER, attachment, GL_ATTACHMENT_STENCIL_SIZE, ctypes.byref(bits)
     )
     return int(bits.value)
 
@@ -262,10 +327,10 @@ def read_stencil(framebuffer: Any, size: tuple[int, int]) -> np.ndarray:
     w, h = size
     out = np.zeros((h, w), np.uint8)
     previous = _read(gl.glGetIntegerv, _INTS["read_framebuffer"][0], 1, ctypes.c_int)
-    align = _read(gl.glGetIntegerv, _GL_PACK_ALIGNMENT, 1, ctypes.c_int)
-    gl.glBindFramebuffer(_GL_READ_FRAMEBUFFER, framebuffer.glo)
-    gl.glPixelStorei(_GL_PACK_ALIGNMENT, 1)
-    gl.glReadPixels(0, 0, w, h, _GL_STENCIL_INDEX, _GL_UNSIGNED_BYTE, out.ctypes.data)
-    gl.glPixelStorei(_GL_PACK_ALIGNMENT, align)
-    gl.glBindFramebuffer(_GL_READ_FRAMEBUFFER, previous)
+    align = _read(gl.glGetIntegerv, GL_PACK_ALIGNMENT, 1, ctypes.c_int)
+    gl.glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer.glo)
+    gl.glPixelStorei(GL_PACK_ALIGNMENT, 1)
+    gl.glReadPixels(0, 0, w, h, GL_STENCIL_INDEX, GL_UNSIGNED_BYTE, out.ctypes.data)
+    gl.glPixelStorei(GL_PACK_ALIGNMENT, align)
+    gl.glBindFramebuffer(GL_READ_FRAMEBUFFER, previous)
     return out[::-1].copy()

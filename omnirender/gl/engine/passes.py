@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from .attributes import _DEPTH_FUNCS
+from .glenum import GL_R11F_G11F_B10F
 
 __all__ = [
     "Pass",
@@ -71,7 +72,7 @@ FORMATS = {
     "f4": (4, "f4", None, 16),
     "rg32ui": (2, "u4", None, 8),
     "rg32f": (2, "f4", None, 8),
-    "r11g11b10f": (3, "f2", 0x8C3A, 4),
+    "r11g11b10f": (3, "f2", GL_R11F_G11F_B10F, 4),
 }
 #: What draws a pass's items (``Pass.technique``): None the pass itself at the frame's level and the engine's
 #: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);

@@ -22,13 +22,13 @@ import weakref
 from typing import Any
 
 from .context import blit
+from .glenum import GL_MIRRORED_REPEAT, GL_SRGB8_ALPHA8, GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
 from .render_texture import RenderTexture, visit
 from .resources import gpu_call
 
-__all__ = ["PipelineSet", "GLPipeline", "apply_sampling", "SRGB8_ALPHA8"]
+__all__ = ["PipelineSet", "GLPipeline", "apply_sampling", "GL_SRGB8_ALPHA8"]
 
 #: GL_SRGB8_ALPHA8: texture texels are display values the GPU decodes before filtering.
-SRGB8_ALPHA8 = 0x8C43
 
 
 def apply_sampling(ctx: Any, raw: Any, tex: Any, texture: Any) -> None:
@@ -44,8 +44,8 @@ def apply_sampling(ctx: Any, raw: Any, tex: Any, texture: Any) -> None:
     if texture.wrap == "mirror" and raw.available:
         # moderngl has no mirrored-repeat switch: set GL_MIRRORED_REPEAT on the bound texture
         tex.use(0)
-        for pname in (0x2802, 0x2803):  # GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T
-            raw.glTexParameteri(0x0DE1, pname, 0x8370)
+        for pname in (GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T):
+            raw.glTexParameteri(GL_TEXTURE_2D, pname, GL_MIRRORED_REPEAT)
 
 
 class GLPipeline:
@@ -65,7 +65,7 @@ class GLPipeline:
         self.textures = []
         self.fbos = []
         for _ in range(2):
-            tex = gpu_call(ctx.texture, self.size, 4, internal_format=SRGB8_ALPHA8, what="a render texture")
+            tex = gpu_call(ctx.texture, self.size, 4, internal_format=GL_SRGB8_ALPHA8, what="a render texture")
             apply_sampling(ctx, host.raw, tex, texture)
             fbo = ctx.framebuffer(color_attachments=[tex])
             fbo.clear(0.0, 0.0, 0.0, 1.0)  # black before the first image

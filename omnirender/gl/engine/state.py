@@ -20,6 +20,8 @@ from __future__ import annotations
 from collections.abc import Hashable
 from typing import Any
 
+from .glenum import GL_CLIP_DISTANCE0, GL_SAMPLE_MASK
+
 __all__ = [
     "StateKind",
     "GLCalls",
@@ -46,6 +48,9 @@ class StateKind:
     index: int = -1
     #: GLSL at global scope of the mesh/point fragment shader while the kind has features (functions, uniforms).
     fragment_code: str = ""
+    #: Whether binding a framebuffer or a moderngl clear sets this state to the framebuffer's own value
+    #: (moderngl keeps colour and depth masks and the scissor per framebuffer): the applier issues it again.
+    framebuffer_state: bool = False
     #: GLSL run in the fragment shader's ``main`` once the surface colour ``base`` (vec4, linear, texture
     #: applied) is known and before lighting; it may ``discard``.
     fragment_main: str = ""
@@ -181,13 +186,26 @@ def not_mirror(item: Any) -> bool:
 
 
 class RasterApplier:
-    """Applies raster tuples, issuing GL calls only for the kinds whose value changed."""
+    """The GL state of a frame: applies raster tuples, issuing GL calls only for the kinds whose value changed,
+    and owns the few states that are not kinds (the bound framebuffer and viewport, the front face, the
+    enabled clip distances).
 
-    __slots__ = ("current", "gl")
+    Engine code changes GL state only through it, so what it tracks is what GL holds.  Code outside the
+    engine that may change any state (a custom pass, a drawer of its own kind) is followed by
+    :meth:`forget`: the next :meth:`apply` then sets every kind.
+    """
+
+    __slots__ = ("current", "gl", "clip_count", "face", "samples")
 
     def __init__(self, gl: GLCalls) -> None:
         self.gl = gl
         self.current: list[Any] | None = None
+        #: how many clip distances are enabled (GL_CLIP_DISTANCE0 ...)
+        self.clip_count = 0
+        #: the front face winding ("ccw" or "cw")
+        self.face = "ccw"
+        #: the one sample a multisampled draw writes (GL_SAMPLE_MASK), or None: every sample
+        self.samples: int | None = None
 
     def apply(self, raster: tuple[Any, ...]) -> None:
         current = self.current
@@ -202,14 +220,90 @@ class RasterApplier:
                 all_kinds[i].apply(self.gl, value)
                 current[i] = value
 
+    def override(self, values: dict[int, Any]) -> None:
+        """Change the kinds at the raster positions in ``values`` (the others stay as they are)."""
+        raster = list(self.current if self.current is not None else defaults())
+        for index, value in values.items():
+            raster[index] = value
+        self.apply(tuple(raster))
+
+    def value(self, kind: type[StateKind]) -> Any:
+        """The value of ``kind`` GL holds now (its default when nothing was applied yet)."""
+        return (self.current if self.current is not None else defaults())[kind.index]
+
+    def reassert(self) -> None:
+        """Issue again the kinds a framebuffer bind or a moderngl clear resets to the framebuffer's own values
+        (colour and depth masks, scissor): GL holds the tracked values again."""
+        if self.current is None:
+            return
+        for kind in _KINDS:
+            if kind.framebuffer_state and kind.index < len(self.current):
+                kind.apply(self.gl, self.current[kind.index])
+
+    def bind(self, framebuffer: Any, size: tuple[int, int], viewport: tuple[int, int, int, int] | None = None) -> None:
+        """Draw into ``framebuffer`` of ``size`` (the whole of it, or the pixel rectangle ``viewport``)."""
+        framebuffer.use()
+        self.gl.framebuffer = framebuffer
+        self.gl.size = tuple(size)
+        self.gl.ctx.viewport = viewport if viewport is not None else (0, 0, *size)
+        self.reassert()
+
+    def viewport(self, box: tuple[int, int, int, int]) -> None:
+        """Draw into the pixel rectangle ``box`` (x, y from the bottom-left) of the bound framebuffer."""
+        self.gl.ctx.viewport = box
+
+    def front_face(self, winding: str) -> None:
+        """Which winding faces the camera: ``"ccw"`` (GL's default) or ``"cw"`` (mirrored cameras)."""
+        if winding != self.face:
+            self.gl.ctx.front_face = winding
+            self.face = winding
+
+    def clip_planes(self, count: int) -> None:
+        """Enable clip distances 0 .. ``count`` - 1 and disable the others (up to 6)."""
+        if count == self.clip_count:
+            return
+        ctx = self.gl.ctx
+        for i in range(6):
+            if i < count:
+                ctx.enable_direct(GL_CLIP_DISTANCE0 + i)
+            else:
+                ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
+        self.clip_count = count
+
+    def begin(self, framebuffer: Any, size: tuple[int, int]) -> None:
+        """A frame starts: ``framebuffer`` bound, every kind at its default (what a clear needs: every channel
+        written, no scissor), point sizes taken from the programs."""
+        self.bind(framebuffer, size)
+        self.apply(defaults())
+        ctx = self.gl.ctx
+        ctx.enable(ctx.PROGRAM_POINT_SIZE)
+
+    def sample_mask(self, sample: int | None) -> None:
+        """Let draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        if sample == self.samples:
+            return
+        ctx = self.gl.ctx
+        if sample is None:
+            ctx.disable_direct(GL_SAMPLE_MASK)
+        else:
+            ctx.enable_direct(GL_SAMPLE_MASK)
+            self.gl.raw.glSampleMaski(0, 1 << sample)
+        self.samples = sample
+
     def forget(self) -> None:
-        """The GL state was changed behind our back (a drawer, a full-screen pass): apply everything next time."""
+        """Code outside the engine may have changed any GL state (a custom pass, a drawer of its own kind):
+        apply every state next time."""
         self.current = None
+        self.clip_count = -1
+        self.face = ""
+        self.samples = -1
 
     def restore_defaults(self) -> None:
-        """State preservation: every kind back to its default."""
+        """State preservation: every state back to its default (what a plain moderngl user expects)."""
         self.apply(defaults())
-        self.current = None
+        self.clip_planes(0)
+        self.front_face("ccw")
+        self.sample_mask(None)
 
 
 def defaults() -> tuple[Any, ...]:

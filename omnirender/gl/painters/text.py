@@ -9,12 +9,14 @@ default font when DejaVu is missing) and kept for the engine's life.
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
 
 from ...core.handler import ShapePainter, default_for
 from ...shapes import Text
+from ..engine.attributes import Blend, DepthTest
 from ..engine.geometry import Geometry
 from ..engine.layout import ROW
 from ..glengine import GLEngine
@@ -139,19 +141,20 @@ class TextPainter(ShapePainter):
         engine.submit(geom, kind="text", extra=(shape.string, float(shape.size)), transparent=False)
 
 
+#: glyph atlases by engine and text size (they go with their engine)
+_ATLASES: weakref.WeakKeyDictionary[Any, dict[int, Any]] = weakref.WeakKeyDictionary()
+
+
 def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     """The drawer for ``"text"`` items: project anchors, build glyph quads, draw without depth test."""
     ctx = engine.ctx
     if not engine.programs.registered("text"):
         engine.programs.register("text", _VS, _FS)
     prog = engine.programs.get("text")
-    atlases = engine.__dict__.setdefault("_atlases", {})
+    atlases = _ATLASES.setdefault(engine, {})
     w, h = engine.target_size
     calls = 0
-    ctx.disable(ctx.DEPTH_TEST)
-    ctx.enable(ctx.BLEND)
-    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-    engine.forget_gl_state()
+    engine.apply_gl_state(DepthTest(False), Blend())  # over everything, blended "over"
     clip = engine.frame_projection @ engine.frame_view
     for item in items:
         string, size = item.state.extra
@@ -188,8 +191,6 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
         vao.release()
         vbo.release()
         calls += 1
-    ctx.enable(ctx.DEPTH_TEST)
-    ctx.disable(ctx.BLEND)
     return calls
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from ...attributes.photometry import srgb_to_linear
 from ...core.handler import ShapePainter, default_for
 from ...shapes import Volume
-from ..engine.context import set_masks
+from ..engine.attributes import Blend, CullFace, DepthClamp, DepthMask, DepthTest
 from ..engine.geometry import Geometry, unit_mesh
 from ..engine.layout import ROW
 from ..engine.passes import Target
@@ -32,7 +32,6 @@ from ..glengine import GLEngine
 
 __all__ = ["VolumePainter", "VolumeGeometry"]
 
-_GL_DEPTH_CLAMP = 0x864F
 #: Where the depth drawn before the volumes is copied (a frame target: made once, kept while volumes are drawn).
 _DRAWN_DEPTH = Target("gl.volume.drawn-depth", colors=(), depth=True)
 
@@ -179,15 +178,9 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         engine.programs.register("volume", _VS, _FS)
     prog = engine.programs.get("volume")
     drawn = engine.copy_framebuffer(_DRAWN_DEPTH)
-    engine.forget_gl_state()
-    ctx.enable(ctx.DEPTH_TEST | ctx.BLEND | ctx.CULL_FACE)
-    ctx.depth_func = "<"
     # back faces: they exist also when the camera is inside the box (front faces are then behind the near
     # plane); depth clamping keeps back faces beyond the far plane from being clipped away
-    ctx.cull_face = "front"
-    ctx.enable_direct(_GL_DEPTH_CLAMP)
-    ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA, ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-    set_masks(ctx, engine.raw, engine.current_framebuffer, depth=True)
+    engine.apply_gl_state(DepthTest(True, "less"), Blend(), CullFace("front"), DepthClamp(True), DepthMask(True))
     view, proj = engine.frame_view, engine.frame_projection
     calls = 0
     for item in items:
@@ -231,9 +224,6 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
         vao.render(ctx.TRIANGLES)
         vao.release()
         calls += 1
-    ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-    ctx.disable_direct(_GL_DEPTH_CLAMP)
-    ctx.cull_face = "back"
     return calls
 
 

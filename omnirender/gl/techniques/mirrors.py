@@ -24,6 +24,7 @@ depth-stencil framebuffers).
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -31,10 +32,11 @@ import numpy as np
 from ..engine.attributes import Blend, ColorMask, DepthMask, DepthTest, StencilOp, StencilTest
 from ..engine.layout import ROW
 from ..engine.passes import Pass, Shader
+from ..engine.stages import FrameStage
 from ..engine.state import MirrorState, not_mirror
 from ..engine.technique import GLTechnique
 
-__all__ = ["Mirrors", "mirror_items", "reflection_matrix"]
+__all__ = ["Mirrors", "MirrorStage", "mirror_items", "reflection_matrix"]
 
 _MODEL = ROW.slice("model")
 _BIT = 1
@@ -149,3 +151,38 @@ class Mirrors(GLTechnique):
                 inside, StencilOp("keep", "keep", "zero", _BIT), Blend(), DepthMask(True),
                 DepthTest(True, "always"))))  # fmt: skip
         return cls(passes)
+
+
+class MirrorStage(FrameStage):
+    """The frame stage of the planar mirrors, after the frame technique (it reflects what that drew)."""
+
+    name = "mirrors"
+
+    def __init__(self) -> None:
+        self._mirrors: list[tuple[Any, _Only]] | None = None  # of the installed list, found on first use
+        self._warned = False
+
+    def changed(self) -> None:
+        self._mirrors = None  # mirror planes follow their transforms
+
+    def draw(self, frame: Any, root: Any) -> int:
+        engine = frame.engine
+        if engine.stereo is not None:
+            if engine.root_scope is not None and not self._warned and mirror_items(root.all_items()):
+                self._warned = True
+                warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
+                              "stage reflects one eye)", stacklevel=4)  # fmt: skip
+            return 0
+        if self._mirrors is None:
+            self._mirrors = mirror_items(root.all_items()) if engine.root_scope is not None else []
+        if not self._mirrors:
+            return 0
+        if not engine.has_stencil or engine.pushed_targets:
+            if not self._warned:
+                self._warned = True
+                warnings.warn("GLEngine: mirrors need the engine's own stencil buffer; they are drawn as plain "
+                              "surfaces here", stacklevel=4)  # fmt: skip
+            return 0
+        state = frame.state
+        technique = Mirrors.plan(self._mirrors, state.view, state.proj, engine.clear_color(state.background))
+        return frame.run(technique, root, item_level=False)

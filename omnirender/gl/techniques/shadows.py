@@ -37,15 +37,17 @@ from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matr
 from ..engine.drawlist import Scope, world_bounds
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
+from ..engine.stages import FrameStage
 from ..engine.state import casts_shadows
 from ..engine.technique import GLTechnique
+from ..engine.units import SHADOW_ATLAS
 
-__all__ = ["ShadowMaps", "ShadowPlan", "ATLAS", "SHADOW_UNIT", "caster_bounds"]
+__all__ = ["ShadowMaps", "ShadowPlan", "ShadowMapStage", "ATLAS", "SHADOW_UNIT", "caster_bounds"]
 
 #: Name of the frame's shadow-map atlas target.
 ATLAS = "shadow-atlas"
-#: Texture unit of the atlas (units 0-7 are the materials').
-SHADOW_UNIT = 8
+#: Texture unit of the atlas (the table of units: ``engine/units.py``).
+SHADOW_UNIT = SHADOW_ATLAS
 #: Cube faces of a point light: the axis each looks along, and its up vector.
 _CUBE = (
     ((1, 0, 0), (0, -1, 0)),
@@ -266,6 +268,56 @@ _DEFAULT = ShadowMaps()
 def caster_bounds(root: Scope) -> tuple[np.ndarray, np.ndarray] | None:
     """World (min, max) of the items that cast shadows, or None when there are none."""
     return world_bounds(item for item in root.all_items() if not item.transparent and casts_shadows(item))
+
+
+class ShadowMapStage(FrameStage):
+    """The frame stage that draws the shadow-map atlas (before the frame technique, whose lit shaders read it).
+
+    The maps are drawn again only when the casters' bounds, the lights, the settings or the frame size
+    changed since the last frame that drew them (the camera is free to move).
+    """
+
+    name = "shadow maps"
+
+    def __init__(self) -> None:
+        self._cache: Any = None  # (key, plan, its technique)
+        self._drawn: Any = None  # (key, caster bounds, size) of the maps the atlas holds
+        self._caster_bounds: Any = None  # (bounds,) of the installed list, made on first use
+
+    def changed(self) -> None:
+        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
+
+    def draw(self, frame: Any, root: Scope) -> int:
+        engine = frame.engine
+        settings = frame_settings(root if engine.root_scope is not None else None, engine.shadows)
+        if settings is None:
+            return 0
+        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
+        if not lights:
+            return 0
+        if self._caster_bounds is None:
+            self._caster_bounds = (caster_bounds(root),)
+        bounds = self._caster_bounds[0]
+        if bounds is None:
+            return 0
+        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+        plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
+        if plan is None:
+            plan = ShadowPlan(settings, lights, bounds)
+            self._cache = (key, plan, plan.technique())
+        technique = self._cache[2]
+        if technique is None:
+            return 0
+        frame.state.shadow_plan = plan
+        drawn = (key, self._caster_bounds, tuple(engine.size))
+        last = self._drawn
+        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
+        if fresh and frame.keep_target(plan.target):
+            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
+        calls = frame.run(technique, root)
+        self._drawn = drawn
+        return calls
 
 
 def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

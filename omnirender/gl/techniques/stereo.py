@@ -25,9 +25,10 @@ import numpy as np
 
 from ..engine.attributes import ColorMask
 from ..engine.passes import Clear, Pass
+from ..engine.stages import FrameStage
 from ..engine.technique import GLTechnique
 
-__all__ = ["Stereo", "MODES", "eye_matrices", "disparity_pixels"]
+__all__ = ["Stereo", "StereoStage", "MODES", "eye_matrices", "disparity_pixels"]
 
 #: How the two eyes are packed into the image.
 MODES = ("side-by-side", "top-bottom", "anaglyph", "left", "right")
@@ -144,3 +145,14 @@ class Stereo(GLTechnique):
             engine.set_pass(Pass(name, camera=(view, p), state=(mask,), clear=clear))
         else:
             engine.set_pass(Pass(name, camera=(view, p), viewport=box))
+
+
+class StereoStage(FrameStage):
+    """The frame stage of a stereo frame (``GLEngine(stereo=...)``): each eye's pass draws the scene through
+    the engine's technique (the ``technique`` stage draws nothing then)."""
+
+    name = "stereo"
+
+    def draw(self, frame: Any, root: Any) -> int:
+        stereo = frame.engine.stereo
+        return 0 if stereo is None else frame.run(stereo, root, item_level=False)
