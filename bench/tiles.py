@@ -7,8 +7,9 @@ Run: .venv/bin/python bench/tiles.py [--compare WxH] [--tile N] [--wide WxH] [--
   channel, how many pixels differ by more than 2/255, and how far the worst
   ones lie from a tile seam (0 means the seams themselves differ).
 * ``--wide 24000x1000``: a render beyond the GL framebuffer limit (tiled on its
-  own) in a child process; prints its peak memory (ru_maxrss) above the
-  process's memory before the render, and that minus the image (colour and depth).
+  own) in a child process; prints its peak resident memory (VmHWM, reset through
+  /proc/self/clear_refs just before the render) above the resident memory before
+  the render, and that minus the image (colour and depth).
 * ``--poster 20000x20000``: ``om.render_to_file`` streaming a poster into a PNG; peak memory likewise.
 The baseline of every ratio is measured in the same run.
 """
@@ -39,20 +40,26 @@ def _scene(effects: bool):
     return scene
 
 
-def compare(size: tuple[int, int], tile: int, effects: bool) -> None:
+def compare(size: tuple[int, int], tile: int, effects: bool, margin: int | None = None) -> None:
     import omnirender as om
 
     scene = _scene(effects)
     t0 = time.perf_counter()
     whole = om.render(scene, size=size)
     t1 = time.perf_counter()
-    tiled = om.render(scene, size=size, tile=tile)
+    if margin is None:
+        tiled = om.render(scene, size=size, tile=tile)
+    else:
+        from omnirender.tiling import render_tiled
+
+        tiled = render_tiled(scene, "gl", size, tile, margin=margin)
     t2 = time.perf_counter()
     diff = np.abs(whole.array.astype(np.int16) - tiled.array.astype(np.int16))
     worst = diff.max(axis=2)
     bad = np.argwhere(worst > 2)
     w, h = size
-    print(f"{w}x{h}, tiles of {tile} ({tiled.info['tiles']} tiles, effects={'SSAO+FXAA' if effects else 'none'})")
+    print(f"{w}x{h}, tiles of {tile}, margin {tiled.info['margin']} ({tiled.info['tiles']} tiles, "
+          f"effects={'SSAO+FXAA' if effects else 'none'})")  # fmt: skip
     print(f"  untiled {t1 - t0:.1f} s, tiled {t2 - t1:.1f} s: ratio {(t2 - t1) / (t1 - t0):.2f}x")
     print(f"  largest difference per channel: {diff.reshape(-1, 4).max(axis=0).tolist()} (of 255)")
     print(f"  pixels differing by more than 2/255: {len(bad)} of {w * h:,} ({len(bad) / (w * h):.2e})")
@@ -69,14 +76,22 @@ def compare(size: tuple[int, int], tile: int, effects: bool) -> None:
 
 
 CHILD = r"""
-import json, resource, sys, time
+import json, sys, time
 import numpy as np
 import omnirender as om
 from omnirender.demo import demo_scene
+
+def status(key):
+    for line in open("/proc/self/status"):
+        if line.startswith(key):
+            return int(line.split()[1]) * 1024
+
 mode, w, h = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 scene = demo_scene()
 om.render(scene, size=(64, 48))  # the GL context, shaders and imports: not the render's memory
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+with open("/proc/self/clear_refs", "w") as fh:
+    fh.write("5")  # the peak (VmHWM) starts again from the current resident size
+base = status("VmRSS:")
 t = time.perf_counter()
 if mode == "wide":
     img = om.render(scene, size=(w, h))
@@ -85,7 +100,7 @@ if mode == "wide":
 else:
     om.render_to_file(scene, sys.argv[4], size=(w, h))
     image_bytes, tiles = 0, None
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+peak = status("VmHWM:")
 print(json.dumps({"seconds": time.perf_counter() - t, "base": base, "peak": peak, "image": image_bytes,
                   "tiles": tiles}))
 """
@@ -98,7 +113,7 @@ def memory(mode: str, size: tuple[int, int], out: str) -> None:
     above = result["peak"] - result["base"]
     mib = 1 << 20
     print(f"{mode} {w}x{h}: {result['seconds']:.1f} s, tiles {result['tiles']}")
-    print(f"  peak RSS above the process before the render: {above / mib:.0f} MiB")
+    print(f"  peak resident memory above the process's before the render: {above / mib:.0f} MiB")
     print(f"  of which the image (colour + depth): {result['image'] / mib:.0f} MiB; beyond it: "
           f"{(above - result['image']) / mib:.0f} MiB (target: < 1024 MiB)")  # fmt: skip
 
@@ -112,9 +127,10 @@ def main() -> None:
     parser.add_argument("--poster", type=_size, default=None)
     parser.add_argument("--out", default="/tmp/omnirender-poster.png")
     parser.add_argument("--skip-compare", action="store_true")
+    parser.add_argument("--margin", type=int, default=None, help="guard band of the tiles (default: the tiler's)")
     args = parser.parse_args()
     if not args.skip_compare:
-        compare(args.compare, args.tile, args.effects)
+        compare(args.compare, args.tile, args.effects, args.margin)
     memory("wide", args.wide, args.out)
     if args.poster:
         memory("poster", args.poster, args.out)
