@@ -28,6 +28,7 @@ SCRIPTS = {
     "postfx.py": [],
     "soak.py": [],
     "snapshots.py": [],
+    "mitsuba_preview.py": [],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -44,6 +45,7 @@ QUICK = {
     "postfx.py": ["--frames", "3"],
     "soak.py": ["--quick"],
     "snapshots.py": ["--quick"],
+    "mitsuba_preview.py": ["--repeat", "1"],
 }
 
 

@@ -24,6 +24,7 @@ import numpy as np
 from _common import output_dir, side_by_side
 
 import omnirender as om
+from omnirender.progress import Progress
 
 ROOM = 2.0  # balls stay in [-ROOM, ROOM] x [0, inf) x [-ROOM, ROOM]
 DT = 1 / 120  # physics step (s); viewers see every second step
@@ -123,6 +124,7 @@ def main() -> list:
     snapshots = []
     frames = 0
     painting = 0.0
+    progress = Progress(round(1.0 / DT), "simulation", "step")  # a bar on a terminal, log lines elsewhere
     try:
         start = time.monotonic()
         for moment in (0.25, 0.5, 0.75, 1.0):  # simulated seconds
@@ -132,12 +134,14 @@ def main() -> list:
                 top.repaint()
                 painting += time.monotonic() - t0
                 frames += 1
+                progress.update(min(steps[0], progress.total))
                 time.sleep(max(0.0, 1 / 30 - (time.monotonic() - t0)))  # the viewers' own pace: 30 fps
             snapshots.append(front.image())
         snapshots.append(top.image())
     finally:
         stop.set()
         thread.join()
+        progress.close()
     print(
         f"{args.balls} balls, {steps[0]} physics steps (1/{round(1 / DT)} s each), {frames} frames per viewer in "
         f"{time.monotonic() - start:.2f} s; {1e3 * painting / max(frames, 1):.1f} ms per frame for both viewers"

@@ -11,7 +11,13 @@ import omnirender as om
 
 
 def output_dir() -> Path:
-    """The folder given as the first argument, else examples/output/ (git-ignored)."""
+    """The folder given as the first argument, else examples/output/ (git-ignored).
+
+    Long work reports its progress: a bar on a terminal, lines on stderr elsewhere (omnirender.progress).
+    """
+    from omnirender.progress import show_progress_lines
+
+    show_progress_lines()
     folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent / "output"
     folder.mkdir(parents=True, exist_ok=True)
     return folder

@@ -114,3 +114,8 @@ def __getattr__(name: str) -> Any:
     close = difflib.get_close_matches(name, [*__all__, *_LAZY_MODULES, *_LAZY_NAMES], n=1)
     hint = f"; did you mean om.{close[0]}?" if close else ""
     raise AttributeError(f"module 'omnirender' has no attribute {name!r}{hint}")
+
+
+def __dir__() -> list[str]:
+    """Every public name, the lazily imported ones included (``dir(om)``, tab completion)."""
+    return sorted({*globals(), *_LAZY_MODULES, *_LAZY_NAMES})

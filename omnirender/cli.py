@@ -29,15 +29,19 @@ __all__ = ["main", "build_parser"]
 _EXAMPLES = """\
 examples:
   omnirender demo -o demo-output                 render the demo scene with every engine
+  omnirender demo -e gl mitsuba                  ... with these engines only
   omnirender render scene.yaml -e gl -o out.png --size 800x600
-  omnirender render scene.json -e mitsuba --spp 64 -o final.png
+  omnirender render scene.json -e mitsuba -o preview.png   a fast, denoised preview
+  omnirender render scene.json -e mitsuba --quality final -o final.png
   omnirender render scene.yaml --mask '!debug'   skip nodes in the group 'debug'
   omnirender animate scene.yaml --frames 0-119 --fps 24 -e povray --workers 2 -o out.mp4
   omnirender animate scene.yaml --turntable 5 --scheduler tcp://host:8786 -o spin.mp4
   omnirender view scene.yaml                     interactive window (mouse: orbit/pan/zoom, h: help)
-  omnirender export scene.yaml scene.glb         also .pov and .rib
+  omnirender export scene.yaml scene.glb         also .pov, .rib, .rad, .html and .obj, .ply, .stl (meshes)
   omnirender info scene.yaml                     tree, statistics, bounds, engines
   omnirender view bunny.obj                      a mesh file: fitted camera, default lights
+  omnirender render bunny.obj -e povray          (render, animate, export and info take mesh files too)
+  omnirender animate bunny.obj --turntable       a 5-second turntable video of a mesh file
   omnirender render scene.yaml --trusted         the file may use raw renderer text / files outside its folder
 
 exit codes: 0 success, 1 the work failed (bad scene file, engine missing or failing), 2 bad command line,
@@ -94,11 +98,19 @@ _positive_float = _number(float, 0.0, True, "a positive number")
 _count = _number(int, 0, False, "a whole number >= 0")
 
 
-def _load(path: str, trusted: bool | argparse.Namespace = False, size: tuple[int, int] = (4, 3)) -> Any:
-    """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``).
+def _load(
+    path: str,
+    trusted: bool | argparse.Namespace = False,
+    size: tuple[int, int] = (4, 3),
+    animated: bool = False,
+    engine: str = "gl",
+) -> Any:
+    """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``, for ``engine``).
 
     ``trusted`` is a flag or the parsed arguments (``--trusted``,
     ``--allowed-root``, ``--strict``): the path policy of the file's references.
+    ``animated``: a glTF file is read with its animations (``om.load_gltf``), staged with a fitted
+    camera and the default lights when it has no camera of its own.
     """
     options = trusted if isinstance(trusted, argparse.Namespace) else None
     trusted = bool(getattr(options, "trusted", False)) if options is not None else bool(trusted)
@@ -122,21 +134,50 @@ def _load(path: str, trusted: bool | argparse.Namespace = False, size: tuple[int
         from .formats.usd import load_usd
         from .scene.mesh_scene import framed
 
-        return framed(load_usd(p, trusted=trusted), aspect=size[0] / size[1])
+        return framed(load_usd(p, trusted=trusted), size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
+    if animated and suffix in (".glb", ".gltf"):
+        from .animation import load_gltf
+        from .scene.mesh_scene import framed
+
+        gltf = load_gltf(p, trusted=trusted, allowed_roots=roots, strict=strict)
+        return framed(gltf, size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
     if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
-        return mesh_scene(p, aspect=size[0] / size[1], trusted=trusted, allowed_roots=roots, strict=strict)
+        return mesh_scene(
+            p,
+            size[0] / size[1],
+            fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES,
+            trusted=trusted,
+            allowed_roots=roots,
+            strict=strict,
+        )
     from .scene.files import load
 
     return load(p, trusted=trusted, allowed_roots=roots)
+
+
+#: Engines that honour ``casts_shadows=False``.  For the others (path tracers) the fill and back lights
+#: staged around a mesh file cast shadows, as those engines would make them anyway, without the warning
+#: a scene asking for shadowless lights gets (the user asked for nothing).
+SHADOWLESS_LIGHT_ENGINES = ("gl", "povray")
+
+
+def _check_engine(name: str) -> None:
+    from .options import did_you_mean
+    from .render import _engines
+
+    if name not in _engines:
+        raise UsageError(f"unknown engine {name!r}; choose one of {', '.join(_engines)}{did_you_mean(name, _engines)}")
 
 
 # -- sub-commands -----------------------------------------------------------
 def _demo(args: argparse.Namespace) -> int:
     from .demo import run_demo
 
-    written = run_demo(Path(args.output), size=args.size)
+    for name in args.engine or ():
+        _check_engine(name)
+    written = run_demo(Path(args.output), size=args.size, engines=args.engine, quality=args.quality)
     return 0 if written else 1
 
 
@@ -151,10 +192,9 @@ def _engines(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from .render import _engines, engine_status, render
+    from .render import engine_status, render
 
-    if args.engine not in _engines:
-        raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
+    _check_engine(args.engine)
     options = _render_options(args)
     output = Path(args.output) if args.output else Path(f"{Path(args.scene).stem}-{args.engine}.png")
     if output.suffix.lower() not in IMAGE_EXTENSIONS:
@@ -162,7 +202,7 @@ def _render(args: argparse.Namespace) -> int:
     ok, why = engine_status(args.engine, check=False)  # its packages; the engine itself says what else fails
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene, args, args.size)
+    scene = _load(args.scene, args, args.size, engine=args.engine)
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -174,6 +214,10 @@ def _render_options(args: argparse.Namespace) -> dict[str, Any]:
     options: dict[str, Any] = {}
     if args.spp is not None:
         options.update(_spp_option(args.engine, args.spp))
+    if args.quality is not None:
+        if args.engine != "mitsuba":
+            raise UsageError(f"--quality is an option of the mitsuba engine (for {args.engine}, use --spp)")
+        options["quality"] = args.quality
     if args.mask is not None:
         from .core.mask import compile_mask
 
@@ -187,20 +231,10 @@ def _render_options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _animate(args: argparse.Namespace) -> int:
     from .animation import animations, render_frames, turntable, video
-    from .animation.frames import FRAME_EXTENSIONS, load_scene
+    from .animation.frames import FRAME_EXTENSIONS
     from .animation.video import VIDEO_EXTENSIONS
-    from .render import _engines
 
-    if args.engine not in _engines:
-        raise UsageError(f"unknown engine {args.engine!r}; choose one of {', '.join(_engines)}")
-    if not Path(args.scene).is_file():
-        raise UsageError(f"scene file not found: {args.scene}")
-    if Path(args.scene).suffix.lower() not in SCENE_EXTENSIONS + (".glb", ".gltf") + USD_SUFFIXES:
-        raise UsageError(
-            f"{args.scene}: unknown extension {Path(args.scene).suffix!r}; give a scene file "
-            f"({', '.join(SCENE_EXTENSIONS)}), an animated glTF file (.glb, .gltf) or a USD stage "
-            f"({', '.join(USD_SUFFIXES)})"
-        )
+    _check_engine(args.engine)
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("give either --workers (local processes) or --scheduler (a Dask cluster), not both")
     options = _render_options(args)
@@ -221,11 +255,11 @@ def _animate(args: argparse.Namespace) -> int:
         frames = parse_frames(args.frames) if args.frames is not None else None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    scene = load_scene(Path(args.scene), getattr(args, "trusted", False))
+    scene = _load(args.scene, args, args.size, animated=True, engine=args.engine)
     if args.turntable is not None:
         turntable(scene, args.turntable, fps=args.fps or 24.0)
     elif not animations(scene):
-        raise UsageError(f"{args.scene} holds no animation; add an om.Animation or use --turntable SECONDS")
+        raise UsageError(f"{args.scene} holds no animation; add an om.Animation or use --turntable [SECONDS]")
     workers: Any = args.scheduler if args.scheduler is not None else args.workers
     report = render_frames(
         scene, frames, engine=args.engine, size=args.size, out=pattern, workers=workers, fps=args.fps,
@@ -430,10 +464,24 @@ def _is_shape(component: Any) -> bool:
 
 
 # -- parser -------------------------------------------------------------------
+def _engine_names() -> str:
+    """``gl (default), povray, mitsuba or radiance`` from the engine registry."""
+    from .render import _engines
+
+    names = [f"{n} (default)" if n == "gl" else n for n in _engines]
+    return ", ".join(names[:-1]) + f" or {names[-1]}" if len(names) > 1 else "".join(names)
+
+
+def _export_extensions() -> str:
+    from .render import exporters
+
+    return ", ".join(exporters())
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="omnirender",
-        description="One scene graph, many engines: render, view, export and inspect scene files.",
+        description="One scene graph, many engines: render, view, export and inspect scene files and mesh files.",
         epilog=_EXAMPLES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -441,98 +489,111 @@ def build_parser() -> argparse.ArgumentParser:
     # --debug is also accepted after the command; SUPPRESS keeps a value given before it
     common = argparse.ArgumentParser(add_help=False)
     common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks on errors")
-    common.add_argument(
+    reads = argparse.ArgumentParser(add_help=False)  # the commands that read a scene file
+    reads.add_argument(
         "--trusted",
         action="store_true",
         help="trust the scene file: allow raw renderer text (povray.Raw, radiance.Raw) and files outside its folder",
     )
-    common.add_argument(
+    reads.add_argument(
         "--allowed-root",
         action="append",
         metavar="DIR",
         help="a folder the file's references may lead into besides its own (repeatable)",
     )
-    common.add_argument(
+    reads.add_argument(
         "--strict",
         action="store_true",
         help="fail instead of warning when a texture, material or extension of a mesh file cannot be used",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    def command(name: str, help: str) -> argparse.ArgumentParser:
-        return sub.add_parser(name, help=help, parents=[common])
+    def command(name: str, help: str, scene: bool = True) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=help, parents=[common, reads] if scene else [common])
 
-    p = command("render", help="render a scene file to an image")
-    p.add_argument(
-        "scene",
-        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
+    scene_help = (
+        "scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)"
     )
-    p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
+    engine_help = f"{_engine_names()}; see 'omnirender engines'"
+    quality_help = (
+        "mitsuba only: preview (default: few samples, denoised when pyoidn is installed) or final (many samples)"
+    )
+    p = command("render", help="render a scene file or a mesh file to an image")
+    p.add_argument("scene", help=scene_help)
+    p.add_argument("-e", "--engine", default="gl", help=engine_help)
     p.add_argument("-o", "--output", help="image file (.png, .jpg...; default SCENE-ENGINE.png)")
     p.add_argument("--size", type=_size, default=(800, 600), help="image size WxH (default 800x600)")
     p.add_argument("--spp", type=_positive, help="samples per pixel (path tracers, antialiasing)")
+    p.add_argument("--quality", choices=("preview", "final"), help=quality_help)
     p.add_argument("--mask", help="group mask expression, e.g. '!debug & (left|shared)'")
     p.set_defaults(func=_render)
 
     p = command("animate", help="render the frames of an animated scene (locally or on Dask) and make a video")
     p.add_argument(
-        "scene", help="scene file (.json, .yaml) with an om.Animation, an animated .glb/.gltf or a USD stage"
+        "scene",
+        help=f"scene file with an om.Animation, an animated glTF or USD file; with --turntable any {scene_help}",
     )
-    p.add_argument("-e", "--engine", default="gl", help="gl (default), povray or mitsuba; see 'omnirender engines'")
+    p.add_argument("-e", "--engine", default="gl", help=engine_help)
     p.add_argument("-o", "--output", help="video (.mp4, .gif...) or frame pattern (frames/%%05d.png)")
     p.add_argument("--frames", help="frame numbers: 0-119, 0-119:2 or 3,5,8 (default: the whole animation)")
     p.add_argument("--fps", type=_positive_float, help="frames per second (default: the animation's)")
     p.add_argument("--size", type=_size, default=(640, 480), help="image size WxH (default 640x480)")
     p.add_argument("--spp", type=_positive, help="samples per pixel (path tracers, antialiasing)")
+    p.add_argument("--quality", choices=("preview", "final"), help=quality_help)
     p.add_argument("--mask", help="group mask expression, e.g. '!debug'")
     p.add_argument("--workers", type=_count, help="local worker processes (0: this process; default: one per core)")
     p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (see 'dask scheduler')")
-    p.add_argument("--turntable", type=_positive_float, metavar="SECONDS", help="add a turntable of this length")
+    p.add_argument(
+        "--turntable",
+        type=_positive_float,
+        nargs="?",
+        const=5.0,
+        metavar="SECONDS",
+        help="add a turntable of this length (default 5 s): the camera and lights orbit the scene",
+    )
     p.add_argument("--frames-dir", help="frame pattern when writing a video (default OUTPUT-frames/%%05d.png)")
     p.add_argument("--overwrite", action="store_true", help="render frames again even if their files exist")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_animate)
 
-    p = command("view", help="open a scene file in an interactive window")
-    p.add_argument(
-        "scene",
-        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
-    )
+    p = command("view", help="open a scene file or a mesh file in an interactive window")
+    p.add_argument("scene", help=scene_help)
     p.add_argument("--size", type=_size, default=(960, 720), help="window size WxH (default 960x720)")
     p.add_argument("--duration", type=float, help="close the window after this many seconds (demos, tests)")
     p.set_defaults(func=_view)
 
-    p = command("export", help="write a scene file in another format (.glb, .usda, .usdc, .usdz, .pov, .rib)")
-    p.add_argument(
-        "scene",
-        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
-    )
-    p.add_argument("output", help="output file; the extension chooses the format")
+    p = command("export", help=f"write a scene file or a mesh file in another format ({_export_extensions()})")
+    p.add_argument("scene", help=scene_help)
+    p.add_argument("output", help=f"output file; the extension chooses the format: {_export_extensions()}")
     p.set_defaults(func=_export)
 
     p = command("info", help="print the node tree with paths, statistics, bounds and capable engines")
-    p.add_argument(
-        "scene",
-        help="scene file (.json, .yaml), USD stage (.usd .usda .usdc .usdz) or mesh (.obj .ply .stl .off .glb .gltf)",
-    )
+    p.add_argument("scene", help=scene_help)
     p.add_argument("--no-engines", action="store_true", help="skip checking which engines can render it")
     p.set_defaults(func=_info)
 
-    p = command("schema", help="print the JSON Schema of scene files (every registered type)")
+    p = command("schema", help="print the JSON Schema of scene files (every registered type)", scene=False)
     p.add_argument("-o", "--output", help="write it to this file instead of printing it")
     p.set_defaults(func=_schema)
 
-    p = command("engines", help="list engines and exporters and whether they work here")
+    p = command("engines", help="list engines and exporters and whether they work here", scene=False)
     p.set_defaults(func=_engines)
 
-    p = command("demo", help="render the demo scene with every available engine")
+    p = command("demo", help="render the demo scene with every available engine (or those of -e)", scene=False)
     p.add_argument("-o", "--output", default="demo-output", help="folder for the images (default: demo-output)")
     p.add_argument("--size", type=_size, default=(640, 480), help="image size WxH (default 640x480)")
+    p.add_argument(
+        "-e", "--engine", nargs="+", metavar="ENGINE", help=f"render with these engines only ({_engine_names()})"
+    )
+    p.add_argument("--quality", choices=("preview", "final"), default="preview", help=quality_help)
     p.set_defaults(func=_demo)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
+    from .progress import show_progress_lines
+
+    show_progress_lines()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

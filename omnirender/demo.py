@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import omnirender as om
@@ -44,15 +45,27 @@ def demo_scene() -> om.Node:
     return scene
 
 
-def run_demo(output: Path, size: tuple[int, int] = (640, 480)) -> list[Path]:
-    """Render the demo scene with each available engine into ``output``; returns the files.
+def run_demo(
+    output: Path,
+    size: tuple[int, int] = (640, 480),
+    engines: Sequence[str] | None = None,
+    quality: str = "preview",
+) -> list[Path]:
+    """Render the demo scene with each available engine (or each of ``engines``) into ``output``;
+    returns the files.
 
     What cannot run here is said first, with the command(s) that install it;
-    an engine that fails is reported and the others go on.
+    an engine that fails is reported and the others go on.  ``quality`` is
+    Mitsuba's (``"preview"``: a few samples, denoised; ``"final"``).
     """
     from .render import install_commands
 
     status = om.engines()
+    if engines is not None:
+        unknown = [name for name in engines if name not in status]
+        if unknown:
+            raise ValueError(f"run_demo: unknown engine(s) {unknown}; choose from {', '.join(status)}")
+        status = {name: status[name] for name in dict.fromkeys(engines)}
     usable = [name for name, (ok, _) in status.items() if ok]
     skipped = [name for name, (ok, _) in status.items() if not ok]
     print(f"omnirender demo: rendering with {', '.join(usable) or 'no engine'}", end="")
@@ -66,17 +79,24 @@ def run_demo(output: Path, size: tuple[int, int] = (640, 480)) -> list[Path]:
     scene = demo_scene()
     stats = om.statistics(scene)
     print(f"demo scene: {stats['nodes']} nodes, {stats['shapes']} shapes, {stats['attributes']} attributes", end="")
-    print(f", {stats['triangles']} triangles" if "triangles" in stats else "")
+    print(f", {stats['triangles']} triangles" if "triangles" in stats else "", flush=True)
     written: list[Path] = []
     for name in usable:
         path = output / f"demo-{name}.png"
         start = time.perf_counter()
+        options = {"quality": quality} if name == "mitsuba" else {}
         try:
-            om.render(scene, engine=name, size=size).save(path)
+            image = om.render(scene, engine=name, size=size, **options)
+            image.save(path)
         except Exception as exc:  # one engine failing must not hide the others' pictures
-            print(f"{name:8s} failed: {' '.join(str(exc).split()) or type(exc).__name__}")
+            print(f"{name:8s} failed: {' '.join(str(exc).split()) or type(exc).__name__}", flush=True)
             continue
         written.append(path)
-        print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s)")
+        note = ""
+        if name == "mitsuba" and quality == "preview" and not image.info.get("denoised"):
+            from .mitsuba.denoise import INSTALL
+
+            note = f"; grainy: no denoiser, {INSTALL}"
+        print(f"{name:8s} wrote {path} ({time.perf_counter() - start:.1f} s{note})", flush=True)
     print(f"{len(written)} image(s) in {output.resolve()}")
     return written

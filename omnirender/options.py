@@ -15,7 +15,36 @@ import math
 import numbers
 from typing import Any
 
-__all__ = ["check_timeout", "check_integer", "check_real", "check_image_size", "SizeLimits"]
+__all__ = [
+    "check_timeout",
+    "check_integer",
+    "check_real",
+    "check_image_size",
+    "SizeLimits",
+    "did_you_mean",
+    "options_hint",
+]
+
+
+def did_you_mean(name: Any, choices: Any) -> str:
+    """``"; did you mean 'spp'?"`` when ``name`` is close to one of ``choices``, else ``""``."""
+    import difflib
+
+    close = difflib.get_close_matches(str(name), [str(c) for c in choices], n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def options_hint(unknown: Any, accepted: Any) -> str:
+    """``"; did you mean 'spp' for 'sp'?"`` for each unknown option close to an accepted one, else ``""``."""
+    import difflib
+
+    accepted = [str(a) for a in accepted]
+    pairs = []
+    for name in sorted(str(u) for u in unknown):
+        close = difflib.get_close_matches(name, accepted, n=1, cutoff=0.6)
+        if close:
+            pairs.append(f"{close[0]!r} for {name!r}")
+    return f"; did you mean {' and '.join(pairs)}?" if pairs else ""
 
 
 def _is_bool_or_text(value: Any) -> bool:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
 import threading
 from collections.abc import Callable, Sequence
 from typing import IO, Any
@@ -91,7 +90,11 @@ def run_watched(
         proc.wait()
         reader.join(5)
         raise
-    reader.join(5)
+    finally:
+        reader.join(5)
+        if not reader.is_alive():  # the pipe is ours to close (else the reader still holds it)
+            assert stream is not None
+            stream.close()
     if failures:
         raise failures[0]
     return proc.returncode, b"".join(chunks)
@@ -131,22 +134,13 @@ def exit_description(returncode: int) -> str:
 def progress_reporter(
     progress: Any, total: int, unit: str, label: str
 ) -> tuple[Callable[[int, int], None], Callable[[], None]]:
-    """(update(done, total), close()) for a ``progress=`` argument: None (a bar on a terminal), bool, or a callable."""
+    """(update(done, total), close()) for a ``progress=`` argument: None (a bar on a terminal, log lines
+    elsewhere: see :mod:`omnirender.progress`), True (a bar), False, or a callable ``(done, total)``."""
     if callable(progress):
         return progress, lambda: None
-    if progress is None:
-        progress = sys.stderr.isatty()
-    if not progress:
+    if progress is False:
         return (lambda done, total: None), lambda: None
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover - tqdm is in the engines' extras
-        return (lambda done, total: None), lambda: None
-    bar = tqdm(total=total, unit=unit, desc=label, leave=False)
+    from .progress import Progress
 
-    def update(done: int, total: int) -> None:
-        bar.total = total
-        bar.n = done
-        bar.refresh()
-
-    return update, bar.close
+    bar = Progress(total, label, unit, show=progress)
+    return bar.update, bar.close

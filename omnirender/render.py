@@ -198,7 +198,8 @@ def render(
     - gl: ``samples`` (MSAA, 0/1/2/4/8/16), ``background``, ``read_depth``, ``shadows`` (default True),
       ``pipeline`` (``"forward"`` or ``"deferred"``);
     - povray: ``quality`` (0..11), ``antialias``, ``timeout``, ``threads``, ``keep``, ``depth``;
-    - mitsuba: ``spp`` (samples per pixel), ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
+    - mitsuba: ``quality`` (``"preview"``, the default: a few samples, denoised; ``"final"``), ``spp``
+      (samples per pixel), ``denoise``, ``integrator`` (a Mitsuba plugin dict), ``seed``, ``rfilter``,
       ``depth``, ``headlight``, ``global_ambient``;
     - radiance: ``options`` (an ``om.radiance.Options``), ``oversample``, ``exposure``, ``timeout``, ``progress``,
       ``keep``, ``headlight``, ``global_ambient``;
@@ -216,7 +217,11 @@ def render(
     """
     entry = _engines.get(engine)
     if entry is None:
-        raise ValueError(f"unknown engine {engine!r}; registered engines: {sorted(_engines)}")
+        from .options import did_you_mean
+
+        raise ValueError(
+            f"unknown engine {engine!r}; registered engines: {sorted(_engines)}{did_you_mean(engine, _engines)}"
+        )
     size = _check_size(size)
     as_scene = getattr(scene, "as_scene", None)
     if callable(as_scene):  # not a scene graph but drawn by one (a renderer tree)

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import sys
 import time
 import uuid
 from collections.abc import Iterator
@@ -32,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from .animation import frame_times
+from .mainguard import check_main_guard
 from .worker import FrameResult, Job, dump_job, install_job, release_all, run_frame
 
 __all__ = ["render_frames", "FrameReport", "FrameFailure", "FramesFailed", "frame_paths", "load_scene"]
@@ -205,7 +205,7 @@ def render_frames(
                 else:
                     report.failed.append(FrameFailure(result.frame, result.time, result.error, result.attempts))
                     bar.set_postfix_str(f"{len(report.failed)} failed", refresh=False)
-                bar.update(1)
+                bar.advance()
         finally:
             bar.close()
     else:
@@ -226,6 +226,7 @@ Backend = Any
 def _backend(workers: Any, count: int) -> tuple[Backend, str]:
     if workers is None:
         n = min(os.cpu_count() or 1, count)
+        check_main_guard("om.render_frames (workers=None: one process per core)")
         return _pool(n), f"{n} local processes"
     if isinstance(workers, bool):
         raise TypeError("render_frames: workers must be None, an int, a Dask client or a scheduler address")
@@ -235,6 +236,7 @@ def _backend(workers: Any, count: int) -> tuple[Backend, str]:
         if workers == 0:
             return _here, "this process"
         n = min(workers, count)
+        check_main_guard(f"om.render_frames(workers={workers})")
         return _pool(n), f"{n} local process{'es' if n > 1 else ''}"
     from .dask import dask_backend
 
@@ -293,20 +295,7 @@ def _pool(n: int) -> Backend:
 
 
 def _progress(total: int, engine: str, show: bool | None) -> Any:
-    enabled = sys.stderr.isatty() if show is None else bool(show)
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover - tqdm comes with every rendering extra
-        return _NoBar()
-    return tqdm(total=total, desc=f"{engine} frames", unit="frame", disable=not enabled, file=sys.stderr)
+    """A bar on a terminal, log lines elsewhere (``show`` None), a bar (True) or nothing (False)."""
+    from ..progress import Progress
 
-
-class _NoBar:
-    def update(self, n: int) -> None:
-        pass
-
-    def set_postfix_str(self, text: str, refresh: bool = True) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
+    return Progress(total, f"{engine} frames", "frame", show=show)

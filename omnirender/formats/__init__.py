@@ -4,7 +4,7 @@
   exporter (writer), GLB packing and ``EXT_mesh_gpu_instancing``;
 - :mod:`~omnirender.formats.meshes`: OBJ, PLY, STL, OFF through trimesh (and
   :mod:`~omnirender.formats.obj`, plain OBJ files without trimesh) for
-  ``om.MeshFile``;
+  ``om.MeshFile``; a scene's surfaces written as one ``.obj``, ``.ply`` or ``.stl``;
 - :mod:`~omnirender.formats.usd`: ``om.load_usd`` and the ``.usd``/``.usda``/
   ``.usdc``/``.usdz`` exporter, through ``usd-core``;
 - :mod:`~omnirender.formats.rib`: RenderMan RIB; :mod:`~omnirender.formats.html`:
@@ -37,3 +37,6 @@ for _suffix, _what in ((".usda", "text"), (".usdc", "binary"), (".usd", "binary"
     register_exporter(_suffix, "omnirender.formats.usd.writer:export", f"OpenUSD stage ({_what})")
 register_exporter(".rib", "omnirender.formats.rib:export", "RenderMan RIB")
 register_exporter(".html", "omnirender.formats.html:export", "self-contained web page (three.js, works offline)")
+register_exporter(".obj", "omnirender.formats.meshes:export", "Wavefront OBJ: every surface as one mesh (trimesh)")
+register_exporter(".ply", "omnirender.formats.meshes:export", "PLY: every surface as one mesh with colours (trimesh)")
+register_exporter(".stl", "omnirender.formats.meshes:export", "STL: every surface as one mesh, no colours (trimesh)")

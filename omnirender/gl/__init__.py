@@ -191,6 +191,11 @@ def _one_shot_programs(ctx: Any) -> Any:
     return _one_shot.programs
 
 
+#: What om.gl.render takes (for "did you mean" in the unknown-option error).
+_GL_OPTIONS = ("size", "mask", "samples", "background", "read_depth", "on_missing", "technique", "shadows",
+               "pipeline", "stereo")  # fmt: skip
+
+
 def render(
     scene: Any,
     size: tuple[int, int] = (640, 480),
@@ -215,6 +220,7 @@ def render(
     GPU resources are released after each call.
     """
     _load()
+    from ..options import options_hint
     from .glengine import GLEngine
 
     read_depth = options.pop("read_depth", True)
@@ -224,7 +230,7 @@ def render(
         raise TypeError(
             f"om.gl.render: unknown options {sorted(options)}; it takes size, mask, samples, background, "
             "read_depth, on_missing, technique, shadows, pipeline and stereo (spp/quality are options of the "
-            "mitsuba/povray engines)"
+            "mitsuba/povray engines)" + options_hint(options, _GL_OPTIONS)
         )
     from .engine.context import check_samples_total
 

@@ -26,7 +26,7 @@ def available() -> tuple[bool, str]:
     return _available()
 
 
-def render(scene: Any, size: tuple[int, int] = (640, 480), spp: int = 64, **options: Any) -> Any:
+def render(scene: Any, size: tuple[int, int] = (640, 480), spp: int | None = None, **options: Any) -> Any:
     """Render ``scene`` with Mitsuba 3; see :func:`omnirender.mitsuba.rendering.render` for the options."""
     import inspect
 
@@ -35,5 +35,10 @@ def render(scene: Any, size: tuple[int, int] = (640, 480), spp: int = 64, **opti
     accepted = [p for p in inspect.signature(_render).parameters if p not in ("scene", "size", "spp")]
     unknown = sorted(set(options) - set(accepted))
     if unknown:
-        raise TypeError(f"mitsuba.render: unknown option(s) {unknown}; accepted: spp, {', '.join(accepted)}")
+        from ..options import options_hint
+
+        raise TypeError(
+            f"mitsuba.render: unknown option(s) {unknown}; accepted: spp, {', '.join(accepted)}"
+            + options_hint(unknown, ["spp", *accepted])
+        )
     return _render(scene, size, spp, **options)

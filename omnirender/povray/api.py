@@ -47,9 +47,15 @@ def scene_sdl(scene: Any, size: tuple[int, int] = (640, 480), **engine_options: 
     """Evaluate ``scene`` with a POVRayEngine; returns (SDL text, engine) — the engine lists the resources."""
     unknown = set(engine_options) - _ENGINE_OPTIONS
     if unknown:
+        from ..options import options_hint
+
         raise TypeError(
             f"POV-Ray: unknown option(s) {sorted(unknown)}; render() takes size, quality, antialias, timeout, "
             f"progress, threads, keep, depth and the engine options {sorted(_ENGINE_OPTIONS)}"
+            + options_hint(
+                unknown,
+                ["size", "quality", "antialias", "timeout", "progress", "threads", "keep", "depth", *_ENGINE_OPTIONS],
+            )  # fmt: skip
         )
     if not hasattr(scene, "preevaluate"):  # a list of components
         from ..scene import Node

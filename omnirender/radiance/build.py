@@ -25,6 +25,8 @@ __all__ = ["as_node", "evaluate", "write_scene", "compile_octree", "locate", "De
 
 #: Keyword options passed on to the engine.
 ENGINE_OPTIONS = {"mask", "on_missing", "technique", "resource_prefix"}
+#: The options of ``om.radiance.render`` itself (for "did you mean" when an unknown one reaches the engine).
+RENDER_OPTIONS = ("options", "oversample", "timeout", "progress", "keep", "global_ambient", "headlight", "exposure")
 
 
 class Deadline:
@@ -59,7 +61,12 @@ def evaluate(scene: Any, size: tuple[int, int], **options: Any) -> RadianceEngin
     """A :class:`RadianceEngine` that has evaluated ``scene`` (a Node or a list of components)."""
     unknown = set(options) - ENGINE_OPTIONS - {"global_ambient", "headlight", "coverage", "shared"}
     if unknown:
-        raise TypeError(f"Radiance: unknown option(s) {sorted(unknown)}; the engine takes {sorted(ENGINE_OPTIONS)}")
+        from ..options import options_hint
+
+        raise TypeError(
+            f"Radiance: unknown option(s) {sorted(unknown)}; the engine takes {sorted(ENGINE_OPTIONS)}"
+            + options_hint(unknown, [*ENGINE_OPTIONS, *RENDER_OPTIONS])
+        )
     engine = RadianceEngine(size, **options)
     engine.run(as_node(scene))
     return engine

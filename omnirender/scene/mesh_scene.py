@@ -20,12 +20,13 @@ from ..core.camera import Camera
 from ..shapes.files import mesh_suffixes
 from .node import Node
 
-__all__ = ["mesh_scene", "mesh_suffixes", "framed"]
+__all__ = ["mesh_scene", "mesh_suffixes", "framed", "staged_lights"]
 
 
 def mesh_scene(
     mesh: str | os.PathLike[str] | Any,
     aspect: float = 4 / 3,
+    fill_shadows: bool = False,
     *,
     trusted: bool = False,
     allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
@@ -36,16 +37,15 @@ def mesh_scene(
     The camera looks at the mesh's bounding box from the front, a little
     above and to the right, so that the whole mesh shows in an image of
     width / height ``aspect``.  The file is read here (to measure it): a
-    malformed one raises ValueError naming it.  ``trusted``, ``allowed_roots``
-    and ``strict`` are :class:`~omnirender.shapes.MeshFile`'s (the path
+    malformed one raises ValueError naming it.  ``fill_shadows``: see :func:`staged_lights`.
+    ``trusted``, ``allowed_roots`` and ``strict`` are :class:`~omnirender.shapes.MeshFile`'s (the path
     policy for the file's references, warnings as errors).
     """
-    from ..attributes.lights import default_lights
     from ..shapes import MeshFile
     from ..techniques import bounds
 
     if isinstance(mesh, (str, os.PathLike)) and str(mesh).lower().endswith((".glb", ".gltf")):
-        kept = _gltf_scene(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
+        kept = _gltf_scene(mesh, fill_shadows, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
         if kept is not None:
             return kept
     shape = MeshFile(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
@@ -57,13 +57,28 @@ def mesh_scene(
         raise ValueError(f"mesh_scene: {mesh!r} has no geometry to look at")
     camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
     eye_to_world = np.linalg.inv(camera.view_matrix())
-    return Node("scene", [camera, *default_lights(eye_to_world), body])
+    return Node("scene", [camera, *staged_lights(eye_to_world, fill_shadows), body])
 
 
-def _gltf_scene(path: str | os.PathLike[str], **policy: Any) -> Node | None:
+def staged_lights(eye_to_world: np.ndarray, fill_shadows: bool = False) -> list[Any]:
+    """The default key, fill and back lights placed for a camera (``eye_to_world``).
+
+    The fill and back lights cast no shadows, unless ``fill_shadows``: path tracers cannot turn a
+    light's shadows off and warn when a scene asks for it, so the command line stages the lights for
+    them with shadows, as they would draw them anyway (the user asked for nothing).
+    """
+    from ..attributes.lights import default_lights
+
+    lights = default_lights(eye_to_world)
+    if fill_shadows:
+        for light in lights:
+            light.casts_shadows = True
+    return lights
+
+
+def _gltf_scene(path: str | os.PathLike[str], fill_shadows: bool = False, **policy: Any) -> Node | None:
     """A glTF file with a camera as ``om.load_gltf`` reads it: its camera, its lights (default lights placed
     for its camera when it has none); None when it has no camera (then it is framed like any mesh)."""
-    from ..attributes.lights import default_lights
     from .readers import scene_reader
 
     load_gltf = scene_reader(path)  # the registered glTF importer (formats/ registers it)
@@ -77,13 +92,13 @@ def _gltf_scene(path: str | os.PathLike[str], **policy: Any) -> Node | None:
         return scene
     camera, world = declared.camera
     eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
-    return Node("scene", [*default_lights(eye_to_world), scene])
+    return Node("scene", [*staged_lights(eye_to_world, fill_shadows), scene])
 
 
-def framed(scene: Node, aspect: float = 4 / 3) -> Node:
+def framed(scene: Node, aspect: float = 4 / 3, fill_shadows: bool = False) -> Node:
     """``scene`` as the command line shows a file: its own camera and lights, else a camera fitted to its
-    bounds (as :func:`mesh_scene` places it) and default lights placed for the camera."""
-    from ..attributes.lights import default_lights
+    bounds (as :func:`mesh_scene` places it) and default lights placed for the camera (``fill_shadows``: see
+    :func:`staged_lights`)."""
     from ..techniques import bounds
 
     declared = scene.declarations()
@@ -95,11 +110,11 @@ def framed(scene: Node, aspect: float = 4 / 3) -> Node:
             raise ValueError(f"{scene.name}: nothing to look at")
         camera = Camera.fit(box, aspect, direction=(0.45, 0.35, 1.0), margin=1.05)
         eye_to_world = np.linalg.inv(camera.view_matrix())
-        lights = [] if declared.lights else default_lights(eye_to_world)
+        lights = [] if declared.lights else staged_lights(eye_to_world, fill_shadows)
         return Node("scene", [camera, *lights, scene])
     camera, world = declared.camera
     eye_to_world = np.asarray(world, np.float64) @ np.linalg.inv(camera.view_matrix())
-    return Node("scene", [*default_lights(eye_to_world), scene])
+    return Node("scene", [*staged_lights(eye_to_world, fill_shadows), scene])
 
 
 def _node_name(stem: str) -> str:

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..core.component import RenderingComponent
 from ..core.paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError
+from ..options import did_you_mean
 from .arrays import COMPACT_MIN_SIZE, SideCar, decode_base64, numeric_list
 from .node import Node
 from .parse import LIMITS, DuplicateKeys, ParseLimits, nesting_message
@@ -196,7 +197,8 @@ class Reader:
             for key in params:
                 if key not in accepted:
                     choices = ", ".join(accepted) or "none"
-                    raise self.error(f"{where}.{key}", f"{name} has no parameter {key!r} (parameters: {choices})")
+                    hint = did_you_mean(key, accepted).replace("; ", " - ", 1)
+                    raise self.error(f"{where}.{key}", f"{name} has no parameter {key!r}{hint} (parameters: {choices})")
         path_params = _registry.paths.get(name, ())
         kwargs: dict[str, Any] = {}
         for key, value in params.items():

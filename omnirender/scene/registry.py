@@ -309,8 +309,19 @@ def _resolve(name: str, where: str) -> type:
                     _registry.add(name, cls, override=False, paths=(), origin=module_name)
         if cls is not None:
             return cls
-        raise SceneFileError(where, f"unknown type {name!r}: {module_name} defines no component {attr!r}")
-    raise SceneFileError(where, f"unknown type {name!r} (known: {_known()}; register others with om.register_type)")
+        from ..options import did_you_mean
+
+        known = [n for n in dir(module) if not n.startswith("_") and _is_concrete_component(getattr(module, n))]
+        raise SceneFileError(
+            where, f"unknown type {name!r}: {module_name} defines no component {attr!r}{did_you_mean(attr, known)}"
+        )
+    from ..options import did_you_mean
+
+    hint = did_you_mean(name, [n for n in _registry.by_name if "." not in n])
+    raise SceneFileError(
+        where,
+        f"unknown type {name!r}{hint.replace(';', ' -', 1)} (known: {_known()}; register others with om.register_type)",
+    )
 
 
 def _known() -> str:

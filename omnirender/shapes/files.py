@@ -10,7 +10,9 @@ only for those an engine actually evaluates.
 from __future__ import annotations
 
 import importlib
+import logging
 import os
+import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -66,7 +68,18 @@ def read_mesh(
     if isinstance(reader, str):
         module, _, name = reader.partition(":")
         reader = getattr(importlib.import_module(module), name)
-    return reader(path, policy=policy or PathPolicy(), strict=strict)
+    start = time.monotonic()
+    parts = reader(path, policy=policy or PathPolicy(), strict=strict)
+    seconds = time.monotonic() - start
+    if seconds >= SLOW_LOAD:  # long work says what it did (the "omnirender" logger, see omnirender.progress)
+        triangles = sum(len(ts.index_array()) for _, ts in parts)
+        name = "a trimesh object" if key == TRIMESH_OBJECT else os.fspath(path)
+        logging.getLogger("omnirender").info("loaded %s: %d triangles in %.1f s", name, triangles, seconds)
+    return parts
+
+
+#: Loading a mesh file for longer than this (seconds) is reported on the "omnirender" logger.
+SLOW_LOAD = 1.0
 
 
 class MeshFile(DeclaredShape):

@@ -94,6 +94,19 @@ def _attach_context(glfw: Any, handle: Any) -> Any:
     return ctx
 
 
+def _init_glfw(glfw: Any) -> tuple[bool, str]:
+    """``glfw.init()`` with its error (no display...) returned as text, not printed as a GLFWError warning."""
+    previous = glfw.ERROR_REPORTING
+    glfw.ERROR_REPORTING = "raise"
+    try:
+        return bool(glfw.init()), ""
+    except glfw.GLFWError as exc:
+        text = str(exc)
+        return False, text.split(") ", 1)[-1].strip("b'\"") if text.startswith("(") else text
+    finally:
+        glfw.ERROR_REPORTING = previous
+
+
 class Window:
     """A glfw window bound to ``viewer``; ``run()`` loops until closed, ``step()`` runs one iteration."""
 
@@ -101,10 +114,11 @@ class Window:
         import glfw
 
         self._glfw = glfw
-        if not glfw.init():
+        ok, reason = _init_glfw(glfw)
+        if not ok:
             raise RuntimeError(
-                "omnirender window: glfw cannot initialise (no display?); set DISPLAY or run under Xvfb, "
-                "or use om.Viewer(window=False) for offscreen images"
+                f"omnirender window: glfw cannot initialise ({reason or 'no display?'}); set DISPLAY or run "
+                "under Xvfb, or use om.Viewer(window=False) for offscreen images"
             )
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)

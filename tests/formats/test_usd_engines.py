@@ -80,3 +80,15 @@ def test_the_stage_agrees_with_the_glTF_export_of_its_omnirender_equivalent(stag
     for what, xy in PATCHES.items():
         de = float(delta_e2000(cielab(_patch(gltf, xy)), cielab(_patch(usd, xy))))
         assert de <= 8.0, f"{what}: CIEDE2000 {de:.1f} between the glTF and USD paths"
+
+
+@pytest.mark.gl
+def test_a_point_instancer_with_a_sphere_and_a_dome_light_renders_as_the_same_omnirender_scene(tmp_path):
+    require("gl")
+    from usd_stages import crowd_stage, equivalent_crowd
+
+    a = om.render(om.load_usd(crowd_stage(tmp_path)), engine="gl", size=SIZE)
+    b = om.render(equivalent_crowd(), engine="gl", size=SIZE)
+    diff = np.abs(a.rgb.astype(np.float64) - b.rgb.astype(np.float64)).mean()
+    assert diff <= 2.0, f"mean |diff| {diff:.2f}/255"
+    assert 0.1 < a.mask.mean()

@@ -364,11 +364,19 @@ def test_time_samples_become_animation_tracks(tmp_path):
     op = ball.AddTranslateOp()
     op.Set(Gf.Vec3d(0, 0, 0), 1)
     op.Set(Gf.Vec3d(4, 0, 0), 49)
-    root = om.load_usd(_save(stage))
+    blob = UsdGeom.Mesh.Define(stage, "/Blob")  # deforming points are not animated: said, not dropped silently
+    blob.GetPointsAttr().Set([(0, 0, 0), (1, 0, 0), (0, 1, 0)], 1)
+    blob.GetPointsAttr().Set([(0, 0, 0), (2, 0, 0), (0, 1, 0)], 49)
+    blob.GetFaceVertexCountsAttr().Set([3])
+    blob.GetFaceVertexIndicesAttr().Set([0, 1, 2])
+    blob.GetSubdivisionSchemeAttr().Set("none")
+    with pytest.warns(UserWarning, match=r"1 time-sampled attribute\(s\) other than transforms.*/Blob.points"):
+        root = om.load_usd(_save(stage))
     (anim,) = [c for c in root.components if isinstance(c, om.Animation)]
     assert anim.duration == pytest.approx(2.0)
     for t in (0.0, 1.0, 2.0):
-        lo, hi = om.bounds(om.scene_at(root, t))
+        at = om.scene_at(root, t)
+        lo, hi = om.bounds(om.Node("ball", [at["/Ball"]]))
         assert np.allclose((np.array(lo) + np.array(hi)) / 2, (2.0 * t, 0, 0), atol=1e-6)
 
 
@@ -477,3 +485,24 @@ def test_a_point_instancer_draws_as_one_instanced_batch(tmp_path):
         finally:
             engine.release()
     assert calls[0] == calls[1], calls
+
+
+def test_the_command_line_exports_and_animates_stages(tmp_path):
+    from usd_stages import shapes_stage
+
+    from omnirender.cli import main
+
+    stage = shapes_stage(tmp_path)
+    assert main(["export", str(stage), str(tmp_path / "again.usdc")]) == 0
+    assert main(["export", str(tmp_path / "again.usdc"), str(tmp_path / "same.glb")]) == 0
+    assert (tmp_path / "same.glb").stat().st_size > 1000
+    moving = _new(tmp_path, "moving.usda")
+    moving.SetStartTimeCode(0)
+    moving.SetEndTimeCode(2)
+    moving.SetTimeCodesPerSecond(2)
+    op = UsdGeom.Sphere.Define(moving, "/Ball").AddTranslateOp()
+    op.Set(Gf.Vec3d(0, 0, 0), 0)
+    op.Set(Gf.Vec3d(1, 0, 0), 2)
+    frames = tmp_path / "frames" / "%02d.png"
+    assert main(["animate", _save(moving), "-o", str(frames), "--size", "32x24", "--workers", "0"]) == 0
+    assert len(list((tmp_path / "frames").glob("*.png"))) >= 2

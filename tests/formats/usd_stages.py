@@ -123,3 +123,79 @@ def equivalent_shapes() -> om.Node:
     scene.add(om.Node("Drum", [om.Translation(1.6, 0.5, 0.0), pbr(BLUE), om.Cylinder(radius=0.5, height=1.0)]))
     scene.add(om.Node("Peak", [om.Translation(0.0, 0.6, -1.8), pbr(RED), om.Cone(radius=0.5, height=1.2)]))
     return scene
+
+
+def crowd_stage(folder: Path) -> Path:
+    """Camera, a sphere light (radius 0.2), a dome light, a floor and a PointInstancer of 12 turned, scaled boxes
+    coloured per instance (displayColor), one of them hidden by invisibleIds."""
+    from pxr import Gf, UsdGeom, UsdLux, Vt
+
+    path = folder / "crowd.usda"
+    stage = _stage(path)
+    stage.RemovePrim("/World/Sun")
+    lamp = UsdLux.SphereLight.Define(stage, "/World/Lamp")
+    lamp.AddTranslateOp().Set(Gf.Vec3d(*LAMP))
+    lamp.GetRadiusAttr().Set(0.2)
+    lamp.GetIntensityAttr().Set(LAMP_RADIANCE)
+    dome = UsdLux.DomeLight.Define(stage, "/World/Sky")
+    dome.GetIntensityAttr().Set(0.2)
+    floor = UsdGeom.Cube.Define(stage, "/World/Floor")
+    floor.AddTranslateOp().Set(Gf.Vec3d(0, -0.05, 0))
+    floor.AddScaleOp().Set(Gf.Vec3f(8, 0.1, 8))
+    floor.GetSizeAttr().Set(1.0)
+    bind(floor.GetPrim(), preview_material(stage, "/World/Looks/Grey", GREY))
+    crowd = UsdGeom.PointInstancer.Define(stage, "/World/Crowd")
+    box = UsdGeom.Cube.Define(stage, "/World/Crowd/Prototypes/Box")
+    box.GetSizeAttr().Set(0.5)
+    bind(box.GetPrim(), preview_material(stage, "/World/Looks/White", (0.8, 0.8, 0.8)))
+    crowd.CreatePrototypesRel().SetTargets([box.GetPath()])
+    t, q, s, c = crowd_arrays()
+    crowd.CreateProtoIndicesAttr([0] * len(t))
+    crowd.CreatePositionsAttr(Vt.Vec3fArray.FromNumpy(t.astype(np.float32)))
+    crowd.CreateOrientationsfAttr(Vt.QuatfArray.FromNumpy(q[:, [1, 2, 3, 0]].astype(np.float32)))  # (i, j, k, r)
+    crowd.CreateScalesAttr(Vt.Vec3fArray.FromNumpy(s.astype(np.float32)))
+    colors = UsdGeom.PrimvarsAPI(crowd.GetPrim()).CreatePrimvar(
+        "displayColor", __import__("pxr").Sdf.ValueTypeNames.Color3fArray, "vertex"
+    )
+    colors.Set(Vt.Vec3fArray.FromNumpy(c.astype(np.float32)))
+    crowd.CreateIdsAttr(list(range(len(t))))
+    crowd.CreateInvisibleIdsAttr([5])
+    stage.GetRootLayer().Save()
+    return path
+
+
+LAMP = (1.0, 3.0, 2.0)
+LAMP_RADIANCE = 250.0
+
+
+def crowd_arrays():
+    """Translations, unit quaternions (w, x, y, z), scales and linear colours of the 12 instances."""
+    k = np.arange(12)
+    angle = 2 * np.pi * k / 12
+    t = np.stack([2.2 * np.cos(angle), np.full(12, 0.4), 2.2 * np.sin(angle) - 0.5], 1)
+    half = angle / 2
+    q = np.stack([np.cos(half), np.zeros(12), np.sin(half), np.zeros(12)], 1)
+    s = np.stack([np.ones(12), 1 + k / 12, np.ones(12)], 1)
+    c = np.stack([0.1 + 0.8 * k / 11, 0.3 * np.ones(12), 0.9 - 0.8 * k / 11], 1)
+    return t, q, s, c
+
+
+def equivalent_crowd() -> om.Node:
+    """The scene of :func:`crowd_stage`, built with omnirender (the documented light mapping)."""
+    from omnirender.geometry.trs import compose_trs
+
+    scene = om.Node("crowd")
+    scene.add(om.Node("Camera", [om.Translation(*EYE), om.Camera(eye=(0, 0, 0), center=(0, 0, -1), fov=FOV, near=0.1,
+                                                                  far=100)]))  # fmt: skip
+    scene.add(om.PointLight(position=LAMP, intensity=LAMP_RADIANCE * 0.2**2, constant=0.0, quadratic=1.0))
+    scene.add(om.AmbientLight(color=srgb((1, 1, 1)), intensity=0.2))
+    grey = om.PBRMaterial(base_color=srgb(GREY), metallic=0.0, roughness=0.8)
+    scene.add(om.Node("Floor", [om.Translation(0, -0.05, 0), om.Scaling(8, 0.1, 8), grey, om.Box(size=1.0)]))
+    t, q, s, c = crowd_arrays()
+    matrices = compose_trs(t, q[:, [1, 2, 3, 0]], s)
+    visible = np.ones(12, bool)
+    visible[5] = False
+    white = om.PBRMaterial(base_color=srgb((0.8, 0.8, 0.8)), metallic=0.0, roughness=0.8)
+    colors = np.array([srgb(row) for row in c])
+    scene.add(om.Node("Crowd", [white, om.InstanceSet(om.Box(size=0.5), matrices, colors=colors, visible=visible)]))
+    return scene

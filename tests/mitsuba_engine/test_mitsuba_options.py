@@ -28,5 +28,5 @@ def test_bad_values_are_explained(options, message):
 
 @pytest.mark.mitsuba
 def test_unknown_options_list_the_accepted_ones():
-    with pytest.raises(TypeError, match=r"unknown option\(s\) \['quality'\]; accepted: spp, integrator, depth"):
-        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", size=(8, 6), quality=3)
+    with pytest.raises(TypeError, match=r"unknown option\(s\) \['samples'\]; accepted: spp, quality, denoise, integ"):
+        om.render(om.Node("s", [om.Sphere()]), engine="mitsuba", size=(8, 6), samples=3)

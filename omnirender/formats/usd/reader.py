@@ -206,6 +206,7 @@ class _StageReader:
         self.subdivided: list[str] = []
         self.cameras = 0
         self.uv_names: list[str] = ["st"]
+        self.frozen: list[str] = []  # time-varying attributes read at one time (only transforms are animated)
 
     def warn(self, message: str) -> None:
         warnings.warn(f"load_usd {self.name}: {message}", stacklevel=4)
@@ -225,6 +226,12 @@ class _StageReader:
             self.warn(
                 f"{len(self.subdivided)} subdivision surface(s) drawn as their control cage ({shown}); "
                 "author subdivisionScheme = 'none' for polygon meshes"
+            )
+        if self.frozen:
+            shown = ", ".join(self.frozen[:5]) + (" ..." if len(self.frozen) > 5 else "")
+            self.warn(
+                f"{len(self.frozen)} time-sampled attribute(s) other than transforms are read at the start time "
+                f"only ({shown})"
             )
         if self.camera_path is not None and self.cameras == 0:
             raise USDImportError(f"load_usd {self.name}: no camera at {self.camera_path!r}")
@@ -249,6 +256,8 @@ class _StageReader:
             return None
         imageable = UsdGeom.Imageable(prim)
         if imageable:
+            if self.animate and imageable.GetVisibilityAttr().ValueMightBeTimeVarying():
+                self.frozen.append(str(imageable.GetVisibilityAttr().GetPath()))
             if imageable.GetVisibilityAttr().Get(self.time) == UsdGeom.Tokens.invisible:
                 return None
             purpose = imageable.GetPurposeAttr().Get()
@@ -410,6 +419,8 @@ class _StageReader:
     def mesh(self, mesh: Any) -> list[Any]:
         prim = mesh.GetPrim()
         where = str(prim.GetPath())
+        if self.animate and mesh.GetPointsAttr().ValueMightBeTimeVarying():
+            self.frozen.append(str(mesh.GetPointsAttr().GetPath()))
         points = np.asarray(mesh.GetPointsAttr().Get(self.time) or [], np.float32).reshape(-1, 3)
         counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], np.int32)
         fvi = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], np.int32)
@@ -653,11 +664,12 @@ class _StageReader:
             if len(rows) == 0 or not proto:
                 continue
             for k, (local, attrs, shape) in enumerate(self.leaves(proto, np.eye(4))):
-                transforms = matrices[rows] @ local
+                placed = matrices if len(rows) == n else matrices[rows]
+                transforms = placed if np.array_equal(local, np.eye(4)) else placed @ local
                 item = InstanceSet(
                     shape,
                     transforms,
-                    colors=None if colors is None else colors[rows],
+                    colors=None if colors is None else (colors if len(rows) == n else colors[rows]),
                     visible=None if visible[rows].all() else visible[rows],
                 )
                 name = _node_name(proto.GetName()) + (f"-{k}" if k else "")
@@ -672,7 +684,6 @@ class _StageReader:
         t = np.zeros((n, 3)) if positions is None or len(positions) != n else np.asarray(positions, np.float64)
         m = np.zeros((n, 4, 4))
         m[:, 3, 3] = 1.0
-        linear = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
         orientations = (
             instancer.GetOrientationsfAttr().Get(self.time) if hasattr(instancer, "GetOrientationsfAttr") else None
         )
@@ -680,20 +691,16 @@ class _StageReader:
             orientations = instancer.GetOrientationsAttr().Get(self.time)
         if orientations is not None and len(orientations) == n:
             q = _quaternions(orientations)  # (w, x, y, z)
-            q /= np.maximum(np.linalg.norm(q, axis=1, keepdims=True), 1e-300)
+            q /= np.maximum(np.sqrt(np.einsum("ij,ij->i", q, q)), 1e-300)[:, None]
             w, x, y, z = q.T
-            linear = np.stack(
-                [
-                    np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=1),
-                    np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=1),
-                    np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=1),
-                ],
-                axis=1,
-            )
+            m[:, 0, 0], m[:, 0, 1], m[:, 0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+            m[:, 1, 0], m[:, 1, 1], m[:, 1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+            m[:, 2, 0], m[:, 2, 1], m[:, 2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+        else:
+            m[:, 0, 0] = m[:, 1, 1] = m[:, 2, 2] = 1.0
         scales = instancer.GetScalesAttr().Get(self.time)
         if scales is not None and len(scales) == n:
-            linear = linear * np.asarray(scales, np.float64)[:, None, :]
-        m[:, :3, :3] = linear
+            m[:, :3, :3] *= np.asarray(scales, np.float64)[:, None, :]
         m[:, :3, 3] = t
         return m
 
