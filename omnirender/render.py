@@ -307,16 +307,21 @@ def _check_scene(function: str, scene: Any) -> None:
 
 
 def _warn_if_empty(function: str, scene: Any) -> None:
-    """Warn when ``scene`` holds no shape at all: the image would show only the background."""
+    """Warn when ``scene`` holds nothing but attributes (no shape): the image would show only the background.
+
+    Components that are neither shapes nor attributes (techniques, a renderer tree's drawing component)
+    may draw by themselves: a scene holding one is not reported.
+    """
     import warnings
 
-    from .core.component import Shape
+    from .core.component import Attribute, Shape
     from .scene.node import Node
 
     stack, seen = [scene], set()
     while stack:
         current = stack.pop()
-        if isinstance(current, Shape):
+        draws = hasattr(current, "parameters") and not isinstance(current, (Attribute, Node))
+        if isinstance(current, Shape) or draws:
             return
         if isinstance(current, Node):
             if id(current) not in seen:
