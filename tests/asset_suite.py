@@ -163,14 +163,18 @@ def _write_ply_faces(path: Path) -> None:
     v, f = _icosphere()
     c = v[f].mean(axis=1)
     rgb = np.stack([c[:, 0] > 0, c[:, 1] > 0, c[:, 2] > 0], -1).astype(np.uint8) * 200 + 40
+    # every vertex has the same default colour, as many exporters write: the faces' colours are the real ones
     header = (
         f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\nproperty float x\nproperty float y\n"
-        f"property float z\nelement face {len(f)}\nproperty list uchar int vertex_indices\nproperty uchar red\n"
+        "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+        f"element face {len(f)}\nproperty list uchar int vertex_indices\nproperty uchar red\n"
         "property uchar green\nproperty uchar blue\nend_header\n"
     )
+    vertex = np.zeros(len(v), np.dtype([("p", "<f4", 3), ("rgb", "u1", 3)]))
+    vertex["p"], vertex["rgb"] = v, 255
     face = np.zeros(len(f), np.dtype([("n", "u1"), ("i", "<i4", 3), ("rgb", "u1", 3)]))
     face["n"], face["i"], face["rgb"] = 3, f, rgb
-    path.write_bytes(header.encode() + v.astype("<f4").tobytes() + face.tobytes())
+    path.write_bytes(header.encode() + vertex.tobytes() + face.tobytes())
 
 
 def _write_obj_uv(path: Path) -> None:

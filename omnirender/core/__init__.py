@@ -26,7 +26,7 @@ from .limits import ResourceLimitError
 from .mask import MaskError, compile_mask
 from .paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError, resolve_reference
 from .technique import Technique
-from .transform import Matrix, Rotation, Scaling, Transform, Translation, finite_vector
+from .transform import Matrix, Rotation, Scaling, Transform, Translation, TranslationArray, finite_vector
 
 __all__ = [
     "PathPolicy",
@@ -62,6 +62,7 @@ __all__ = [
     "Transform",
     "Matrix",
     "Translation",
+    "TranslationArray",
     "Rotation",
     "Scaling",
     "finite_vector",

@@ -274,6 +274,7 @@ def _parts(loaded: Any, path: str, strict: bool = False) -> list[tuple[dict[str,
 
 
 def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, Any] | None, TriangleSet]:
+    _ply_face_colors(mesh)
     _consistent_winding(mesh)
     arrays = triangle_arrays(mesh)
     material = None
@@ -289,6 +290,34 @@ def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, An
         if material is not None and arrays["texcoords"] is None and material.pop("texture", None) is not None:
             report_drop(f"MeshFile {path}", "texture dropped: the mesh has no texture coordinates", strict=strict)
     return material, TriangleSet(**arrays)
+
+
+def _ply_face_colors(mesh: Any) -> None:
+    """Use a PLY file's per-face colours when its vertex colours are all the same.
+
+    Many exporters write a default colour on every vertex beside the real
+    colours of the faces; trimesh keeps the vertex colours and drops the
+    faces', so the faces' colours were lost in every engine.
+    """
+    raw = (getattr(mesh, "metadata", None) or {}).get("_ply_raw")
+    visual = getattr(mesh, "visual", None)
+    if not raw or "face" not in raw or getattr(visual, "kind", None) != "vertex":
+        return
+    data = raw["face"].get("data")
+    names = set(getattr(getattr(data, "dtype", None), "names", None) or ())
+    if not {"red", "green", "blue"} <= names or len(data) != len(mesh.faces):
+        return  # no face colours, or polygons split into more triangles than the file has faces
+    if len(np.unique(np.asarray(visual.vertex_colors), axis=0)) > 1:
+        return  # real vertex colours: they win, as in trimesh
+    channels = [c for c in ("red", "green", "blue", "alpha") if c in names]
+    fc = np.stack([np.asarray(data[c], np.float64).reshape(-1) for c in channels], -1)
+    if np.asarray(data["red"]).dtype.kind == "f":
+        fc = fc * 255.0  # float colours are in [0, 1]
+    if len(np.unique(fc, axis=0)) < 2:
+        return
+    from trimesh.visual import ColorVisuals
+
+    mesh.visual = ColorVisuals(mesh, face_colors=np.clip(np.round(fc), 0, 255).astype(np.uint8))
 
 
 def _consistent_winding(mesh: Any) -> None:

@@ -164,3 +164,42 @@ def test_chromium_shows_instance_sets_as_gl_does(tmp_path):
         delta = delta_e2000(cielab(gl[rows, cols]), cielab(shot[rows, cols]))
         print(f"instance colours GL vs Chromium: dE max {delta.max():.1f}")
         assert delta.max() < 10
+
+
+def test_phong_materials_keep_their_parameters_for_the_page():
+    scene = om.Node("s", [om.Material(diffuse=(0.7, 0.7, 0.7), specular=(0.1, 0.1, 0.1), shininess=8), om.Sphere()])
+    glb, _ = gltf.build(scene)
+    doc = json.loads(glb[20 : 20 + int.from_bytes(glb[12:16], "little")])
+    phong = doc["materials"][0]["extras"]["omnirender"]["phong"]
+    assert phong["shininess"] == 8.0 and phong["specular"] == pytest.approx([0.0100] * 3, abs=2e-4)  # linear
+
+
+@pytest.mark.gl
+@pytest.mark.chromium
+@pytest.mark.slow
+def test_the_page_has_gl_shadows_and_no_floor_glare(tmp_path):
+    """Issue 23: the demo's page had no shadows and a bright specular glare on the floor that GL does not have."""
+    from omnirender.demo import demo_scene
+
+    def luminance(rgb: np.ndarray) -> np.ndarray:
+        return rgb[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+
+    scene = demo_scene()
+    lit_scene = demo_scene()
+    lit_scene.insert(0, om.Shadowing(cast=False))
+    gl = luminance(om.render(scene, engine="gl", size=SIZE).array.astype(float))
+    lit = luminance(om.render(lit_scene, engine="gl", size=SIZE).array.astype(float))
+    floor_only = demo_scene()
+    for name in ("knot", "torus", "ball"):
+        floor_only.remove(floor_only.child(name))
+    full, alone = (om.render(s, engine="gl", size=SIZE) for s in (lit_scene, floor_only))
+    with np.errstate(invalid="ignore"):
+        floor = np.isfinite(full.depth) & (np.abs(full.depth - alone.depth) < 1e-3)
+    shadow = floor & (gl < 0.8 * lit)
+    om.export(scene, tmp_path / "demo.html")
+    page = luminance(_chromium_screenshot(tmp_path / "demo.html", tmp_path / "page.png", SIZE).astype(float))
+    assert shadow.sum() > 300
+    darker = float(np.mean(page[shadow] < 0.85 * lit[shadow]))
+    print(f"page darker than GL's unshadowed floor on {darker:.1%} of GL's shadow pixels")
+    assert darker > 0.8  # the page's shadows fall where GL's do
+    assert np.percentile(page[floor & ~shadow], 99) < np.percentile(lit[floor], 99) + 20  # no glare

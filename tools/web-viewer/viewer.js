@@ -35,6 +35,78 @@ function convertLight(light, units) {
   if (light.isSpotLight) light.penumbra = units.penumbra || 0;
 }
 
+// Materials and shadows as the GL engine draws them.  A Phong material (omnirender's om.Material, kept by the
+// glTF exporter in the material's extras) becomes three.js's Blinn-Phong material: GL's Phong exponent n is
+// about a Blinn-Phong exponent 4 n, and three.js normalises its lobe by (n / 2 + 1) and weighs it by the
+// cosine of the light, which GL does not, so the specular colour is divided by that factor (the highlight's
+// peak stays GL's; the metallic-roughness stand-in had a bright glare on rough floors).
+function phongMaterial(material, phong) {
+  const shininess = 4 * Math.max(phong.shininess, 1);
+  const spec = phong.specular.map((c) => c / (shininess / 2 + 1));
+  return new THREE.MeshPhongMaterial({
+    name: material.name,
+    color: material.color,
+    map: material.map,
+    specular: new THREE.Color(spec[0], spec[1], spec[2]),
+    shininess,
+    emissive: material.emissive,
+    emissiveMap: material.emissiveMap,
+    normalMap: material.normalMap,
+    side: material.side,
+    transparent: material.transparent,
+    opacity: material.opacity,
+    alphaTest: material.alphaTest,
+    vertexColors: material.vertexColors,
+  });
+}
+
+// Shadow maps on, as in every omnirender engine: every opaque mesh casts and receives, every light casts,
+// with 2048-texel maps, soft PCF, a normal bias of 0.6 % of the scene radius and a camera fitted to it.
+function enableShadows(renderer, root) {
+  renderer.shadowMap.enabled = true;
+  renderer.shadowMap.type = THREE.PCFSoftShadowMap;
+  const box = new THREE.Box3().setFromObject(root);
+  const center = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
+  root.traverse((object) => {
+    if (object.isMesh) {
+      const materials = Array.isArray(object.material) ? object.material : [object.material];
+      object.castShadow = !materials.some((m) => m.transparent);
+      object.receiveShadow = true;
+    }
+    if (!object.isLight || object.isAmbientLight) return;
+    object.castShadow = true;
+    object.shadow.mapSize.set(2048, 2048);
+    object.shadow.bias = -0.0002;
+    object.shadow.normalBias = radius * 0.006;
+    const position = object.getWorldPosition(new THREE.Vector3());
+    const far = position.distanceTo(center) + radius;
+    if (object.isDirectionalLight) {
+      const shadowCamera = object.shadow.camera;
+      shadowCamera.left = shadowCamera.bottom = -radius;
+      shadowCamera.right = shadowCamera.top = radius;
+      // the shadow camera sits at the light and looks at its target (a child one unit ahead): the light is
+      // moved along its direction to just behind the scene, which changes nothing else for a sun
+      const d = object.target.getWorldPosition(new THREE.Vector3()).sub(position).normalize();
+      const place = center.clone().addScaledVector(d, -2 * radius);
+      if (object.parent) object.parent.worldToLocal(place);
+      object.position.copy(place);
+      object.updateMatrixWorld(true);
+      shadowCamera.near = 0.01 * radius;
+      shadowCamera.far = 4 * radius;
+    } else {
+      // a light exactly in the plane of a caster's face (round numbers: a light above a floor's edge) makes
+      // SwiftShader's clipper fill a whole cube face with that edge-on face, shadowing everything in it:
+      // the light moves by a ten-thousandth of the scene, which nothing else notices
+      object.position.add(new THREE.Vector3(0.73, 0.31, 0.53).multiplyScalar(radius * 1e-4));
+      object.updateMatrixWorld(true);
+      object.shadow.camera.near = Math.max(far - 2 * radius, far * 0.002);
+      object.shadow.camera.far = far;
+    }
+    object.shadow.camera.updateProjectionMatrix();
+  });
+}
+
 function fittedCamera(root, aspect) {
   const box = new THREE.Box3().setFromObject(root);
   const center = box.getCenter(new THREE.Vector3());
@@ -67,7 +139,12 @@ export function show(container, options) {
       let index = 0;
       gltf.scene.traverse((object) => {
         if (object.isLight) convertLight(object, (options.lights || [])[index++] || {});
+        if (object.isMesh && !Array.isArray(object.material)) {
+          const phong = ((object.material.userData || {}).omnirender || {}).phong;
+          if (phong) object.material = phongMaterial(object.material, phong);
+        }
       });
+      enableShadows(renderer, gltf.scene);
       const ambient = options.ambient || [0, 0, 0];
       if (ambient.some((v) => v > 0)) {
         const color = new THREE.Color().setRGB(ambient[0], ambient[1], ambient[2], THREE.SRGBColorSpace);

@@ -270,7 +270,9 @@ class GLTFEngine(NodeTrackingEngine):
         emissive), with ``KHR_texture_transform`` and the UV set; alpha mode,
         cutoff and double-sidedness; emission above 1 through
         ``KHR_materials_emissive_strength``.  Phong materials become the
-        nearest metallic-roughness material (roughness from the shininess).
+        nearest metallic-roughness material (roughness from the shininess),
+        their specular colour (linear) and shininess kept in the material's
+        ``extras`` (``{"omnirender": {"phong": ...}}``: the web page draws them).
         Per-vertex colours replace a Phong colour (glTF multiplies: the factor
         is then white).
         """
@@ -299,6 +301,10 @@ class GLTFEngine(NodeTrackingEngine):
             "roughnessFactor": float(roughness),
         }
         material: dict[str, Any] = {"name": name, "pbrMetallicRoughness": pbr_block, "doubleSided": app.double_sided}
+        if app.model == "phong" and float(np.max(app.specular)) > 0.0:
+            # the Phong parameters themselves, for readers that draw Phong as GL does (the web page)
+            phong = {"specular": [float(c) for c in app.specular], "shininess": float(app.shininess)}
+            material["extras"] = {"omnirender": {"phong": phong}}
         if app.texture is not None or app.layers:
             if app.layers:
                 image = bake_layers(None if app.texture is None else app.texture.image_array(), app.layers)
@@ -453,6 +459,12 @@ class GLTFEngine(NodeTrackingEngine):
             return
         camera, world = self.camera
         w, h = self.size
+        if camera.is_off_axis:
+            warnings.warn(
+                f"glTF export: the camera's off-axis shift {camera.shift} is dropped (glTF cameras are symmetric "
+                "frusta); the exported camera looks along the same axis with the same field of view",
+                stacklevel=3,
+            )
         if camera.is_orthographic:
             cam: dict[str, Any] = {
                 "type": "orthographic",

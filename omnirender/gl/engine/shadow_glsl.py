@@ -12,7 +12,8 @@ both are no-ops.
   direction from the light), with normal offset and depth bias measured in
   texels of that face, and percentage-closer filtering chosen at compile
   time by ``SHADOW_PCF`` (0: one comparison, hard shadows; 1: bilinear 2x2;
-  2: four bilinear taps spread over ``u_shadow_style.x`` texels).  Software
+  2, the default softness: a tent over 3x3 texels, Filament's and three.js's
+  PCF; 3: four bilinear taps spread over ``u_shadow_style.x`` texels).  Software
   rasterisers run every side of a branch, so the filter is a define, not a
   uniform.
 * ``LIGHT_SELECT``: ``u_light_on[i]`` scales light ``i`` and ``u_ambient_on``
@@ -57,6 +58,20 @@ float shadow_lookup(vec4 tile, vec2 uv, float z) {
     return shadow_at(tile, t, z);
 #elif SHADOW_PCF == 1
     return shadow_bilinear(tile, t, z);
+#elif SHADOW_PCF == 2
+    // a tent 3 texels wide (the PCF of Filament and three.js): the 3x3 texels nearest t, each weighted by
+    // 1.5 - |distance| per axis; 9 fetches where four bilinear taps take 16
+    vec2 c = floor(t) + 0.5;   // the nearest texel centre
+    vec2 f = t - c;            // in [-0.5, 0.5)
+    vec3 wx = vec3(0.5 + f.x, 1.5 - abs(f.x), 0.5 - f.x);   // 1.5 - |d| for d = f + 1, f, f - 1
+    vec3 wy = vec3(0.5 + f.y, 1.5 - abs(f.y), 0.5 - f.y);
+    float sum = 0.0;
+    for (int j = -1; j <= 1; ++j) {
+        for (int i = -1; i <= 1; ++i) {
+            sum += wx[1 - i] * wy[1 - j] * shadow_at(tile, c + vec2(float(i), float(j)), z);
+        }
+    }
+    return sum / ((wx.x + wx.y + wx.z) * (wy.x + wy.y + wy.z));
 #else
     float h = 0.5 * max(u_shadow_style.x - 1.0, 0.0);  // four filtered taps spread over the softness radius
     return 0.25 * (shadow_bilinear(tile, t + vec2(-h, -h), z) + shadow_bilinear(tile, t + vec2(h, -h), z)
@@ -83,7 +98,10 @@ float face_shadow(int f, int count, vec3 light_eye, vec3 P, vec3 N, vec3 L) {
     clip = u_shadow_mat[f] * vec4(W, 1.0);
     if (clip.w <= 0.0) return 1.0;
     vec3 q = clip.xyz / clip.w * 0.5 + 0.5;
-    if (count == 1 && (q.x < 0.0 || q.x > 1.0 || q.y < 0.0 || q.y > 1.0)) return 1.0;  // no caster there
+    // outside the face's map no caster can be (faces are cropped to the casters); a cube face's own border
+    // keeps a few texels of slack for the offsets, which may carry a point just past it
+    float slack = count == 1 ? 0.0 : 4.0 / tile.z;
+    if (q.x < -slack || q.x > 1.0 + slack || q.y < -slack || q.y > 1.0 + slack) return 1.0;
     return shadow_lookup(tile, clamp(q.xy, 0.0, 1.0), clamp(q.z, 0.0, 1.0));
 }
 """
@@ -110,8 +128,8 @@ uniform float u_ambient_on;
 
 
 def pcf_mode(softness: float) -> int:
-    """The ``SHADOW_PCF`` define for a softness in texels."""
-    return 0 if softness <= 0.0 else 1 if softness <= 1.0 else 2
+    """The ``SHADOW_PCF`` define for a softness in texels (0 hard, 1 bilinear, 2 tent, 3 four spread taps)."""
+    return 0 if softness <= 0.0 else 1 if softness <= 1.0 else 2 if softness <= 2.0 else 3
 
 
 def shadow_code(features: dict[str, Any]) -> str:

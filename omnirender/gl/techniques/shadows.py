@@ -13,8 +13,17 @@ scopes included, from the light's camera:
 * point lights: six 90-degree faces of a cube; faces that cannot see a caster
   are not drawn.
 
+Perspective faces are fitted tightly: each is cropped to the rectangle the
+casters' bounds cover in it (:func:`frustum_crop`), so its texels go where
+shadows can fall.  The map resolution follows the image (``resolution=None``:
+the image's larger side, :func:`auto_resolution`) within an atlas
+budget (:data:`MAX_ATLAS`), so a shadow texel stays near a pixel on the
+screen (1024 texels at 640x480); both depend on the casters, the lights and the image size only, never
+on the camera, so maps drawn once stay valid while the camera moves.
+
 Lit shaders then look each light up in its face (``SHADOW_MAPS``, see
-:mod:`.shadow_glsl`) with percentage-closer filtering, normal offset and depth
+:mod:`.shadow_glsl`) with percentage-closer filtering (by default a tent over
+3x3 texels: edges without stair steps), slope-scaled normal offset and depth
 bias, for every item that receives shadows.  :class:`ShadowMaps` is the
 technique that sets these for the subgraph after it: ``ShadowMaps(enabled=False)``
 at the top of the root node switches shadow maps off for the whole frame (no
@@ -42,7 +51,17 @@ from ..engine.state import casts_shadows
 from ..engine.technique import GLTechnique
 from ..engine.units import SHADOW_ATLAS
 
-__all__ = ["ShadowMaps", "ShadowPlan", "ShadowMapStage", "ATLAS", "SHADOW_UNIT", "caster_bounds"]
+__all__ = [
+    "ShadowMaps",
+    "ShadowPlan",
+    "ShadowMapStage",
+    "ATLAS",
+    "SHADOW_UNIT",
+    "caster_bounds",
+    "auto_resolution",
+    "frustum_crop",
+    "MAX_ATLAS",
+]
 
 #: Name of the frame's shadow-map atlas target.
 ATLAS = "shadow-atlas"
@@ -59,6 +78,20 @@ _CUBE = (
 )
 #: Spots wider than this get a cube of faces: one perspective map would stretch too far.
 _MAX_SPOT_CUTOFF = 65.0
+#: The atlas's largest side in texels (the faces of a frame share it: 4096^2 depth texels are 64 MiB).
+MAX_ATLAS = 4096
+#: Automatic map resolutions: texels per pixel of the image's larger side, and the range.
+AUTO_TEXELS_PER_PIXEL = 1.0
+AUTO_RANGE = (512, 2048)
+#: Cropped faces keep this margin (a fraction of the crop) around the casters' rectangle.
+_CROP_MARGIN = 0.02
+
+
+def auto_resolution(size: tuple[int, int]) -> int:
+    """The map resolution for an image of ``size``: its larger side, a power of two in ``AUTO_RANGE``."""
+    want = AUTO_TEXELS_PER_PIXEL * max(int(size[0]), int(size[1]), 1)
+    r = 1 << max(int(math.ceil(math.log2(want))), 0)
+    return int(min(max(r, AUTO_RANGE[0]), AUTO_RANGE[1]))
 
 
 def _positive(owner: str, name: str, value: Any, minimum: float = 0.0) -> float:
@@ -72,8 +105,10 @@ class ShadowMaps(GLTechnique):
 
     ``enabled=False`` keeps shadow maps off these receivers (at the top of the
     root node: off for the whole frame).  ``resolution`` (pixels per map
-    side) is taken from the scene's first ShadowMaps.  ``softness`` is the
-    radius of percentage-closer filtering in map texels (0: hard shadows),
+    side; None: :func:`auto_resolution` of the image) is taken from the
+    scene's first ShadowMaps.  ``softness`` is the
+    width of percentage-closer filtering in map texels (0: hard shadows, 1:
+    bilinear, 2: a tent over 3x3 texels, more: four bilinear taps spread wider),
     ``bias`` the depth bias and ``normal_offset`` the offset along the
     surface normal, both in map texels: they keep lit surfaces from shadowing
     themselves (acne) without detaching shadows from their casters
@@ -91,17 +126,20 @@ class ShadowMaps(GLTechnique):
     def __init__(
         self,
         enabled: bool = True,
-        resolution: int = 512,
-        softness: float = 1.0,
+        resolution: int | None = None,
+        softness: float = 2.0,
         bias: float = 2.0,
         normal_offset: float = 3.0,
     ) -> None:
         super().__init__(passes=1)
         if not isinstance(enabled, bool):
             raise ValueError(f"ShadowMaps: enabled must be True or False, got {enabled!r}")
-        if isinstance(resolution, bool) or not isinstance(resolution, int) or not 16 <= resolution <= 8192:
+        if resolution is not None and (
+            isinstance(resolution, bool) or not isinstance(resolution, int) or not 16 <= resolution <= 8192
+        ):
             raise ValueError(
-                f"ShadowMaps: resolution must be a whole number of pixels in [16, 8192], got {resolution!r}"
+                f"ShadowMaps: resolution must be None (automatic) or a whole number of pixels in [16, 8192], "
+                f"got {resolution!r}"
             )
         self.enabled = enabled
         self.resolution = resolution
@@ -147,14 +185,21 @@ class _MapPasses(GLTechnique):
 class ShadowPlan:
     """The shadow maps of one frame: faces per light, the atlas, the passes and the shader uniforms."""
 
-    def __init__(self, settings: ShadowMaps, lights: list[tuple[Any, np.ndarray]], bounds: Any) -> None:
+    def __init__(
+        self,
+        settings: ShadowMaps,
+        lights: list[tuple[Any, np.ndarray]],
+        bounds: Any,
+        size: tuple[int, int] = (640, 480),
+    ) -> None:
         self.settings = settings
         self.faces: list[_Face] = []
         #: id(light) -> (first face, face count)
         self.light_faces: dict[int, tuple[int, int]] = {}
         lo, hi = bounds
+        wanted = settings.resolution if settings.resolution is not None else auto_resolution(size)
         for light, matrix in lights:
-            faces = _light_faces(light, matrix, lo, hi, settings.resolution)
+            faces = _light_faces(light, matrix, lo, hi, wanted)
             if not faces:
                 continue
             if len(self.faces) + len(faces) > MAX_SHADOW_FACES:
@@ -167,9 +212,13 @@ class ShadowPlan:
             self.light_faces[id(light)] = (len(self.faces), len(faces))
             self.faces.extend(faces)
         drawn = [f for f in self.faces if f.drawn]
-        r = settings.resolution
         cols = max(1, math.ceil(math.sqrt(len(drawn))))
         rows = max(1, math.ceil(len(drawn) / cols))
+        r = wanted if settings.resolution is not None else min(wanted, MAX_ATLAS // cols)
+        self.resolution = r
+        if r != wanted:  # texel sizes were measured for the wanted resolution
+            for face in self.faces:
+                face.texel = (face.texel[0] * wanted / r, face.texel[1] * wanted / r)
         self.target = Target(ATLAS, colors=(), depth=True, size=(cols * r, rows * r))
         for k, face in enumerate(drawn):
             face.tile = (k % cols, k // cols)
@@ -185,7 +234,7 @@ class ShadowPlan:
 
     def technique(self) -> _MapPasses | None:
         """The depth passes, or None when no face needs drawing."""
-        r = self.settings.resolution
+        r = self.resolution
         passes = []
         for k, face in enumerate(self.faces):
             if face.tile is None:
@@ -217,7 +266,7 @@ class ShadowPlan:
             self.texels[k] = face.texel
             if face.tile is not None:
                 col, row = face.tile
-                r = self.settings.resolution
+                r = self.resolution
                 self.tiles[k] = (col * r, row * r, r, r)
         self.style = np.asarray(self.settings.style(), np.float32)
 
@@ -282,10 +331,9 @@ class ShadowMapStage(FrameStage):
     def __init__(self) -> None:
         self._cache: Any = None  # (key, plan, its technique)
         self._drawn: Any = None  # (key, caster bounds, size) of the maps the atlas holds
-        self._caster_bounds: Any = None  # (bounds,) of the installed list, made on first use
 
     def changed(self) -> None:
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
+        """Nothing to forget: the engine's render index keeps the casters' bounds up to date."""
 
     def draw(self, frame: Any, root: Scope) -> int:
         engine = frame.engine
@@ -295,22 +343,22 @@ class ShadowMapStage(FrameStage):
         lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
         if not lights:
             return 0
-        if self._caster_bounds is None:
-            self._caster_bounds = (caster_bounds(root),)
-        bounds = self._caster_bounds[0]
+        # the render index keeps the casters' bounds: a new tuple whenever casters moved (compared below)
+        casters = engine.index.caster_bounds() if engine.root_scope is not None else (caster_bounds(root),)
+        bounds = casters[0]
         if bounds is None:
             return 0
         key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
-               tuple((id(light), light.version, m.tobytes()) for light, m in lights))  # fmt: skip
+               tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
         if plan is None:
-            plan = ShadowPlan(settings, lights, bounds)
+            plan = ShadowPlan(settings, lights, bounds, tuple(engine.size))
             self._cache = (key, plan, plan.technique())
         technique = self._cache[2]
         if technique is None:
             return 0
         frame.state.shadow_plan = plan
-        drawn = (key, self._caster_bounds, tuple(engine.size))
+        drawn = (key, casters, tuple(engine.size))
         last = self._drawn
         fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
         if fresh and frame.keep_target(plan.target):
@@ -360,16 +408,84 @@ def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         axis = light.world_direction(matrix)
         fov = min(2.0 * light.cutoff + 2.0, 179.0)
         view = look_at_matrix(p, p + axis, _up_for(axis))
-        texel = 2.0 * math.tan(math.radians(fov) / 2.0) / resolution
-        return [_Face(view, perspective_matrix(fov, 1.0, near, far), (0.0, texel))]
+        face = _cropped_face(view, math.tan(math.radians(fov) / 2.0), near, far, lo, hi, resolution)
+        return [face] if face is not None else []
     rlo, rhi = lo - p, hi - p
     faces = []
-    texel = 2.0 / resolution  # 90 degrees: the face is 2 units wide at distance 1
     for axis, up in _CUBE:
         a = np.asarray(axis, np.float64)
         view = look_at_matrix(p, p + a, up)
-        faces.append(_Face(view, perspective_matrix(90.0, 1.0, near, far), (0.0, texel), _sees(a, rlo, rhi)))
+        face = _cropped_face(view, 1.0, near, far, lo, hi, resolution) if _sees(a, rlo, rhi) else None
+        if face is None:  # the face sees no caster: a placeholder, not drawn (looked up as lit)
+            face = _Face(view, perspective_matrix(90.0, 1.0, near, far), (0.0, 2.0 / resolution), False)
+        faces.append(face)
     return faces
+
+
+def _cropped_face(
+    view: np.ndarray, k: float, near: float, far: float, lo: np.ndarray, hi: np.ndarray, resolution: int
+) -> _Face | None:
+    """A perspective face (half-width ``k`` at distance 1) cropped to the casters' rectangle in it; None: none."""
+    crop = frustum_crop(view, k, near, lo, hi)
+    if crop is None:
+        return None
+    x0, y0, x1, y1 = crop
+    mx, my = (x1 - x0) * _CROP_MARGIN + 1e-4, (y1 - y0) * _CROP_MARGIN + 1e-4
+    x0, y0, x1, y1 = max(x0 - mx, -1.0), max(y0 - my, -1.0), min(x1 + mx, 1.0), min(y1 + my, 1.0)
+    sx, sy = (x1 - x0) / 2.0, (y1 - y0) / 2.0
+    # the crop rectangle becomes the whole of NDC: x' = (x - cx) / sx
+    crop_matrix = np.array(
+        [[1 / sx, 0, 0, -(x0 + x1) / 2 / sx], [0, 1 / sy, 0, -(y0 + y1) / 2 / sy], [0, 0, 1, 0], [0, 0, 0, 1]]
+    )
+    proj = crop_matrix @ perspective_matrix(math.degrees(2.0 * math.atan(k)), 1.0, near, far)
+    return _Face(view, proj, (0.0, 2.0 * k * max(sx, sy) / resolution))
+
+
+_BOX_FACES = ((0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3))
+
+
+def _clip_polygon(poly: list[np.ndarray], w: np.ndarray, c: float) -> list[np.ndarray]:
+    """Sutherland-Hodgman: the part of a convex polygon where ``w . p + c >= 0``."""
+    out = []
+    for i in range(len(poly)):
+        p, q = poly[i], poly[(i + 1) % len(poly)]
+        fp, fq = float(w @ p + c), float(w @ q + c)
+        if fp >= 0.0:
+            out.append(p)
+        if (fp >= 0.0) != (fq >= 0.0):
+            out.append(p + (q - p) * (fp / (fp - fq)))
+    return out
+
+
+def frustum_crop(
+    view: np.ndarray, k: float, near: float, lo: np.ndarray, hi: np.ndarray
+) -> tuple[float, float, float, float] | None:
+    """The rectangle (x0, y0, x1, y1) in [-1, 1]^2 (units of ``k``) that the box [lo, hi] covers inside the square
+    frustum ``|x|, |y| <= k d``, ``d = -z >= near`` of the camera ``view``; None when no part of it is inside.
+
+    The box's faces are clipped by the frustum's planes and the clipped
+    polygons projected: the exact bounding rectangle of what a face can see.
+    """
+    eye = _corners(lo, hi) @ view[:3, :3].T + view[:3, 3]
+    planes = [(np.array([sx, sy, -k]), 0.0) for sx, sy in ((-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0))]
+    planes.append((np.array([0.0, 0.0, -1.0]), -near))
+    points = []
+    for face in _BOX_FACES:
+        poly = [eye[i] for i in face]
+        for w, c in planes:
+            poly = _clip_polygon(poly, w, c)
+            if not poly:
+                break
+        points.extend(poly)
+    if not points:
+        return None
+    pts = np.array(points)
+    d = np.maximum(-pts[:, 2], 1e-12) * k
+    x, y = pts[:, 0] / d, pts[:, 1] / d
+    x0, y0, x1, y1 = (float(np.clip(v, -1.0, 1.0)) for v in (x.min(), y.min(), x.max(), y.max()))
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1, y1
 
 
 def _sees(axis: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> bool:
