@@ -67,6 +67,7 @@ _LAZY_NAMES = {
     "render_frames": "animation",
     "video": "animation",
     "load_gltf": "formats.gltf",
+    "render_to_file": "tiling",
     "load_usd": "formats.usd",
 }
 

@@ -99,13 +99,23 @@ _count = _number(int, 0, False, "a whole number >= 0")
 
 
 def _load(
-    path: str, trusted: bool = False, size: tuple[int, int] = (4, 3), animated: bool = False, engine: str = "gl"
+    path: str,
+    trusted: bool | argparse.Namespace = False,
+    size: tuple[int, int] = (4, 3),
+    animated: bool = False,
+    engine: str = "gl",
 ) -> Any:
     """The scene of a scene file, or a scene made around a mesh file (for an image of ``size``, for ``engine``).
 
+    ``trusted`` is a flag or the parsed arguments (``--trusted``,
+    ``--allowed-root``, ``--strict``): the path policy of the file's references.
     ``animated``: a glTF file is read with its animations (``om.load_gltf``), staged with a fitted
     camera and the default lights when it has no camera of its own.
     """
+    options = trusted if isinstance(trusted, argparse.Namespace) else None
+    trusted = bool(getattr(options, "trusted", False)) if options is not None else bool(trusted)
+    roots = list(getattr(options, "allowed_root", None) or [])
+    strict = bool(getattr(options, "strict", False))
     from .scene.mesh_scene import mesh_suffixes
 
     mesh_exts = mesh_suffixes()
@@ -129,14 +139,22 @@ def _load(
         from .animation import load_gltf
         from .scene.mesh_scene import framed
 
-        return framed(load_gltf(p), size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
+        gltf = load_gltf(p, trusted=trusted, allowed_roots=roots, strict=strict)
+        return framed(gltf, size[0] / size[1], engine not in SHADOWLESS_LIGHT_ENGINES)
     if suffix in mesh_exts:
         from .scene.mesh_scene import mesh_scene
 
-        return mesh_scene(p, size[0] / size[1], fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES)
+        return mesh_scene(
+            p,
+            size[0] / size[1],
+            fill_shadows=engine not in SHADOWLESS_LIGHT_ENGINES,
+            trusted=trusted,
+            allowed_roots=roots,
+            strict=strict,
+        )
     from .scene.files import load
 
-    return load(p, trusted=trusted)
+    return load(p, trusted=trusted, allowed_roots=roots)
 
 
 #: Engines that honour ``casts_shadows=False``.  For the others (path tracers) the fill and back lights
@@ -184,7 +202,7 @@ def _render(args: argparse.Namespace) -> int:
     ok, why = engine_status(args.engine, check=False)  # its packages; the engine itself says what else fails
     if not ok:
         raise RuntimeError(f"engine {args.engine!r} is not available here: {why}")
-    scene = _load(args.scene, getattr(args, "trusted", False), args.size, engine=args.engine)
+    scene = _load(args.scene, args, args.size, engine=args.engine)
     image = render(scene, engine=args.engine, size=args.size, **options)
     image.save(output)
     print(output)
@@ -237,7 +255,7 @@ def _animate(args: argparse.Namespace) -> int:
         frames = parse_frames(args.frames) if args.frames is not None else None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    scene = _load(args.scene, getattr(args, "trusted", False), args.size, animated=True, engine=args.engine)
+    scene = _load(args.scene, args, args.size, animated=True, engine=args.engine)
     if args.turntable is not None:
         turntable(scene, args.turntable, fps=args.fps or 24.0)
     elif not animations(scene):
@@ -283,7 +301,7 @@ def _msaa_samples(spp: int) -> int:
 
 
 def _view(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, getattr(args, "trusted", False), args.size)
+    scene = _load(args.scene, args, args.size)
     from .viewer import view
 
     view(scene, size=args.size, title=f"omnirender - {Path(args.scene).name}", duration=args.duration)
@@ -296,14 +314,14 @@ def _export(args: argparse.Namespace) -> int:
     ext = Path(args.output).suffix.lower()
     if ext not in exporters():
         raise UsageError(f"cannot export to {args.output!r}: use one of {', '.join(exporters())}")
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, args)
     export(scene, args.output)
     print(args.output)
     return 0
 
 
 def _info(args: argparse.Namespace) -> int:
-    scene = _load(args.scene, getattr(args, "trusted", False))
+    scene = _load(args.scene, args)
     print(scene_report(scene, engines=not args.no_engines))
     return 0
 
@@ -476,6 +494,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--trusted",
         action="store_true",
         help="trust the scene file: allow raw renderer text (povray.Raw, radiance.Raw) and files outside its folder",
+    )
+    reads.add_argument(
+        "--allowed-root",
+        action="append",
+        metavar="DIR",
+        help="a folder the file's references may lead into besides its own (repeatable)",
+    )
+    reads.add_argument(
+        "--strict",
+        action="store_true",
+        help="fail instead of warning when a texture, material or extension of a mesh file cannot be used",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

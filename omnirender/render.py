@@ -179,6 +179,7 @@ def render(
     engine: str = "gl",
     size: tuple[int, int] = (640, 480),
     mask: str | None = None,
+    tile: int | None = None,
     **options: Any,
 ) -> Any:
     """Render ``scene`` with the engine called ``engine``; returns an :class:`om.Image`.
@@ -204,6 +205,12 @@ def render(
       ``keep``, ``headlight``, ``global_ambient``;
     - every engine: ``on_missing`` (``"raise"``, ``"warn"`` or ``"skip"`` for shapes no handler can draw).
 
+    ``tile`` renders the image as tiles of at most ``tile`` x ``tile`` pixels
+    with off-axis projections and stitches them (:mod:`omnirender.tiling`):
+    the GL engine does so by itself when ``size`` is beyond its framebuffer
+    limit; the other engines refuse ``tile=``.  :func:`om.render_to_file`
+    streams tiles into a PNG file for posters larger than memory.
+
     The returned image has ``.array`` (H, W, 4) uint8 sRGB, ``.depth``
     (eye-space distance, inf on the background, or None), ``.mask``,
     ``.pixel(x, y)`` and ``.save(path)``.
@@ -220,6 +227,16 @@ def render(
     if callable(as_scene):  # not a scene graph but drawn by one (a renderer tree)
         scene = as_scene(engine, size)
     _check_scene(f"om.render(engine={engine!r})", scene)
+    _warn_if_empty(f"om.render(engine={engine!r})", scene)
+    if tile is None and engine == "gl" and max(size) > 4096:
+        from .tiling import MAX_TILED_PIXELS, needs_tiles
+
+        if size[0] * size[1] <= MAX_TILED_PIXELS:  # larger: refused before any context is made
+            tile = needs_tiles(engine, size, options.get("samples", 4))
+    if tile is not None:
+        from .tiling import render_tiled
+
+        return render_tiled(scene, engine, size, tile, mask=mask, **options)
     if mask is not None:
         options["mask"] = mask
     # the GL engine fits the same camera to what it compiled; the others get it in a stand-in root node
@@ -287,6 +304,38 @@ def _check_scene(function: str, scene: Any) -> None:
     for i, item in enumerate(scene):
         if not isinstance(item, RenderingComponent) and not hasattr(item, "_compile_node"):
             raise TypeError(f"{function}: scene[{i}] is a {type(item).__name__} ({item!r:.60}), not a component; {fix}")
+
+
+def _warn_if_empty(function: str, scene: Any) -> None:
+    """Warn when ``scene`` holds nothing but attributes (no shape): the image would show only the background.
+
+    Components that are neither shapes nor attributes (techniques, a renderer tree's drawing component)
+    may draw by themselves: a scene holding one is not reported.
+    """
+    import warnings
+
+    from .core.component import Attribute, Shape
+    from .scene.node import Node
+
+    stack, seen = [scene], set()
+    while stack:
+        current = stack.pop()
+        draws = hasattr(current, "parameters") and not isinstance(current, (Attribute, Node))
+        if isinstance(current, Shape) or draws:
+            return
+        if isinstance(current, Node):
+            if id(current) not in seen:
+                seen.add(id(current))
+                stack.extend(current.items)
+        elif isinstance(current, (list, tuple)):
+            stack.extend(current)
+        elif not hasattr(current, "parameters"):
+            return  # something else (a generator, a renderer tree's product): the adapter judges it
+    warnings.warn(
+        f"{function}: the scene holds no shapes, so the image shows only the background; add shapes "
+        "(om.Sphere(), om.MeshFile(path), ...) to a node of the scene",
+        stacklevel=3,
+    )
 
 
 def _check_size(size: Any) -> tuple[int, int]:

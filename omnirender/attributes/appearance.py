@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..core.component import MonoAttribute
+from ..core.limits import MAX_PIXEL_SIZE
 from ._params import (
     Param,
     Parameterised,
@@ -402,17 +403,12 @@ class Texture(Parameterised, MonoAttribute):
             return cached
         source = self._image
         if isinstance(source, str):
+            from .imagefile import read_image  # decompression bombs refused before decoding (core.limits)
+
             try:
-                from PIL import Image as PILImage
-            except ImportError:  # pragma: no cover - Pillow is a dependency of the gl extra
-                raise RuntimeError(f"Texture: loading {source!r} needs Pillow (pip install pillow)") from None
-            try:
-                with PILImage.open(source) as img:
-                    arr = np.asarray(img.convert("RGBA"), dtype=np.uint8)
+                arr = read_image(source, f"Texture: cannot read image file {source!r}", "it")
             except FileNotFoundError:
                 raise FileNotFoundError(f"Texture: image file {source!r} does not exist") from None
-            except Exception as exc:
-                raise ValueError(f"Texture: cannot read image file {source!r}: {exc}") from None
         else:
             arr = _to_rgba8(source)
         arr = np.ascontiguousarray(arr)
@@ -456,12 +452,15 @@ class DrawStyle(Parameterised, MonoAttribute):
 
     ``cull`` is ``"none"``, ``"back"`` or ``"front"`` (True means back, False none);
     ``shading`` ``"smooth"`` (interpolated normals) or ``"flat"`` (face normals).
+    ``line_width`` and ``point_size`` are pixels, > 0 and at most
+    ``omnirender.core.limits.MAX_PIXEL_SIZE`` (4096); engines draw them no
+    larger than their driver supports (GL's ``GL_POINT_SIZE_RANGE``).
     """
 
     __slots__ = ("_mode", "_line_width", "_point_size", "_cull", "_shading")
     mode = Param(check_choice("filled", "wireframe", "points"), "filled, wireframe or points")
-    line_width = Param(check_number(0.0, min_open=True), "line width in pixels")
-    point_size = Param(check_number(0.0, min_open=True), "point size in pixels")
+    line_width = Param(check_number(0.0, MAX_PIXEL_SIZE, min_open=True), "line width in pixels")
+    point_size = Param(check_number(0.0, MAX_PIXEL_SIZE, min_open=True), "point size in pixels")
     cull = Param(_check_cull, "none, back or front")
     shading = Param(check_choice("smooth", "flat"), "smooth or flat")
 

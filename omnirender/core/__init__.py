@@ -6,6 +6,7 @@ This package imports no graphics library and nothing else of omnirender.
 from .camera import Camera, look_at_matrix, orthographic_matrix, perspective_matrix
 from .component import Attribute, ChangeJournal, MonoAttribute, PolyAttribute, RenderingComponent, Shape, category_of
 from .context import RenderingContext
+from .drops import DroppedContentError, DroppedContentWarning
 from .engine import Engine
 from .errors import EvaluationError, NoHandlerError, OmnirenderError
 from .handler import (
@@ -21,11 +22,20 @@ from .handler import (
     registry,
 )
 from .light import Light, LightSwitch
+from .limits import ResourceLimitError
 from .mask import MaskError, compile_mask
+from .paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError, resolve_reference
 from .technique import Technique
 from .transform import Matrix, Rotation, Scaling, Transform, Translation, TranslationArray, finite_vector
 
 __all__ = [
+    "PathPolicy",
+    "resolve_reference",
+    "UntrustedReferenceError",
+    "RemoteReferenceError",
+    "ResourceLimitError",
+    "DroppedContentWarning",
+    "DroppedContentError",
     "ChangeJournal",
     "RenderingComponent",
     "Shape",

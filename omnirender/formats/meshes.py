@@ -5,6 +5,16 @@ and a scene's surfaces written as one mesh (``.obj``, ``.ply``, ``.stl``).
 (registered by :mod:`omnirender.formats`) the first time a file is used.
 Trimesh is imported only then, so declaring a MeshFile needs no extra package.
 
+Mesh files are untrusted input.  The files a mesh file names (an OBJ's
+``mtllib`` and texture maps, a PLY's ``TextureFile``, a glTF's buffers and
+images) are resolved by the path policy (:mod:`omnirender.core.paths`): inside
+the mesh file's folder or ``allowed_roots``, unless ``trusted=True``.  Decoded
+sizes obey :mod:`omnirender.core.limits`.  What cannot be used (a missing
+material library or texture, a remote URL, a decompression bomb, a texture map
+kind the reader does not import) is dropped with a
+:class:`~omnirender.core.drops.DroppedContentWarning` naming the file, or
+raises with ``strict=True``.
+
 :func:`export` (``om.export(scene, "x.obj")``): :class:`MeshEngine` (service
 ``"mesh.export"``) evaluates the scene like the other exporters (the camera's
 group mask, every shape through its simplifier, an ``InstanceSet`` as its
@@ -18,6 +28,7 @@ surface: they are left out with one warning naming them, never silently.
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -25,6 +36,9 @@ from typing import Any
 import numpy as np
 
 from ..core import ShapePainter, default_for
+from ..core.drops import report_drop
+from ..core.limits import ResourceLimitError, check_count, check_image_size
+from ..core.paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError
 from ..fileio import atomic_path
 from ..shapes import LineSet, PointSet, Polyline
 from ..shapes.meshes import TriangleSet
@@ -39,14 +53,22 @@ SUFFIXES = (".obj", ".ply", ".stl", ".off", ".gltf", ".glb")
 MESH_EXTENSIONS = (".obj", ".ply", ".stl")
 
 
-def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
-    """The parts of a mesh file or trimesh object: ``[(material parameters or None, TriangleSet)]``."""
+def read_mesh(
+    path: Any, *, policy: PathPolicy | None = None, strict: bool = False
+) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """The parts of a mesh file or trimesh object: ``[(material parameters or None, TriangleSet)]``.
+
+    ``policy`` (the path policy of :mod:`omnirender.core.paths`, default: the
+    file's folder only) governs the files the mesh file names; ``strict``
+    turns warnings about content left out into errors.
+    """
+    policy = policy or PathPolicy()
     if is_trimesh(path) or is_trimesh_scene(path):
-        return _parts(path, "the trimesh object")
+        return _parts(path, "the trimesh object", strict)
     if not os.path.exists(path):
         raise FileNotFoundError(f"MeshFile: no such file {path!r}")
     if path.lower().endswith((".gltf", ".glb")):
-        return _load_gltf(path)
+        return _load_gltf(path, policy, strict)
     if str(path).lower().endswith(".obj"):
         try:
             plain = read_plain_obj(path)
@@ -61,11 +83,17 @@ def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         import trimesh
     except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
         raise ValueError(f"MeshFile: loading {path!r} needs trimesh (pip install omnirender[mesh]): {exc}") from None
+    _check_header(path)
+    resolver = _PolicyResolver(path, policy, strict)
     try:
-        loaded = trimesh.load(path, process=False)
+        loaded = trimesh.load(path, process=False, resolver=resolver)
+    except (UntrustedReferenceError, ResourceLimitError):
+        raise
     except Exception as exc:
+        resolver.finish()  # a refused reference explains the failure better
         raise ValueError(f"MeshFile: cannot load {path!r}: {type(exc).__name__}: {exc}") from None
-    parts = _parts(loaded, repr(path))
+    resolver.finish()
+    parts = _parts(loaded, repr(path), strict)
     if str(path).lower().endswith(".obj") and not _names_materials(path):
         # texture coordinates without a material library: trimesh makes up a grey material with a tiny
         # placeholder image; the file has no appearance, so the shapes get the scene's (or the default)
@@ -79,7 +107,151 @@ def _names_materials(path: str) -> bool:
         return any(line.lstrip().startswith(b"mtllib") for line in fh)
 
 
-def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+_PLY_COUNT = re.compile(rb"^element\s+(\S+)\s+(\S+)", re.MULTILINE)
+_OFF_COUNTS = re.compile(rb"^\s*(?:[A-Z]*OFF)?\s*(\d+)\s+(\d+)", re.MULTILINE)
+
+
+def _check_header(path: str) -> None:
+    """Refuse a PLY or OFF file whose header announces more elements than the limits or the file can hold."""
+    lower = path.lower()
+    if not lower.endswith((".ply", ".off")):
+        return
+    with open(path, "rb") as fh:
+        head = fh.read(4096)
+    size = os.path.getsize(path)
+    source = f"MeshFile {path!r}"
+    if lower.endswith(".ply"):
+        end = head.find(b"end_header")
+        for name, count in _PLY_COUNT.findall(head[: end if end >= 0 else len(head)]):
+            if not count.isdigit():
+                raise ValueError(f"{source}: the PLY header's element {name.decode(errors='replace')!r} has no count")
+            n = int(count)
+            check_count(source, f"the PLY element {name.decode(errors='replace')!r}", n, "vertices")
+            if n > size:  # every element takes at least one byte
+                raise ValueError(
+                    f"{source}: the PLY header announces {n:,} {name.decode(errors='replace')} elements "
+                    f"but the file holds only {size:,} bytes (truncated or corrupt)"
+                )
+        return
+    lines = [ln for ln in head.splitlines() if ln.strip() and not ln.lstrip().startswith(b"#")]
+    text = b"\n".join(lines[:2])
+    match = _OFF_COUNTS.search(text.replace(b"OFF", b"OFF ", 1))
+    if match:
+        vertices, faces = int(match.group(1)), int(match.group(2))
+        check_count(source, "the OFF header", vertices, "vertices")
+        check_count(source, "the OFF header", 3 * faces, "indices")
+        if vertices + faces > size:
+            raise ValueError(
+                f"{source}: the OFF header announces {vertices:,} vertices and {faces:,} faces but the file holds "
+                f"only {size:,} bytes (truncated or corrupt)"
+            )
+
+
+_IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tga", ".tif", ".tiff", ".gif", ".webp", ".dds", ".ppm")
+#: MTL statements naming texture maps that the OBJ reader does not import (only ``map_Kd`` is).
+_UNREAD_MAPS = re.compile(
+    r"^\s*(map_ka|map_ks|map_ns|map_d|map_bump|bump|disp|decal|refl|norm|map_pr|map_pm|map_ps|map_ke|map_aat)\s+(.+)$",
+    re.IGNORECASE | re.MULTILINE,
+)
+
+
+class _PolicyResolver:
+    """The files trimesh asks for (``mtllib``, texture maps), read under the path policy.
+
+    Trimesh swallows every exception a resolver raises (an unreadable
+    material just disappears), so refusals and drops are recorded here and
+    reported by :meth:`finish` after the load: a refused path raises, a
+    missing or unusable file warns (or raises when ``strict``).
+    """
+
+    def __init__(self, path: str, policy: PathPolicy, strict: bool) -> None:
+        self.file_path = path
+        self.file_name = os.path.basename(path)
+        self.parent = os.path.dirname(os.path.abspath(path))
+        self.policy = policy
+        self.strict = strict
+        self.refused: list[UntrustedReferenceError | ResourceLimitError] = []
+        self.drops: list[str] = []
+
+    def __getitem__(self, name: str) -> bytes:
+        return self.get(name)
+
+    def __contains__(self, name: str) -> bool:
+        return False
+
+    def keys(self) -> list[str]:
+        return []
+
+    def write(self, name: str, data: Any) -> None:  # pragma: no cover - loading never writes
+        raise OSError("MeshFile: loading a mesh file never writes files")
+
+    def namespaced(self, namespace: str) -> _PolicyResolver:
+        return self
+
+    def get(self, name: str) -> bytes:
+        kind = "material library" if str(name).strip().lower().endswith(".mtl") else "texture"
+        try:
+            full = self.policy.resolve(name, self.file_path, f"the {kind}")
+        except RemoteReferenceError as exc:
+            self.drops.append(f"{kind} {name!r} dropped: {exc.reason}")
+            raise OSError(exc.reason) from None
+        except UntrustedReferenceError as exc:
+            self.refused.append(exc)
+            raise OSError(str(exc)) from None
+        try:
+            with open(full, "rb") as fh:
+                data = fh.read()
+        except OSError as exc:
+            self.drops.append(f"{kind} {name!r} dropped: cannot read {os.fspath(full)!r} ({exc.strerror or exc})")
+            raise
+        if kind == "texture":
+            self._check_image(name, data)
+        else:
+            self._note_unread_maps(name, data)
+        return data
+
+    def _check_image(self, name: str, data: bytes) -> None:
+        from PIL import Image as PILImage
+
+        try:
+            import io
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                with PILImage.open(io.BytesIO(data)) as img:
+                    width, height = img.size
+        except Exception as exc:
+            if type(exc).__name__ == "DecompressionBombError":  # Pillow refuses beyond twice its own limit
+                message = f"texture {name!r} dropped: it is a decompression bomb ({exc}; see MAX_IMAGE_PIXELS)"
+            else:
+                message = f"texture {name!r} dropped: not a readable image ({type(exc).__name__})"
+            self.drops.append(message)
+            raise OSError(message) from None
+        try:
+            check_image_size(f"MeshFile {self.file_path!r}", f"the texture {name!r}", width, height)
+        except ResourceLimitError as exc:
+            self.drops.append(f"texture {name!r} dropped: {width}x{height} pixels is beyond the image limits ({exc})")
+            raise OSError(str(exc)) from None
+
+    def _note_unread_maps(self, name: str, data: bytes) -> None:
+        text = data.decode("utf-8", errors="replace")
+        for key, value in _UNREAD_MAPS.findall(text):
+            self.drops.append(
+                f"{key} {value.strip()!r} in material library {name!r} dropped: the OBJ reader imports only map_Kd "
+                "(diffuse colour) textures"
+            )
+
+    def finish(self) -> None:
+        """Raise the first refused reference; report every drop (warnings, or an error when strict)."""
+        if self.refused:
+            raise self.refused[0]
+        drops, self.drops = self.drops, []
+        for message in dict.fromkeys(drops):
+            report_drop(f"MeshFile {self.file_path!r}", message, strict=self.strict, stacklevel=6)
+
+
+def _parts(loaded: Any, path: str, strict: bool = False) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
     """The parts of a loaded trimesh object (a Trimesh, or a Scene's meshes with their transforms)."""
     if is_trimesh_scene(loaded):
         try:
@@ -93,7 +265,7 @@ def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, Triangle
         if not is_trimesh(mesh) or len(mesh.faces) == 0:
             continue  # point clouds, paths and empty geometry carry no triangles
         try:
-            parts.append(_part(mesh))
+            parts.append(_part(mesh, path, strict))
         except ValueError as exc:
             raise ValueError(f"MeshFile: {path} holds invalid geometry: {exc}") from None
     if not parts:
@@ -101,7 +273,7 @@ def _parts(loaded: Any, path: str) -> list[tuple[dict[str, Any] | None, Triangle
     return parts
 
 
-def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
+def _part(mesh: Any, path: str = "", strict: bool = False) -> tuple[dict[str, Any] | None, TriangleSet]:
     _ply_face_colors(mesh)
     _consistent_winding(mesh)
     arrays = triangle_arrays(mesh)
@@ -114,9 +286,9 @@ def _part(mesh: Any) -> tuple[dict[str, Any] | None, TriangleSet]:
             material = {"kind": "phong", "diffuse": tuple(float(c) for c in fc[0, :3]), "opacity": float(fc[0, 3])}
             arrays["colors"] = None
     elif kind != "vertex" and (kind == "texture" or hasattr(visual, "material")):
-        material = _material(getattr(visual, "material", None))
-        if material is not None and arrays["texcoords"] is None:
-            material.pop("texture", None)
+        material = _material(getattr(visual, "material", None), path, strict)
+        if material is not None and arrays["texcoords"] is None and material.pop("texture", None) is not None:
+            report_drop(f"MeshFile {path}", "texture dropped: the mesh has no texture coordinates", strict=strict)
     return material, TriangleSet(**arrays)
 
 
@@ -185,16 +357,23 @@ def _alpha(value: Any) -> float:
     return float(np.clip(a[3] / 255.0 if a.max() > 1.0 else a[3], 0.0, 1.0))
 
 
-def _texture(image: Any) -> np.ndarray | None:
+def _texture(image: Any, path: str, strict: bool) -> np.ndarray | None:
     if image is None:
         return None
     try:
+        check_image_size(f"MeshFile {path}", "a texture", *map(int, image.size))
         return np.asarray(image.convert("RGBA"), dtype=np.uint8)
-    except Exception:
+    except Exception as exc:
+        name = getattr(image, "info", {}).get("file_path", "a texture")
+        report_drop(
+            f"MeshFile {path}",
+            f"texture {name!r} dropped: cannot decode it ({type(exc).__name__}: {exc})",
+            strict=strict,
+        )
         return None
 
 
-def _material(mat: Any) -> dict[str, Any] | None:
+def _material(mat: Any, path: str = "", strict: bool = False) -> dict[str, Any] | None:
     if mat is None:
         return None
     name = type(mat).__name__
@@ -208,7 +387,7 @@ def _material(mat: Any) -> dict[str, Any] | None:
             "emission": _rgb(getattr(mat, "emissiveFactor", None), (0.0, 0.0, 0.0)),
             "opacity": _alpha(base),
         }
-        tex = _texture(getattr(mat, "baseColorTexture", None))
+        tex = _texture(getattr(mat, "baseColorTexture", None), path, strict)
     elif name == "SimpleMaterial":
         diffuse = getattr(mat, "diffuse", None)
         glossiness = getattr(mat, "glossiness", None)
@@ -224,7 +403,7 @@ def _material(mat: Any) -> dict[str, Any] | None:
             "shininess": max(shininess, 1.0),
             "opacity": _alpha(diffuse),
         }
-        tex = _texture(getattr(mat, "image", None))
+        tex = _texture(getattr(mat, "image", None), path, strict)
     else:
         return None
     if tex is not None:
@@ -232,12 +411,12 @@ def _material(mat: Any) -> dict[str, Any] | None:
     return out
 
 
-def _load_gltf(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+def _load_gltf(path: str, policy: PathPolicy, strict: bool) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
     """glTF through the full importer (materials, textures, Draco...), flattened to world-space parts."""
     from .gltf.reader import GLTFImportError, flatten_gltf
 
     try:
-        flat = flatten_gltf(path)
+        flat = flatten_gltf(path, trusted=policy.trusted, allowed_roots=policy.allowed_roots, strict=strict)
     except GLTFImportError as exc:
         raise ValueError(f"MeshFile: {exc}") from None
     parts = [({"kind": "attributes", "attributes": attrs} if attrs else None, ts) for attrs, ts in flat]

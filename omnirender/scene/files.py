@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -155,11 +156,14 @@ def loads(
     source: str | None = None,
     trusted: bool = False,
     limits: ParseLimits = LIMITS,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
 ) -> Node:
     """Parse scene-file text; relative file paths are resolved against ``base_dir`` (cwd when None).
 
     ``trusted=True`` allows trusted-only components (``povray.Raw``) and file
     paths outside ``base_dir``; pass it only for files you wrote yourself.
+    ``allowed_roots`` lists folders file paths may lead into besides
+    ``base_dir`` (the path policy of :mod:`omnirender.core.paths`).
     ``limits`` bounds nesting depth and YAML alias expansion.
     """
     fmt = _check_format(fmt)
@@ -186,15 +190,24 @@ def loads(
     except ParseError as exc:
         raise SceneFileError(exc.path, exc.reason, where) from None
     base = None if base_dir is None else os.path.abspath(os.fspath(base_dir))
-    return Reader(base, source, trusted, limits).document(doc)
+    return Reader(base, source, trusted, limits, tuple(allowed_roots or ())).document(doc)
 
 
-def load(path: str | os.PathLike[str], *, trusted: bool = False, limits: ParseLimits = LIMITS) -> Node:
+def load(
+    path: str | os.PathLike[str],
+    *,
+    trusted: bool = False,
+    limits: ParseLimits = LIMITS,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+) -> Node:
     """Read a scene file (``.json``, ``.yaml``, ``.yml``) and return its root node.
 
     ``trusted=True`` allows trusted-only components such as ``povray.Raw``
     (hand-written SDL) and file paths outside the file's folder; without it
-    they are refused with an :class:`UntrustedContentError`.
+    they are refused with an :class:`UntrustedContentError`.  File paths obey
+    the path policy of :mod:`omnirender.core.paths`: inside the file's folder
+    or one of ``allowed_roots``.  Mesh files the scene names read their own
+    references (materials, textures) under the same policy.
     """
     target = Path(path)
     fmt = _format_of(target)
@@ -211,7 +224,15 @@ def load(path: str | os.PathLike[str], *, trusted: bool = False, limits: ParseLi
             f"not a UTF-8 text file (byte 0x{byte} at offset {exc.start}); scene files are UTF-8 JSON or YAML",
             str(target),
         ) from None
-    return loads(text, fmt, base_dir=target.resolve().parent, source=str(target), trusted=trusted, limits=limits)
+    return loads(
+        text,
+        fmt,
+        base_dir=target.resolve().parent,
+        source=str(target),
+        trusted=trusted,
+        limits=limits,
+        allowed_roots=allowed_roots,
+    )
 
 
 def json_schema() -> dict[str, Any]:

@@ -10,6 +10,7 @@ camera, lit by its lights (or by the default lights placed for that camera).
 from __future__ import annotations
 
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -22,22 +23,32 @@ from .node import Node
 __all__ = ["mesh_scene", "mesh_suffixes", "framed", "staged_lights"]
 
 
-def mesh_scene(mesh: str | os.PathLike[str] | Any, aspect: float = 4 / 3, fill_shadows: bool = False) -> Node:
+def mesh_scene(
+    mesh: str | os.PathLike[str] | Any,
+    aspect: float = 4 / 3,
+    fill_shadows: bool = False,
+    *,
+    trusted: bool = False,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+    strict: bool = False,
+) -> Node:
     """A scene holding ``mesh`` (a mesh file or a trimesh object), a fitted camera and default lights.
 
     The camera looks at the mesh's bounding box from the front, a little
     above and to the right, so that the whole mesh shows in an image of
     width / height ``aspect``.  The file is read here (to measure it): a
     malformed one raises ValueError naming it.  ``fill_shadows``: see :func:`staged_lights`.
+    ``trusted``, ``allowed_roots`` and ``strict`` are :class:`~omnirender.shapes.MeshFile`'s (the path
+    policy for the file's references, warnings as errors).
     """
     from ..shapes import MeshFile
     from ..techniques import bounds
 
     if isinstance(mesh, (str, os.PathLike)) and str(mesh).lower().endswith((".glb", ".gltf")):
-        kept = _gltf_scene(mesh, fill_shadows)
+        kept = _gltf_scene(mesh, fill_shadows, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
         if kept is not None:
             return kept
-    shape = MeshFile(mesh)
+    shape = MeshFile(mesh, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
     shape.load()
     name = Path(os.fspath(mesh)).stem if isinstance(mesh, (str, os.PathLike)) else "mesh"
     body = Node(_node_name(name), [shape])
@@ -65,7 +76,7 @@ def staged_lights(eye_to_world: np.ndarray, fill_shadows: bool = False) -> list[
     return lights
 
 
-def _gltf_scene(path: str | os.PathLike[str], fill_shadows: bool = False) -> Node | None:
+def _gltf_scene(path: str | os.PathLike[str], fill_shadows: bool = False, **policy: Any) -> Node | None:
     """A glTF file with a camera as ``om.load_gltf`` reads it: its camera, its lights (default lights placed
     for its camera when it has none); None when it has no camera (then it is framed like any mesh)."""
     from .readers import scene_reader
@@ -73,7 +84,7 @@ def _gltf_scene(path: str | os.PathLike[str], fill_shadows: bool = False) -> Nod
     load_gltf = scene_reader(path)  # the registered glTF importer (formats/ registers it)
     if load_gltf is None:
         return None
-    scene = load_gltf(path, animation=None)
+    scene = load_gltf(path, animation=None, **policy)  # trusted, allowed_roots, strict
     declared = scene.declarations()
     if declared.camera is None:
         return None

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..core.component import RenderingComponent
+from ..core.paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError
 from ..options import did_you_mean
 from .arrays import COMPACT_MIN_SIZE, SideCar, decode_base64, numeric_list
 from .node import Node
@@ -39,11 +40,17 @@ class Reader:
     """Builds the graph of one document; see the module docs."""
 
     def __init__(
-        self, base_dir: str | None, source: str | None, trusted: bool = False, limits: ParseLimits = LIMITS
+        self,
+        base_dir: str | None,
+        source: str | None,
+        trusted: bool = False,
+        limits: ParseLimits = LIMITS,
+        allowed_roots: tuple[str, ...] = (),
     ) -> None:
         self.base_dir = base_dir
         self.source = source
         self.trusted = trusted
+        self.policy = PathPolicy.of(trusted, allowed_roots)
         self.limits = limits
         self.objects: dict[str, Any] = {}
         self.sidecar = SideCar()
@@ -208,27 +215,26 @@ class Reader:
                 if len(given) == 1:
                     located = (f"{where}.{given[0]}", located[1])
             raise self.error(*located) from None
+        use_policy = getattr(obj, "use_path_policy", None)
+        if use_policy is not None:  # a mesh file reads its own references under the scene's policy
+            base = self.base_dir if self.base_dir is not None else os.getcwd()
+            use_policy(PathPolicy.of(self.trusted, (base, *self.policy.allowed_roots)))
         self.define(data, obj, where)
         return obj
 
     # -- the path policy -------------------------------------------------------------
     def path(self, text: str, where: str) -> str:
-        """``text`` resolved against the scene's folder; refused outside it unless trusted (see the module docs)."""
+        """``text`` resolved against the scene's folder by the path policy (:mod:`omnirender.core.paths`)."""
         if "\x00" in text:
             raise self.error(where, "a file path cannot hold a NUL character")
         base = self.base_dir if self.base_dir is not None else os.getcwd()
-        full = text if os.path.isabs(text) else os.path.normpath(os.path.join(base, text))
-        if not self.trusted:
-            folder = os.path.realpath(base)
-            real = os.path.realpath(full)
-            if os.path.isabs(text) or os.path.commonpath([real, folder]) != folder:
-                kind = "an absolute path" if os.path.isabs(text) else "a path leading outside the scene's folder"
-                raise self.untrusted(
-                    where,
-                    f"{text!r} is {kind} ({folder}); scene files may only name files inside their own folder, "
-                    "so that a file from elsewhere cannot read other files on this machine. Move the file next "
-                    "to the scene file",
-                )
+        referrer = os.path.join(base, os.path.basename(self.source or "<scene text>"))
+        try:
+            full = os.fspath(self.policy.resolve(text, referrer, "the path"))
+        except RemoteReferenceError as exc:
+            raise self.error(where, exc.reason) from None
+        except UntrustedReferenceError as exc:
+            raise self.untrusted(where, exc.reason) from None
         return text if self.base_dir is None else full
 
     # -- values ------------------------------------------------------------------------
@@ -359,10 +365,11 @@ def _signature_names(cls: Callable[..., Any]) -> list[str] | None:
     except (TypeError, ValueError):
         return None
     names = []
+    excluded = getattr(cls, "scene_file_excluded", ())  # loader options the scene's own policy sets
     for p in sig.parameters.values():
         if p.kind is p.VAR_KEYWORD:
             return None
-        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY):
+        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and p.name not in excluded:
             names.append(p.name)
     return names
 

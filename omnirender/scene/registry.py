@@ -26,6 +26,7 @@ from ..core.handler import (
     ShapeSimplifier,
 )
 from ..core.light import Light
+from ..core.paths import UntrustedReferenceError
 from ..core.transform import Transform
 
 __all__ = [
@@ -99,20 +100,32 @@ def shorten_path(path: str, limit: int = 160) -> str:
 
 
 #: How a caller vouches for a scene file, in the Python API and on the command line.
-TRUST_FIX = "if you wrote this file yourself or trust its author, load it with om.load(path, trusted=True)"
+TRUST_FIX = (
+    "if you wrote this file yourself or trust its author, load it with om.load(path, trusted=True) "
+    "(or allow the folders it names with om.load(path, allowed_roots=[folder]))"
+)
 TRUST_FIX_CLI = "if you wrote this file yourself or trust its author, run the command again with --trusted"
 
 
-class UntrustedContentError(SceneFileError):
+class UntrustedContentError(SceneFileError, UntrustedReferenceError):
     """Content a scene file may hold only when its loader trusts it (raw renderer text, files outside its folder).
+
+    An :class:`~omnirender.core.paths.UntrustedReferenceError` like every
+    refusal of the path policy, so one ``except`` catches them all.
 
     The message ends with the Python fix (``trusted=True``); :attr:`cli_message`
     says the same for the command line (``--trusted``).
     """
 
     def __init__(self, path: str, message: str, source: str | None = None) -> None:
-        super().__init__(path, f"{message}; {TRUST_FIX}", source)
+        self.path = path
+        self.source = source
+        where = f"{source}: " if source else ""
+        text = f"{message}; {TRUST_FIX}"
+        ValueError.__init__(self, f"{where}{shorten_path(path)}: {text}" if path else f"{where}{text}")
         self.reason = message
+        self.referrer = source or "<scene text>"
+        self.reference = path
         where = f"{source}: " if source else ""
         shown = shorten_path(path)
         self.cli_message = (

@@ -83,6 +83,8 @@ def _type_schema(name: str, cls: type) -> dict[str, Any]:
                 continue
             if p.kind not in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY):
                 continue
+            if p.name in getattr(cls, "scene_file_excluded", ()):
+                continue  # a loader option the scene file's own policy sets (MeshFile's trusted)
             schema = _value_schema(p.default)
             if name in _registry.paths and p.name in _registry.paths[name]:
                 schema = {"type": "string", "description": "a file inside the scene file's folder (or trusted)"}

@@ -46,11 +46,17 @@ def vector(owner: str, name: str, value: Any, size: int, *, positive: bool = Fal
     if isinstance(value, (str, bytes, bool, np.bool_)):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}")
     try:
-        arr = np.array(value, dtype=np.float64).reshape(-1)
+        arr = np.array(value, dtype=np.float64)
     except OverflowError:
         raise ValueError(f"{owner}: {name} must be {size} numbers of at most {MAX_MAGNITUDE:.0e}") from None
     except (TypeError, ValueError):
         raise ValueError(f"{owner}: {name} must be {size} numbers, got {value!r:.60}") from None
+    if arr.ndim > 1:
+        raise ValueError(
+            f"{owner}: {name} must be a flat list of {size} numbers, got a nested list of shape {arr.shape} "
+            f"({value!r:.60}); pass e.g. {name}=(1, 2, 3)"
+        )
+    arr = arr.reshape(-1)
     if positive and arr.size == 1:
         arr = np.repeat(arr, size)
     if arr.shape != (size,):

@@ -16,6 +16,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
+from ..core.paths import PathPolicy
 from .base import DeclaredShape, parameter
 from .meshes import TriangleSet
 from .trimeshes import is_trimesh, is_trimesh_scene
@@ -25,12 +26,17 @@ __all__ = ["MeshFile", "register_mesh_reader", "mesh_suffixes", "read_mesh"]
 #: The key a reader of in-memory trimesh objects is registered under.
 TRIMESH_OBJECT = "<trimesh>"
 
-MeshReader = Callable[[Any], list[tuple[dict[str, Any] | None, TriangleSet]]]
+MeshReader = Callable[..., list[tuple[dict[str, Any] | None, TriangleSet]]]
 _readers: dict[str, str | MeshReader] = {}
 
 
 def register_mesh_reader(suffixes: Iterable[str], reader: str | MeshReader, *, override: bool = False) -> None:
-    """Make ``om.MeshFile`` read files ending in ``suffixes`` with ``reader(path) -> [(material, TriangleSet)]``.
+    """Make ``om.MeshFile`` read files ending in ``suffixes`` with ``reader(path, *, policy, strict)``.
+
+    The reader returns ``[(material, TriangleSet)]``; ``policy`` is the path
+    policy (:class:`~omnirender.core.paths.PathPolicy`) the files the mesh file
+    names must obey, ``strict`` asks it to raise instead of warning when it
+    leaves content out (:mod:`omnirender.core.drops`).
 
     ``reader`` is a callable or a ``"module:function"`` string imported on
     first use.  ``TRIMESH_OBJECT`` as a suffix names the reader of trimesh
@@ -48,7 +54,9 @@ def mesh_suffixes() -> tuple[str, ...]:
     return tuple(s for s in _readers if s != TRIMESH_OBJECT)
 
 
-def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+def read_mesh(
+    path: Any, *, policy: PathPolicy | None = None, strict: bool = False
+) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
     """The parts of the mesh file (or trimesh object) ``path`` through its registered reader."""
     if is_trimesh(path) or is_trimesh_scene(path):
         key = TRIMESH_OBJECT
@@ -61,7 +69,7 @@ def read_mesh(path: Any) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         module, _, name = reader.partition(":")
         reader = getattr(importlib.import_module(module), name)
     start = time.monotonic()
-    parts = reader(path)
+    parts = reader(path, policy=policy or PathPolicy(), strict=strict)
     seconds = time.monotonic() - start
     if seconds >= SLOW_LOAD:  # long work says what it did (the "omnirender" logger, see omnirender.progress)
         triangles = sum(len(ts.index_array()) for _, ts in parts)
@@ -94,14 +102,37 @@ class MeshFile(DeclaredShape):
     files are read with the full importer (``om.load_gltf``: every material
     slot, Draco, sparse accessors), flattened to world coordinates; their
     parts carry ``{"kind": "attributes", "attributes": [...]}``.
+
+    ``trusted``, ``allowed_roots`` and ``strict`` set how the file's own
+    references are read (see the module docs); they are the loader's options,
+    not parameters of the shape (scene files do not store them: a scene file
+    passes its own policy to the mesh files it names).
     """
 
-    __slots__ = ("_path",)
+    __slots__ = ("_path", "_policy", "_strict")
     _params = ("path",)
+    #: Loader options a scene file may not set: it passes its own path policy (see :meth:`use_path_policy`).
+    scene_file_excluded = frozenset({"trusted", "allowed_roots", "strict"})
     path = parameter("path", "Path of the mesh file.")
 
-    def __init__(self, path: str | os.PathLike | Any) -> None:
+    def __init__(
+        self,
+        path: str | os.PathLike | Any,
+        *,
+        trusted: bool = False,
+        allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+        strict: bool = False,
+    ) -> None:
+        object.__setattr__(self, "_policy", PathPolicy.of(trusted, allowed_roots))
+        object.__setattr__(self, "_strict", bool(strict))
         super().__init__(path=path)
+
+    def use_path_policy(self, policy: PathPolicy, strict: bool | None = None) -> None:
+        """Read the file's references under ``policy`` from now on (scene files pass theirs)."""
+        object.__setattr__(self, "_policy", policy)
+        if strict is not None:
+            object.__setattr__(self, "_strict", bool(strict))
+        self._cache.pop("parts", None)
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         path = p["path"]
@@ -129,7 +160,7 @@ class MeshFile(DeclaredShape):
 
     def parts(self) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
         """[(material parameters or None, TriangleSet)] per part, in file order; cached per version."""
-        return self._cached("parts", lambda: read_mesh(self._path))
+        return self._cached("parts", lambda: read_mesh(self._path, policy=self._policy, strict=self._strict))
 
     @property
     def triangle_count(self) -> int:

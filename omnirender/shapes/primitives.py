@@ -89,8 +89,9 @@ class Cone(_RadiusHeight):
 class Torus(DeclaredShape):
     """A torus around the y axis: the ring (``major_radius``) lies in the xz plane, tube of ``minor_radius``.
 
-    Both radii are > 0; ``minor_radius < major_radius`` gives the usual ring torus
-    (larger minor radii self-intersect and are not closed 2-manifolds).
+    Both radii are > 0 and ``minor_radius <= major_radius`` (the usual ring
+    torus; equal radii close the hole): a larger minor radius would intersect
+    itself and is refused with ValueError.
     """
 
     __slots__ = ("_major_radius", "_minor_radius")
@@ -102,10 +103,15 @@ class Torus(DeclaredShape):
         super().__init__(major_radius=major_radius, minor_radius=minor_radius)
 
     def _validate(self, p: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-        return {
-            "major_radius": _check.scalar("Torus", "major_radius", p["major_radius"], positive=True),
-            "minor_radius": _check.scalar("Torus", "minor_radius", p["minor_radius"], positive=True),
-        }, {}
+        major = _check.scalar("Torus", "major_radius", p["major_radius"], positive=True)
+        minor = _check.scalar("Torus", "minor_radius", p["minor_radius"], positive=True)
+        if minor > major:
+            raise ValueError(
+                f"Torus: minor_radius ({minor}) must not exceed major_radius ({major}): such a spindle torus "
+                "intersects itself and encloses no well-defined inside; swap the two radii if you meant "
+                f"Torus(major_radius={minor}, minor_radius={major})"
+            )
+        return {"major_radius": major, "minor_radius": minor}, {}
 
 
 class Disk(DeclaredShape):

@@ -25,6 +25,16 @@ brightness is the physical one (:func:`light_from_gltf`).  An extension the
 file *requires* that is not supported raises :class:`GLTFImportError` naming
 it; an unsupported optional one warns once.
 
+Glb and glTF files are untrusted input: buffer and image URIs are resolved by
+the path policy (:mod:`omnirender.core.paths`; inside the file's folder or
+``allowed_roots``, unless ``trusted=True``; ``http(s):`` never fetched),
+decoded sizes obey :mod:`omnirender.core.limits` (image pixels, accessor
+bytes, node nesting), and what cannot be used (a missing or remote image, a
+decompression bomb, an unsupported extension) is dropped with a
+:class:`~omnirender.core.drops.DroppedContentWarning` naming the file and
+what was dropped, or raises with ``strict=True``.  A buffer that cannot be
+read is an error (the geometry needs it).
+
 Not imported (a warning says so): skins (meshes stay in their bind pose),
 morph targets and their ``weights`` channels.  Colours are converted from
 glTF's linear values to the display values omnirender's attributes hold;
@@ -34,12 +44,11 @@ texture coordinates get omnirender's convention (v = 0 at the image's bottom row
 from __future__ import annotations
 
 import base64
-import io
 import json
 import math
 import os
 import struct
-import warnings
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -48,8 +57,12 @@ import numpy as np
 from ...animation.animation import Animation
 from ...animation.tracks import Keyframes
 from ...attributes import DirectionalLight, PBRMaterial, PointLight, SpotLight, Texture
+from ...attributes.imagefile import read_image
 from ...attributes.photometry import srgb_to_linear
 from ...core.camera import Camera
+from ...core.drops import DroppedContentError, report_drop
+from ...core.limits import ResourceLimitError, check_bytes, check_count, check_nesting
+from ...core.paths import PathPolicy, RemoteReferenceError, UntrustedReferenceError
 from ...core.transform import Matrix, Rotation, Scaling, Translation
 from ...geometry.trs import compose_trs
 from ...scene.node import Node
@@ -92,8 +105,10 @@ def _linear_to_srgb(c: Any) -> tuple[float, ...]:
 
 
 class _Reader:
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, policy: PathPolicy | None = None, strict: bool = False) -> None:
         self.path = path
+        self.policy = policy or PathPolicy()
+        self.strict = strict
         data = path.read_bytes()
         self.bin: bytes | None = None
         if data[:4] == struct.pack("<I", _GLB_MAGIC):
@@ -101,6 +116,8 @@ class _Reader:
         else:
             try:
                 self.doc = json.loads(data.decode("utf-8"))
+            except RecursionError:
+                raise self.error("the JSON is nested too deeply") from None
             except (UnicodeDecodeError, json.JSONDecodeError) as exc:
                 raise self.error(f"neither a GLB file nor glTF JSON ({exc})") from None
         if not isinstance(self.doc, dict) or str(self.doc.get("asset", {}).get("version", "")).split(".")[0] != "2":
@@ -117,6 +134,10 @@ class _Reader:
     def error(self, message: str) -> GLTFImportError:
         return GLTFImportError(f"load_gltf {str(self.path)!r}: {message}")
 
+    def drop(self, message: str) -> None:
+        """Warn (or raise, when strict) that part of the file was left out: see :mod:`omnirender.core.drops`."""
+        report_drop(f"load_gltf {str(self.path)!r}", message, strict=self.strict, stacklevel=5)
+
     def _check_extensions(self) -> None:
         required = [e for e in self.doc.get("extensionsRequired", []) if e not in SUPPORTED_EXTENSIONS]
         if required:
@@ -126,11 +147,7 @@ class _Reader:
             )
         unknown = [e for e in self.doc.get("extensionsUsed", []) if e not in SUPPORTED_EXTENSIONS]
         if unknown:
-            warnings.warn(
-                f"load_gltf {self.path.name}: optional extension(s) {', '.join(map(str, unknown))} are not "
-                "supported and were ignored",
-                stacklevel=4,
-            )
+            self.drop(f"optional extension(s) {', '.join(map(str, unknown))} are not supported and were ignored")
 
     def _glb(self, data: bytes) -> dict[str, Any]:
         if len(data) < 20:
@@ -145,7 +162,10 @@ class _Reader:
             if len(chunk) != size:
                 raise self.error("truncated GLB chunk")
             if kind == _JSON_CHUNK and doc is None:
-                doc = json.loads(chunk.decode("utf-8"))
+                try:
+                    doc = json.loads(chunk.decode("utf-8"))
+                except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+                    raise self.error(f"the GLB's JSON chunk is not valid JSON ({type(exc).__name__})") from None
             elif kind == _BIN_CHUNK and self.bin is None:
                 self.bin = chunk
             offset += 8 + size + (-size % 4)
@@ -177,25 +197,40 @@ class _Reader:
                 raise self.error(f"buffers[{index}] has no uri and there is no GLB binary chunk")
             data = self.bin
         else:
-            data = self._uri(uri, f"buffers[{index}]")
+            try:
+                data = self._uri(uri, f"buffers[{index}].uri")
+            except RemoteReferenceError as exc:
+                raise self.error(f"buffers[{index}] cannot be read: {exc.reason}") from None
+            except FileNotFoundError as exc:
+                raise self.error(f"buffers[{index}]: {exc}") from None
         if len(data) < int(buf.get("byteLength", 0)):
             raise self.error(f"buffers[{index}] holds {len(data)} bytes, fewer than its byteLength")
         self.buffers[index] = data
         return data
 
-    def _uri(self, uri: str, where: str) -> bytes:
+    def _uri(self, uri: Any, where: str) -> bytes:
+        """The bytes a URI names: a base64 data URI, or a file resolved by the path policy.
+
+        Raises UntrustedReferenceError (refused path), RemoteReferenceError (a
+        URL), FileNotFoundError (no such file) or GLTFImportError.
+        """
+        if not isinstance(uri, str):
+            raise self.error(f"{where} must be a string, got {type(uri).__name__}")
         if uri.startswith("data:"):
             header, _, payload = uri.partition(",")
             if not header.endswith(";base64"):
                 raise self.error(f"{where}: only base64 data URIs are supported")
-            return base64.b64decode(payload)
-        from urllib.parse import unquote
-
-        file = self.path.parent / unquote(uri)
+            try:
+                return base64.b64decode(payload, validate=True)
+            except ValueError:
+                raise self.error(f"{where}: the data URI is not valid base64") from None
+        file = self.policy.resolve(uri, self.path, where, uri=True)
         try:
             return file.read_bytes()
+        except FileNotFoundError:
+            raise FileNotFoundError(f"{where} {uri!r}: the file {str(file)!r} does not exist") from None
         except OSError as exc:
-            raise self.error(f"{where}: cannot read {str(file)!r}: {exc}") from None
+            raise self.error(f"{where}: cannot read {str(file)!r}: {exc.strerror or exc}") from None
 
     def view(self, index: int) -> tuple[bytes, int, int | None]:
         view = self.item("bufferViews", index)
@@ -224,6 +259,11 @@ class _Reader:
         count = acc.get("count")
         if dtype is None or width is None or not isinstance(count, int) or count < 0:
             raise self.error(f"{where}: bad componentType, type or count")
+        try:
+            check_bytes(f"load_gltf {str(self.path)!r}", where, count * width * np.dtype(dtype).itemsize)
+            check_count(f"load_gltf {str(self.path)!r}", where, count, "indices")
+        except ResourceLimitError as exc:
+            raise self.error(str(exc).split(": ", 1)[1]) from None
         if "bufferView" in acc:
             out = self._elements(acc["bufferView"], int(acc.get("byteOffset", 0)), dtype, width, count, where)
         else:
@@ -249,26 +289,31 @@ class _Reader:
         return out
 
     # -- scene --------------------------------------------------------------------
-    def image(self, source: int) -> np.ndarray:
-        found = self.images.get(source)
-        if found is not None:
-            return found
+    def image(self, source: int) -> np.ndarray | None:
+        """The pixels of ``images[source]``, or None (with a drop warning) when they cannot be used."""
+        if source in self.images:
+            return self.images[source]
         image = self.item("images", source)
         where = f"images[{source}]"
+        pixels: np.ndarray | None = None
         if "bufferView" in image:
-            data = self.view(image["bufferView"])[0]
+            data: bytes | None = self.view(image["bufferView"])[0]
         elif "uri" in image:
-            data = self._uri(image["uri"], where)
+            try:
+                data = self._uri(image["uri"], f"{where}.uri")
+            except (RemoteReferenceError, FileNotFoundError) as exc:
+                reason = exc.reason if isinstance(exc, RemoteReferenceError) else str(exc)
+                self.drop(f"{where} dropped (textures using it are left out): {reason}")
+                data = None
         else:
             raise self.error(f"{where} has neither bufferView nor uri")
-        from PIL import Image as PILImage
-
-        try:
-            with PILImage.open(io.BytesIO(data)) as img:
-                pixels = np.asarray(img.convert("RGBA"), np.uint8)
-        except OSError as exc:
-            raise self.error(f"{where} is not a readable image: {exc}") from None
-        pixels.setflags(write=False)
+        if data is not None:
+            try:
+                pixels = read_image(data, f"load_gltf {str(self.path)!r}", where)
+            except ValueError as exc:  # not an image, or beyond core.limits (a decompression bomb)
+                self.drop(f"{where} dropped (textures using it are left out): {str(exc).split(': ', 1)[-1]}")
+            else:
+                pixels.setflags(write=False)
         self.images[source] = pixels
         return pixels
 
@@ -285,11 +330,14 @@ class _Reader:
         if source is None:
             return None
         pixels = self.image(source)
+        if pixels is None:
+            self.textures[key] = None
+            return None
         sampler = self.item("samplers", tex["sampler"]) if "sampler" in tex else {}
         wrap = _WRAP.get(sampler.get("wrapS", 10497), "repeat")
         nearest = sampler.get("magFilter") == 9728
         if uv_set > 1:
-            warnings.warn(f"load_gltf {self.path.name}: TEXCOORD_{uv_set} is not supported; set 0 used", stacklevel=4)
+            self.drop(f"textures[{index}] uses TEXCOORD_{uv_set}, which is not supported; set 0 used instead")
             uv_set = 0
         offset, scale, rotation = _texture_transform(transform)
         result = self.textures[key] = Texture(
@@ -303,8 +351,11 @@ class _Reader:
         )
         return result
 
-    def _slot(self, info: Any, textured: bool) -> Texture | None:
-        if not textured or not isinstance(info, dict) or "index" not in info:
+    def _slot(self, info: Any, textured: bool, where: str = "a texture") -> Texture | None:
+        if not isinstance(info, dict) or "index" not in info:
+            return None
+        if not textured:
+            self.drop(f"{where} dropped: a primitive using the material has no TEXCOORD_0")
             return None
         return self.texture(info["index"], info)
 
@@ -315,6 +366,7 @@ class _Reader:
         if key in self.materials:
             return self.materials[key]
         mat = self.item("materials", index)
+        at = f"materials[{index}]"
         pbr = mat.get("pbrMetallicRoughness", {})
         base = list(pbr.get("baseColorFactor", [1.0, 1.0, 1.0, 1.0]))
         extensions = mat.get("extensions", {})
@@ -333,18 +385,22 @@ class _Reader:
                 roughness=float(pbr.get("roughnessFactor", 1.0)),
                 emission=_linear_to_srgb([c / peak for c in emissive]),
                 opacity=float(base[3]),
-                base_color_texture=self._slot(pbr.get("baseColorTexture"), textured),
-                metallic_roughness_texture=self._slot(pbr.get("metallicRoughnessTexture"), textured),
-                normal_texture=self._slot(normal, textured),
+                base_color_texture=self._slot(pbr.get("baseColorTexture"), textured, f"{at}.baseColorTexture"),
+                metallic_roughness_texture=self._slot(
+                    pbr.get("metallicRoughnessTexture"), textured, f"{at}.metallicRoughnessTexture"
+                ),
+                normal_texture=self._slot(normal, textured, f"{at}.normalTexture"),
                 normal_scale=float(normal.get("scale", 1.0)) if isinstance(normal, dict) else 1.0,
-                occlusion_texture=self._slot(occlusion, textured),
+                occlusion_texture=self._slot(occlusion, textured, f"{at}.occlusionTexture"),
                 occlusion_strength=float(occlusion.get("strength", 1.0)) if isinstance(occlusion, dict) else 1.0,
-                emissive_texture=self._slot(mat.get("emissiveTexture"), textured),
+                emissive_texture=self._slot(mat.get("emissiveTexture"), textured, f"{at}.emissiveTexture"),
                 emissive_strength=strength * peak,
                 alpha_mode=mode,
                 alpha_cutoff=float(mat.get("alphaCutoff", 0.5)),
                 double_sided=bool(mat.get("doubleSided", False)),
             )
+        except (GLTFImportError, UntrustedReferenceError, DroppedContentError):
+            raise
         except ValueError as exc:
             raise self.error(f"materials[{index}]: {exc}") from None
         out: list[Any] = [material]
@@ -385,7 +441,7 @@ class _Reader:
         if "POSITION" not in attrs:
             return None
         if prim.get("targets"):
-            warnings.warn(f"load_gltf {self.path.name}: {where} has morph targets; they are not imported", stacklevel=4)
+            self.drop(f"{where} has morph targets; they are not imported")
         draco = self._draco(prim, where) if "KHR_draco_mesh_compression" in prim.get("extensions", {}) else {}
 
         def read(name: str) -> np.ndarray:
@@ -439,6 +495,10 @@ class _Reader:
     def node(self, index: int, names: dict[int, str], built: dict[int, Node], transforms: dict, active: set) -> Node:
         if index in active:
             raise self.error(f"nodes[{index}] is its own ancestor")
+        try:
+            check_nesting(f"load_gltf {str(self.path)!r}", f"nodes[{index}]", len(active) + 1)
+        except ResourceLimitError as exc:
+            raise self.error(str(exc).split(": ", 1)[1]) from None
         if index in built:  # glTF nodes have one parent; a repeat reference is shared, as in a DAG
             return built[index]
         spec = self.item("nodes", index)
@@ -463,7 +523,7 @@ class _Reader:
         if light is not None:
             node.add(self.light(light))
         if "skin" in spec:
-            warnings.warn(f"load_gltf {self.path.name}: skin of nodes[{index}] ignored (bind pose)", stacklevel=3)
+            self.drop(f"the skin of nodes[{index}] is not imported (the mesh stays in its bind pose)")
         if "mesh" in spec:
             parts = self.mesh(spec["mesh"])
             instancing = spec.get("extensions", {}).get("EXT_mesh_gpu_instancing")
@@ -568,7 +628,7 @@ class _Reader:
             path, node = target.get("path"), target.get("node")
             where = f"animations[{index}].channels[{c}]"
             if path == "weights":
-                warnings.warn(f"load_gltf {self.path.name}: {where} animates morph weights; skipped", stacklevel=3)
+                self.drop(f"{where} animates morph weights, which are not imported; skipped")
                 continue
             component = self.targets.get(node, {}).get(path)
             if component is None:
@@ -674,17 +734,40 @@ def _segments(indices: np.ndarray, mode: int) -> np.ndarray:
     return pairs
 
 
-def load_gltf(path: str | os.PathLike[str], animation: int | str | None = 0) -> Node:
+def load_gltf(
+    path: str | os.PathLike[str],
+    animation: int | str | None = 0,
+    *,
+    trusted: bool = False,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+    strict: bool = False,
+) -> Node:
     """The scene of a glTF 2.0 file (``.glb`` or ``.gltf``) as an ``om.Node``, with its animation as tracks.
 
     ``animation`` picks the clip (glTF files may hold several): an index, a
     name, ``"all"`` (every clip at once) or None (none).  See the module docs
-    for what is imported.
+    for what is imported.  ``trusted`` and ``allowed_roots`` set where the
+    file's buffer and image URIs may lead (the path policy of
+    :mod:`omnirender.core.paths`); ``strict=True`` turns the warnings about
+    content that was left out into :class:`~omnirender.core.drops.DroppedContentError`.
     """
     source = Path(path)
     if not source.is_file():
         raise FileNotFoundError(f"load_gltf: no such file {str(source)!r}")
-    reader = _Reader(source)
+    if not (animation is None or isinstance(animation, str) or type(animation) is int):
+        raise TypeError(f"load_gltf: animation must be an index, a name, 'all' or None, got {animation!r}")
+    try:
+        return _load(source, animation, PathPolicy.of(trusted, allowed_roots), strict)
+    except (TypeError, KeyError, AttributeError, IndexError, RecursionError, struct.error, OverflowError) as exc:
+        # a value of the wrong JSON type somewhere the importer does not check it one by one
+        raise GLTFImportError(
+            f"load_gltf {str(source)!r}: malformed glTF ({type(exc).__name__}: {exc}); the file does not follow "
+            "the glTF 2.0 schema (check it with the Khronos glTF validator)"
+        ) from None
+
+
+def _load(source: Path, animation: int | str | None, policy: PathPolicy, strict: bool) -> Node:
+    reader = _Reader(source, policy, strict)
     scenes = reader.items("scenes")
     scene_index = reader.doc.get("scene", 0)
     if scenes:
@@ -732,7 +815,13 @@ def load_gltf(path: str | os.PathLike[str], animation: int | str | None = 0) -> 
     return root
 
 
-def flatten_gltf(path: str | os.PathLike[str]) -> list[tuple[list[Any], Any]]:
+def flatten_gltf(
+    path: str | os.PathLike[str],
+    *,
+    trusted: bool = False,
+    allowed_roots: Iterable[str | os.PathLike[str]] | None = None,
+    strict: bool = False,
+) -> list[tuple[list[Any], Any]]:
     """The triangle primitives of a glTF file's default scene in world coordinates, with their attributes.
 
     ``[(attributes, TriangleSet)]``: what ``om.MeshFile`` needs (one static
@@ -742,7 +831,7 @@ def flatten_gltf(path: str | os.PathLike[str]) -> list[tuple[list[Any], Any]]:
     """
     from ...core.transform import Transform
 
-    root = load_gltf(path, animation=None)
+    root = load_gltf(path, animation=None, trusted=trusted, allowed_roots=allowed_roots, strict=strict)
     out: list[tuple[list[Any], Any]] = []
 
     def walk(node: Node, matrix: np.ndarray) -> None:

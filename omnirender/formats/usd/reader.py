@@ -42,6 +42,7 @@ from ...animation.animation import Animation
 from ...animation.tracks import Keyframes
 from ...attributes import Color, Material, PBRMaterial, Texture
 from ...attributes.photometry import linear_to_srgb
+from ...core.paths import PathPolicy
 from ...core.transform import Matrix, Rotation, Scaling, Translation
 from ...geometry.trs import decompose_trs
 from ...scene.node import Node
@@ -107,12 +108,12 @@ def load_usd(
     return _StageReader(stage, name, folder, trusted, purposes, camera, animation).build()
 
 
-def flatten_usd(path: str | os.PathLike[str]) -> list[tuple[list[Any], TriangleSet]]:
+def flatten_usd(path: str | os.PathLike[str], *, trusted: bool = False) -> list[tuple[list[Any], TriangleSet]]:
     """The triangle sets of a stage in world coordinates with their attributes: what ``om.MeshFile`` reads."""
     from ...core import SIMPLIFY, Engine, Shape
     from ...core.transform import Transform
 
-    root = load_usd(path, animation=False)
+    root = load_usd(path, animation=False, trusted=trusted)
     out: list[tuple[list[Any], Any]] = []
     engine = Engine()  # its simplifiers turn spheres, boxes... into triangle sets
 
@@ -136,10 +137,16 @@ def flatten_usd(path: str | os.PathLike[str]) -> list[tuple[list[Any], TriangleS
     return out
 
 
-def mesh_parts(path: str) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
-    """``om.MeshFile`` parts of a USD file (registered by :mod:`omnirender.formats`)."""
+def mesh_parts(
+    path: str, *, policy: PathPolicy | None = None, strict: bool = False
+) -> list[tuple[dict[str, Any] | None, TriangleSet]]:
+    """``om.MeshFile`` parts of a USD file (registered by :mod:`omnirender.formats`).
+
+    ``policy.trusted`` is passed on (the stage's own check of its layers and
+    textures, :mod:`.policy`); ``allowed_roots`` and ``strict`` are not used yet.
+    """
     try:
-        flat = flatten_usd(path)
+        flat = flatten_usd(path, trusted=bool(policy and policy.trusted))
     except USDImportError as exc:
         raise ValueError(f"MeshFile: {exc}") from None
     parts = [({"kind": "attributes", "attributes": attrs} if attrs else None, ts) for attrs, ts in flat]

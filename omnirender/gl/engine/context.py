@@ -124,7 +124,8 @@ def check_samples_total(size: Any, samples: int = 0) -> tuple[int, int]:
         raise ValueError(
             f"GLEngine: size {w}x{h} with {max(1, samples)} sample(s) per pixel needs {w * h * max(1, samples):,} "
             f"samples, more than the {MAX_SAMPLES_TOTAL:,} (2 GiB of colour and depth) this engine allocates; "
-            "render a smaller image, with fewer samples=, or tiles"
+            "render a smaller image, with fewer samples=, in tiles (om.render(..., tile=2048)), or into a "
+            "file tile by tile (om.render_to_file)"
         )
     return w, h
 
@@ -137,7 +138,8 @@ def check_size(size: Any, ctx: Any, samples: int = 0) -> tuple[int, int]:
     if w > top or h > top:
         raise ValueError(
             f"GLEngine: size {w}x{h} exceeds this driver's maximum framebuffer size {top}x{top} "
-            f"(GL_MAX_RENDERBUFFER_SIZE / GL_MAX_VIEWPORT_DIMS); render tiles or a smaller image"
+            f"(GL_MAX_RENDERBUFFER_SIZE / GL_MAX_VIEWPORT_DIMS); om.render(scene, size=...) renders such an "
+            "image in tiles (omnirender.tiling), or render a smaller one"
         )
     return w, h
 
