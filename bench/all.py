@@ -16,6 +16,7 @@ SCRIPTS = {
     "picking.py": [],
     "gl_objects.py": [],
     "dynamic.py": [],
+    "frame_cost.py": ["--cpu"],
     "shadows.py": [],
     "offline_export.py": ["--repeat", "1"],
     "render_frames.py": [],
@@ -33,6 +34,7 @@ SCRIPTS = {
 QUICK = {
     "gl_objects.py": ["--quick"],
     "dynamic.py": ["--quick"],
+    "frame_cost.py": ["--cpu", "--quick"],
     "shadows.py": ["--frames", "6"],
     "offline_export.py": ["--repeat", "1", "--triangles", "200000"],
     "render_frames.py": ["--frames", "8"],

@@ -56,7 +56,7 @@ def build_scene(mesh_path) -> om.Node:
     knot = scene.add(om.Node("knot"))
     knot.add(om.Translation(0, 0.95, 0))
     knot.add(om.Material(diffuse=(0.85, 0.35, 0.15), specular=(1, 1, 1), shininess=60))
-    knot.add(om.povray.Finish(phong=0.9, reflection=0.15))  # only POV-Ray reads it
+    knot.add(om.povray.Finish(phong=0.9, reflection=0.15))  # POV-Ray reads it; others take its phong
     knot.add(om.MeshFile(mesh_path))
     return scene
 

@@ -22,7 +22,7 @@ from .render import engines, export, exporters, register_engine, register_export
 from .scene import Node, Statistics, TraceEngine, Visitor, register_statistic, statistics, trace
 from .shapes import *  # noqa: F403
 from .shapes import __all__ as _shapes_all
-from .techniques import Hit, attribute_search, bounds, collisions, image_info, pick
+from .techniques import Hit, attribute_search, bounds, collisions, image_info, node_origin, pick, screen_corners
 
 __version__ = "0.1.0"
 
@@ -96,6 +96,8 @@ __all__ = [
     "attribute_search",
     "image_info",
     "Hit",
+    "screen_corners",
+    "node_origin",
 ]
 
 

@@ -6,6 +6,12 @@ Tests that need an engine use the markers ``gl``, ``povray``, ``mitsuba``,
 the engine is missing they are skipped, except when
 ``OMNIRENDER_REQUIRE_ENGINES=1`` (set by ``.ci/run``): then they fail, so CI
 can never pass by skipping.
+
+GL tests that need more than OpenGL 3.3 core without multisampling (what every conforming driver
+offers, Mesa's softpipe included) declare it with ``@pytest.mark.gl_needs(samples=4)`` (multisampling
+with at least that many samples) or ``@pytest.mark.gl_needs(version=400)`` (an OpenGL 4.0 context):
+on a driver without it they are skipped with the reason, also in CI (a driver's capability, not a
+missing engine; the softpipe and GL 4.1 jobs of ``.ci/run`` rely on it).
 """
 
 from __future__ import annotations
@@ -99,6 +105,45 @@ def engine_available(name: str) -> tuple[bool, str]:
     return _cache[name]
 
 
+_gl_caps: dict | None = None
+
+
+def gl_capabilities() -> dict:
+    """The headless context's renderer, version code (330, 410, 450) and most multisampling samples."""
+    global _gl_caps
+    if _gl_caps is None:
+        import moderngl
+
+        ctx = moderngl.create_standalone_context(backend="egl")
+        try:
+            _gl_caps = {
+                "renderer": str(ctx.info.get("GL_RENDERER", "unknown")),
+                "version": int(ctx.version_code),
+                "samples": int(ctx.max_samples),
+            }
+        finally:
+            ctx.release()
+    return _gl_caps
+
+
+def _gl_needs(item: pytest.Item) -> str | None:
+    """Why the test's ``gl_needs`` marker cannot be met by this machine's OpenGL driver, or None."""
+    marker = item.get_closest_marker("gl_needs")
+    if marker is None or not engine_available("gl")[0]:
+        return None
+    caps = gl_capabilities()
+    samples = int(marker.kwargs.get("samples", 0))
+    version = int(marker.kwargs.get("version", 0))
+    if samples and caps["samples"] < samples:
+        return f"needs multisampling ({samples} samples); {caps['renderer']} offers {caps['samples']}"
+    if version and caps["version"] < version:
+        return (
+            f"needs OpenGL {version // 100}.{version % 100 // 10}; {caps['renderer']} offers "
+            f"{caps['version'] // 100}.{caps['version'] % 100 // 10}"
+        )
+    return None
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     for name in _CHECKS:
         if item.get_closest_marker(name) is None:
@@ -108,3 +153,6 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
             if REQUIRE:
                 pytest.fail(f"engine {name!r} is required in CI but unavailable: {why}", pytrace=False)
             pytest.skip(why)
+    why = _gl_needs(item)
+    if why is not None:
+        pytest.skip(why)

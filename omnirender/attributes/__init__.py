@@ -19,7 +19,7 @@ from .appearance import BumpMap, Color, DrawStyle, Material, MultiTexture, PBRMa
 from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
 from .lights import AmbientLight, DirectionalLight, LightSource, PointLight, SpotLight
 from .shadowing import Mirror, Shadowing
-from .transforms import Billboard, BillboardSimplifier, LookAt
+from .transforms import Billboard, BillboardSimplifier, DirectionOfFlight, LookAt, Polar, Reflection
 
 __all__ = [
     "Color",
@@ -36,6 +36,9 @@ __all__ = [
     "SpotLight",
     "AmbientLight",
     "LookAt",
+    "Reflection",
+    "DirectionOfFlight",
+    "Polar",
     "Billboard",
     "BillboardSimplifier",
     "ClipPlane",

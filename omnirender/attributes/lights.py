@@ -62,13 +62,14 @@ class _Defaulted(Param):
 class LightSource(Parameterised, Light):
     """Base of the concrete lights: colour, intensity and OpenGL's colour terms."""
 
-    __slots__ = ("_color", "_intensity", "_ambient", "_diffuse", "_specular", "_casts_shadows")
+    __slots__ = ("_color", "_intensity", "_ambient", "_diffuse", "_specular", "_casts_shadows", "_enabled")
     color = Param(check_rgb, "light colour (RGB in [0, 1])")
     intensity = Param(_nonneg, "scale of the colour (>= 0)")
     ambient = Param(check_rgb, "ambient contribution (RGB)")
     diffuse = _Defaulted(optional(check_rgb), "diffuse colour; None: color * intensity")
     specular = _Defaulted(optional(check_rgb), "specular colour; None: color * intensity")
     casts_shadows = Param(check_bool, "shapes between the light and a surface shadow it (every engine)")
+    enabled = Param(check_bool, "False switches the light off in every engine, as if it were absent (ArtiSynth)")
 
     def __init__(
         self,
@@ -78,8 +79,10 @@ class LightSource(Parameterised, Light):
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
+        enabled: bool = True,
     ) -> None:
         super().__init__()
+        self.enabled = enabled
         self.color = color
         self.intensity = intensity
         self.ambient = ambient
@@ -163,8 +166,9 @@ class DirectionalLight(LightSource):
         diffuse: Sequence[float] | None = None,
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
+        enabled: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows, enabled)
         self.direction = direction
 
     def world_direction(self, matrix: np.ndarray) -> np.ndarray:
@@ -191,8 +195,9 @@ class PointLight(_Attenuated):
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
         threshold: float = DEFAULT_THRESHOLD,
+        enabled: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows, enabled)
         self._init_attenuation(position, constant, linear, quadratic, threshold)
 
 
@@ -224,8 +229,9 @@ class SpotLight(_Attenuated):
         specular: Sequence[float] | None = None,
         casts_shadows: bool = True,
         threshold: float = DEFAULT_THRESHOLD,
+        enabled: bool = True,
     ) -> None:
-        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows)
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows, enabled)
         self._init_attenuation(position, constant, linear, quadratic, threshold)
         self.direction = direction
         self.cutoff = cutoff
@@ -258,8 +264,8 @@ class AmbientLight(LightSource):
 
     __slots__ = ()
 
-    def __init__(self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2) -> None:
-        super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), False)
+    def __init__(self, color: Sequence[float] = (1.0, 1.0, 1.0), intensity: float = 0.2, enabled: bool = True) -> None:
+        super().__init__(color, intensity, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), False, enabled)
 
     @property
     def ambient(self) -> tuple[float, float, float]:  # type: ignore[override]
@@ -270,7 +276,7 @@ class AmbientLight(LightSource):
         object.__setattr__(self, "_ambient", check_rgb("AmbientLight", "ambient", value))
 
     def parameters(self) -> dict[str, Any]:
-        return {"color": self._color, "intensity": self._intensity}
+        return {"color": self._color, "intensity": self._intensity, "enabled": self._enabled}
 
 
 class EyeLight(NamedTuple):

@@ -1,4 +1,5 @@
-"""Modelling transforms beyond the core ones: ``LookAt`` and ``Billboard``.
+"""Modelling transforms beyond the core ones: ``LookAt``, ``Billboard`` and the VRS's
+``Reflection``, ``DirectionOfFlight`` and ``Polar``.
 
 Both are :class:`~omnirender.core.transform.Transform` subclasses, so they
 share the ``Transform`` category and compose with the accumulated model matrix.
@@ -15,6 +16,20 @@ the rotation that turns the object's +z axis towards the camera eye (with
 an ``om.Matrix`` / ``om.Rotation``.  Because it is a simplified attribute the
 engine keeps a frame for it; popping the ``Transform`` category at that depth
 undoes the computed rotation (the paper's billboarding example).
+
+The VRS transforms (static matrices, so every engine and exporter takes them
+like an ``om.Matrix``):
+
+* ``Reflection(normal, point)`` mirrors in the plane through ``point`` with
+  ``normal`` (determinant -1: engines keep the lit side facing out, see the
+  GL fragment shader's mirror test);
+* ``DirectionOfFlight(velocity, up, position)`` turns the object's +z axis
+  along ``velocity`` (a moving object oriented along its flight), +y towards
+  ``up``, and moves it to ``position``;
+* ``Polar(radius, azimuth, elevation, orient)`` places the object at spherical
+  coordinates: azimuth in degrees about +y from +z towards +x, elevation in
+  degrees above the xz plane; with ``orient`` its +z axis points radially
+  outwards and +y towards increasing elevation.
 """
 
 from __future__ import annotations
@@ -31,7 +46,7 @@ from ..core.handler import AttributeSimplifier, default_for
 from ..core.transform import Matrix, Rotation, Transform, finite_vector
 from ._params import unit_tuple
 
-__all__ = ["LookAt", "Billboard", "BillboardSimplifier"]
+__all__ = ["LookAt", "Billboard", "BillboardSimplifier", "Reflection", "DirectionOfFlight", "Polar"]
 
 
 class LookAt(Transform):
@@ -200,3 +215,142 @@ class BillboardSimplifier(AttributeSimplifier):
         if view is None:
             return
         engine.push(billboard.pushed_transform(engine.model_matrix(), view))
+
+
+class _Parametric(Transform):
+    """A static transform whose matrix follows from a few named parameters (re-validated when one is set)."""
+
+    __slots__ = ()
+    _names: tuple[str, ...] = ()
+
+    def _assign(self, **values: Any) -> None:
+        current = {name: getattr(self, "_" + name) for name in self._names if hasattr(self, "_" + name)}
+        current.update(values)
+        checked, matrix = self._build(current)
+        for name, value in checked.items():
+            object.__setattr__(self, "_" + name, value)
+        self._set_matrix(matrix)
+
+    def _build(self, values: dict[str, Any]) -> tuple[dict[str, Any], np.ndarray]:  # pragma: no cover
+        raise NotImplementedError
+
+    def __getattr__(self, name: str) -> Any:
+        if name in type(self)._names:
+            return object.__getattribute__(self, "_" + name)
+        raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in type(self)._names:
+            self._assign(**{name: value})
+        else:
+            super().__setattr__(name, value)
+
+    def parameters(self) -> dict[str, Any]:
+        out = {}
+        for name in self._names:
+            v = getattr(self, "_" + name)
+            out[name] = list(v) if isinstance(v, tuple) else v
+        return out
+
+
+def _unit(owner: str, name: str, value: Any) -> np.ndarray:
+    v = finite_vector(owner, name, value, 3)
+    n = float(np.linalg.norm(v))
+    if n < 1e-300:
+        raise ValueError(f"{owner}: {name} must not be the zero vector")
+    return v / n
+
+
+def _degrees(owner: str, name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ValueError(f"{owner}: {name} must be a number of degrees, got {value!r:.40}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{owner}: {name} must be finite, got {v}")
+    return v
+
+
+class Reflection(_Parametric):
+    """Mirror in the plane through ``point`` with ``normal`` (a VRS reflection transform; determinant -1)."""
+
+    __slots__ = ("_normal", "_point")
+    _names = ("normal", "point")
+
+    def __init__(self, normal: Sequence[float] = (1.0, 0.0, 0.0), point: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        super().__init__()
+        self._assign(normal=normal, point=point)
+
+    def _build(self, values: dict[str, Any]) -> tuple[dict[str, Any], np.ndarray]:
+        n = _unit("Reflection", "normal", values["normal"])
+        p = finite_vector("Reflection", "point", values["point"], 3)
+        m = np.eye(4)
+        m[:3, :3] -= 2.0 * np.outer(n, n)
+        m[:3, 3] = 2.0 * float(n @ p) * n
+        return {"normal": tuple(float(x) for x in n), "point": tuple(float(x) for x in p)}, m
+
+
+class DirectionOfFlight(_Parametric):
+    """Turn the object's +z axis along ``velocity`` (+y towards ``up``) and move it to ``position`` (VRS)."""
+
+    __slots__ = ("_velocity", "_up", "_position")
+    _names = ("velocity", "up", "position")
+
+    def __init__(
+        self,
+        velocity: Sequence[float] = (0.0, 0.0, 1.0),
+        up: Sequence[float] = (0.0, 1.0, 0.0),
+        position: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        super().__init__()
+        self._assign(velocity=velocity, up=up, position=position)
+
+    def _build(self, values: dict[str, Any]) -> tuple[dict[str, Any], np.ndarray]:
+        z = _unit("DirectionOfFlight", "velocity", values["velocity"])
+        u = _unit("DirectionOfFlight", "up", values["up"])
+        p = finite_vector("DirectionOfFlight", "position", values["position"], 3)
+        x = np.cross(u, z)
+        if float(np.linalg.norm(x)) < 1e-9:
+            raise ValueError("DirectionOfFlight: up must not be parallel to the velocity; give another up")
+        x /= np.linalg.norm(x)
+        m = np.eye(4)
+        m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = x, np.cross(z, x), z, p
+        checked = {
+            "velocity": tuple(float(v) for v in finite_vector("DirectionOfFlight", "velocity", values["velocity"], 3)),
+            "up": tuple(float(v) for v in finite_vector("DirectionOfFlight", "up", values["up"], 3)),
+            "position": tuple(float(v) for v in p),
+        }
+        return checked, m
+
+
+class Polar(_Parametric):
+    """Place the object at spherical coordinates (VRS polar transform; see the module docstring)."""
+
+    __slots__ = ("_radius", "_azimuth", "_elevation", "_orient")
+    _names = ("radius", "azimuth", "elevation", "orient")
+
+    def __init__(self, radius: float = 1.0, azimuth: float = 0.0, elevation: float = 0.0, orient: bool = False):
+        super().__init__()
+        self._assign(radius=radius, azimuth=azimuth, elevation=elevation, orient=orient)
+
+    def _build(self, values: dict[str, Any]) -> tuple[dict[str, Any], np.ndarray]:
+        r = _degrees("Polar", "radius", values["radius"])
+        if r < 0.0:
+            raise ValueError(f"Polar: radius must be >= 0, got {r}")
+        az = math.radians(_degrees("Polar", "azimuth", values["azimuth"]))
+        el = math.radians(_degrees("Polar", "elevation", values["elevation"]))
+        orient = values["orient"]
+        if not isinstance(orient, (bool, np.bool_)):
+            raise ValueError(f"Polar: orient must be True or False, got {orient!r:.40}")
+        radial = np.array([math.cos(el) * math.sin(az), math.sin(el), math.cos(el) * math.cos(az)])
+        m = np.eye(4)
+        m[:3, 3] = r * radial
+        if orient:
+            east = np.array([math.cos(az), 0.0, -math.sin(az)])
+            m[:3, 0], m[:3, 1], m[:3, 2] = east, np.cross(radial, east), radial
+        checked = {
+            "radius": r,
+            "azimuth": float(values["azimuth"]),
+            "elevation": float(values["elevation"]),
+            "orient": bool(orient),
+        }
+        return checked, m

@@ -7,7 +7,8 @@ inner nodes are renderer groups (:class:`DepthGroup`, :class:`OcclusionGroup`,
 :class:`ShadowGroup`, your own :class:`RendererGroup` subclasses).  A tree
 renders with ``tree.render(size)`` or ``om.render(tree, engine="gl")``, or sits
 in a scene graph as a technique.  :func:`check_rules` checks a renderer
-against the four integration rules of DESIGN.md.  Light fields are captured
+against the four integration rules of DESIGN.md, :func:`check_tree` a tree
+against the paper's structural guidelines.  Light fields are captured
 with :func:`capture_light_field` or loaded with :meth:`LightField.load`.
 
 The package builds on the GL engine (moderngl); it is imported on first use.
@@ -39,6 +40,8 @@ __all__ = [
     "check_rules",
     "RuleReport",
     "RuleViolation",
+    "check_tree",
+    "TreeProblem",
 ]
 
 _WHERE = {
@@ -62,6 +65,8 @@ _WHERE = {
     "check_rules": "rules",
     "RuleReport": "rules",
     "RuleViolation": "rules",
+    "check_tree": "guidelines",
+    "TreeProblem": "guidelines",
 }
 
 

@@ -300,7 +300,9 @@ def _world_camera(camera: Camera, world: np.ndarray) -> Camera:
     eye = (m @ np.array([*camera.eye, 1.0]))[:3]
     center = (m @ np.array([*camera.center, 1.0]))[:3]
     up = m[:3, :3] @ np.asarray(camera.up)
-    return Camera(eye, center, up, fov=camera.fov, height=camera.height, near=camera.near, far=camera.far)
+    return Camera(
+        eye, center, up, fov=camera.fov, height=camera.height, near=camera.near, far=camera.far, shift=camera.shift
+    )
 
 
 def _judge(report: RuleReport, renderer: Renderer, empty: _Run, filled: _Run, tolerance: int) -> None:

@@ -23,7 +23,7 @@ from .handler import (
 from .light import Light, LightSwitch
 from .mask import MaskError, compile_mask
 from .technique import Technique
-from .transform import Matrix, Rotation, Scaling, Transform, Translation, finite_vector
+from .transform import Matrix, Rotation, Scaling, Transform, Translation, TranslationArray, finite_vector
 
 __all__ = [
     "ChangeJournal",
@@ -52,6 +52,7 @@ __all__ = [
     "Transform",
     "Matrix",
     "Translation",
+    "TranslationArray",
     "Rotation",
     "Scaling",
     "finite_vector",

@@ -21,6 +21,7 @@ from typing import Any
 
 __all__ = [
     "ChangeJournal",
+    "note_edit",
     "RenderingComponent",
     "Shape",
     "Attribute",
@@ -40,11 +41,18 @@ class ChangeJournal:
     store per journal.
     """
 
-    __slots__ = ("_changed", "__weakref__")
+    __slots__ = ("_changed", "_edits", "__weakref__")
 
     def __init__(self) -> None:
-        self._changed: dict[int, RenderingComponent] = {}
-        _JOURNALS.append(weakref.ref(self, _JOURNALS.remove))
+        changed: dict[int, RenderingComponent] = {}
+        edits: list[tuple[Any, str, Any, int] | None] = []
+        self._changed = changed
+        self._edits = edits
+        # touch() stores into the live journals' dicts directly (no weak reference to follow per change);
+        # the journal's collection takes its dict and its edit list out of the lists
+        _JOURNALS.append(changed)
+        _EDIT_LOGS.append(edits)
+        weakref.finalize(self, _forget_journal, changed, edits)
 
     def drain(self) -> list[RenderingComponent]:
         """The components changed since the last drain, in the order they first changed; empties the journal."""
@@ -52,12 +60,48 @@ class ChangeJournal:
         self._changed.clear()
         return changed
 
+    def drain_edits(self) -> list[tuple[Any, str, Any, int]] | None:
+        """The list edits since the last drain, in order: ``(container, "insert" | "remove", item, index)``.
+
+        None when more than :data:`EDIT_LIMIT` edits piled up (or an edit
+        could not be described): the reader must assume anything changed.
+        Empties the log.
+        """
+        edits = list(self._edits)
+        self._edits.clear()
+        return None if None in edits else edits  # type: ignore[return-value]
+
     def __len__(self) -> int:
         return len(self._changed)
 
 
-#: Live change journals (weak references; a journal removes itself when collected).
-_JOURNALS: list[weakref.ref] = []
+#: The dicts of the live change journals (a journal's dict leaves the list when the journal is collected).
+_JOURNALS: list[dict[int, RenderingComponent]] = []
+
+
+#: The edit lists of the live change journals (see :func:`note_edit`).
+_EDIT_LOGS: list[list[tuple[Any, str, Any, int] | None]] = []
+#: Edits a journal keeps before it only records that too many happened (an engine that stopped drawing).
+EDIT_LIMIT = 4096
+
+
+def _forget_journal(changed: dict[int, RenderingComponent], edits: list) -> None:
+    for registry, own in ((_JOURNALS, changed), (_EDIT_LOGS, edits)):
+        for i, d in enumerate(registry):
+            if d is own:
+                del registry[i]
+                break
+
+
+def note_edit(container: Any, op: str, item: Any, index: int) -> None:
+    """Tell the live journals that ``container``'s list changed: ``op`` ("insert", "remove", or another word for
+    a change they cannot follow) of ``item`` at ``index``.  Nodes call it; engines read it with
+    :meth:`ChangeJournal.drain_edits` to update only what the edit touches."""
+    for log in _EDIT_LOGS:
+        if len(log) < EDIT_LIMIT:
+            log.append((container, op, item, index))
+        elif len(log) == EDIT_LIMIT:
+            log.append(None)
 
 
 class RenderingComponent:
@@ -101,16 +145,26 @@ class RenderingComponent:
 
     def touch(self) -> None:
         """Mark the component as changed: bump its version and its owners' versions, and tell the journals."""
-        object.__setattr__(self, "_version", self._version + 1)
-        if _JOURNALS:
-            for ref in _JOURNALS:
-                journal = ref()
-                if journal is not None:
-                    journal._changed[id(self)] = self
+        _set_version(self, self._version + 1)
+        for changed in _JOURNALS:
+            changed[id(self)] = self
         owners = self._owners
         if owners:
             for node in owners:
                 node.touch()
+
+    @staticmethod
+    def touch_all(components: list[RenderingComponent]) -> None:
+        """:meth:`touch` every one of ``components`` (distinct), the journals told in one update per journal."""
+        for c in components:
+            _set_version(c, c._version + 1)
+        for changed in _JOURNALS:
+            changed.update(zip(map(id, components), components, strict=True))
+        for c in components:
+            owners = c._owners
+            if owners:
+                for node in owners:
+                    node.touch()
 
     def attach_owner(self, owner: Any) -> None:
         """Make ``owner`` (anything with ``touch()``: a node, a shape built from this one) hear of changes."""
@@ -171,6 +225,9 @@ class RenderingComponent:
         params = ", ".join(f"{k}={_short(v)}" for k, v in self.parameters().items())
         return f"{type(self).__name__}({params})"
 
+
+#: The ``_version`` slot's setter: a change bumps the version without going through ``__setattr__``.
+_set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 
 _SLOTS: dict[type, tuple[str, ...]] = {}
 _TRANSIENT: dict[type, dict[str, Callable[[], Any]]] = {}

@@ -32,7 +32,7 @@ from .declarations import Declarations
 from .dispatch import NOTHING, SERVICE, SIMPLIFIER, HandlerCaches
 from .errors import EvaluationError, NoHandlerError
 from .handler import SIMPLIFY, Handler, registry
-from .light import Light, LightSwitch
+from .light import Light, LightSwitch, light_on
 from .program import (
     ADD,
     DEINSTALL,
@@ -479,8 +479,8 @@ class Engine:
                 f"add() needs a PolyAttribute, got {type(attribute).__name__}{self._where()}; "
                 f"mono attributes are push()ed"
             )
-        if attribute.category is Light and id(attribute) in self._pre_lights:
-            return
+        if attribute.category is Light and (id(attribute) in self._pre_lights or not light_on(attribute)):
+            return  # pre-evaluated already, or disabled: a disabled light is as if absent
         h = self._handler_for(attribute)
         if h is not None and h.service == SIMPLIFY:
             self._poly_frames[id(attribute)] = [attribute, h, 0, self._record(h, attribute)]
@@ -493,7 +493,7 @@ class Engine:
 
     def remove(self, attribute: Attribute) -> None:
         """Deactivate a poly attribute added before."""
-        if attribute.category is Light and id(attribute) in self._pre_lights:
+        if attribute.category is Light and (id(attribute) in self._pre_lights or not light_on(attribute)):
             return
         frame = self._poly_frames.pop(id(attribute), None)
         if frame is not None:
@@ -670,6 +670,8 @@ class Engine:
         lights, camera = declared.lights, declared.camera
         lights_set = self.context.poly_set(Light)
         for light, matrix in lights:
+            if not light_on(light):
+                continue  # disabled: no placement, no painter
             self._placements.append((light, matrix))
             if id(light) not in self._pre_lights:
                 self._pre_lights[id(light)] = light
@@ -758,16 +760,17 @@ class Engine:
         return self.context.poly(category)
 
     def lights(self) -> list[tuple[Light, np.ndarray]]:
-        """Active lights with their world matrices, after the light switch.
+        """Active lights with their world matrices, after the light switch; disabled lights are left out.
 
         Pre-evaluated lights come first, once per placement; lights added
         during the traversal follow with the model matrix they were added with.
         """
         switch = self.context.mono(LightSwitch)
-        out = [(light, m) for light, m in self._placements if switch is None or switch.allows(light)]
+        allows = light_on if switch is None else switch.allows
+        out = [(light, m) for light, m in self._placements if allows(light)]
         pre = self._pre_lights
         for light in self.context.poly(Light):
-            if id(light) not in pre and (switch is None or switch.allows(light)):
+            if id(light) not in pre and allows(light):
                 out.append((light, self._light_matrices.get(id(light), _IDENTITY)))
         return out
 

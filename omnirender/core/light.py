@@ -13,7 +13,12 @@ from typing import Any
 
 from .component import MonoAttribute, PolyAttribute
 
-__all__ = ["Light", "LightSwitch"]
+__all__ = ["Light", "LightSwitch", "light_on"]
+
+
+def light_on(light: Any) -> bool:
+    """Whether ``light`` shines at all (``enabled``); a ``LightSwitch`` may still turn it off for a subgraph."""
+    return bool(light.enabled)
 
 
 class Light(PolyAttribute):
@@ -22,6 +27,8 @@ class Light(PolyAttribute):
     __slots__ = ()
     shares_category = True
     declared = "all"  # every light shines wherever it sits (declarative pre-evaluation)
+    #: False: the light is off in every engine, as if absent (``om.PointLight(enabled=False)``; ArtiSynth)
+    enabled = True
 
 
 class LightSwitch(MonoAttribute):
@@ -45,6 +52,8 @@ class LightSwitch(MonoAttribute):
 
     def allows(self, light: Light) -> bool:
         """Whether ``light`` is on under this switch."""
+        if not light.enabled:
+            return False
         if self.lights is None:
             return self.on
         listed = any(light is other for other in self.lights)

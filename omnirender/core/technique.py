@@ -4,7 +4,10 @@ A technique looks up and calls handlers for shapes and attributes (the
 look-up of DESIGN.md: the service, then ``"simplify"``, then the parent class
 along the MRO), and controls how often the sequence is evaluated: ``start``,
 then for as long as ``needs_pass`` says so ``prepare_pass``, the evaluation,
-``finish_pass`` and ``next_pass``; finally ``stop``.  A technique met inside a
+``finish_pass`` and ``next_pass``; finally ``stop``.  ``prepare_pass`` may
+decline its pass by returning ``False`` (the VRS protocol): that pass is
+neither evaluated nor finished, and ``next_pass`` moves on
+(:func:`pass_accepted` is the one rule every engine applies).  A technique met inside a
 node takes over the rest of that node's list, so nested techniques nest passes.
 
 Pass state lives in the engine, not in the technique: every run of a technique
@@ -28,7 +31,12 @@ from .component import RenderingComponent
 if TYPE_CHECKING:
     from .engine import Engine
 
-__all__ = ["Technique", "TechniqueFrame"]
+__all__ = ["Technique", "TechniqueFrame", "pass_accepted"]
+
+
+def pass_accepted(prepared: object) -> bool:
+    """Whether a pass runs, given what ``prepare_pass`` returned: anything but ``False`` (None included)."""
+    return prepared is not False
 
 
 class TechniqueFrame:
@@ -83,8 +91,13 @@ class Technique(RenderingComponent):
         """Whether another pass is needed."""
         return engine.current_pass < self.passes
 
-    def prepare_pass(self, engine: Engine) -> None:
-        """Called before each pass (set state, bind targets)."""
+    def prepare_pass(self, engine: Engine) -> bool | None:
+        """Called before each pass (set state, bind targets); return ``False`` to skip this pass.
+
+        A skipped pass is neither evaluated nor finished (``finish_pass`` is not
+        called); ``next_pass`` still advances.  None (the default) runs it.
+        """
+        return None
 
     def finish_pass(self, engine: Engine) -> None:
         """Called after each pass (read back, merge)."""
@@ -103,9 +116,9 @@ class Technique(RenderingComponent):
             self.start(engine)
             try:
                 while self.needs_pass(engine):
-                    self.prepare_pass(engine)
-                    engine.run_program(program)
-                    self.finish_pass(engine)
+                    if pass_accepted(self.prepare_pass(engine)):
+                        engine.run_program(program)
+                        self.finish_pass(engine)
                     self.next_pass(engine)
             finally:
                 self.stop(engine)

@@ -9,14 +9,26 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from math import isfinite
+from itertools import chain
+from operator import attrgetter
+from typing import Any
 
 import numpy as np
 
-from .component import MonoAttribute
+from .component import MonoAttribute, RenderingComponent
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 
-__all__ = ["Transform", "Matrix", "Translation", "Rotation", "Scaling", "finite_vector", "axis_angle_matrix"]
+__all__ = [
+    "Transform",
+    "Matrix",
+    "Translation",
+    "Rotation",
+    "Scaling",
+    "TranslationArray",
+    "finite_vector",
+    "plain_triple",
+    "axis_angle_matrix",
+]
 
 
 def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
@@ -37,6 +49,50 @@ def finite_vector(owner: str, name: str, value, size: int) -> np.ndarray:
         raise ValueError(f"{owner}: {name} must be finite, got {value!r}")
     check_array_magnitude(owner, name, arr)
     return arr
+
+
+#: Scalar types taken as they are by the setters' fast path (bool is left to the validating path).
+_SCALARS = frozenset({float, int, np.float64, np.float32, np.float16, np.int64, np.int32, np.int16, np.int8,
+                      np.uint64, np.uint32, np.uint16, np.uint8})  # fmt: skip
+_REAL_KINDS = frozenset("fiu")
+
+
+def plain_triple(value: object) -> tuple[float, float, float] | None:
+    """``value`` as three Python floats when it plainly is three finite numbers within the magnitude limit.
+
+    The setters' fast path (a simulation loop assigns thousands per frame):
+    a tuple or list of three Python or numpy numbers, or a numpy array of
+    shape (3,) of a real dtype.  Anything else, or a value out of the limits,
+    gives None and the caller validates it the slow way (:func:`finite_vector`),
+    which also makes the error message.
+    """
+    cls = value.__class__
+    if cls is tuple or cls is list:
+        if len(value) != 3:  # type: ignore[arg-type]
+            return None
+        x, y, z = value  # type: ignore[misc]
+        if x.__class__ is not float or y.__class__ is not float or z.__class__ is not float:
+            if x.__class__ not in _SCALARS or y.__class__ not in _SCALARS or z.__class__ not in _SCALARS:
+                return None
+            try:
+                x, y, z = float(x), float(y), float(z)
+            except OverflowError:  # an integer beyond float's range
+                return None
+    elif cls is np.ndarray:
+        if value.shape != (3,) or value.dtype.kind not in _REAL_KINDS:  # type: ignore[attr-defined]
+            return None
+        x, y, z = value.tolist()  # type: ignore[attr-defined]
+        if x.__class__ is not float:  # an integer array
+            x, y, z = float(x), float(y), float(z)
+    else:
+        return None
+    # comparisons are False for NaN: a non-finite number takes the validating path
+    if -_MAX <= x <= _MAX and -_MAX <= y <= _MAX and -_MAX <= z <= _MAX:
+        return (x, y, z)
+    return None
+
+
+_MAX = MAX_MAGNITUDE
 
 
 _DIAGONAL = np.arange(4)
@@ -152,22 +208,28 @@ class Translation(Transform):
         else:
             self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
 
+    def __setattr__(self, name: str, value: Any) -> None:
+        # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames
+        if name == "offset":
+            offset = plain_triple(value)
+            if offset is not None:
+                _set_offset(self, offset)
+                _set_matrix(self, None)
+                self.touch()
+                return
+        RenderingComponent.__setattr__(self, name, value)
+
     @property
     def offset(self) -> tuple[float, float, float]:
         return self._offset
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
-        offset = None
-        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
-            x, y, z = value
-            if type(x) is float and type(y) is float and type(z) is float and isfinite(x + y + z):
-                if abs(x) <= MAX_MAGNITUDE and abs(y) <= MAX_MAGNITUDE and abs(z) <= MAX_MAGNITUDE:
-                    offset = value
+        offset = plain_triple(value)  # a simulation loop's case: three numbers, a numpy row
         if offset is None:
             offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
-        object.__setattr__(self, "_offset", offset)
-        self._changed()
+        _set_offset(self, offset)
+        _set_matrix(self, None)  # made again when somebody asks (assigning the public parameter touches)
 
     def _build_matrix(self) -> np.ndarray:
         m = np.eye(4)
@@ -179,11 +241,18 @@ class Translation(Transform):
         out = np.zeros((len(transforms), 4, 4))
         out[:, _DIAGONAL, _DIAGONAL] = 1.0
         if transforms:
-            out[:, :3, 3] = [t._offset for t in transforms]  # type: ignore[attr-defined]
+            n = len(transforms)
+            flat = chain.from_iterable(map(_OFFSET, transforms))  # C-level loops: no Python step per transform
+            out[:, :3, 3] = np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
         return out
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}
+
+
+_OFFSET = attrgetter("_offset")
+_set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
+_set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]
 
 
 def axis_angle_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:
@@ -247,9 +316,11 @@ class Rotation(Transform):
 
     @angle.setter
     def angle(self, value: float) -> None:
-        if type(value) is float and -MAX_MAGNITUDE <= value <= MAX_MAGNITUDE:  # a simulation loop's case (NaN fails)
+        if value.__class__ is not float and value.__class__ in _SCALARS:  # a numpy number, an int
+            value = float(value)
+        if value.__class__ is float and -MAX_MAGNITUDE <= value <= MAX_MAGNITUDE:  # a simulation loop's case
             object.__setattr__(self, "_angle", value)
-            self._changed()
+            _set_matrix(self, None)
         else:
             self._assign(value, self._axis)
 
@@ -315,18 +386,12 @@ class Scaling(Transform):
 
     @factors.setter
     def factors(self, value: Sequence[float]) -> None:
-        if type(value) is tuple and len(value) == 3:  # the common case of a simulation loop: 3 Python floats
-            x, y, z = value
-            if (
-                type(x) is float
-                and type(y) is float
-                and type(z) is float
-                and MIN_MAGNITUDE <= abs(x) <= MAX_MAGNITUDE
-                and MIN_MAGNITUDE <= abs(y) <= MAX_MAGNITUDE
-                and MIN_MAGNITUDE <= abs(z) <= MAX_MAGNITUDE
-            ):
-                object.__setattr__(self, "_factors", value)
-                self._changed()
+        plain = plain_triple(value)  # a simulation loop's case: three numbers, a numpy row
+        if plain is not None:
+            x, y, z = plain
+            if MIN_MAGNITUDE <= abs(x) and MIN_MAGNITUDE <= abs(y) and MIN_MAGNITUDE <= abs(z):
+                object.__setattr__(self, "_factors", plain)
+                _set_matrix(self, None)
                 return
         v = finite_vector("Scaling", "factors", value, 3)
         if np.any(v == 0.0):
@@ -352,3 +417,78 @@ class Scaling(Transform):
 
     def parameters(self) -> dict:
         return {"factors": list(self.factors)}
+
+
+class TranslationArray(Sequence[Translation]):
+    """Many :class:`Translation` attributes whose offsets are the rows of one ``(N, 3)`` array you own.
+
+    The bulk way to move thousands of nodes: the array is held *without
+    copying* (as :class:`~omnirender.shapes.InstanceSet` holds its arrays);
+    ``moves[i]`` is an ordinary ``om.Translation`` that you add to node ``i``.
+    Write the array in place and call :meth:`touch`: every translation takes
+    its row, validated for the whole array at once (finite, within the
+    magnitude limit), and changes exactly as if its ``offset`` had been
+    assigned, so every engine (GL, POV-Ray, Mitsuba, Radiance, picking,
+    bounds) sees the same scene.  Between two :meth:`touch` calls the
+    translations keep the offsets of the last one.
+    """
+
+    __slots__ = ("_array", "_translations", "_version")
+
+    def __init__(self, offsets: np.ndarray | Sequence[Sequence[float]]) -> None:
+        a = self._checked(offsets if isinstance(offsets, np.ndarray) else np.asarray(offsets, dtype=np.float64))
+        self._array = offsets if isinstance(offsets, np.ndarray) else a
+        self._translations = [Translation(offset=row) for row in a.tolist()]
+        self._version = 0
+
+    @property
+    def array(self) -> np.ndarray:
+        """The bound array (the application's own object when it was a numpy array)."""
+        return self._array
+
+    @property
+    def version(self) -> int:
+        """Counter bumped by every :meth:`touch`."""
+        return self._version
+
+    def __len__(self) -> int:
+        return len(self._translations)
+
+    def __getitem__(self, index):  # type: ignore[override]
+        return self._translations[index]
+
+    def __iter__(self):
+        return iter(self._translations)
+
+    def touch(self) -> None:
+        """Every translation takes its row of the array (written in place since); one change per translation."""
+        a = self._checked(self._array)
+        translations = self._translations
+        for t, (x, y, z) in zip(translations, a.tolist(), strict=True):
+            _set_offset(t, (x, y, z))
+            _set_matrix(t, None)
+        Translation.touch_all(translations)
+        self._version += 1
+
+    def _checked(self, offsets: np.ndarray) -> np.ndarray:
+        a = np.asarray(offsets, dtype=np.float64) if offsets.dtype != np.float64 else offsets
+        bound = hasattr(self, "_translations")
+        n = len(self._translations) if bound else len(a)
+        if a.ndim != 2 or a.shape[1] != 3 or len(a) != n:
+            rows = f" of {n} rows" if bound else ""
+            raise ValueError(
+                f"TranslationArray: offsets must be an (N, 3) array{rows}, got shape {a.shape}; write the array in "
+                "place (positions[:] = ...) rather than replacing it"
+            )
+        bad = ~(np.abs(a) <= MAX_MAGNITUDE).all(axis=1)  # NaN compares False
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            where = ""
+            if hasattr(self, "_translations"):
+                owners = self._translations[i].owners
+                where = f" (in node {owners[0].path})" if owners else ""
+            raise ValueError(
+                f"TranslationArray: offset of translation {i} is {tuple(a[i].tolist())}{where}; offsets must be "
+                f"finite and at most {MAX_MAGNITUDE:.0e} in magnitude"
+            )
+        return a

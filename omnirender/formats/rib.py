@@ -377,14 +377,18 @@ class RIBEngine(NodeTrackingEngine):
         aspect = w / h
         out = [f"Format {w} {h} 1"]
         if camera.is_orthographic:
-            half_h = camera.height / 2.0
+            left, right, bottom, top = camera.window(aspect)
             out.append('Projection "orthographic"')
-            out.append(f"ScreenWindow {-half_h * aspect:.7g} {half_h * aspect:.7g} {-half_h:.7g} {half_h:.7g}")
+            out.append(f"ScreenWindow {left:.7g} {right:.7g} {bottom:.7g} {top:.7g}")
         else:
             fov = camera.fov  # RenderMan's fov spans the smaller image side
             if aspect < 1.0:
                 fov = math.degrees(2.0 * math.atan(math.tan(math.radians(camera.fov) / 2.0) * aspect))
             out.append(f'Projection "perspective" "fov" {rib_numbers(fov)}')
+            if camera.is_off_axis:  # the window in units where the smaller side spans [-1, 1], moved off-axis
+                unit = math.tan(math.radians(fov) / 2.0)
+                left, right, bottom, top = (v / unit for v in camera.window(aspect))
+                out.append(f"ScreenWindow {left:.7g} {right:.7g} {bottom:.7g} {top:.7g}")
         out.append(f"Clipping {camera.near:.7g} {camera.far:.7g}")
         view = np.diag([1.0, 1.0, -1.0, 1.0]) @ camera.view_matrix() @ np.linalg.inv(np.asarray(world, np.float64))
         out.append(f"Transform {_matrix(view)}")

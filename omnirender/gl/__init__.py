@@ -259,6 +259,7 @@ def _trim_heap() -> None:
 
         try:
             _malloc_trim = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim
+            _malloc_trim.argtypes, _malloc_trim.restype = [ctypes.c_size_t], ctypes.c_int
         except (OSError, AttributeError):  # not glibc: nothing to do
             _malloc_trim = False
     if _malloc_trim:

@@ -44,12 +44,13 @@ from .engine.context import (
     depth_stencil_framebuffer,
 )
 from .engine.drawer import BatchDrawer
-from .engine.drawlist import Batch, DrawItem, DrawState, Scope, world_bounds
+from .engine.drawlist import Batch, DrawItem, DrawState, Scope
 from .engine.dynamic import TransformUpdater
 from .engine.frame import FrameRunner
 from .engine.frame_state import FrameState
 from .engine.geometry import Geometry, GeometryCache, unit_mesh
 from .engine.imagespace import RenderTarget
+from .engine.index import RenderIndex
 from .engine.layout import ROW
 from .engine.passes import Pass, Target, _camera
 from .engine.renderer import BatchRenderer
@@ -61,7 +62,7 @@ from .engine.state import defaults, kinds
 from .engine.targets import FrameTargets
 from .engine.technique import GLTechnique
 from .techniques.forward import Forward
-from .techniques.mirrors import MirrorStage
+from .techniques.mirrors import MirrorStage, mirror_items
 from .techniques.shadows import ShadowMapStage
 from .techniques.stereo import StereoStage
 
@@ -180,6 +181,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
         self._occurrences: dict[tuple[int, int], int] = {}
         self._next_occurrence = 0
+        #: id(node) -> (its occurrence key (-1: compiled more than once), ref), for compiling only edited subtrees
+        self._occurrence_of: dict[int, tuple[int, Any]] = {}
+        #: id(node) -> (ref, structure version, its components when they all precede its children, else None)
+        self._leading_cache: dict[int, tuple[Any, int, Any]] = {}
         self._prune_limit = 4096
         self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
         self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
@@ -206,7 +211,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         # draw state
         self._batch_pool: dict[tuple, Batch] = {}
         self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
-        self._bounds: tuple[np.ndarray, np.ndarray] | None = None
+        #: the installed draw list and its derived lists (items, mirrors, bounds), kept up to date by change kind
+        self.index = RenderIndex(mirror_items)
         self._defaults = defaults()
         self.stats: dict[str, Any] = {}
         with self.current():
@@ -304,10 +310,6 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
 
         if value is not None and not isinstance(value, Stereo):
             raise TypeError(f"GLEngine: stereo must be an om.gl.Stereo(...) or None, got {value!r:.60}")
-        if value is not None and self._pipeline_technique is not None:
-            raise ValueError(
-                "GLEngine: stereo frames draw each eye with the forward pipeline; give pipeline='forward' with stereo"
-            )
         self._stereo = value
 
     @property
@@ -400,6 +402,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
                 self._journal.drain()  # nothing compiled to update in place: forget what changed
+                self._journal.drain_edits()
                 self._install(self._immediate)
                 self._move_plan = None
                 self._immediate = Scope()
@@ -416,7 +419,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     @property
     def draw_items(self) -> list[DrawItem]:
         """Every compiled draw item of the installed frame, in compile order (nested scopes included)."""
-        return [] if self._root is None else self._root.all_items()
+        return list(self.index.items())
 
     @property
     def batches(self) -> list[Batch]:
@@ -433,10 +436,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
 
     def scene_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World-space (min, max) of the compiled draw list, or None when it is empty."""
-        if self._bounds is not None:
-            return self._bounds
-        self._bounds = world_bounds(item for item in self.draw_items if not item.state.overlay)
-        return self._bounds
+        return self.index.bounds()
 
     def camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
         """(camera, view, projection) of the scene's camera (else the auto-fit one) at the engine's size."""
@@ -534,7 +534,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     @property
     def item_count(self) -> int:
         """How many draw items the installed list holds (nested scopes included)."""
-        return self._item_count if self._root is not None else 0
+        return len(self.index.items()) if self._root is not None else 0
 
     # -- framebuffers pushed by a FramebufferStack ----------------------------------------------
     @property

@@ -20,6 +20,8 @@ import copy
 from collections.abc import Mapping
 from typing import Any
 
+from ..attributes.appearance import PBRMaterial
+from ..attributes.conversion import EngineSpecific, based_on, display_rgb, shininess_of_roughness
 from ..core import MonoAttribute, PolyAttribute
 
 __all__ = ["BSDF", "Emitter", "Integrator", "MitsubaPlugin"]
@@ -68,14 +70,62 @@ class MitsubaPlugin:
         return {"plugin": dict(self._plugin)}  # type: ignore[attr-defined]
 
 
-class BSDF(MitsubaPlugin, MonoAttribute):
-    """A Mitsuba BSDF plugin dict for the following shapes: ``BSDF({"type": "dielectric"})``."""
+def _value(spec: Any) -> Any:
+    """The number or RGB list of a reflectance given as a number, a list or ``{"type": "rgb", "value": ...}``."""
+    if isinstance(spec, Mapping):
+        return spec.get("value") if spec.get("type") in ("rgb", "spectrum") else None
+    return spec
+
+
+class BSDF(EngineSpecific, MitsubaPlugin, MonoAttribute):
+    """A Mitsuba BSDF plugin dict for the following shapes: ``BSDF({"type": "dielectric"})``.
+
+    Other engines use the closest generic material (``generic``): ``diffuse``
+    and the plastics as a Phong material (roughness as exponent), the
+    conductors and ``principled`` as a metallic-roughness material, the
+    dielectrics as a mostly transparent glossy material; ``twosided`` wraps are
+    looked through.  Textured parameters keep the current colour.
+    """
 
     __slots__ = ("_plugin",)
 
     def __init__(self, plugin: Mapping[str, Any]) -> None:
         super().__init__()
         self.plugin = plugin
+
+    def generic(self, current: Any) -> list[Any] | None:
+        p = self._plugin
+        while p.get("type") in ("twosided", "mask", "bumpmap", "normalmap"):
+            nested = [v for v in p.values() if isinstance(v, Mapping) and "type" in v and v["type"] != "bitmap"]
+            if not nested:
+                return None
+            p = nested[-1]
+        kind = p.get("type")
+        alpha = float(p["alpha"]) if isinstance(p.get("alpha"), (int, float)) else 0.1
+        if kind == "diffuse":
+            rgb = display_rgb(_value(p.get("reflectance", 0.5)))
+            return [based_on(current, diffuse=rgb, specular=(0.0, 0.0, 0.0))] if rgb else None
+        if kind in ("plastic", "roughplastic"):
+            rgb = display_rgb(_value(p.get("diffuse_reflectance", 0.5)))
+            shininess = shininess_of_roughness(alpha) if kind == "roughplastic" else 200.0
+            changes = {"specular": (0.5, 0.5, 0.5), "shininess": shininess}
+            if rgb:
+                changes["diffuse"] = rgb
+            return [based_on(current, **changes)]
+        if kind in ("conductor", "roughconductor"):
+            rgb = display_rgb(_value(p.get("specular_reflectance", 1.0))) or (1.0, 1.0, 1.0)
+            roughness = alpha**0.5 if kind == "roughconductor" else 0.05
+            return [PBRMaterial(base_color=rgb, metallic=1.0, roughness=min(max(roughness, 0.0), 1.0))]
+        if kind == "principled":
+            rgb = display_rgb(_value(p.get("base_color", 0.5))) or (0.5, 0.5, 0.5)
+            metallic = p.get("metallic", 0.0)
+            roughness = p.get("roughness", 0.5)
+            if not isinstance(metallic, (int, float)) or not isinstance(roughness, (int, float)):
+                return [PBRMaterial(base_color=rgb)]
+            return [PBRMaterial(base_color=rgb, metallic=float(metallic), roughness=float(roughness))]
+        if kind in ("dielectric", "thindielectric", "roughdielectric"):
+            return [based_on(current, specular=(1.0, 1.0, 1.0), shininess=200.0, opacity=0.2)]
+        return None
 
 
 class Emitter(MitsubaPlugin, PolyAttribute):

@@ -188,6 +188,12 @@ def headlight_emitter(camera: Camera, camera_world: np.ndarray) -> dict[str, Any
     }
 
 
+def _translation(t: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = t
+    return m
+
+
 def sensor_matrix(camera: Camera, camera_world: np.ndarray, aspect: float) -> np.ndarray:
     """Mitsuba sensor ``to_world`` reproducing the camera's GL view exactly.
 
@@ -199,6 +205,8 @@ def sensor_matrix(camera: Camera, camera_world: np.ndarray, aspect: float) -> np
     eye_to_world = np.asarray(camera_world, np.float64) @ np.linalg.inv(camera.view_matrix())
     m = eye_to_world @ GL_TO_MITSUBA_EYE
     if camera.is_orthographic:
+        if camera.is_off_axis:  # parallel rays: the off-axis window moves with the eye
+            m = eye_to_world @ _translation(np.array([*camera.shift, 0.0]) * camera.height) @ GL_TO_MITSUBA_EYE
         s = camera.height * aspect / 2.0
         m = m @ np.diag([s, s, 1.0, 1.0])
     return m
@@ -217,4 +225,8 @@ def sensor_dict(camera: Camera, camera_world: np.ndarray, size: tuple[int, int],
     if not camera.is_orthographic:
         sensor["fov"] = float(camera.fov)
         sensor["fov_axis"] = "y"
+        if camera.is_off_axis:
+            # Mitsuba's principal point offset is in film widths (x, to the right) and film heights (y, down)
+            sensor["principal_point_offset_x"] = float(camera.shift[0] * h / w)
+            sensor["principal_point_offset_y"] = float(-camera.shift[1])
     return sensor

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..attributes import BumpMap, Mirror, MultiTexture, Texture
 from ..attributes.clipping import ClipRecords
+from ..attributes.conversion import native_to
 from ..attributes.photometry import ambient_total, linear_to_srgb, srgb_to_linear
 from ..attributes.surface import Appearance, appearance_key, engine_appearance, resolve_surface
 from ..attributes.texturing import bake_layers, scaled_image
@@ -500,3 +501,7 @@ class MitsubaEngine(Engine):
                 f"{len(self.emitters)} emitters, {len(self.shapes)} shapes): {exc}; check om.mitsuba.Integrator "
                 f"and om.mitsuba.Emitter plugin dicts"
             ) from None
+
+
+# Its own renderer-specific attributes stay on their stacks here (other engines convert them to generic ones).
+native_to(MitsubaEngine, "mitsuba.paint", BSDF)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -190,9 +189,6 @@ def eye_depth(ray_depth: np.ndarray, alpha: np.ndarray, camera: Camera, size: tu
     if camera.is_orthographic:
         return (t + camera.near).astype(np.float32)
     # cosine between each pixel's central ray and the viewing axis
-    ty = math.tan(math.radians(camera.fov) / 2.0)
-    tx = ty * w / h
-    xs = ((np.arange(w) + 0.5) / w * 2.0 - 1.0) * tx
-    ys = ((np.arange(h) + 0.5) / h * 2.0 - 1.0) * ty
+    xs, ys = camera.pixel_grid((w, h))
     cos = 1.0 / np.sqrt(1.0 + xs[None, :] ** 2 + ys[:, None] ** 2)
     return np.where(hit, t * cos + camera.near, np.inf).astype(np.float32)

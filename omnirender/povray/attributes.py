@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..attributes.conversion import EngineSpecific, based_on, display_rgb
 from ..core import MonoAttribute, PolyAttribute
 from . import sdl
 
@@ -72,17 +73,53 @@ class SDLBlock(MonoAttribute):
         return f"{self.keyword} {{ {self.body()} }}"
 
 
-class Finish(SDLBlock):
+def _number(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)
+
+
+def _gray_or_rgb(value: Any) -> tuple[float, float, float] | None:
+    n = _number(value)
+    if n is not None:
+        return (n, n, n)
+    if isinstance(value, (list, tuple)) and len(value) == 3 and all(_number(v) is not None for v in value):
+        return (float(value[0]), float(value[1]), float(value[2]))
+    return None
+
+
+class Finish(EngineSpecific, SDLBlock):
     """Extra ``finish`` items, appended after those derived from the material (so they win).
 
-    ``om.povray.Finish(phong=0.8, reflection=0.2, metallic=True)``.
+    ``om.povray.Finish(phong=0.8, reflection=0.2, metallic=True)``.  Other
+    engines apply what a Phong material can say (``generic``): ``phong`` (with
+    ``phong_size``) or ``specular`` (with ``roughness``) as the specular colour
+    and exponent, ``ambient`` and ``emission``; reflection and the rest are
+    POV-Ray's only.
     """
 
     __slots__ = ()
     keyword = "finish"
 
+    def generic(self, current: Any) -> list[Any] | None:
+        p = self._params
+        changes: dict[str, Any] = {}
+        phong, specular = _number(p.get("phong")), _number(p.get("specular"))
+        if phong is not None:
+            changes["specular"] = (min(max(phong, 0.0), 1.0),) * 3
+            changes["shininess"] = max(_number(p.get("phong_size")) or 40.0, 0.0)
+        elif specular is not None:
+            changes["specular"] = (min(max(specular, 0.0), 1.0),) * 3
+            roughness = _number(p.get("roughness")) or 0.05
+            changes["shininess"] = 1.0 / max(roughness, 1e-4)
+        for key in ("ambient", "emission"):
+            rgb = _gray_or_rgb(p.get(key))
+            if rgb is not None:
+                changes[key] = tuple(min(max(c, 0.0), 1.0) for c in rgb)
+        return [based_on(current, **changes)] if changes else None
 
-class Pigment(SDLBlock):
+
+class Pigment(EngineSpecific, SDLBlock):
     """A ``pigment`` that replaces the one derived from the colour or material.
 
     ``color`` (3 to 5 numbers: rgb, rgbf, rgbft) is written first; other
@@ -93,6 +130,17 @@ class Pigment(SDLBlock):
 
     __slots__ = ()
     keyword = "pigment"
+
+    def generic(self, current: Any) -> list[Any] | None:
+        """Other engines: the colour as the diffuse colour (filter + transmit as transparency); patterns are lost."""
+        colour = self._params.get("color")
+        if colour is None:
+            return None
+        values = [min(max(float(v), 0.0), 1.0) for v in colour]
+        changes: dict[str, Any] = {"diffuse": display_rgb(values[:3])}  # POV-Ray colours are linear
+        if len(values) > 3:
+            changes["opacity"] = max(0.0, 1.0 - sum(values[3:]))
+        return [based_on(current, **changes)]
 
     def body(self) -> str:
         params = dict(self._params)

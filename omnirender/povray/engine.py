@@ -26,9 +26,10 @@ from typing import Any
 import numpy as np
 
 from ..attributes import Mirror, Shadowing
+from ..attributes.conversion import native_to
 from ..core import Camera, Engine, LightSwitch, Technique
 from . import sdl
-from .attributes import GlobalSettings, Interior, Raw
+from .attributes import Finish, GlobalSettings, Interior, Pigment, Raw
 
 __all__ = ["POVRayEngine", "camera_sdl", "depth_texture", "decode_depth", "coverage"]
 
@@ -44,7 +45,8 @@ def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
 
     ``view`` is the world-to-eye matrix.  Perspective: the image plane at unit
     distance spans ``2 tan(fov/2)`` vertically and ``aspect`` times that
-    horizontally.  Orthographic: the view volume is ``height`` tall.
+    horizontally.  Orthographic: the view volume is ``height`` tall.  An
+    off-axis camera (``camera.shift``) moves the window's centre.
     """
     w, h = size
     aspect = w / h
@@ -54,10 +56,16 @@ def camera_sdl(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> str:
     up = axes[:, 1] / np.linalg.norm(axes[:, 1])
     forward = -axes[:, 2] / np.linalg.norm(axes[:, 2])
     location = eye_to_world[:3, 3]
+    sx, sy = camera.shift
     if camera.is_orthographic:
         kind, extent = "orthographic", float(camera.height)
+        location = location + extent * (sx * right + sy * up)  # parallel rays: the window moves with the eye
     else:
         kind, extent = "perspective", 2.0 * math.tan(math.radians(camera.fov) / 2.0)
+        # off-axis: POV-Ray's ray is direction + x right + y up (x, y in [-1/2, 1/2]), so pointing ``direction`` at
+        # the shifted window's centre gives glFrustum's asymmetric window (POV-Ray then warns that the camera
+        # vectors are not perpendicular, and renders exactly that)
+        forward = forward + extent * (sx * right + sy * up)
 
     # the axes at full precision: POV-Ray warns "Camera vectors are not perpendicular" when a dot product of
     # the parsed vectors exceeds 1e-10, which 9 significant digits do not guarantee
@@ -365,3 +373,7 @@ def decode_depth(rgb16: np.ndarray, far: float) -> np.ndarray:
 def coverage(rgb16: np.ndarray) -> np.ndarray:
     """(H, W) uint8 alpha of the depth pass: 255 on objects, 0 on the (blue) background."""
     return np.where(rgb16[:, :, 2] < 32768, 255, 0).astype(np.uint8)
+
+
+# Its own renderer-specific attributes stay on their stacks here (other engines convert them to generic ones).
+native_to(POVRayEngine, "pov.paint", Finish, Pigment)

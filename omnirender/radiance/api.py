@@ -83,16 +83,10 @@ def _view_depth(rot: np.ndarray, engine: RadianceEngine, size: tuple[int, int]) 
     ``near + t / L``; an orthographic one ``near + t``.
     """
     camera, _ = engine.camera_or_default()
-    w, h = size
-    xs = (np.arange(w) + 0.5) / w * 2.0 - 1.0
-    ys = 1.0 - (np.arange(h) + 0.5) / h * 2.0
+    x, y = np.meshgrid(*camera.pixel_grid(size))
     if camera.is_orthographic:
-        half_h = camera.height / 2.0
-        x, y = np.meshgrid(xs * half_h * w / h, ys * half_h)
         z = camera.near + rot
         return z, np.sqrt(x * x + y * y + z * z)
-    tv = math.tan(math.radians(camera.fov) / 2.0)
-    x, y = np.meshgrid(xs * tv * w / h, ys * tv)
     length = np.sqrt(1.0 + x * x + y * y)
     z = camera.near + rot / length
     return z, z * length

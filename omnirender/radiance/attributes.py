@@ -24,6 +24,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from ..attributes._params import Param, Parameterised, _numbers, check_direction, check_number, check_rgb
+from ..attributes.appearance import PBRMaterial
+from ..attributes.conversion import EngineSpecific, based_on, display_rgb, shininess_of_roughness
 from ..core import Light, MonoAttribute, PolyAttribute
 from . import rad
 
@@ -87,7 +89,7 @@ def _check_strings(owner: str, name: str, value: Any) -> tuple[str, ...]:
     return tuple(rad.token(s, owner, f"{name} item") for s in items)
 
 
-class Material(Parameterised, MonoAttribute):
+class Material(EngineSpecific, Parameterised, MonoAttribute):
     """Any Radiance material (or pattern, texture, mixture) primitive for the shapes that follow.
 
     ``kind`` is the Radiance type name, ``reals`` its real arguments and
@@ -118,6 +120,32 @@ class Material(Parameterised, MonoAttribute):
                 f"Material: a Radiance {self._kind!r} takes {' or '.join(map(str, counts))} real arguments, "
                 f"got {len(self._reals)}: {self._reals}"
             )
+
+    def generic(self, current: Any) -> list[Any] | None:
+        """Other engines: ``plastic`` and ``trans`` as Phong materials, ``metal`` as a metallic one, ``glass``
+        as a mostly transparent glossy one, ``light``/``glow`` as emission (clipped to 1); patterns,
+        textures and mixtures are Radiance's only."""
+        kind, r = self._kind, self._reals
+        rgb = display_rgb(r[:3]) if len(r) >= 3 else None
+        if rgb is None:
+            return None
+        if kind in ("plastic", "plastic2", "trans") and len(r) >= 5:
+            spec, rough = float(r[3]), float(r[4])
+            changes: dict[str, Any] = {
+                "diffuse": rgb,
+                "specular": display_rgb(min(max(spec, 0.0), 1.0)),  # Radiance's specularity is linear
+                "shininess": shininess_of_roughness(rough) if rough > 0 else 200.0,
+            }
+            if kind == "trans" and len(r) >= 6:
+                changes["opacity"] = min(max(1.0 - float(r[5]), 0.0), 1.0)
+            return [based_on(current, **changes)]
+        if kind in ("metal", "metal2") and len(r) >= 5:
+            return [PBRMaterial(base_color=rgb, metallic=1.0, roughness=min(max(float(r[4]) ** 0.5, 0.0), 1.0))]
+        if kind in ("glass", "dielectric"):
+            return [based_on(current, diffuse=rgb, specular=(1.0, 1.0, 1.0), shininess=200.0, opacity=0.2)]
+        if kind in ("light", "glow", "illum", "spotlight"):
+            return [based_on(current, diffuse=(0.0, 0.0, 0.0), emission=rgb)]
+        return None
 
 
 _int_ge0 = check_number(0.0, integer=True)

@@ -23,10 +23,12 @@ import numpy as np
 
 from ..attributes import photometry
 from ..attributes.clipping import ClipRecords
+from ..attributes.conversion import native_to
 from ..attributes.surface import resolve_surface
 from ..core import Camera, Engine, Technique
 from ..options import check_real
 from . import rad
+from .attributes import Material as RadMaterial
 from .attributes import Options
 
 __all__ = ["RadianceEngine", "MeshJob", "view_arguments"]
@@ -56,7 +58,8 @@ def view_arguments(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> l
     Perspective (``-vtv``): the vertical angle is the camera's fov and the
     horizontal one spans ``aspect`` times the image plane.  Orthographic
     (``-vtl``): the view is ``height`` tall and ``height * aspect`` wide.  The
-    near and far planes become Radiance's fore and aft clipping planes.
+    near and far planes become Radiance's fore and aft clipping planes; an
+    off-axis camera's ``shift`` becomes the view shift and lift (``-vs``, ``-vl``).
     """
     w, h = size
     aspect = w / h
@@ -79,6 +82,9 @@ def view_arguments(camera: Camera, view: np.ndarray, size: tuple[int, int]) -> l
         "-vv", *_exact([vertical]),
         "-vo", *_exact([camera.near]),
         "-va", *_exact([camera.far]),
+        # off-axis window (camera.shift in image heights): Radiance's view shift and lift, in image widths/heights
+        "-vs", *_exact([camera.shift[0] / aspect]),
+        "-vl", *_exact([camera.shift[1]]),
     ]  # fmt: skip
 
 
@@ -315,3 +321,7 @@ class RadianceEngine(Engine):
             f"# view: rpict {view} -x {self.size[0]} -y {self.size[1]} -pa 0 -av {ambient}\n"
         )
         return head + self.lights_text() + "".join(self.body)
+
+
+# Its own renderer-specific attributes stay on their stacks here (other engines convert them to generic ones).
+native_to(RadianceEngine, "rad.paint", RadMaterial)

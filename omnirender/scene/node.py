@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..core.camera import Camera
-from ..core.component import RenderingComponent
+from ..core.component import RenderingComponent, note_edit
 from ..core.declarations import FIRST, Declarations
 from ..core.engine import Engine
 from ..core.light import Light
@@ -141,6 +141,7 @@ class Node:
         self._groups = _group_set(value)
         self._restructure()
         self.touch()
+        note_edit(self, "groups", None, -1)
 
     @property
     def parent(self) -> Node | None:
@@ -237,15 +238,22 @@ class Node:
                 f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
                 f"handler, technique or Node"
             )
-        self._items.insert(index, item)
+        patch = _declaration_patch(self, item)
+        n = len(self._items)
+        at = min(index, n) if index >= 0 else max(0, n + index)  # where list.insert puts it
+        self._items.insert(at, item)
         self._restructure()
         self.touch()
+        if patch:
+            _patch_declarations(patch, at, 1)
+        note_edit(self, "insert", item, at)
         return item
 
     def remove(self, item: Any) -> Any:
         """Remove the first occurrence of ``item``; returns it."""
         for i, existing in enumerate(self._items):
             if existing is item:
+                patch = _declaration_patch(self, item)
                 del self._items[i]
                 if isinstance(item, Node):
                     for j, p in enumerate(item._parents):
@@ -256,6 +264,9 @@ class Node:
                     item._detach(self)
                 self._restructure()
                 self.touch()
+                if patch:
+                    _patch_declarations(patch, i, -1)
+                note_edit(self, "remove", item, i)
                 return item
         raise ValueError(f"Node {self.path}: {item!r} is not in this node")
 
@@ -589,15 +600,23 @@ def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> 
 class _Local:
     """A node's declared placements in its own coordinates, valid for one version and mask."""
 
-    __slots__ = ("version", "structure", "mask_fn", "placements")
+    __slots__ = ("version", "structure", "mask_fn", "placements", "relevant")
 
     def __init__(
-        self, version: int, structure: int, mask_fn: Any, placements: list[tuple[Any, np.ndarray | None]]
+        self,
+        version: int,
+        structure: int,
+        mask_fn: Any,
+        placements: list[tuple[Any, np.ndarray | None]],
+        relevant: list[int],
     ) -> None:
         self.version = version
         self.structure = structure
         self.mask_fn = mask_fn
         self.placements = placements  # matrix None: the node's own coordinates (identity)
+        #: indices of the items that can contribute while the lists below stay the same: transforms, declared
+        #: components and the children that declared something (a parameter change walks only these)
+        self.relevant = relevant
 
     def valid(self, node: Node, mask_fn: Any) -> bool:
         """Whether this result still holds for ``node``.
@@ -630,6 +649,19 @@ def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
     return [(c, eye if m is None else m) for c, m in local]
 
 
+def _relevant_items(node: Node, mask_fn: Any) -> tuple[list[Any], list[int] | None]:
+    """The items to visit when ``node``'s declarations are made again, and their indices (None: all of them).
+
+    While the node's lists (and every list below) are unchanged, only the
+    items its last result named relevant can change what it declares.
+    """
+    entry = node._declared
+    if entry is not None and entry.mask_fn is mask_fn and entry.structure == node._structure:
+        items = node._items
+        return [items[i] for i in entry.relevant], entry.relevant
+    return node._items, None
+
+
 def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | None]]:
     stack: list[tuple[Node, bool]] = [(root, False)]
     while stack:
@@ -639,7 +671,7 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
             if entry is not None and entry.valid(node, mask_fn):
                 continue
             stack.append((node, True))
-            for item in node._items:
+            for item in _relevant_items(node, mask_fn)[0]:
                 if item.__class__ is Node or isinstance(item, Node):
                     e = item._declared
                     if (e is None or not e.valid(item, mask_fn)) and not (
@@ -651,13 +683,16 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
         m: np.ndarray | None = None
         pending: list[Transform] = []  # transforms met since the last placement: multiplied only when needed
         firsts: dict[Any, int] = {}  # category -> index in out of this node's own "first" declaration
-        for item in node._items:
+        items, indices = _relevant_items(node, mask_fn)
+        relevant: list[int] = []
+        for position, item in enumerate(items):
             if item.__class__ is Node or isinstance(item, Node):
                 if item._groups and mask_fn is not None and not mask_fn(item._groups):
                     continue
                 found = item._declared.placements  # type: ignore[union-attr]
                 if not found:
                     continue
+                relevant.append(position if indices is None else indices[position])
                 if pending:
                     m = _fold(m, pending)
                 if m is None:
@@ -665,8 +700,10 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
                 else:
                     out.extend((c, m if cm is None else m @ cm) for c, cm in found)
             elif isinstance(item, Transform):
+                relevant.append(position if indices is None else indices[position])
                 pending.append(item)
             elif item.declared is not None:
+                relevant.append(position if indices is None else indices[position])
                 if pending:
                     m = _fold(m, pending)
                 if item.declared == FIRST:
@@ -678,8 +715,60 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
                         continue
                     firsts[category] = len(out)
                 out.append((item, m))
-        node._declared = _Local(node._version, node._structure, mask_fn, out)
+        node._declared = _Local(node._version, node._structure, mask_fn, out, relevant)
     return root._declared.placements  # type: ignore[union-attr]
+
+
+def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local]] | None:
+    """Before ``item`` enters or leaves ``node``'s list: the valid declaration results that the edit keeps.
+
+    An item that declares nothing (a shape, a material, a child subtree
+    without lights or cameras) changes no declaration, so the results of the
+    node and of its ancestors (one parent each) stay valid once their indices
+    shift: a simulation adding and removing plain nodes under a root of 10,000
+    does not walk the root again.  None when the edit may change what is declared.
+    """
+    entry = node._declared
+    if entry is None or not _holds(entry, node):
+        return None
+    mask_fn = entry.mask_fn
+    if isinstance(item, Node):
+        if item._groups and mask_fn is not None and not mask_fn(item._groups):
+            pass  # masked out: declares nothing here
+        elif _local_placements(item, mask_fn):
+            return None
+    elif isinstance(item, Transform):
+        if entry.placements:  # it may move what the node declares after it
+            return None
+    elif getattr(item, "declared", None) is not None:
+        return None
+    chain = [(node, entry)]
+    up = node._parents
+    while len(up) == 1:
+        above = up[0]
+        e = above._declared
+        if e is None or e.mask_fn is not mask_fn or not _holds(e, above):
+            break
+        chain.append((above, e))
+        up = above._parents
+    return chain
+
+
+def _holds(entry: _Local, node: Node) -> bool:
+    """Whether ``entry`` is what a walk of ``node`` would give now (as :meth:`_Local.valid`, for its own mask)."""
+    if entry.structure != node._structure:
+        return False
+    return entry.version == node._version or not entry.placements
+
+
+def _patch_declarations(chain: list[tuple[Node, _Local]], index: int, shift: int) -> None:
+    """After the edit: the kept results are valid for the new versions; the edited node's indices shift."""
+    node, entry = chain[0]
+    entry.relevant = [i + shift if i >= index else i for i in entry.relevant if not (shift < 0 and i == index)]
+    for n, e in chain:
+        e.version = n._version
+        e.structure = n._structure
+    _observe()  # recorded versions are observed: the next change must reach these nodes again
 
 
 def _fold(m: np.ndarray | None, pending: list[Transform]) -> np.ndarray | None:

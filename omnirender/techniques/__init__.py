@@ -21,6 +21,7 @@ from .picking import (
     pick,
     pixel_ray,
 )
+from .screen import node_origin, screen_corners
 from .search import AttributeSearch, AttributeSearchEngine, attribute_search
 from .statistics import TriangleCountEngine, count_triangles
 
@@ -50,4 +51,6 @@ __all__ = [
     "pixel_ray",
     "world_matrix_of",
     "evaluate_in_place",
+    "screen_corners",
+    "node_origin",
 ]

@@ -91,7 +91,8 @@ class CSGIntersector(RayIntersector):
             for hit in (enter, leave):
                 if hit is not None and 0.0 < hit.distance <= engine.tmax:
                     engine.hits.append(Hit(hit.distance, hit.point, hit.normal, engine.scene_shape,
-                                           engine.scene_path, hit.primitive, hit.part))  # fmt: skip
+                                           engine.scene_path, hit.primitive, hit.part,
+                                           pick_ids=engine.pick_ids()))  # fmt: skip
         if engine.nearest and engine.hits:
             best = min(engine.hits, key=lambda h: h.distance)
             engine.hits = [best]

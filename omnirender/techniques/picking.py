@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import ClipPlane
+from ..attributes import ClipPlane, PickId
 from ..core.camera import Camera
 from ..core.handler import AttributePainter, RayIntersector, default_for
 from ..core.mask import compile_mask
@@ -48,8 +48,11 @@ class Hit:
     origin side); ``shape`` the shape the scene holds and ``path`` its node
     path; ``primitive`` the triangle index in the (possibly simplified)
     triangle set, -1 for analytic shapes; ``part`` the shape actually
-    intersected (a simplifier's triangle set, or ``shape`` itself).  Hits
-    compare by identity (their arrays make value equality ambiguous).
+    intersected (a simplifier's triangle set, or ``shape`` itself).
+    ``pick_ids`` are the ids of the ``om.PickId`` attributes active for the
+    shape, outermost first (ids nest), and ``pick_id`` the innermost one (None
+    without any).  Hits compare by identity (their arrays make value equality
+    ambiguous).
     """
 
     distance: float
@@ -61,6 +64,13 @@ class Hit:
     part: Any = field(default=None, repr=False)
     #: the index of the instance hit when ``shape`` is an ``om.InstanceSet``, else -1
     instance: int = -1
+    #: the ids of the active ``om.PickId`` attributes, outermost first
+    pick_ids: tuple[int | str, ...] = ()
+
+    @property
+    def pick_id(self) -> int | str | None:
+        """The innermost ``om.PickId`` id active for the shape hit, or None."""
+        return self.pick_ids[-1] if self.pick_ids else None
 
 
 class PickEngine(AnalysisEngine):
@@ -154,14 +164,19 @@ class PickEngine(AnalysisEngine):
         shape = self.scene_shape
         ids = self.poly(InstanceId)
         instance = ids[-1].index if ids else -1
+        pick_ids = self.pick_ids()
         for i in np.nonzero(keep)[0]:
             self.hits.append(
-                Hit(float(t[i]), points[i], normals[i], shape, self.scene_path, int(prims[i]), part, instance)
+                Hit(float(t[i]), points[i], normals[i], shape, self.scene_path, int(prims[i]), part, instance, pick_ids)
             )
         if self.nearest and self.hits:
             best = min(self.hits, key=lambda h: h.distance)
             self.hits = [best]
             self.tmax = best.distance
+
+    def pick_ids(self) -> tuple[int | str, ...]:
+        """The ids of the ``om.PickId`` attributes active now, outermost first."""
+        return tuple(p.id for p in self.poly(PickId))
 
     def sorted_hits(self) -> list[Hit]:
         """The hits nearest first."""

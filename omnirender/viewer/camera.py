@@ -136,6 +136,12 @@ class ViewerCamera:
         return self._eye_to_world[:3, 1].copy()
 
     @property
+    def eye_z_direction(self) -> np.ndarray:
+        """The eye frame's z axis in world coordinates: unit, pointing from the centre back to the eye."""
+        z = self._eye_to_world[:3, 2]
+        return z / np.linalg.norm(z)
+
+    @property
     def distance(self) -> float:
         """Eye-to-centre distance."""
         return float(np.linalg.norm(self._center - self._eye_to_world[:3, 3]))
@@ -223,6 +229,10 @@ class ViewerCamera:
     def set_perspective(self, *args: float) -> None:
         """``(fov, near, far)`` with vertical fov in degrees, or ``(left, right, bottom, top, near, far)``."""
         self._set_projection("set_perspective", False, args)
+
+    def set_vertical_field_of_view(self, fov: float) -> None:
+        """Make the projection perspective with vertical field ``fov`` degrees, keeping near and far."""
+        self._set_projection("set_vertical_field_of_view", False, (fov, self._near, self._far))
 
     def set_orthogonal(self, *args: float) -> None:
         """``(field_height, near, far)`` or ``(left, right, bottom, top, near, far)``."""
@@ -372,12 +382,17 @@ class ViewerCamera:
 
     # -- conversion -------------------------------------------------------
     def to_camera(self) -> Camera:
-        """An equivalent ``om.Camera`` (field-of-view/height form; explicit frusta are approximated)."""
+        """An equivalent ``om.Camera``: an explicit frustum's height and off-centre window become its field
+        (or height) and ``shift``; its width follows the image's aspect."""
         eye, up = self.eye, self.up
         center = self._center if self.distance > 0 else eye - self._eye_to_world[:3, 2]
+        left, right, bottom, top = self.frustum()
+        height = top - bottom
+        shift = ((left + right) / (2.0 * height), (bottom + top) / (2.0 * height))
         if self._orthogonal:
-            return Camera.orthographic(eye, center, up, height=self.view_plane_height, near=self._near, far=self._far)
-        return Camera.look_at(eye, center, up, fov=self.fov, near=self._near, far=self._far)
+            return Camera(eye, center, up, fov=None, height=height, near=self._near, far=self._far, shift=shift)
+        fov = math.degrees(2.0 * math.atan(height / (2.0 * self._near)))  # the window's height at unit distance
+        return Camera(eye, center, up, fov=fov, near=self._near, far=self._far, shift=shift)
 
     def set_from_camera(self, camera: Camera, world: np.ndarray | None = None) -> None:
         """Adopt an ``om.Camera`` (placed by ``world``, its node's accumulated matrix)."""

@@ -1,7 +1,8 @@
 """Render lists: the prerendered, sorted list a viewer repaints from.
 
-``prerender(renderables)`` runs each renderable's ``prerender`` and files the
-visible ones into four sublists (opaque, transparent, 2D opaque, 2D
+``prerender(renderables)`` runs each renderable's ``prerender`` — visible or
+not, as ArtiSynth does, so that a hidden renderable can still add visible
+sub-renderables — and files the visible ones into four sublists (opaque, transparent, 2D opaque, 2D
 transparent), each sorted by ``z_order`` (stable, so insertion order breaks ties).
 Prerender and repaint both hold the list's lock: renderables cache what they
 will draw in ``prerender`` (like a back buffer that becomes the front one), so
@@ -52,15 +53,18 @@ class RenderList:
             self.generation += 1
 
     def add_if_visible(self, renderable: Any) -> bool:
-        """Prerender ``renderable`` and file it by its hints if visible; returns whether it was added.
+        """Prerender ``renderable``, then file it by its hints if visible; returns whether it was added.
 
-        Call it from a renderable's ``prerender`` to add sub-renderables.  An
-        ``om.Node`` is filed as its :class:`~omnirender.viewer.NodeRenderable`.
+        ``prerender`` runs whether or not the renderable is visible (ArtiSynth's
+        ``RenderList.addIfVisible``): an invisible parent still gets to add its
+        visible sub-renderables.  Call it from a renderable's ``prerender`` to
+        add sub-renderables.  An ``om.Node`` is filed as its
+        :class:`~omnirender.viewer.NodeRenderable`.
         """
         renderable = renderable_of(renderable)
+        renderable.prerender(self)
         if not getattr(renderable, "visible", True):
             return False
-        renderable.prerender(self)
         hints = int(renderable.render_hints() or 0)
         name = PASSES[(1 if hints & TRANSPARENT else 0) + (2 if hints & TWO_DIMENSIONAL else 0)]
         target = self._building[name] if self._building is not None else getattr(self, name)

@@ -145,7 +145,7 @@ class NodePart:
     """The 2D and/or translucent shapes of a prerendered node, filed in their own sublist.
 
     ``owner`` is the node's :class:`NodeRenderable` (a highlighted owner
-    highlights its parts too).
+    highlights its parts too; a hidden owner's parts are hidden too).
     """
 
     __slots__ = ("owner", "hints", "visible", "z_order", "_snapshot")
@@ -153,7 +153,7 @@ class NodePart:
     def __init__(self, owner: NodeRenderable, hints: int, snapshot: _Snapshot) -> None:
         self.owner = owner
         self.hints = hints
-        self.visible = True
+        self.visible = owner.visible  # the node's own shapes: hidden with it
         self.z_order = owner.z_order
         self._snapshot = snapshot
 

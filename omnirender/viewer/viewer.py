@@ -379,7 +379,23 @@ class Viewer:
 
     @property
     def vertical_field_of_view(self) -> float:
+        """The vertical field of view in degrees; setting it makes the projection perspective (near/far kept)."""
         return self._camera.fov
+
+    @vertical_field_of_view.setter
+    def vertical_field_of_view(self, fov: float) -> None:
+        self._camera.set_vertical_field_of_view(fov)
+
+    def set_vertical_field_of_view(self, fov: float) -> None:
+        """ArtiSynth's ``setVerticalFieldOfView``: perspective with vertical ``fov`` degrees, near/far kept."""
+        self._camera.set_vertical_field_of_view(fov)
+
+    def get_vertical_field_of_view(self) -> float:
+        return self._camera.fov
+
+    def get_eye_z_direction(self) -> np.ndarray:
+        """ArtiSynth's ``getEyeZDirection``: the eye's z axis in world coordinates (from the centre to the eye)."""
+        return self._camera.eye_z_direction
 
     def is_orthogonal(self) -> bool:
         return self._camera.is_orthogonal

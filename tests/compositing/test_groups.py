@@ -108,6 +108,7 @@ def world_points(camera: om.Camera, image: om.Image) -> tuple[np.ndarray, np.nda
     return mask, (eye @ np.linalg.inv(camera.view_matrix()).T)[:, :3]
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 @pytest.mark.parametrize(
     "light", [om.PointLight(position=(2.0, 6.0, 1.5)), om.DirectionalLight(direction=(-0.3, -1.0, -0.2))], ids=repr
 )
@@ -129,6 +130,7 @@ def test_the_shadow_group_darkens_the_pixels_an_analytic_shadow_test_predicts(li
     assert np.allclose(shaded.depth[mask], lit.depth[mask], rtol=1e-5)  # shadows change colour, not depth
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_a_volume_casts_a_shadow_on_meshes():
     light = om.PointLight(position=(0, 6, 0))
     floor = C.SceneRenderer(om.Node("floor", [light, om.Material(diffuse=(0.8, 0.8, 0.8)),

@@ -33,6 +33,7 @@ def built_ins() -> dict[str, C.Renderer]:
     }
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 @pytest.mark.parametrize("name", list(built_ins()))
 def test_every_built_in_renderer_follows_the_four_rules(name):
     renderer = built_ins()[name]

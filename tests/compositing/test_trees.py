@@ -75,7 +75,7 @@ def test_a_scene_renderer_keeps_its_engine_and_compiled_scene_between_frames():
         assert renderer.engine(host) is guest and guest.stats["compiled"] is False  # replayed
         renderer.scene.add(om.Sphere(center=(1, 1, 0), radius=0.2))
         host.render(scene)
-        assert guest.stats["compiled"] is True
+        assert guest.stats["compiled"] in (True, "subtrees")  # compiled again (the edited node alone)
     renderer.release()
 
 
@@ -123,6 +123,7 @@ def test_a_group_decides_order_and_repetition_of_its_children():
     assert calls == ["a", "b", "c", "d"]  # depth first, in registration order
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_a_shadow_group_in_a_scene_graph_shadows_the_rest_of_its_node():
     floor = om.Node("floor", [om.Material(diffuse=(0.8, 0.8, 0.8)), om.Box(size=(6, 0.1, 6), center=(0, -1.05, 0))])
     sphere = om.Node("sphere", [om.Material(diffuse=(0.9, 0.4, 0.2)), om.Sphere(radius=0.6)])

@@ -66,6 +66,32 @@ def test_frame_data_belongs_to_one_run():
     assert labels(engine).count("x") == 4
 
 
+def test_prepare_pass_returning_false_declines_that_pass():
+    """VRS: a technique told to skip 2 of 4 passes evaluates its scope twice and finishes only those."""
+
+    class Declining(om.Technique):
+        __slots__ = ("log",)
+
+        def __init__(self, log: list) -> None:
+            super().__init__(passes=4)
+            object.__setattr__(self, "log", log)
+
+        def prepare_pass(self, engine):
+            self.log.append(("prepare", engine.current_pass))
+            return engine.current_pass in (0, 2)
+
+        def finish_pass(self, engine):
+            self.log.append(("finish", engine.current_pass))
+
+    log: list = []
+    engine = recorder()
+    om.Node("n", [Declining(log), S("x")]).evaluate(engine)
+    assert labels(engine).count("x") == 2
+    assert [i for kind, i in log if kind == "prepare"] == [0, 1, 2, 3]
+    assert [i for kind, i in log if kind == "finish"] == [0, 2]
+    assert om.core.technique.pass_accepted(None) and not om.core.technique.pass_accepted(False)
+
+
 def test_an_unsupported_technique_is_ignored_and_its_scope_evaluated_once():
     log: list = []
 

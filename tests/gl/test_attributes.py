@@ -156,6 +156,7 @@ def test_light_switch_turns_lights_off_for_a_subgraph(engine):
     assert engine.lights() == []  # nothing stays active after the traversal
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_sixteen_point_lights(engine):
     s = base()
     s.remove(s.components[1])

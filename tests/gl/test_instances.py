@@ -143,6 +143,7 @@ def test_an_array_spoiled_in_place_is_refused_when_drawn_with_its_node_path():
         om.render(scene, engine="gl", size=(16, 16))
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_an_array_of_another_length_resizes_the_buffer():
     from omnirender.gl import GLEngine
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
 import threading
 
 import numpy as np
@@ -39,14 +38,13 @@ def test_the_raw_depth_stencil_renderbuffer_is_deleted_with_its_engine():
     engine = gl.GLEngine(size=(32, 24), context=ctx)
     rbo = engine._stencil_rbo
     assert rbo is not None and engine.raw.available
-    is_renderbuffer = engine.raw._lib.glIsRenderbuffer
-    is_renderbuffer.argtypes = [ctypes.c_uint]
-    assert is_renderbuffer(rbo)
+    is_renderbuffer = engine.raw.glIsRenderbuffer  # GLboolean: declared c_ubyte (see test_raw_gl.py)
+    assert is_renderbuffer(rbo) == 1
     engine.size = (40, 30)  # new framebuffers: the old renderbuffer goes
-    assert not is_renderbuffer(rbo)
+    assert is_renderbuffer(rbo) == 0
     current = engine._stencil_rbo
     engine.release()
-    assert not is_renderbuffer(current)
+    assert is_renderbuffer(current) == 0
 
 
 def test_a_size_no_engine_accepts_costs_no_context(monkeypatch):

@@ -79,6 +79,7 @@ def test_empty_chain_looks_like_no_chain(engine, deferred, pipeline):
     assert np.allclose(np.nan_to_num(plain.depth, posinf=-1), np.nan_to_num(chained.depth, posinf=-1), atol=1e-3)
 
 
+@pytest.mark.gl_needs(samples=4)
 @pytest.mark.parametrize("pipeline", ["forward", "deferred"])
 def test_chain_keeps_the_engines_multisampling(pipeline):
     """With MSAA the opaque scene is drawn multisampled and resolved (in linear light, so edges differ a little
@@ -98,6 +99,30 @@ def test_chain_keeps_the_engines_multisampling(pipeline):
     assert diff.mean() < 0.5 and (diff > 8).mean() < 0.02, (diff.mean(), (diff > 8).mean())
     levels = len(np.unique(chained.array[..., :3].reshape(-1, 3), axis=0))
     assert levels > 1.3 * len(np.unique(single[..., :3].reshape(-1, 3), axis=0)), "edges are not antialiased"
+
+
+@pytest.mark.gl_needs(samples=4)
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_the_chain_resolves_samples_in_a_shader_not_by_the_drivers_blit(monkeypatch, pipeline):
+    """glBlitFramebuffer resolves float samples "in an implementation-dependent manner" (OpenGL 4.6, 18.3.2):
+    NVIDIA's left the chain's edges aliased.  The chain averages the samples itself."""
+    from omnirender.gl.engine import frame as frame_module
+
+    multisampled_blits = []
+    real = frame_module.blit
+
+    def recording(raw, source, target, *args, **kwargs):
+        if any(getattr(a, "samples", 0) > 1 for a in (*source.color_attachments, source.depth_attachment) if a):
+            multisampled_blits.append(source)
+        return real(raw, source, target, *args, **kwargs)
+
+    monkeypatch.setattr(frame_module, "blit", recording)
+    e = om.gl.GLEngine(size=SIZE, samples=4, pipeline=pipeline)
+    try:
+        e.render(build(CAMERA, shapes(), effects=[]))
+    finally:
+        e.release()
+    assert not multisampled_blits, "the chain's samples were resolved by glBlitFramebuffer"
 
 
 def test_passes_run_depth_effects_before_transparency_and_colour_effects_after(engine):

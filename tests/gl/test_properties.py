@@ -77,6 +77,7 @@ def test_bad_size_raises():
         GLEngine(size=(10**6, 10))
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_replacing_a_mesh_every_frame_keeps_buffers_bounded(engine):
     from omnirender.gl.engine.resources import live_buffers
 

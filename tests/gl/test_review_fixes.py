@@ -65,6 +65,7 @@ def test_plain_shapes_after_a_special_state_shape_are_drawn_after_it(engine):
     assert b > 200 and r < 50, (r, g, b)
 
 
+@pytest.mark.slow  # 20-90 s on a software rasteriser (the softpipe and GL 4.1 jobs of .ci/run leave it out)
 def test_transparent_shapes_with_per_frame_state_keep_buffers_bounded(engine):
     """An animated clip plane through a transparent sphere and a per-frame texture / draw style leak nothing."""
     from omnirender.gl.engine.resources import live_buffers
@@ -180,12 +181,25 @@ def test_shape_construction_errors_say_how_to_fix():
         om.TriangleSet(v, colors=[(1, 0, 0), (0, 1, 0)])
 
 
-def test_oversized_texture_and_volume_raise_a_clear_error(engine):
+@pytest.mark.parametrize("limit", ["context", 16384, 32768])
+def test_oversized_texture_and_volume_raise_a_clear_error(engine, monkeypatch, limit):
+    """The limits are the context's (llvmpipe allows 16384 texels per side, NVIDIA 32768): an image one texel
+    wider is refused with a clear error, by the engine or, beyond what any GPU holds, by the Texture itself."""
+    from omnirender.attributes.appearance import MAX_TEXTURE_SIDE
+
+    if limit != "context":  # another driver's limit, as the engine would have read it from that context
+        monkeypatch.setattr(engine, "max_texture_size", limit)
     s = om.Node("scene")
     s.add(om.Camera.look_at(eye=(0, 0, 4)))
     n = s.add(om.Node("textured"))
     # one pixel high, one pixel wider than the GPU allows: tiny in memory, still too large
-    n.add(om.Texture(np.zeros((1, engine.max_texture_size + 1, 3), np.uint8)))
+    image = np.zeros((1, engine.max_texture_size + 1, 3), np.uint8)
+    if image.shape[1] > MAX_TEXTURE_SIDE:  # no GPU holds it: the declaration refuses it already
+        with pytest.raises(ValueError, match=r"Texture: image is .* at most \d+ per side .*scale the image down"):
+            om.Texture(image)
+        image = np.zeros((1, 2, 3), np.uint8)
+        monkeypatch.setattr(engine, "max_texture_size", 1)  # the engine's own check, at a limit an image exceeds
+    n.add(om.Texture(image))
     n.add(om.Box())
     with pytest.raises(ValueError, match=r"Texture .*in node /scene/textured: .*resize") as info:
         engine.render(s)
@@ -225,6 +239,7 @@ def test_camera_inside_a_volume_sees_it(engine):
     assert 0.05 <= inside.depth[36, 48] < 0.5
 
 
+@pytest.mark.gl_needs(samples=4)
 def test_multisampling_is_on_by_default():
     """om.render's default anti-aliases edges: a tilted white square on black has intermediate grey levels."""
     s = om.Node("scene")

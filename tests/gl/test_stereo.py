@@ -111,7 +111,68 @@ def test_stereo_errors_say_what_to_give():
     scene.insert(0, om.Camera.orthographic((0, 0, 0), (0, 0, -1), height=2))
     with pytest.raises(ValueError, match="orthographic; stereo needs a perspective camera"):
         om.render(scene, engine="gl", size=(64, 48), stereo=om.gl.Stereo())
-    with pytest.raises(ValueError, match="pipeline='forward'"):
-        om.gl.GLEngine(size=(64, 48), pipeline="deferred", stereo=om.gl.Stereo()).release()
     with pytest.raises(TypeError, match="om.gl.Stereo"):
         om.Viewer(stereo="side-by-side")
+
+
+def _centroid(rgb: np.ndarray) -> tuple[float, float]:
+    weight = rgb[..., :3].astype(float).sum(-1)
+    weight[weight < 0.5 * weight.max()] = 0
+    ys, xs = np.indices(weight.shape)
+    return float((weight * xs).sum() / weight.sum()) + 0.5, float((weight * ys).sum() / weight.sum()) + 0.5
+
+
+def test_screen_stereo_with_a_tracked_head_node_has_zero_disparity_on_the_screen():
+    """guacamole's screen + eye nodes: each eye looks through the screen rectangle (off-axis); a marker on the
+    screen lands on the same pixel of both eye images within half a pixel, wherever the tracked head is."""
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 3), (0, 0, 0), near=0.5, far=50), om.Background((0, 0, 0))])
+    tracker = om.Translation(0.4, -0.3, 2.5)
+    head = scene.add(om.Node("head", [tracker]))
+    scene.add(om.Node("marker", [om.Translation(0.8, 0.6, 0.0), om.Rotation(90, (1, 0, 0)), om.Color((1, 1, 1)),
+                                 om.Rectangle(size=(0.1, 0.1))]))  # fmt: skip  # flat, in the screen's plane
+    # the screen node (not drawn): a 3.2 x 2.4 rectangle turned to face +z, its -z edge up
+    screen = om.Node("screen", [om.Rotation(90, (1, 0, 0)), om.Rectangle(size=(3.2, 2.4))])
+    stereo = om.gl.Stereo("side-by-side", eye_separation=0.065, screen=screen, head=head)
+    expected = ((0.8 + 1.6) / 3.2 * 160, (1.2 - 0.6) / 2.4 * 120)
+    seen = []
+    for position in [(0.4, -0.3, 2.5), (-1.0, 0.5, 1.5)]:
+        tracker.offset = position
+        img = om.render(scene, engine="gl", size=(2 * 160, 120), stereo=stereo).array
+        left, right = _centroid(img[:, :160]), _centroid(img[:, 160:])
+        assert abs(left[0] - right[0]) <= 0.5 and abs(left[1] - right[1]) <= 0.5, position
+        assert abs(left[0] - expected[0]) <= 0.5 and abs(left[1] - expected[1]) <= 0.5, position
+        seen.append(img)
+    with pytest.raises(ValueError, match="either convergence= or screen="):
+        om.gl.Stereo(screen=screen, convergence=3)
+    with pytest.raises(ValueError, match="head= needs screen="):
+        om.gl.Stereo(head=head)
+
+
+@pytest.mark.parametrize("mode", ["side-by-side", "top-bottom", "anaglyph", "right"])
+def test_stereo_with_the_deferred_pipeline_equals_forward_per_eye(mode):
+    """guacamole's stereo on its deferred pipeline: each eye through the whole pipeline (one G-buffer layout, an
+    eye-sized target copied into its place); per eye within 3/255 of forward stereo."""
+    scene = om.Node("s", [om.Camera.look_at((0, 1, 5), (0, 0, 0)), om.PointLight(position=(3, 4, 5)),
+                          om.Background((0.1, 0.1, 0.2))])  # fmt: skip
+    scene.add(
+        om.Node("a", [om.Material(diffuse=(1, 0.3, 0.2), specular=(1, 1, 1), shininess=30), om.Sphere(radius=0.8)])
+    )
+    scene.add(om.Node("b", [om.Translation(1.2, 0, -1), om.Material(diffuse=(0.2, 0.8, 0.3)), om.Box(size=(1, 1, 1))]))
+    scene.add(
+        om.Node("f", [om.Translation(0, -0.9, 0), om.Material(diffuse=(0.7, 0.7, 0.7)), om.Box(size=(6, 0.1, 6))])
+    )
+    stereo = om.gl.Stereo(mode, eye_separation=0.3)
+    images = {}
+    for pipeline in ("forward", "deferred"):
+        with om.gl.GLEngine(size=(160, 80), samples=0, stereo=stereo, pipeline=pipeline) as engine:
+            images[pipeline] = engine.render(scene).array[..., :3].astype(int)
+            names = [p["name"] for p in engine.stats["passes"] if "eye" in p["name"]]
+        assert any("left" in n for n in names) == (mode != "right")
+    forward, deferred = images["forward"], images["deferred"]
+    halves = {
+        "side-by-side": [(slice(None), slice(0, 80)), (slice(None), slice(80, None))],
+        "top-bottom": [(slice(0, 40), slice(None)), (slice(40, None), slice(None))],
+    }.get(mode, [(slice(None),) * 2])
+    for half in halves:  # fmt: skip
+        assert np.abs(forward[half] - deferred[half]).mean() <= 3.0
+    assert forward.std() > 20  # something was drawn

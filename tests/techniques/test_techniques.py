@@ -442,3 +442,23 @@ def test_instances_of_an_instance_set_are_bodies_and_picks_of_their_own():
     assert om.collisions(scene) == [("/s/set[2]", "/s/wall")]
     hits = om.pick(scene, ray=((-10.0, 0.0, 0.0), (1.0, 0.0, 0.0)))
     assert [h.instance for h in hits[:3]] == [1, 1, 0]  # entering and leaving instance 1, then instance 0
+
+
+def test_hits_report_the_pick_ids_active_for_the_shape():
+    """VRS pick ids: a hit names the innermost om.PickId (ids nest), also for triangle sets and CSG."""
+    s = om.Node("s")
+    car = s.add(om.Node("car", [om.PickId("car")]))
+    wheel = car.add(om.Node("wheel", [om.PickId(7), om.Translation(0, 0, -3)]))
+    wheel.add(om.Sphere(radius=0.5))
+    car.add(om.Node("body", [om.Translation(3, 0, -3), om.Torus(major_radius=0.6, minor_radius=0.3)]))
+    s.add(om.Node("plain", [om.Translation(-3, 0, -3), om.Sphere(radius=0.5)]))
+    s.add(om.Node("csg", [om.PickId("csg"), om.Translation(0, 3, -3),
+                          om.CSG("difference", om.Box(size=(1, 1, 1)), om.Sphere(radius=0.2))]))  # fmt: skip
+    hit = om.pick(s, ray=((0, 0, 0), (0, 0, -1)), nearest=True)[0]
+    assert hit.pick_id == 7 and hit.pick_ids == ("car", 7)
+    hit = om.pick(s, ray=((3.6, 0, 0), (0, 0, -1)), nearest=True)[0]
+    assert hit.path == "/s/car/body" and hit.pick_id == "car" and hit.primitive >= 0
+    hit = om.pick(s, ray=((-3, 0, 0), (0, 0, -1)), nearest=True)[0]
+    assert hit.pick_id is None and hit.pick_ids == ()
+    hit = om.pick(s, ray=((0, 3, 0), (0, 0, -1)), nearest=True)[0]
+    assert hit.path == "/s/csg" and hit.pick_id == "csg"

@@ -215,3 +215,30 @@ def test_orthogonal_needs_positive_near_and_resizing_follows_aspect():
     v.set_size(200, 400)
     assert np.isclose(v.view_plane_width, 0.5 * v.view_plane_height)
     assert np.isclose(v.get_projection_matrix()[0, 0], 2 * v.get_projection_matrix()[1, 1])
+
+
+def test_vertical_field_of_view_is_settable_and_eye_z_points_back_to_the_eye():
+    """ArtiSynth's setVerticalFieldOfView / getEyeZDirection."""
+    v = viewer(size=(400, 400))
+    v.set_orthogonal(4, 1, 9)
+    v.set_vertical_field_of_view(60)
+    assert not v.is_orthogonal() and v.get_vertical_field_of_view() == 60
+    assert v.view_plane_distance == 1 and v.far_plane_distance == 9  # near and far kept
+    assert np.allclose(v.get_projection_matrix(), om.perspective_matrix(60, 1.0, 1, 9))
+    v.vertical_field_of_view = 20
+    assert v.vertical_field_of_view == 20
+    with pytest.raises(ValueError, match="fov"):
+        v.set_vertical_field_of_view(180)
+    v.set_eye_to_world((1, 2, 3), (1, 2, 0), (0, 1, 0))
+    assert np.allclose(v.get_eye_z_direction(), (0, 0, 1))
+    v.set_eye_to_world((4, 0, 0), (0, 0, 0), (0, 0, 1))
+    assert np.allclose(v.get_eye_z_direction(), (1, 0, 0))
+
+
+def test_an_explicit_off_centre_frustum_reaches_the_engines_as_a_shifted_camera():
+    """The viewer's glFrustum-style window becomes om.Camera.shift, so every engine sees the same window."""
+    v = viewer(size=(400, 200))
+    v.set_perspective(-1, 3, -0.5, 1.5, 2, 20)  # width 4 = aspect x height 2: the image's window exactly
+    cam = v.camera.to_camera()
+    assert cam.is_off_axis
+    assert np.allclose(cam.projection_matrix(2.0), v.get_projection_matrix())

@@ -11,6 +11,7 @@ from viewer_helpers import Dot, Item, RecordingEngine
 
 import omnirender as om
 from omnirender.viewer import HIGHLIGHT, TRANSPARENT, TWO_DIMENSIONAL, RenderList, Viewer
+from omnirender.viewer.renderable import renderable_of
 
 
 def test_render_list_files_by_hints_and_sorts_by_z_order():
@@ -30,7 +31,8 @@ def test_render_list_files_by_hints_and_sorts_by_z_order():
     assert [r.dot.label for r in rl.transparent] == ["t"]
     assert [r.dot.label for r in rl.opaque_2d] == ["2d"]
     assert [r.dot.label for r in rl.transparent_2d] == ["t2d"]
-    assert hidden.prerenders == 0 and all(i.prerenders == 1 for i in items)
+    # ArtiSynth prerenders every renderable, visible or not; only visible ones are filed
+    assert hidden.prerenders == 1 and all(i.prerenders == 1 for i in items)
     assert len(rl) == 6 and rl.generation == 1
 
 
@@ -49,6 +51,45 @@ def test_prerender_may_add_sub_renderables():
     rl.prerender([Group()])
     assert [r.dot.label for r in rl.opaque] == ["part2", "group"]
     assert [r.dot.label for r in rl.transparent] == ["part1"]
+    # a hidden parent is still prerendered, so its visible children are drawn (ArtiSynth's rule)
+    hidden = Group()
+    hidden.visible = False
+    hidden.parts[0].visible = False
+    rl.prerender([hidden])
+    assert hidden.prerenders == 1 and hidden.parts[0].prerenders == 1
+    assert [r.dot.label for r in rl] == ["part2"]
+
+
+def test_hidden_parent_draws_visible_children_in_viewer(recorder):
+    class Parent(Item):
+        def __init__(self):
+            super().__init__("parent")
+            self.child = Item("child")
+
+        def prerender(self, render_list):
+            super().prerender(render_list)
+            render_list.add_if_visible(self.child)
+
+    v = Viewer(engine=recorder)
+    parent = Parent()
+    parent.visible = False
+    v.add_renderable(parent)
+    v.rerender()
+    assert recorder.drawn() == ["child"]
+
+
+def test_hidden_node_renderable_hides_its_translucent_parts():
+    node = om.Node("n")
+    node.add(om.Box())
+    node.add(om.Material(diffuse=(1, 0, 0), opacity=0.5))
+    node.add(om.Sphere())
+    rl = RenderList()
+    r = renderable_of(node)
+    rl.prerender([r])
+    assert len(rl.opaque) == 1 and len(rl.transparent) == 1
+    r.visible = False
+    rl.prerender([r])
+    assert len(rl) == 0
 
 
 def test_repaint_draws_passes_in_order_without_prerendering(recorder):

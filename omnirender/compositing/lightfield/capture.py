@@ -81,8 +81,11 @@ def capture_light_field(
     if len(cameras) < 2:
         raise ValueError(f"capture_light_field: needs at least 2 cameras, got {len(cameras)}")
     for i, camera in enumerate(cameras):
-        if not isinstance(camera, Camera) or camera.is_orthographic:
-            raise TypeError(f"capture_light_field: camera {i} must be a perspective om.Camera, got {camera!r:.60}")
+        if not isinstance(camera, Camera) or camera.is_orthographic or camera.is_off_axis:
+            raise TypeError(
+                f"capture_light_field: camera {i} must be a perspective om.Camera on its axis (no shift; light-field "
+                f"views are pinhole cameras), got {camera!r:.60}"
+            )
     if engine == "gl":
         images = _gl_images(scene, cameras, size, options)
     else:

@@ -453,6 +453,12 @@ class GLTFEngine(NodeTrackingEngine):
             return
         camera, world = self.camera
         w, h = self.size
+        if camera.is_off_axis:
+            warnings.warn(
+                f"glTF export: the camera's off-axis shift {camera.shift} is dropped (glTF cameras are symmetric "
+                "frusta); the exported camera looks along the same axis with the same field of view",
+                stacklevel=3,
+            )
         if camera.is_orthographic:
             cam: dict[str, Any] = {
                 "type": "orthographic",

@@ -23,8 +23,7 @@ sample count on a software rasteriser, whatever it shows.
 
 from __future__ import annotations
 
-import re
-
+from ..engine.diagnostics import errors
 from ..engine.shaders import MAX_LIGHTS, SRGB_GLSL
 from ..engine.shadow_glsl import MAPS_CORE
 from .layout import BufferLayout, Channel
@@ -151,9 +150,18 @@ def _outputs(layout: BufferLayout) -> str:
     return "\n".join(lines)
 
 
+#: Integer and flag outputs: stored as a byte's [0, 1] value (GLSL to store, GLSL to read back from ``{}``).
+_CODED = {
+    "uint8": ("(float(min({}, 255u)) / 255.0)", "uint(round({} * 255.0))"),
+    "bool": ("({} ? 1.0 : 0.0)", "({} > 0.5)"),
+}
+
+
 def _component(value: str, kind: str, index: int) -> str:
     """GLSL for component ``index`` of an output ``value`` of G-buffer type ``kind``, as stored."""
     glsl, size, _, srgb = G_TYPES[kind]
+    if kind in _CODED:
+        return _CODED[kind][0].format(value)
     if srgb:
         value = f"to_srgb({value})"
     return value if size == 1 else f"{value}[{index}]"
@@ -317,6 +325,8 @@ def _g_reads(layout: BufferLayout, model: ShadingModel) -> str:
         glsl, size, _, srgb = G_TYPES[kind]
         values = [_channel_value(c) for c in layout.channels[model.number][name]]
         value = values[0] if size == 1 else f"{glsl}({', '.join(values)})"
+        if kind in _CODED:
+            value = _CODED[kind][1].format(value)
         lines.append(f"    g.{name} = {f'to_linear({value})' if srgb else value};")
     lines += ["    return g;", "}"]
     return "\n".join(lines)
@@ -691,18 +701,17 @@ def shading_program(layout: BufferLayout, samples: int, defines: dict[str, objec
     return head + _FULLSCREEN_VERTEX, fragment
 
 
-_ERROR = re.compile(r"(\d+):(\d+)\((\d+)\):\s*(?:error|ERROR)?:?\s*(.*)")
-
-
 def explain(error: str, models: tuple[ShadingModel, ...], where: str) -> ShadingModelError | None:
-    """A :class:`ShadingModelError` naming model, stage and line for a driver error in a model's code, or None."""
+    """A :class:`ShadingModelError` naming model, stage and line for a driver error in a model's code, or None.
+
+    The driver's log is read by :func:`~omnirender.gl.engine.diagnostics.parse` (Mesa, NVIDIA, AMD, Intel
+    formats); the line number it reports encodes the model and the stage (:func:`first_line`).
+    """
     by_number = {m.number: m for m in models}
-    for line in str(error).splitlines():
-        found = _ERROR.search(line)
-        if not found:
+    for diagnostic in errors(str(error)):
+        if diagnostic.line is None:
             continue
-        _, line, _, message = found.groups()
-        number, rest = divmod(int(line), 10000)
+        number, rest = divmod(diagnostic.line, 10000)
         stage_id, row = divmod(rest, 1000)
         model = by_number.get(number - 1)
         stage = next((s for s, k in _STAGE_IDS.items() if k == stage_id), None)
@@ -711,7 +720,7 @@ def explain(error: str, models: tuple[ShadingModel, ...], where: str) -> Shading
         text = model.stages[stage].splitlines()
         code = text[row - 1].strip() if 0 < row <= len(text) else ""
         return ShadingModelError(
-            f"shading model {model.name!r}, {stage} stage, line {row}: {message.strip()}"
+            f"shading model {model.name!r}, {stage} stage, line {row}: {diagnostic.message}"
             + (f"\n    {code}" if code else "")
             + f"\n(compiling the deferred pipeline's {where}; the stage must define {STAGES[stage]})"
         )

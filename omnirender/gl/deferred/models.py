@@ -19,7 +19,8 @@ A :class:`ShadingModel` is GLSL in four stages, each optional but ``shading``:
 
 Outputs are declared with types: G-buffer outputs ``"unorm"`` (a float in [0, 1], 8 bits),
 ``"color"`` (linear RGB in [0, 1], 8 bits per channel, sRGB-encoded), ``"half"`` (a 16-bit float),
-``"rgb16"`` (three 16-bit floats); L-buffer outputs ``"float"`` and ``"rgb"`` (non-negative, summed
+``"rgb16"`` (three 16-bit floats), ``"uint8"`` (a GLSL ``uint`` 0..255, one byte) and ``"bool"``
+(a GLSL ``bool``, one byte); L-buffer outputs ``"float"`` and ``"rgb"`` (non-negative, summed
 over lights).  Parameters (``"float"``, ``"vec2"``, ``"vec3"``, ``"vec4"``, ``"color"``: given as
 display values like every colour of a scene) are read as ``material.<name>`` in every stage.
 A :class:`MaterialDescription` is a model plus parameter values; many share one model
@@ -64,6 +65,8 @@ G_TYPES = {
     "color": ("vec3", 3, "8", True),
     "half": ("float", 1, "16", False),
     "rgb16": ("vec3", 3, "16", False),
+    "uint8": ("uint", 1, "8", False),  # an integer 0..255 (larger values are clamped), one byte
+    "bool": ("bool", 1, "8", False),  # a flag, one byte
 }
 #: L-buffer output types: (GLSL type, channels); stored in unsigned 11/11/10-bit float layers, added up.
 L_TYPES = {"float": ("float", 1), "rgb": ("vec3", 3)}

@@ -452,7 +452,7 @@ class DeferredRenderer:
         engine.default_gl_state()
         # lights add up; the proxies' back faces (one fragment per pixel, also with the camera inside a proxy)
         # behind the surface ("gequal": the surface may be inside), not clipped by the far plane
-        engine.apply_gl_state(DepthMask(False), Blend(True, "one", "one"), DepthClamp(True))
+        engine.apply_gl_state(*_LIGHTS_STATE)
         defines = self._frame_defines(engine)
         plan = engine.frame_shadows
         if plan is not None:
@@ -463,8 +463,7 @@ class DeferredRenderer:
         try:
             for kind, proxy, rows in table.instances(engine.frame_view):
                 fullscreen = proxy == FULLSCREEN
-                engine.apply_gl_state(CullFace("none" if fullscreen else "front"),
-                                      DepthTest(depth_test and not fullscreen, "gequal"))  # fmt: skip
+                engine.apply_gl_state(*_PROXY_STATE[fullscreen, depth_test and not fullscreen])
                 key = ("lighting", layout.key, kind, fullscreen, samples, tuple(sorted(defines.items())))
                 prog = self._program(engine, key, *lighting_program(layout, kind, fullscreen, samples, defines))
                 self._bind_buffers(engine, prog, gbuffer, ambient=False, extra=extra)
@@ -486,7 +485,7 @@ class DeferredRenderer:
         gbuffer = engine.target(GBUFFER)
         samples = gbuffer.description.samples
         engine.default_gl_state()
-        engine.apply_gl_state(DepthTest(True, "always"))  # the pass writes every pixel's nearest depth
+        engine.apply_gl_state(_ALWAYS)  # the pass writes every pixel's nearest depth
         prog = self._program(engine, ("pixels", samples), *pixels_program(samples))
         self._bind_buffers(engine, prog, gbuffer, ambient=False)
         vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
@@ -501,10 +500,7 @@ class DeferredRenderer:
         samples = gbuffer.description.samples
         prog = self._program(engine, ("depth", samples), *depth_program(samples))
         self._bind_buffers(engine, prog, gbuffer, ambient=False)
-        states = [ColorMask(False, False, False, False), DepthMask(True), DepthTest(True, "less")]
-        if stencil:
-            states += [StencilTest(True, "always", _WON, _WON), StencilOp("keep", "keep", "replace", _WON)]
-        engine.apply_gl_state(*states)
+        engine.apply_gl_state(*(_DEPTH_STATE + (_MARK_STATE if stencil else ())))
         vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
         draws = range(samples) if samples > 1 else (None,)
         for k in draws:
@@ -569,16 +565,14 @@ class DeferredRenderer:
         # surfaces behind that depth (all but the nearest under a perspective camera, none under an
         # orthographic one, whose depth is linear).  Where the G-buffer's surface is seen is decided by the
         # stencil marks, the G-buffer depth written by the fragment, or the edge blending below, never by it.
-        states: list[Any] = [DepthMask(False), DepthTest(False)]
         if stencil:  # the depth pass marked the samples where the G-buffer's surface won
             defines["STENCIL_MARKED"] = True
-            states.append(StencilTest(True, "equal", _WON, _WON))
+            engine.apply_gl_state(*_SHADE_MARKED)
         elif samples <= 1:  # where the G-buffer's depth is the frame's
             defines["FRAG_DEPTH"] = True
-            states[1] = DepthTest(True, "equal")
+            engine.apply_gl_state(*_SHADE_EQUAL_DEPTH)
         else:  # edges blend their samples' mean over the samples no surface covers
-            states.append(Blend(True, "one", "one_minus_src_alpha"))
-        engine.apply_gl_state(*states)
+            engine.apply_gl_state(*_SHADE_EDGES)
         extra: dict[str, Any] = {}
         if samples > 1:
             extra["u_pixels"] = engine.target(_PIXELS.name).texture("pixel")
@@ -598,9 +592,9 @@ class DeferredRenderer:
             vao, _ = self._vao(engine, prog, FULLSCREEN, 1)
             vao.render(ctx.TRIANGLES, instances=1)
         finally:
-            engine.apply_gl_state(StencilTest(False))
+            engine.apply_gl_state(_NO_STENCIL)
             if stencil:  # the marks go again: the stencil is as the frame had it (only those bits cleared)
-                engine.apply_gl_state(ScissorTest(enabled=False), StencilOp(write_mask=_WON))
+                engine.apply_gl_state(*_CLEAR_MARKS)
                 clear_stencil_value(engine.raw, 0)
             engine.default_gl_state()
         engine.count(1, 0)
@@ -641,6 +635,20 @@ class DeferredRenderer:
 #: The per-pixel centre depth and edge flag of a multisampled G-buffer, and the lights of its edge samples.
 _PIXELS = Target("deferred.pixels", colors=("pixel",), formats=("rg32f",), depth=True, relative="enclosing")
 _LIGHTS = "deferred.lights"
+
+
+# The GL state of the deferred passes (made once: state attributes are components, cheap to apply, not to make).
+_LIGHTS_STATE = (DepthMask(False), Blend(True, "one", "one"), DepthClamp(True))
+_PROXY_STATE = {(fullscreen, tested): (CullFace("none" if fullscreen else "front"), DepthTest(tested, "gequal"))
+                for fullscreen in (False, True) for tested in (False, True)}  # fmt: skip
+_ALWAYS = DepthTest(True, "always")
+_DEPTH_STATE = (ColorMask(False, False, False, False), DepthMask(True), DepthTest(True, "less"))
+_MARK_STATE = (StencilTest(True, "always", _WON, _WON), StencilOp("keep", "keep", "replace", _WON))
+_SHADE_MARKED = (DepthMask(False), DepthTest(False), StencilTest(True, "equal", _WON, _WON))
+_SHADE_EQUAL_DEPTH = (DepthMask(False), DepthTest(True, "equal"))
+_SHADE_EDGES = (DepthMask(False), DepthTest(False), Blend(True, "one", "one_minus_src_alpha"))
+_NO_STENCIL = StencilTest(False)
+_CLEAR_MARKS = (ScissorTest(enabled=False), StencilOp(write_mask=_WON))
 
 
 def _mask_sample(engine: Any, prog: Any, k: int | None) -> None:

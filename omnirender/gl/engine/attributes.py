@@ -343,6 +343,7 @@ class ScissorTest(GLState):
     __slots__ = ("enabled", "box")
     default = None
     framebuffer_state = True  # moderngl sets it per framebuffer on use() and clear()
+    always_reassert = True  # a framebuffer keeps the scissor last set while it was bound
 
     def __init__(self, box: tuple[int, int, int, int] = (0, 0, 1, 1), enabled: bool = True) -> None:
         super().__init__()

@@ -32,6 +32,7 @@ from ...attributes.photometry import linear_rgb
 from ...attributes.surface import Appearance, appearance_key, resolve_appearance
 from ...core.component import RenderingComponent
 from ...core.light import LightSwitch
+from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform
 from ...scene.node import Node
 from ..deferred.models import MaterialDescription
@@ -129,6 +130,42 @@ class _NodeEntry:
         self.entries = entries
 
 
+def _colors_copy(source: Any) -> np.ndarray | None:
+    """A copy of an instance set's colours as the application holds them (None without colours)."""
+    colors = getattr(source, "colors", None)
+    if colors is None:
+        return None
+    array = getattr(colors, "array", None)
+    return np.array(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+
+
+class _Bail(Exception):
+    """A subtree compile met what it does not handle: the full compile runs instead."""
+
+
+_UNDO = frozenset((POP, REMOVE, DEINSTALL))
+
+
+def _below(node: Any, ids: set[int]) -> bool:
+    """Whether ``node`` or one of its first-parent ancestors is among ``ids``."""
+    up = node
+    while up is not None:
+        if id(up) in ids:
+            return True
+        up = up.parent
+    return False
+
+
+def _same_declarations(a: Any, b: Any) -> bool:
+    """Whether two pre-evaluations declare the same components (lights, camera, background) at the same places."""
+    if a is None or b is None:
+        return False
+    if a is b:
+        return True
+    pa, pb = a.placements, b.placements
+    return len(pa) == len(pb) and all(x is y and np.array_equal(m, n) for (x, m), (y, n) in zip(pa, pb, strict=True))
+
+
 class DrawListCompiler:
     """Mixin of :class:`~omnirender.gl.engine.GLEngine`: the compile traversal's hooks, state capture, ``submit``."""
 
@@ -176,6 +213,9 @@ class DrawListCompiler:
         def store() -> None:
             frames.pop()
             self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
+            found = self._occurrence_of.get(id(node))
+            several = found is not None and (found[0] != key or found[1]() is not node)
+            self._occurrence_of[id(node)] = (-1 if several else key, weakref.ref(node))  # -1: several
 
         return local(), store
 
@@ -216,6 +256,7 @@ class DrawListCompiler:
         mask_key = self._mask
         c = self._compiled
         changed = self._journal.drain()
+        edits = self._journal.drain_edits()
         if len(kinds()) != self._kinds_seen:
             self._new_state_kinds()
             c = None
@@ -232,12 +273,21 @@ class DrawListCompiler:
                     self._compiled = (c[0], scene.version, mask_key, c[3])
                     self.stats["compiled"] = False
                     return self._root
+            elif edits and self._root is not None and self._full_key is not None:
+                # nodes added or removed, attributes replaced: compile only the subtrees the edits touch
+                count = self._splice(scene, edits, changed)
+                if count is not None:
+                    self.stats["incremental"] = count
+                    self._compiled = (c[0], scene.version, mask_key, scene.structure_version)
+                    self.stats["compiled"] = "subtrees"
+                    return self._root
         self.sync_registry()
         camera = scene.declarations(self.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
         if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
             self._node_cache.clear()
             self._occurrences.clear()
+            self._occurrence_of.clear()
         self._full_key = full_key
         root = Scope(None)
         self._scope = root
@@ -247,6 +297,7 @@ class DrawListCompiler:
             self.run(scene)
             if self.material_table.generation != generation:  # the material table started again: every id anew
                 self._node_cache.clear()
+                self._occurrence_of.clear()
                 self._surface_memo.clear()
                 self._state_dirty = self._surface_dirty = True
                 root = self._scope = Scope(None)
@@ -256,6 +307,7 @@ class DrawListCompiler:
             self._surface.clear()
             self._clips.clear()
             self._node_cache.clear()
+            self._occurrence_of.clear()
             self._compiled = None
             raise
         finally:
@@ -267,6 +319,228 @@ class DrawListCompiler:
         self._move_plan = None
         self.stats["compiled"] = True
         return root
+
+    # -- compiling only the subtrees that list edits touched --------------------------------
+    def _splice(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
+        """Apply the list edits since the last frame by compiling only the subtrees they touch.
+
+        Handles the edits of simulations and editors: child nodes appended to
+        or removed from a node, components inserted or removed in a node
+        without child nodes (an attribute replaced).  The state each subtree is
+        compiled in is rebuilt by evaluating the components of its ancestors
+        (their shapes go to a scope that is dropped): the ancestors must each
+        hold their components before their child nodes and have one parent.
+        The new items replace the old in their batches (:meth:`_splice_install`).
+        Returns how many items were removed and added, or None when the full
+        compile must run (nothing installed has changed then).
+        """
+        plan = self._splice_plan(scene, edits, changed)
+        if plan is None:
+            return None
+        leaves, groups = plan
+        old_declared = self.declared
+        self._running += 1
+        snapshot = self._snapshot()
+        generation = self.material_table.generation
+        removed: list[Any] = []
+        added: list[Any] = []
+        try:
+            self.begin(scene)
+            if not _same_declarations(old_declared, self.declared):
+                raise _Bail
+            for node, key, path in leaves:
+                removed.extend(self._node_cache[key].entries)
+                added.extend(self._compile_at(node, key, path))
+            for node, key, path, appended, gone in groups:
+                for child in gone:
+                    child_key = self._occurrence_of.pop(id(child))[0]
+                    removed.extend(self._node_cache.pop(child_key).entries)
+                for child in appended:
+                    self._next_occurrence += 1
+                    added.extend(self._compile_at(child, self._next_occurrence, (*path, node)))
+                self._node_cache.pop(key, None)  # its list changed: compiled again by the next full compile
+            if self.material_table.generation != generation:
+                raise _Bail
+        except BaseException:
+            self._reset(snapshot)
+            self._scope = self._immediate
+            self._compile_frames = []
+            self._node_cache.clear()  # some entries may be half made: the full compile starts afresh
+            self._occurrence_of.clear()
+            return None
+        else:
+            self.end(scene)
+        finally:
+            self._running -= 1
+        self._scope = self._immediate
+        self._compile_frames = []
+        for _, _, path in leaves:
+            for above in path:  # their flattened entries hold the old items: compiled again when next missed
+                self._drop_entry(above)
+        for _, _, path, _, _ in groups:
+            for above in path:
+                self._drop_entry(above)
+        if not self._splice_install(removed, added):
+            self._node_cache.clear()
+            self._occurrence_of.clear()
+            return None
+        return len(removed) + len(added)
+
+    def _drop_entry(self, node: Any) -> None:
+        key = self._key_of(node)
+        if key is not None:
+            self._node_cache.pop(key, None)
+
+    def _splice_plan(self, scene: Any, edits: list[Any], changed: list[Any]) -> tuple[list, list] | None:
+        """Which nodes to compile again (leaves) and which children to add and remove, or None."""
+        grouped = self._group_edits(edits)
+        if grouped is None:
+            return None
+        leaves, groups, loose = grouped
+        added_ids = {i for g in groups.values() for i in g[2]}
+        removed_ids = {i for g in groups.values() for i in g[3]}
+        for node in loose:  # edited, not compiled: inside a new subtree, or outside the scene
+            up = node
+            while up is not None and id(up) not in added_ids:
+                if self._key_of(up) is not None:
+                    return None  # below a compiled node without being compiled (masked?): not followed
+                up = up.parent
+        for c in changed:  # components changed since the last frame: only those the new subtrees hold
+            if isinstance(c, Node) or not c.owners:
+                continue
+            for owner in c.owners:  # an owner may be a component built from it (an instance set's shape)
+                if not isinstance(owner, Node) or (id(owner) not in leaves and not _below(owner, added_ids)):
+                    return None
+        leaf_list = []
+        for node in leaves.values():
+            own = self._own(node)
+            if own is None or any(isinstance(x, Node) for x in (*node.items, *own)):
+                return None
+            path = self._path_to(scene, node)
+            if path is None or _below(node, removed_ids):
+                return None
+            leaf_list.append((node, self._key_of(node), path))
+        group_list = []
+        for node, key, appended, gone in groups.values():
+            items = node.items
+            if appended and (
+                len(appended) > len(items) or {id(x) for x in items[len(items) - len(appended) :]} != set(appended)
+            ):
+                return None  # not appended at the end
+            if any(self._key_of(child) is None for child in gone.values()):
+                return None
+            path = self._path_to(scene, node)
+            if path is None or _below(node, removed_ids):
+                return None
+            ordered = [x for x in items[len(items) - len(appended) :]] if appended else []
+            group_list.append((node, key, path, ordered, list(gone.values())))
+        return leaf_list, group_list
+
+    def _group_edits(self, edits: list[Any]) -> tuple[dict, dict, list] | None:
+        """The edits by node: (nodes whose components changed, compiled nodes whose children came or went (node,
+        key, appended, removed), edited nodes not compiled), or None for an edit the splice does not follow."""
+        leaves: dict[int, Any] = {}
+        groups: dict[int, list[Any]] = {}
+        loose: list[Any] = []
+        for container, op, item, _ in edits:
+            if op not in ("insert", "remove") or not isinstance(container, Node):
+                return None
+            key = self._key_of(container)
+            if key is None:
+                loose.append(container)
+            elif not isinstance(item, Node):
+                leaves[id(container)] = container
+            else:
+                _, _, appended, gone = groups.setdefault(id(container), [container, key, {}, {}])
+                if op == "insert" and id(item) in gone:
+                    return None  # moved within the list
+                if op == "insert":
+                    appended[id(item)] = item
+                elif id(item) in appended:
+                    del appended[id(item)]
+                else:
+                    gone[id(item)] = item
+        if set(leaves) & set(groups):
+            return None
+        return leaves, groups, loose
+
+    def _key_of(self, node: Any) -> int | None:
+        """The occurrence key of ``node`` in the compiled graph, or None (not compiled, or compiled several times)."""
+        found = self._occurrence_of.get(id(node))
+        if found is None or found[0] < 0 or found[1]() is not node:
+            return None
+        return found[0]
+
+    def _own(self, node: Any) -> tuple | None:
+        """The items ``node`` held when it was last compiled, or None when its entry is gone."""
+        key = self._key_of(node)
+        entry = None if key is None else self._node_cache.get(key)
+        if entry is None or entry.ref() is not node:
+            return None
+        return tuple(x if isinstance(x, Node) else x[0] for x in entry.own)
+
+    def _path_to(self, scene: Any, node: Any) -> tuple[Any, ...] | None:
+        """The ancestors of ``node`` from ``scene`` down (one parent each, components before children), or None."""
+        path = []
+        up = node
+        while up is not scene:
+            parents = up.parents
+            if len(parents) != 1:
+                return None
+            up = parents[0]
+            if self._leading(up) is None:
+                return None
+            path.append(up)
+        path.reverse()
+        return tuple(path)
+
+    def _leading(self, node: Any) -> tuple[Any, ...] | None:
+        """``node``'s components when they all come before its child nodes (else None); cached per list."""
+        version = node.structure_version
+        found = self._leading_cache.get(id(node))
+        if found is not None and found[0]() is node and found[1] == version:
+            return found[2]
+        items = node.items
+        types = list(map(type, items))
+        first = types.index(Node) if Node in types else len(types)
+        leading = items[:first] if types.count(Node) == len(types) - first else None
+        if leading is not None and any(isinstance(x, Node) for x in leading):
+            leading = None  # a Node subclass among them
+        if len(self._leading_cache) > 4096:
+            self._leading_cache.clear()
+        self._leading_cache[id(node)] = (weakref.ref(node), version, leading)
+        return leading
+
+    def _compile_at(self, node: Any, key: int, path: tuple[Any, ...]) -> list[Any]:
+        """Compile ``node`` (occurrence ``key``) in the state its ancestors ``path`` make; returns its entries."""
+        ops = self._ops
+        sink = Scope()
+        self._scope = sink
+        undos = []
+        for above in path:
+            leading = self._leading(above)
+            program = compile_components(leading, [])
+            if any(code == TECHNIQUE for code, _ in program):
+                raise _Bail
+            cut = len(program) - sum(1 for code, _ in program if code in _UNDO)
+            ops[ENTER](above)
+            for code, arg in program[:cut]:
+                ops[code](arg)
+            undos.append(program[cut:])
+        target = Scope(None)
+        self._scope = target
+        own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
+        self._compile_frames = [[key, 0, True]]
+        self.run_program(node.local_program())
+        self._compile_frames = []
+        self._node_cache[key] = _NodeEntry(node, own, list(target.entries))
+        self._occurrence_of[id(node)] = (key, weakref.ref(node))
+        self._scope = sink
+        for undo in reversed(undos):
+            for code, arg in undo:
+                ops[code](arg)
+            ops[LEAVE](-1)
+        return target.entries
 
     def _new_state_kinds(self) -> None:
         """A GL state class was defined since the last compile: items must capture one more value."""
@@ -383,6 +657,7 @@ class DrawListCompiler:
         item.instance_models = made.models
         item.source = source
         item.template = template
+        item.source_colors = _colors_copy(source)
         self._scope.entries.append(item)
         return item
 
@@ -608,5 +883,5 @@ class DrawListCompiler:
 
     @property
     def scene_lights(self) -> list[tuple[Any, np.ndarray]]:
-        """The lights of the last pre-evaluated scene with their world matrices."""
-        return [] if self.declared is None else self.declared.lights
+        """The enabled lights of the last pre-evaluated scene with their world matrices."""
+        return [] if self.declared is None else [(light, m) for light, m in self.declared.lights if light.enabled]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import ctypes
 import ctypes.util
+import os
 from typing import Any
 
 from .glenum import (
@@ -59,7 +60,7 @@ from .glenum import (
     GL_UNSIGNED_INT_24_8,
 )
 
-__all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError"]
+__all__ = ["create_context", "check_size", "gl_renderer", "RawGL", "GLError", "SIGNATURES"]
 
 
 class GLError(RuntimeError):
@@ -72,6 +73,11 @@ def create_context(require: int = 330) -> Any:
         import moderngl
     except ImportError as exc:  # pragma: no cover - depends on the installation
         raise GLError(f"GLEngine: moderngl is not installed ({exc}); pip install 'omnirender[gl]'") from None
+    if os.environ.get("GALLIUM_NOOP") == "1":
+        # Mesa's no-op driver (22.x) under its threaded context corrupts memory when part of a buffer that a
+        # draw used is rewritten (glBufferSubData after a draw; our offsets are in range, llvmpipe and GPUs are
+        # fine): run it unthreaded, as llvmpipe runs.  Read when the first context is made.
+        os.environ.setdefault("GALLIUM_THREAD", "0")
     try:
         return moderngl.create_standalone_context(backend="egl", require=require)
     except Exception as exc:
@@ -159,8 +165,18 @@ _STENCIL_OPS = {
 
 _u, _i, _f, _d, _b = ctypes.c_uint, ctypes.c_int, ctypes.c_float, ctypes.c_double, ctypes.c_ubyte
 _pi, _pu, _pf, _pb = ctypes.POINTER(_i), ctypes.POINTER(_u), ctypes.POINTER(_f), ctypes.POINTER(_b)
-#: The GL entry points moderngl lacks: name -> (argument types, result type).
-_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
+#: The GL entry points moderngl lacks: name -> (argument types, result type), as the GL headers declare
+#: them (GLenum/GLbitfield/GLuint -> c_uint, GLint/GLsizei -> c_int, GLboolean -> c_ubyte).  Every raw
+#: call goes through this table: ctypes' default result type is a C int, and reading a GLboolean (one
+#: byte) as an int takes whatever the driver left in the register's upper bytes (-962556927 for
+#: GL_TRUE on NVIDIA's driver).
+SIGNATURES: dict[str, tuple[list[Any], Any]] = {
+    "glStencilFunc": ([_u, _i, _u], None),
+    "glStencilOp": ([_u, _u, _u], None),
+    "glStencilMask": ([_u], None),
+    "glIsRenderbuffer": ([_u], _b),
+    "glIsFramebuffer": ([_u], _b),
+    "glIsTexture": ([_u], _b),
     "glGenFramebuffers": ([_i, _pu], None),
     "glGenRenderbuffers": ([_i, _pu], None),
     "glDeleteRenderbuffers": ([_i, _pu], None),
@@ -217,7 +233,11 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
 
 
 class RawGL:
-    """The handful of GL calls moderngl lacks (stencil state), loaded from libOpenGL/libGL."""
+    """The handful of GL calls moderngl lacks (stencil state, glGet*), loaded from libOpenGL/libGL.
+
+    Each entry point of :data:`SIGNATURES` is an attribute with its declared argument and result
+    types; names outside the table are not reachable (an undeclared call would guess its types).
+    """
 
     _lib: Any = None
 
@@ -234,17 +254,12 @@ class RawGL:
         lib = RawGL._lib
         self.available = lib is not None
         if lib is not None:
-            self._func = lib.glStencilFunc
-            self._func.argtypes = [ctypes.c_uint, ctypes.c_int, ctypes.c_uint]
-            self._op = lib.glStencilOp
-            self._op.argtypes = [ctypes.c_uint, ctypes.c_uint, ctypes.c_uint]
-            self._mask = lib.glStencilMask
-            self._mask.argtypes = [ctypes.c_uint]
-            for name, (args, result) in _SIGNATURES.items():
+            for name, (args, result) in SIGNATURES.items():
                 fn = getattr(lib, name)
                 fn.argtypes = args
                 fn.restype = result
                 setattr(self, name, fn)
+            self._func, self._op, self._mask = self.glStencilFunc, self.glStencilOp, self.glStencilMask
 
     def _require(self) -> None:
         if not self.available:

@@ -156,11 +156,14 @@ class BatchDrawer:
         if fields and (batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None):
             batch.release()
             batch.layout = ROW.subset(fields)
+            # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
+            capacity = max(n, 1) + (n // 8 + 16 if batch.storage is not None else 0)
             batch.buffer = gpu_call(
-                self.ctx.buffer, reserve=max(n, 1) * batch.layout.stride * 4, dynamic=True, what="instance data"
+                self.ctx.buffer, reserve=capacity * batch.layout.stride * 4, dynamic=True, what="instance data"
             )
-            batch.capacity = max(n, 1)
+            batch.capacity = capacity
             batch.dirty = (0, n)
+            batch.sparse = None
         volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
@@ -185,29 +188,20 @@ class BatchDrawer:
                         seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
                         order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
                         batch.drawn = len(seen)
-                    batch.buffer.write(np.ascontiguousarray(batch.rows[np.ix_(order, columns)]).tobytes())
+                    batch.buffer.write(_pack(batch.rows, order, columns))
                     batch.position = np.empty(n, np.int64)
                     batch.position[order] = np.arange(n)
                     batch.sorted_for = self.state.view_key if own_view else None
                     batch.dirty = None
-                elif batch.dirty is not None:
-                    lo, hi = batch.dirty
-                    where = batch.position[lo:hi]
-                    first, last = int(where.min()), int(where.max()) + 1
-                    order = np.empty(n, np.int64)
-                    order[batch.position] = np.arange(n)
-                    data = np.ascontiguousarray(batch.rows[np.ix_(order[first:last], columns)])
-                    batch.buffer.write(data.tobytes(), offset=first * batch.layout.stride * 4)
-                    batch.dirty = None
+                    batch.sparse = None
+                elif batch.sparse or batch.dirty is not None:
+                    _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
                 if own_view:
                     n = batch.drawn
                     if not n:
                         return 0
-            elif batch.dirty is not None:
-                lo, hi = batch.dirty
-                data = np.ascontiguousarray(batch.rows[lo:hi][:, columns])
-                batch.buffer.write(data.tobytes(), offset=lo * batch.layout.stride * 4)
-                batch.dirty = None
+            elif batch.sparse or batch.dirty is not None:
+                _upload_rows(batch, columns, None)
         else:
             row = batch.rows[0]
             prog["i_model"].write(row[_MODEL].tobytes())
@@ -310,8 +304,11 @@ class BatchDrawer:
                 u.value = (start, end, density, mode)
                 prog["u_fog_color"].value = color
         u = prog.get("u_viewport", None)
-        if u is not None:  # lines and tessellated patches: half the target's size in pixels
+        if u is not None:  # lines, points and tessellated patches: half the target's size in pixels
             u.value = (self.state.target_size[0] / 2.0, self.state.target_size[1] / 2.0)
+            u = prog.get("u_viewport_origin", None)
+            if u is not None:  # points: the viewport's corner (a pass's viewport box)
+                u.value = tuple(float(v) for v in self.ctx.viewport[:2])
         if state.kind == "lines":
             prog["u_line_width"].value = float(state.value(LineWidth))
         for unit, (sampler, texture, srgb) in enumerate(state.textures):
@@ -501,3 +498,45 @@ class BatchDrawer:
 def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
     return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
+
+
+def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None) -> None:
+    """Upload the batch's few changed rows (``sparse``) where they lie in its buffer; then the dirty range."""
+    stride = batch.layout.stride * 4
+    rows = batch.rows
+    for index in sorted(set(batch.sparse or ())):
+        place = index if position is None else int(position[index])
+        batch.buffer.write(np.take(rows[index], columns).tobytes(), offset=place * stride)
+    batch.sparse = None
+    if batch.dirty is not None:
+        lo, hi = batch.dirty
+        if position is None:
+            batch.buffer.write(_pack(rows[lo:hi], None, columns), offset=lo * stride)
+        else:
+            where = position[lo:hi]
+            first, last = int(where.min()), int(where.max()) + 1
+            order = np.empty(len(rows), np.int64)
+            order[position] = _arange(len(rows))
+            batch.buffer.write(_pack(rows, order[first:last], columns), offset=first * stride)
+        batch.dirty = None
+
+
+_ARANGE = np.arange(0)
+
+
+def _arange(n: int) -> np.ndarray:
+    """``np.arange(n)`` from a cached array (grown when needed)."""
+    global _ARANGE
+    if len(_ARANGE) < n:
+        _ARANGE = np.arange(max(n, 2 * len(_ARANGE)))
+    return _ARANGE[:n]
+
+
+def _pack(rows: np.ndarray, order: np.ndarray | None, columns: np.ndarray) -> bytes:
+    """The GPU bytes of ``rows`` (those of ``order``, in that order; None: all) restricted to ``columns``.
+
+    Rows first, then columns, each a plain ``take`` (one fancy index over both
+    axes costs several times more).
+    """
+    picked = rows if order is None else np.take(rows, order, axis=0)
+    return np.take(picked, columns, axis=1).tobytes()

@@ -115,6 +115,7 @@ class DrawItem:
         "instance_models",
         "source",
         "template",
+        "source_colors",
     )
 
     def __init__(
@@ -151,6 +152,9 @@ class DrawItem:
         #: for an instance set: the InstanceSet and the item of its shape that each instance repeats
         self.source: Any = None
         self.template: DrawItem | None = None
+        #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
+        #: only positions changed writes the translations and keeps the converted colours
+        self.source_colors: np.ndarray | None = None
 
     def rows(self) -> np.ndarray:
         """The rows this item draws: its instances', or its own as a (1, stride) array."""
@@ -247,6 +251,10 @@ class Batch:
         "source",
         "picks",
         "source_version",
+        "storage",
+        "sparse",
+        "log",
+        "inverse",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -274,6 +282,113 @@ class Batch:
         self.source: Batch | None = None
         self.picks: np.ndarray | None = None
         self.source_version = -1
+        #: the array ``rows`` is the start of (spare rows after it, so a row appended keeps every item's view)
+        self.storage: np.ndarray | None = None
+        #: rows changed since the last upload when few (uploaded one by one), or None: the ``dirty`` range
+        self.sparse: list[int] | None = None
+        #: the last row changes as (version after, lo, hi), so filtered batches copy only those rows
+        self.log: list[tuple[int, int, int]] = []
+        #: a filtered batch: (picks, source row -> index here or -1), made when first needed
+        self.inverse: tuple[Any, np.ndarray] | None = None
+
+    def hold(self, rows: np.ndarray) -> None:
+        """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""
+        n = len(rows)
+        storage = np.empty((n + max(16, n // 8), ROW.stride), np.float32)
+        storage[:n] = rows
+        self.storage = storage
+        self.rows = storage[:n]
+        for i, item in enumerate(self.items):
+            item.row = storage[i]
+
+    def append_row(self, item: DrawItem) -> int:
+        """Add ``item`` as the last row (its row becomes a view of it); returns the row's index."""
+        n = len(self.rows)
+        storage = self.storage
+        if storage is None or n == len(storage):
+            self.items.append(item)
+            self.hold(np.concatenate([self.rows, item.row[None, :]]))
+        else:
+            storage[n] = item.row
+            self.rows = storage[: n + 1]
+            self.items.append(item)
+            item.row = storage[n]
+        item.slot = (self, n)
+        if self.uniform and not uniform_material(self.rows[[0, n]]):
+            self.uniform = False
+        if self.position is not None:
+            if self.drawn == n:  # everything in view: the new row is drawn from the end of the buffer
+                self.position = np.append(self.position, n)
+                self.drawn = n + 1
+            else:
+                self.position = None  # culled: sorted and culled again
+        self.row_changed(n)
+        return n
+
+    def remove_row(self, index: int) -> int | None:
+        """Remove row ``index``: the last row moves into its place; returns the moved row's old index (or None).
+
+        The removed item keeps a copy of its row; the moved item's slot and
+        row view follow it.  In the GPU buffer the row drawn last takes the
+        removed row's place (sorted batches), so one row is uploaded.
+        """
+        last = len(self.rows) - 1
+        removed = self.items[index]
+        removed.row = removed.row.copy()
+        removed.slot = None
+        storage = self.storage if self.storage is not None else self.rows
+        moved: int | None = None
+        if index != last:
+            storage[index] = storage[last]
+            item = self.items[last]
+            self.items[index] = item
+            item.slot = (self, index)
+            item.row = storage[index]
+            moved = last
+        self.items.pop()
+        self.rows = storage[:last]
+        position = self.position
+        if position is not None:
+            if self.drawn < last + 1:
+                self.position = None
+            else:
+                freed = int(position[index])
+                tail = int(np.flatnonzero(position == last)[0])  # the row in the buffer's last place
+                if moved is not None:
+                    position[index] = position[last]
+                    if tail == last:
+                        tail = index
+                position = position[:last].copy()
+                if freed != last:
+                    position[tail] = freed  # the row drawn last fills the freed place
+                    self.row_changed(tail)
+                self.position = position
+                self.drawn = last
+        if moved is not None and self.position is None:
+            self.row_changed(index)
+        if self.sparse is not None:
+            self.sparse = [i for i in self.sparse if i < last]
+        self.version += 1
+        return moved
+
+    def row_changed(self, index: int) -> None:
+        """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
+        if self.dirty is None and self.sparse is None:
+            self.sparse = [index]
+        elif self.sparse is not None and len(self.sparse) < 32:
+            self.sparse.append(index)
+        else:
+            self.version += 1
+            self._log(index, index + 1)
+            self.version -= 1  # changed() below counts the change
+            if self.sparse:
+                lo, hi = min(self.sparse), max(self.sparse) + 1
+                self.dirty = (lo, hi) if self.dirty is None else (min(self.dirty[0], lo), max(self.dirty[1], hi))
+                self.sparse = None
+            self.changed(index, index + 1)
+            return
+        self.version += 1
+        self._log(index, index + 1)
 
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""
@@ -282,13 +397,26 @@ class Batch:
     def changed(self, lo: int, hi: int) -> None:
         """Rows ``lo:hi`` changed: upload them with the next draw, and refresh the batches filtered from this one."""
         d = self.dirty
-        self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
         self.version += 1
+        self._log(lo, hi)
+        if self.sparse:
+            lo, hi = min(lo, *self.sparse), max(hi, max(self.sparse) + 1)
+        self.sparse = None
+        self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
+
+    def _log(self, lo: int, hi: int) -> None:
+        log = self.log
+        log.append((self.version, lo, hi))
+        if len(log) > 32:
+            del log[:16]
 
     def follow(self) -> None:
         """A filtered batch: take its source's rows again when they changed since the last time."""
         source = self.source
         if source is None or self.source_version == source.version:
+            return
+        if self._follow_rows(source):
+            self.source_version = source.version
             return
         self.rows = source.rows.copy() if self.picks is None else source.rows[self.picks]
         self.dirty = (0, len(self.rows)) if len(self.rows) else None
@@ -296,6 +424,46 @@ class Batch:
         if self.position is not None and len(self.position) != len(self.rows):
             self.position = None
         self.source_version = source.version
+
+    def _follow_rows(self, source: Batch) -> bool:
+        """Copy only the source rows its log says changed since the last follow; False when it cannot say."""
+        since = self.source_version
+        entries = [e for e in source.log if e[0] > since]
+        if since < 0 or len(entries) != source.version - since or not entries:
+            return False
+        picks = self.picks
+        if len(self.rows) != (len(source.rows) if picks is None else len(picks)):
+            return False
+        inverse = None
+        if picks is not None:
+            if self.inverse is None or self.inverse[0] is not picks or len(self.inverse[1]) != len(source.rows):
+                table = np.full(len(source.rows), -1, np.int64)
+                table[picks] = np.arange(len(picks))
+                self.inverse = (picks, table)
+            inverse = self.inverse[1]
+        for _, lo, hi in entries:
+            if inverse is None:
+                self.rows[lo:hi] = source.rows[lo:hi]
+                mine = range(lo, hi)
+            else:
+                sel = inverse[lo:hi]
+                sel = sel[sel >= 0]
+                if not len(sel):
+                    continue
+                self.rows[sel] = source.rows[picks[sel]]
+                mine = sel.tolist()
+            if len(mine) <= 8:
+                for i in mine:
+                    self.row_changed(int(i))
+            else:
+                self.changed(int(min(mine)), int(max(mine)) + 1)
+            if self.uniform and len(self.rows) > 1:
+                if lo == 0 or (inverse is not None and 0 in mine):
+                    self.uniform = uniform_material(self.rows)
+                else:
+                    check = self.rows[lo:hi] if inverse is None else self.rows[sel]
+                    self.uniform = bool((check[:, _MATERIAL] == self.rows[0, _MATERIAL]).all())
+        return True
 
     def release(self) -> None:
         for vao in self.vaos.values():

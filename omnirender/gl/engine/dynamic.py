@@ -15,6 +15,7 @@ changed rows as one range (or all of them when most changed).  Anything else
 
 from __future__ import annotations
 
+from itertools import compress, repeat
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,8 @@ from .layout import ROW
 __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
+_TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_EYE3 = np.eye(3)
 
 
 class MovePlan:
@@ -71,6 +74,10 @@ class MovePlan:
             self.local[with_local] = [self.items[i].local for i in with_local]
         # where each item's row lies: its batch (index into batches, -1: no batch) and its row there
         batches: dict[int, int] = {}
+        self._batch_index = batches
+        self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
+        #: (batch, row indices or None: all) the last apply() rewrote, for the render index's bounds
+        self.moved_rows: list[tuple[Any, Any]] = []
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -85,17 +92,79 @@ class MovePlan:
             self.batch_of[i] = b
             self.row_of[i] = row
 
+    def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
+        """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
+        where = self._where
+        if where is None:
+            where = self._where = {id(it): i for i, it in enumerate(self.items)}
+        identity = len(self.transforms)
+        for item in removed:
+            i = where.pop(id(item), None)
+            if i is not None:
+                self.chain[i] = identity  # never recomposed again
+                self.batch_of[i] = -1
+        new = [it for it in added if it.instances is None and it.chain]
+        fresh = [t for it in new for t in it.chain if id(t) not in self.index]
+        if fresh:
+            fresh = list({id(t): t for t in fresh}.values())
+            for t in fresh:
+                self.index[id(t)] = len(self.transforms)
+                self.transforms.append(t)
+            stacked = np.empty((len(fresh), 4, 4))
+            for cls, members in _by_class(range(len(fresh)), fresh).items():
+                stacked[members] = cls.stack_matrices([fresh[k] for k in members])
+            self.matrices = np.concatenate([self.matrices[:identity], stacked, self.matrices[identity:]])
+            self.chain[self.chain == identity] = len(self.transforms)
+            identity = len(self.transforms)
+        if new:
+            length = max(self.chain.shape[1], max(len(it.chain) for it in new))
+            if length > self.chain.shape[1]:
+                pad = np.full((len(self.chain), length - self.chain.shape[1]), identity, np.intp)
+                self.chain = np.concatenate([self.chain, pad], axis=1)
+            rows = np.full((len(new), length), identity, np.intp)
+            for r, item in enumerate(new):
+                rows[r, : len(item.chain)] = [self.index[id(t)] for t in item.chain]
+            self.chain = np.concatenate([self.chain, rows])
+            if self.local is not None or any(it.local is not None for it in new):
+                local = np.broadcast_to(np.eye(4), (len(new), 4, 4)).copy()
+                for r, item in enumerate(new):
+                    if item.local is not None:
+                        local[r] = item.local
+                old = self.local
+                if old is None:
+                    old = np.broadcast_to(np.eye(4), (len(self.items), 4, 4))
+                self.local = np.concatenate([old, local])
+            self.batch_of = np.concatenate([self.batch_of, np.full(len(new), -1, np.intp)])
+            self.row_of = np.concatenate([self.row_of, np.zeros(len(new), np.intp)])
+            for item in new:
+                where[id(item)] = len(self.items)
+                self.items.append(item)
+        for item in (*new, *moved):
+            i = where.get(id(item))
+            if i is None or item.slot is None:
+                continue
+            batch, row = item.slot
+            b = self._batch_index.get(id(batch))
+            if b is None:
+                b = self._batch_index[id(batch)] = len(self.batches)
+                self.batches.append(batch)
+            self.batch_of[i] = b
+            self.row_of[i] = row
+
     def apply(self, changed: list[Any]) -> int:
         """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count."""
-        index = self.index
-        moved = [(k, t) for t in changed if (k := index.get(id(t))) is not None]
-        if not moved:
+        self.moved_rows = []
+        # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
+        found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
+        keep = found >= 0
+        if not keep.any():
             return 0
-        positions = [k for k, _ in moved]
-        for cls, members in _by_class(positions, [t for _, t in moved]).items():
+        positions = found[keep]
+        moved = changed if keep.all() else list(compress(changed, keep.tolist()))
+        for cls, members in _by_class(positions.tolist(), moved).items():
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
-        count = self._apply_items(np.array(positions, np.intp))
-        return count + self._apply_instances(set(positions))
+        count = self._apply_items(positions)
+        return count + self._apply_instances(set(positions.tolist()))
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -125,7 +194,12 @@ class MovePlan:
             batch = self.batches[b]
             where = self.row_of[affected[part]]
             batch.rows[where, _MODEL] = rows[part]
-            batch.changed(int(where.min()), int(where.max()) + 1)
+            if len(where) <= 8:  # a few rows: uploaded one by one, not the range between them
+                for w in where.tolist():
+                    batch.row_changed(w)
+            else:
+                batch.changed(int(where.min()), int(where.max()) + 1)
+            self.moved_rows.append((batch, where))
         return len(affected)
 
     def _apply_instances(self, moved: set[int]) -> int:
@@ -143,12 +217,16 @@ class MovePlan:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
                 batch.changed(0, len(batch.rows))
+                self.moved_rows.append((batch, None))
             count += 1
         return count
 
 
 def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
     """Positions grouped by the class of the transform at the same place in ``transforms``."""
+    classes = list(map(type, transforms))
+    if classes and classes.count(classes[0]) == len(classes):  # one class, the common case: no loop
+        return {classes[0]: list(positions)}
     out: dict[type, list[int]] = {}
     for k, t in zip(positions, transforms, strict=True):
         cls = t.__class__
@@ -179,15 +257,19 @@ class TransformUpdater:
         """
         if not changed:
             return None
-        moved: list[Any] = []
-        sets: list[Any] = []
-        for c in changed:
-            if isinstance(c, Transform) and c.static:
-                moved.append(c)
-            elif isinstance(c, InstanceSet):
-                sets.append(c)
-            else:
-                return None
+        classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
+        if all(issubclass(cls, Transform) and cls.static for cls in classes):
+            moved, sets = changed, []
+        else:
+            moved = []
+            sets = []
+            for c in changed:
+                if isinstance(c, Transform) and c.static:
+                    moved.append(c)
+                elif isinstance(c, InstanceSet):
+                    sets.append(c)
+                else:
+                    return None
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
@@ -195,7 +277,8 @@ class TransformUpdater:
         for item, made in updates:
             _install_rows(item, made)
         if updates:
-            self._invalidate_moved()
+            self.index.moved(None)  # instance rows replaced: every bound again
+            self.frame_runner.placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
@@ -206,6 +289,10 @@ class TransformUpdater:
             items = plan.sources.get(id(shape))
             if not items:
                 return None
+            positions = _positions_only(shape, items)
+            if positions is not None:
+                out.extend((item, positions) for item in items)
+                continue
             matrices, colors, may_mirror = set_arrays(shape)
             for item in items:
                 template = item.template
@@ -223,16 +310,14 @@ class TransformUpdater:
 
     def _apply_moves(self, changed: list[Any]) -> int:
         """Recompose the model matrix of every item below a changed transform; returns how many rows changed."""
-        count = self._moves().apply(changed)
+        plan = self._moves()
+        count = plan.apply(changed)
         if count:
-            self._invalidate_moved()
+            # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
+            # bounds follow the moved rows; mirror planes are read from the rows every frame
+            self.index.moved(plan.moved_rows)
+            self.frame_runner.placements_changed()
         return count
-
-    def _invalidate_moved(self) -> None:
-        """What depends on where items are: filtered batches, bounds, shadow maps, mirror planes."""
-        # batches of pass masks and predicates follow their source batches' versions (Batch.follow)
-        self._bounds = None
-        self.frame_runner.placements_changed()  # shadow maps and mirror planes follow what moved
 
     def _refresh_declarations(self, scene: Any) -> None:
         """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""
@@ -247,8 +332,63 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
-def _install_rows(item: Any, made: InstanceRows) -> None:
-    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed)."""
+def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
+    """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
+
+    That is: positions, no scales, no visibility mask, the same count and the
+    same colours as the items' rows were made from (colours are compared, so
+    their conversion to linear is done once, not every frame).  Positions that
+    are not finite take the full path, which names the instance.
+    """
+    if shape.scales is not None or shape.visible is not None:
+        return None
+    source = shape.transforms
+    array = getattr(source, "array", None)
+    t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
+    t = np.asarray(t, dtype=np.float64)
+    if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
+        return None
+    colors = shape.colors
+    if colors is not None:
+        array = getattr(colors, "array", None)
+        colors = np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+    for item in items:
+        if item.instances is None or len(item.instances) != len(t):
+            return None
+        before = item.source_colors
+        if (before is None) != (colors is None) or (before is not None and not np.array_equal(before, colors)):
+            return None
+    return t
+
+
+def _write_positions(item: Any, positions: np.ndarray) -> None:
+    """Write the translations of an instance set's rows (the chain, then the position, then the shape's local)."""
+    local = item.template.local
+    offset = positions if local is None else positions + local[:3, 3]
+    model = _chain_matrix(item.chain)
+    if (model[:3, :3] == _EYE3).all():
+        world = offset + model[:3, 3]
+    else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
+        world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
+        world += model[:3, 3]
+    item.instance_models[:, :3, 3] = offset
+    item.instances[:, _TRANSLATION] = world
+    if item.slot is not None:
+        batch, _ = item.slot
+        if batch.rows is not item.instances:
+            batch.rows[:, _TRANSLATION] = world
+        batch.changed(0, len(batch.rows))
+
+
+def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
+    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
+
+    An array instead: only the instance positions changed (:func:`_positions_only`).
+    """
+    if isinstance(made, np.ndarray):
+        _write_positions(item, made)
+        return
+    item.source_colors = _colors_of(item.source)
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:
@@ -262,3 +402,11 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
         batch.changed(0, len(made.rows))
     else:
         batch.version += 1
+
+
+def _colors_of(source: Any) -> np.ndarray | None:
+    colors = getattr(source, "colors", None)
+    if colors is None:
+        return None
+    array = getattr(colors, "array", None)
+    return np.array(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ...core.technique import pass_accepted
 from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, ScissorTest, StencilOp
 from .context import GLError, blit, clear_depth, clear_stencil
 from .drawer import BatchDrawer
@@ -218,13 +219,14 @@ class FrameRunner:
                     index = engine.current_pass
                     self._requests.append(None)
                     try:
-                        technique.prepare_pass(engine)
+                        accepted = pass_accepted(technique.prepare_pass(engine))
                     finally:
                         description = self._requests.pop()
-                    if description is None:
-                        description = Pass(f"{type(technique).__name__}[{index}]")
-                    calls += self._execute(technique, description, scope, outer, item_level)
-                    technique.finish_pass(engine)
+                    if accepted:  # a technique may decline a pass (VRS): not drawn, not finished
+                        if description is None:
+                            description = Pass(f"{type(technique).__name__}[{index}]")
+                        calls += self._execute(technique, description, scope, outer, item_level)
+                        technique.finish_pass(engine)
                     technique.next_pass(engine)
             finally:
                 technique.stop(engine)

@@ -15,6 +15,7 @@ import numpy as np
 from ...core.mask import compile_mask
 from .drawlist import Batch, DrawItem, Scope, Segment, plan_batches, uniform_material
 from .geometry import Geometry
+from .layout import ROW
 from .passes import Composed
 
 __all__ = ["BatchRenderer", "item_filter"]
@@ -31,11 +32,11 @@ class BatchRenderer:
     def _install(self, root: Scope) -> None:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
         old = self._root
-        self._bounds = None
-        self.frame_runner.placements_changed()
         self.draw_list_version += 1
+        self.frame_runner.placements_changed()  # stages of users may derive things from placements
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
+            self.index.install(old)
             return
         self.stats["incremental"] = None
         pool = self._batch_pool
@@ -47,7 +48,7 @@ class BatchRenderer:
             for scope in old.walk():
                 _release_filtered(scope)
         self._root = root
-        self._item_count = len(root.all_items())
+        self.index.install(root)
         self._sweep(root)
 
     def _plan(self, scope: Scope, where: tuple, pool: dict[tuple, Batch]) -> None:
@@ -81,8 +82,13 @@ class BatchRenderer:
             if batch is None:
                 batch = Batch(key[0], key[1])
             batch.items = group
-            batch.rows = np.stack([it.row for it in group]) if len(group) > 1 else group[0].rows().copy()
+            if group[0].instances is None and not (where and where[0] == "filtered"):
+                batch.hold(np.stack([it.row for it in group]))  # spare rows: items added later keep the views
+            else:
+                batch.rows = group[0].rows().copy() if len(group) == 1 else np.stack([it.row for it in group])
+                batch.storage = None
             batch.dirty = (0, len(group))
+            batch.sparse = None
             batch.uniform = uniform_material(batch.rows)
             batch.sorted_for = None
             batch.position = None
@@ -100,6 +106,141 @@ class BatchRenderer:
                     # the item's row becomes its batch row: a moved transform writes the row once (dynamic.py)
                     item.row = slot[0].rows[slot[1]]
         return segment
+
+    def _splice_install(self, removed: list[Any], added: list[Any]) -> bool:
+        """Take ``removed`` out of the installed draw list and put ``added`` in, patching batch rows in place.
+
+        A removed row is filled by its batch's last row; an added item becomes
+        the last row of the batch of its geometry and state in the root
+        scope's last segment (a new batch when there is none).  Only the
+        changed rows are uploaded (:meth:`Batch.append_row`, :meth:`Batch.remove_row`);
+        the batches that passes filter from them follow.  Returns False, with
+        nothing changed, for what this does not handle: nested technique
+        scopes, instance sets, states whose order matters.
+        """
+        root = self._root
+        if root is None or not root.parts or not isinstance(root.parts[-1], Segment):
+            return False
+        last = root.parts[-1]
+        segments = [p for p in root.parts if isinstance(p, Segment)]
+        if any(b.state.special for b in last.batches):
+            return False
+        for item in (*removed, *added):
+            if not isinstance(item, DrawItem) or item.instances is not None or item.state.special or item.techniques:
+                return False
+        owner: dict[int, Segment] = {id(b): seg for seg in segments for b in seg.batches}
+        for item in removed:
+            if item.slot is not None and id(item.slot[0]) not in owner:
+                return False
+            if item.slot is None and not (item.transparent or item.state.overlay):
+                return False
+        ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
+        moved_items: list[DrawItem] = []
+        for item in removed:
+            if item.slot is not None:
+                batch, index = item.slot
+                segment = owner[id(batch)]
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                moved = batch.remove_row(index)
+                ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
+                if moved is not None:
+                    shifted = batch.items[index]
+                    segment.slots[segment.items.index(shifted)] = shifted.slot
+                    moved_items.append(shifted)
+            else:
+                segment = next(seg for seg in segments if any(x is item for x in seg.others))
+                at = segment.items.index(item)
+                del segment.items[at]
+                del segment.slots[at]
+                segment.others.remove(item)
+            root.entries.remove(item)
+        by_key = {(id(b.geometry), id(b.state)): b for b in last.batches}
+        new_batch = False
+        for item in added:
+            if item.transparent or item.state.overlay:
+                last.others.append(item)
+            else:
+                batch = by_key.get((id(item.geometry), id(item.state)))
+                if batch is None:
+                    batch = by_key[(id(item.geometry), id(item.state))] = Batch(item.geometry, item.state)
+                    batch.hold(np.empty((0, ROW.stride), np.float32))
+                    batch.uniform = True
+                    last.batches.append(batch)
+                    self._batch_pool[(("spliced", id(batch)),)] = batch
+                    new_batch = True
+                index = batch.append_row(item)
+                ops.setdefault(id(batch), (batch, []))[1].append(("append", index, item))
+            last.items.append(item)
+            last.slots.append(item.slot)
+            root.entries.append(item)
+        root.positions = None
+        if new_batch:
+            _release_filtered(root)
+        else:
+            self._follow_splice(root, ops)
+        self.index.spliced(removed, added)
+        self.frame_runner.placements_changed()
+        kept = {id(it.geometry) for it in added}
+        if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
+            # what only removed items used is released now (their geometry, textures, transient buffers)
+            parts = [p for scope in root.walk() for p in (scope.parts or []) if isinstance(p, Segment)]
+            self._sweep(root, [b.items[0] for p in parts for b in p.batches if b.items] + [
+                it for p in parts for it in p.others])  # fmt: skip
+        for batch, edits in ops.values():
+            self.index.batch_edits(batch, edits)
+        version = self.draw_list_version
+        self.draw_list_version += 1
+        self._follow_version(version, added)
+        if self._move_plan is not None:
+            self._move_plan.splice(removed, added, moved_items)
+        return True
+
+    def _follow_version(self, version: int, added: list[DrawItem]) -> None:
+        """The pipelines scan of ``version`` still holds when no added item reads a render texture."""
+        if self._pipelines is None and self._pipelines_scanned == version:
+            if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
+                self._pipelines_scanned = self.draw_list_version
+
+    def _follow_splice(self, scope: Scope, ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]]) -> None:
+        """Patch the rows the scope's filtered batches select after rows of their sources were removed or added.
+
+        A filtered batch keeps its picks (source row indices, ascending) and
+        items in the same order: a removed row's pick goes, the pick of the row
+        that moved into its place takes the new index, an appended row that
+        the filter keeps is picked last.
+        """
+        for key, views in scope.filtered.items():
+            keep = None
+            for group in views.values():
+                for batch in group:
+                    found = ops.get(id(batch.source)) if batch.source is not None else None
+                    if found is None or batch.picks is None:
+                        continue
+                    picks = batch.picks
+                    for op, index, arg in found[1]:
+                        if op == "remove":
+                            at = int(np.searchsorted(picks, index))
+                            if at < len(picks) and picks[at] == index:
+                                picks = np.delete(picks, at)
+                                del batch.items[at]
+                            if arg is not None:  # row `arg` (the last) now sits at `index`
+                                at = int(np.searchsorted(picks, arg))
+                                if at < len(picks) and picks[at] == arg:
+                                    item = batch.items.pop(at)
+                                    picks = np.delete(picks, at)
+                                    to = int(np.searchsorted(picks, index))
+                                    picks = np.insert(picks, to, index)
+                                    batch.items.insert(to, item)
+                        else:
+                            if keep is None:
+                                keep = item_filter(_Selection(*key))
+                            if keep(arg):  # appended: the largest index
+                                picks = np.append(picks, index)
+                                batch.items.append(arg)
+                    batch.picks = picks
+                    batch.source_version = -1  # rows taken again by the next follow()
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
         """Copy the rows of ``new``'s items into ``old``'s structure (checked to be the same); returns the count."""
@@ -155,9 +296,13 @@ class BatchRenderer:
                 _release_filtered(a)
         return changed
 
-    def _sweep(self, root: Scope) -> None:
-        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures)."""
-        items = root.all_items()
+    def _sweep(self, root: Scope, items: list[DrawItem] | None = None) -> None:
+        """Release GPU objects the new list no longer uses (transient buffers, geometry, textures).
+
+        ``items``: the items to keep what they use (default: every item; after a splice, one item per batch
+        and the unbatched items, which use the same geometry, states and textures).
+        """
+        items = self.index.items() if items is None else items
         used = {id(it.geometry) for it in items}
         self.drawer.sweep(items)
         self.geometry_cache.sweep(used)
@@ -192,6 +337,15 @@ class BatchRenderer:
         return out
 
     # -- batches -----------------------------------------------------------------------
+
+
+class _Selection:
+    """The masks and predicates of a filtered selection (its cache key), as :meth:`_accepts` reads them."""
+
+    __slots__ = ("masks", "selects")
+
+    def __init__(self, masks: Any, selects: Any) -> None:
+        self.masks, self.selects = masks, selects
 
 
 def item_filter(composed: Composed) -> Any:

@@ -141,16 +141,25 @@ out float gl_ClipDistance[NCLIP];
 out vec3 v_pos;
 out vec3 v_normal;
 out vec4 v_color;
+#ifdef POINTS
+uniform vec2 u_viewport;         // half the viewport's size in pixels
+uniform vec2 u_viewport_origin;  // its lower-left corner in window pixels
+float point_size;              // the diameter in pixels
+flat out vec3 v_sprite;          // the point's centre in window pixels and its radius
+#endif
+flat out float v_mirror;  // -1 under a mirroring model matrix (its triangles' winding is reversed), else 1
 PASS_VERTEX_CODE
 void main() {
     vec4 world = i_model * vec4(in_position, 1.0);
 #ifdef POINTS
     vec3 normal = vec3(0.0, 0.0, 1.0);
+    v_mirror = 1.0;
 #else
     mat3 m = mat3(i_model);
     mat3 cof = mat3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
     vec3 normal = cof * in_normal;
-    if (dot(m[0], cof[0]) < 0.0) normal = -normal;
+    v_mirror = dot(m[0], cof[0]) < 0.0 ? -1.0 : 1.0;  // the sign of det(m)
+    if (v_mirror < 0.0) normal = -normal;
     float nn = dot(normal, normal);
     normal = nn > 0.0 ? normal * inversesqrt(nn) : vec3(0.0, 0.0, 1.0);
 #ifdef NORMAL_MAP
@@ -163,12 +172,15 @@ void main() {
 #ifdef POINTS
     v_normal = normal;
 #ifdef VSIZE
-    gl_PointSize = in_size;
+    point_size = in_size;
 #elif defined(INSTANCE_MATERIAL)
-    gl_PointSize = i_point.x;
+    point_size = i_point.x;
 #else
-    gl_PointSize = u_point.x;
+    point_size = u_point.x;
 #endif
+    // a square wider than the disc by a pixel on each side: which pixels on the square's border a driver
+    // covers does not matter; the fragment shader cuts the disc out
+    gl_PointSize = point_size + POINT_MARGIN;
 #else
     v_normal = mat3(u_view) * normal;
 #endif
@@ -202,6 +214,10 @@ void main() {
     for (int k = 0; k < NCLIP; ++k) gl_ClipDistance[k] = dot(u_clip[k], world);
 #endif
     gl_Position = u_proj * eye;
+#ifdef POINTS
+    // the point's centre in window pixels: the fragment shader measures each pixel centre's distance to it
+    v_sprite = vec3((gl_Position.xy / gl_Position.w + 1.0) * u_viewport + u_viewport_origin, 0.5 * point_size);
+#endif
 }
 """
 
@@ -209,6 +225,10 @@ FRAGMENT = """
 in vec3 v_pos;
 in vec3 v_normal;
 in vec4 v_color;
+#ifdef POINTS
+flat in vec3 v_sprite;
+#endif
+flat in float v_mirror;
 #ifdef UVS
 in vec2 v_uv0;
 #ifdef UV1
@@ -403,16 +423,19 @@ void main() {
 #endif
     vec3 N;
 #ifdef POINTS
-    vec2 c = gl_PointCoord * 2.0 - 1.0;
+    // the pixel centre on the point's unit disc, measured from the projected centre: neither which pixels the
+    // driver's square covers nor its gl_PointCoord (llvmpipe's is a pixel off with multisampling) matter
+    vec2 c = (gl_FragCoord.xy - v_sprite.xy) / max(v_sprite.z, 1e-6);
     float r2 = dot(c, c);
     if (r2 > 1.0) discard;
-    N = vec3(c.x, -c.y, sqrt(1.0 - r2));
+    N = vec3(c.x, c.y, sqrt(1.0 - r2));
 #elif defined(FLAT)
     N = cross(dFdx(P), dFdy(P));
     N = dot(N, N) > 0.0 ? normalize(N) : vec3(0.0, 0.0, 1.0);
 #else
     N = dot(v_normal, v_normal) > 0.0 ? normalize(v_normal) : vec3(0.0, 0.0, 1.0);
-    if (!gl_FrontFacing) N = -N;
+    // the side facing the eye: a mirroring model matrix reverses the winding, so its front faces rasterise as back
+    if (gl_FrontFacing == (v_mirror < 0.0)) N = -N;
 #ifdef NORMAL_MAP
     {   // tangent-space normal map (OpenGL convention: x along u, y along v, z out of the surface)
         vec3 t = v_tangent.xyz - N * dot(N, v_tangent.xyz);
@@ -707,6 +730,10 @@ SURFACE_STRUCT = """struct Surface {
 };"""
 
 
+#: Pixels a point's square is drawn wider than its disc (one on each side; see VERTEX's gl_PointSize).
+POINT_MARGIN = 2.0
+
+
 def _header(defines: dict[str, Any]) -> str:
     lines = ["#version 330"]
     types = defines.pop("LIGHTS", None)
@@ -718,6 +745,7 @@ def _header(defines: dict[str, Any]) -> str:
     for name, value in sorted(defines.items()):
         lines.append(f"#define {name} {value}" if value is not True else f"#define {name}")
     lines.append(f"#define MAX_LIGHTS {MAX_LIGHTS}")
+    lines.append(f"#define POINT_MARGIN {POINT_MARGIN:.1f}")
     if "NCLIP" not in defines:
         lines.append("#define NCLIP 0")
     if "MODEL" not in defines:

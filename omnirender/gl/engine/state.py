@@ -51,6 +51,8 @@ class StateKind:
     #: Whether binding a framebuffer or a moderngl clear sets this state to the framebuffer's own value
     #: (moderngl keeps colour and depth masks and the scissor per framebuffer): the applier issues it again.
     framebuffer_state: bool = False
+    #: ... and the framebuffer's own value may be any (not only the default): issued again in every case.
+    always_reassert: bool = False
     #: GLSL run in the fragment shader's ``main`` once the surface colour ``base`` (vec4, linear, texture
     #: applied) is known and before lighting; it may ``discard``.
     fragment_main: str = ""
@@ -233,12 +235,18 @@ class RasterApplier:
 
     def reassert(self) -> None:
         """Issue again the kinds a framebuffer bind or a moderngl clear resets to the framebuffer's own values
-        (colour and depth masks, scissor): GL holds the tracked values again."""
-        if self.current is None:
+        (colour and depth masks, scissor): GL holds the tracked values again.  moderngl keeps a framebuffer's
+        masks at their defaults while they are set with raw calls, so only masks away from the default are
+        issued (all of them without raw GL); the scissor a framebuffer keeps may be any, so it always is."""
+        current = self.current
+        if current is None:
             return
+        exact = not self.gl.raw.available
         for kind in _KINDS:
-            if kind.framebuffer_state and kind.index < len(self.current):
-                kind.apply(self.gl, self.current[kind.index])
+            if kind.framebuffer_state and kind.index < len(current):
+                value = current[kind.index]
+                if exact or kind.always_reassert or value != kind.default:
+                    kind.apply(self.gl, value)
 
     def bind(self, framebuffer: Any, size: tuple[int, int], viewport: tuple[int, int, int, int] | None = None) -> None:
         """Draw into ``framebuffer`` of ``size`` (the whole of it, or the pixel rectangle ``viewport``)."""

@@ -3,8 +3,9 @@
 The painter only records the label (a draw item of kind ``"text"`` whose
 geometry is the anchor point); the drawer projects the anchor with the frame's
 camera and draws one textured quad per glyph in pixel coordinates, without
-depth test.  Atlases are built once per pixel size from DejaVu Sans (Pillow's
-default font when DejaVu is missing) and kept for the engine's life.
+depth test.  Atlases are built once per pixel size from DejaVu Sans, the font
+shipped with the package (:mod:`omnirender.fonts`: the same glyphs and sizes on
+every machine, whatever fonts it has installed), and kept for the engine's life.
 """
 
 from __future__ import annotations
@@ -22,8 +23,6 @@ from ..engine.layout import ROW
 from ..glengine import GLEngine
 
 __all__ = ["TextPainter", "GlyphAtlas"]
-
-_FONTS = ("DejaVuSans.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf")
 
 _VS = """
 in vec2 in_pos;
@@ -54,15 +53,15 @@ class GlyphAtlas:
     def __init__(self, size: int, extra: str = "") -> None:
         from PIL import Image, ImageDraw, ImageFont
 
-        font = None
-        for name in _FONTS:
-            try:
-                font = ImageFont.truetype(name, size)
-                break
-            except OSError:
-                continue
-        if font is None:
-            font = ImageFont.load_default()
+        from ...fonts import font_file
+
+        try:
+            font = ImageFont.truetype(str(font_file()), size)
+        except ImportError as exc:  # Pillow built without FreeType
+            raise RuntimeError(
+                f"GLEngine: text needs Pillow with FreeType support to draw the shipped font ({exc}); "
+                "install Pillow's wheel from PyPI (pip install --force-reinstall pillow)"
+            ) from None
         self.size = size
         chars = sorted(set("".join(chr(c) for c in range(32, 127)) + extra))
         ascent, descent = font.getmetrics()
@@ -141,6 +140,8 @@ class TextPainter(ShapePainter):
         engine.submit(geom, kind="text", extra=(shape.string, float(shape.size)), transparent=False)
 
 
+_STATE = (DepthTest(False), Blend())  # made once: state attributes are components
+
 #: glyph atlases by engine and text size (they go with their engine)
 _ATLASES: weakref.WeakKeyDictionary[Any, dict[int, Any]] = weakref.WeakKeyDictionary()
 
@@ -154,7 +155,7 @@ def draw_text(engine: GLEngine, items: list, state: Any) -> int:
     atlases = _ATLASES.setdefault(engine, {})
     w, h = engine.target_size
     calls = 0
-    engine.apply_gl_state(DepthTest(False), Blend())  # over everything, blended "over"
+    engine.apply_gl_state(*_STATE)  # over everything, blended "over"
     clip = engine.frame_projection @ engine.frame_view
     for item in items:
         string, size = item.state.extra

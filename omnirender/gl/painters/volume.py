@@ -171,6 +171,10 @@ class VolumePainter(ShapePainter):
         engine.submit(geom, local, kind="volume", transparent=True)
 
 
+#: back faces (they exist also when the camera is inside the box), blended over, not clipped by the far plane
+_STATE = (DepthTest(True, "less"), Blend(), CullFace("front"), DepthClamp(True), DepthMask(True))
+
+
 def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     """The drawer for ``"volume"`` items."""
     ctx = engine.ctx
@@ -180,7 +184,7 @@ def draw_volumes(engine: GLEngine, items: list, state: Any) -> int:
     drawn = engine.copy_framebuffer(_DRAWN_DEPTH)
     # back faces: they exist also when the camera is inside the box (front faces are then behind the near
     # plane); depth clamping keeps back faces beyond the far plane from being clipped away
-    engine.apply_gl_state(DepthTest(True, "less"), Blend(), CullFace("front"), DepthClamp(True), DepthMask(True))
+    engine.apply_gl_state(*_STATE)
     view, proj = engine.frame_view, engine.frame_projection
     calls = 0
     for item in items:

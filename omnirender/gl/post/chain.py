@@ -6,7 +6,7 @@ any number of times.  Its passes (all ``om.gl.Pass`` data; see ``engine.stats["p
 
 1. ``scene``: the opaque items, drawn by the frame's pipeline (forward, or deferred with
    ``GLEngine(pipeline="deferred")``) into a linear half-float target with depth (multisampled as the
-   engine is, then ``resolve``d: samples are averaged in linear light);
+   engine is, then ``resolve``d by a shader: samples are averaged in linear light, on every driver alike);
 2. the ``"depth"`` stage: effects that read depth and normals (SSAO, fog, light shafts, depth of field),
    ping-ponging between two float targets: the depth they read is that of the colours they change;
 3. ``transparent``: the transparent items composited by the engine's technique over that image, with
@@ -43,12 +43,6 @@ SCENE = Target("postfx.scene", colors=("color",), depth=True, dtype="f2")
 _LATE = Target("postfx.late", colors=("color",), depth=SCENE.name, dtype="f2")
 _MSAA = "postfx.msaa"
 _PING = (Target("postfx.a", depth=False, dtype="f2"), Target("postfx.b", depth=False, dtype="f2"))
-
-
-def _resolve(engine: Any, draw: Any) -> int:
-    """The multisampled scene's colour and depth resolved into the single-sampled scene target."""
-    engine.copy_framebuffer(SCENE)
-    return 0
 
 
 def chain_effects(effects: Any) -> tuple[Effect, ...]:
@@ -158,7 +152,17 @@ class PostProcess(GLTechnique):
             msaa = Target(_MSAA, colors=("color",), depth=True, dtype="f2", samples=samples)
             passes = [
                 Pass("scene", items="opaque", target=msaa, clear=clear, technique=drawn_by),
-                Pass("resolve", items="none", scopes=False, target=msaa, custom=_resolve),
+                Pass(
+                    "resolve",
+                    target=SCENE,
+                    fullscreen=FullScreen(
+                        glsl.RESOLVE_SAMPLES,
+                        inputs={"u_samples": (_MSAA, "color"), "u_depths": (_MSAA, "depth")},
+                        uniforms={"u_count": samples},
+                        depth=True,
+                        label="the multisampled scene's resolve",
+                    ),
+                ),
             ]
         else:
             passes = [Pass("scene", items="opaque", target=SCENE, clear=clear, technique=drawn_by)]

@@ -85,6 +85,21 @@ vec4 effect(vec2 uv) { return texture(u_input, uv); }
 """
 
 #: The end of every chain: linear colour to the frame (sRGB encoded into an 8-bit frame), with the scene's depth.
+#: The multisampled scene resolved in the shader: the mean of the samples' linear colours, and the depth of
+#: sample 0 (the surface the samples' mean mostly shows is not defined either way; sample 0 is what Mesa's
+#: blit keeps).  glBlitFramebuffer would resolve float samples "in an implementation-dependent manner"
+#: (OpenGL 4.6, section 18.3.2): NVIDIA's driver kept the edges aliased.
+RESOLVE_SAMPLES = """uniform sampler2DMS u_samples;
+uniform sampler2DMS u_depths;
+uniform int u_count;
+vec4 effect(vec2 uv) {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < u_count; ++i) sum += texelFetch(u_samples, p, i);
+    return sum / float(u_count);
+}
+float effect_depth(vec2 uv) { return texelFetch(u_depths, ivec2(gl_FragCoord.xy), 0).r; }
+"""
 OUTPUT = """uniform sampler2D u_input;
 uniform sampler2D u_depth;
 uniform float u_linear;

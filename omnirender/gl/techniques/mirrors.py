@@ -159,23 +159,22 @@ class MirrorStage(FrameStage):
     name = "mirrors"
 
     def __init__(self) -> None:
-        self._mirrors: list[tuple[Any, _Only]] | None = None  # of the installed list, found on first use
         self._warned = False
 
     def changed(self) -> None:
-        self._mirrors = None  # mirror planes follow their transforms
+        """Nothing to forget: the engine's render index finds the mirrors once per draw list, and the planes
+        are read from the rows every frame."""
 
     def draw(self, frame: Any, root: Any) -> int:
         engine = frame.engine
         if engine.stereo is not None:
-            if engine.root_scope is not None and not self._warned and mirror_items(root.all_items()):
+            if engine.root_scope is not None and not self._warned and engine.index.mirror_items():
                 self._warned = True
                 warnings.warn("GLEngine: mirrors are drawn as plain surfaces in stereo frames (the mirror "
                               "stage reflects one eye)", stacklevel=4)  # fmt: skip
             return 0
-        if self._mirrors is None:
-            self._mirrors = mirror_items(root.all_items()) if engine.root_scope is not None else []
-        if not self._mirrors:
+        mirrors = engine.index.mirror_items() if engine.root_scope is not None else []
+        if not mirrors:
             return 0
         if not engine.has_stencil or engine.pushed_targets:
             if not self._warned:
@@ -184,5 +183,5 @@ class MirrorStage(FrameStage):
                               "surfaces here", stacklevel=4)  # fmt: skip
             return 0
         state = frame.state
-        technique = Mirrors.plan(self._mirrors, state.view, state.proj, engine.clear_color(state.background))
+        technique = Mirrors.plan(mirrors, state.view, state.proj, engine.clear_color(state.background))
         return frame.run(technique, root, item_level=False)

@@ -282,10 +282,9 @@ class ShadowMapStage(FrameStage):
     def __init__(self) -> None:
         self._cache: Any = None  # (key, plan, its technique)
         self._drawn: Any = None  # (key, caster bounds, size) of the maps the atlas holds
-        self._caster_bounds: Any = None  # (bounds,) of the installed list, made on first use
 
     def changed(self) -> None:
-        self._caster_bounds = None  # shadow maps are drawn again where the casters moved to
+        """Nothing to forget: the engine's render index keeps the casters' bounds up to date."""
 
     def draw(self, frame: Any, root: Scope) -> int:
         engine = frame.engine
@@ -295,9 +294,9 @@ class ShadowMapStage(FrameStage):
         lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
         if not lights:
             return 0
-        if self._caster_bounds is None:
-            self._caster_bounds = (caster_bounds(root),)
-        bounds = self._caster_bounds[0]
+        # the render index keeps the casters' bounds: a new tuple whenever casters moved (compared below)
+        casters = engine.index.caster_bounds() if engine.root_scope is not None else (caster_bounds(root),)
+        bounds = casters[0]
         if bounds is None:
             return 0
         key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
@@ -310,7 +309,7 @@ class ShadowMapStage(FrameStage):
         if technique is None:
             return 0
         frame.state.shadow_plan = plan
-        drawn = (key, self._caster_bounds, tuple(engine.size))
+        drawn = (key, casters, tuple(engine.size))
         last = self._drawn
         fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
         if fresh and frame.keep_target(plan.target):

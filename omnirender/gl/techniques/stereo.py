@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..engine.attributes import ColorMask
-from ..engine.passes import Clear, Pass
+from ..engine.passes import Clear, FullScreen, Pass, Target
 from ..engine.stages import FrameStage
 from ..engine.technique import GLTechnique
 
@@ -34,6 +34,13 @@ __all__ = ["Stereo", "StereoStage", "MODES", "eye_matrices", "disparity_pixels"]
 MODES = ("side-by-side", "top-bottom", "anaglyph", "left", "right")
 #: Colour masks of the anaglyph's eyes: red for the left eye, green and blue (cyan) for the right.
 ANAGLYPH_MASKS = (ColorMask(True, False, False, True), ColorMask(False, True, True, True))
+#: A pipeline eye (deferred) copied into its place in the frame, colour over what is there and its depth.
+_EYE = Target("stereo.eye")
+_EYE_COPY = """uniform sampler2D u_eye;
+uniform sampler2D u_eye_depth;
+vec4 effect(vec2 uv) { return texture(u_eye, uv); }
+float effect_depth(vec2 uv) { return texture(u_eye_depth, uv).r; }
+"""
 
 
 def eye_matrices(
@@ -54,7 +61,8 @@ def eye_matrices(
     left_edge, right_edge = -right - shift, right - shift
     p = np.zeros((4, 4))
     p[0, 0] = 2.0 * near / (right_edge - left_edge)
-    p[0, 2] = (right_edge + left_edge) / (right_edge - left_edge)
+    p[0, 2] = (right_edge + left_edge) / (right_edge - left_edge) + proj[0, 2]  # plus an off-axis camera's shift
+    p[1, 2] = proj[1, 2]
     p[1, 1] = near / top
     p[2, 2] = (far + near) / (near - far)
     p[2, 3] = 2.0 * far * near / (near - far)
@@ -87,17 +95,67 @@ class Stereo(GLTechnique):
     the zero-parallax plane from the eyes (None: the camera's distance to its
     ``center``).  Each eye keeps the camera's vertical field of view; its
     aspect is that of its half of the image.  Needs a perspective camera.
+
+    Screen stereo (guacamole's screen and eye nodes, for head-tracked VR):
+    ``screen`` is a screen node holding an ``om.Rectangle`` or its three world
+    corners (lower-left, lower-right, upper-left), ``head`` a tracked node (or
+    a world point; None: the frame camera's eye).  Every frame, each eye sits
+    ``eye_separation / 2`` from the head along the head node's x axis (the
+    screen's right axis for a point) and sees through the screen with
+    ``om.Camera.from_screen``: points on the screen have no disparity, and
+    moving the head node moves both frusta.  The scene camera gives only near
+    and far.  ``convergence`` does not apply.
     """
 
-    __slots__ = ("mode", "eye_separation", "convergence")
+    __slots__ = ("mode", "eye_separation", "convergence", "screen", "head")
 
-    def __init__(self, mode: str = "side-by-side", eye_separation: float = 0.065, convergence: float | None = None):
+    def __init__(
+        self,
+        mode: str = "side-by-side",
+        eye_separation: float = 0.065,
+        convergence: float | None = None,
+        *,
+        screen: Any = None,
+        head: Any = None,
+    ):
         if mode not in MODES:
             raise ValueError(f"Stereo: mode must be one of {MODES}, got {mode!r}")
-        super().__init__(passes=1 if mode in ("left", "right") else 2)
+        # per eye: the eye, then (pipelines other than forward only) its copy into the frame
+        super().__init__(passes=2 if mode in ("left", "right") else 4)
         self.mode = mode
         self.eye_separation = _positive("eye_separation", eye_separation)
         self.convergence = None if convergence is None else _positive("convergence", convergence)
+        if screen is None and head is not None:
+            raise ValueError("Stereo: head= needs screen= (the screen node or its corners the eyes look through)")
+        if screen is not None and convergence is not None:
+            raise ValueError("Stereo: give either convergence= or screen= (a screen's plane has zero parallax)")
+        if screen is not None:
+            from ...techniques.screen import screen_corners
+
+            screen_corners(screen)  # validated now
+        self.screen = screen
+        self.head = head
+
+    def screen_eye(self, engine: Any, sign: float, aspect: float) -> tuple[np.ndarray, np.ndarray]:
+        """(view, projection) of one eye looking through :attr:`screen` from the tracked head."""
+        from ...core.camera import Camera, screen_frame
+        from ...techniques.screen import node_frame, node_origin, screen_corners
+
+        corners = screen_corners(self.screen)
+        _, right, _, _ = screen_frame(corners)
+        if self.head is None:
+            head, axis = np.asarray(engine.eye_position, dtype=np.float64)[:3], right
+        elif hasattr(self.head, "_compile_node"):
+            frame = node_frame(self.head)
+            head, axis = frame[:3, 3], frame[:3, 0] / np.linalg.norm(frame[:3, 0])
+        else:
+            head, axis = node_origin(self.head), right
+        camera = engine.frame_camera
+        near = float(getattr(camera, "near", 0.1))
+        far = float(getattr(camera, "far", 1000.0))
+        eye = head + sign * self.eye_separation / 2.0 * axis
+        cam = Camera.from_screen(corners, eye, near=near, far=far)
+        return cam.view_matrix(), cam.projection_matrix(aspect)
 
     def eyes(self) -> tuple[float, ...]:
         """The signs of the eyes drawn, in pass order (-1 left, +1 right)."""
@@ -127,24 +185,48 @@ class Stereo(GLTechnique):
         d = float(np.linalg.norm(np.subtract(center, eye)))
         return d if d > 0 else float(np.linalg.norm(eye_world))
 
-    def prepare_pass(self, engine: Any) -> None:
+    def prepare_pass(self, engine: Any) -> bool:
+        """Pass 2k draws eye k; pass 2k+1 copies it into the frame when the engine's pipeline is not forward
+        (a deferred eye is drawn whole into an eye-sized target first: its passes own the viewport), else it
+        is declined."""
         proj = engine.frame_projection
         if abs(proj[3, 3] - 1.0) < 1e-9:
             raise ValueError(
                 "Stereo: the camera is orthographic; stereo needs a perspective camera (om.Camera.look_at)"
             )
-        sign = self.eyes()[engine.current_pass]
+        index, copy = divmod(engine.current_pass, 2)
+        sign = self.eyes()[index]
         size = engine.target_size
         box = self.viewport(sign, size)
         w, h = (box[2], box[3]) if box is not None else size
-        view, p = eye_matrices(engine.frame_view, proj, w / h, sign, self.eye_separation, self.convergence_for(engine))
+        through_pipeline = engine.frame_technique is not engine.technique  # e.g. the deferred pipeline
         name = "left eye" if sign < 0 else "right eye"
-        if self.mode == "anaglyph":
-            mask = ANAGLYPH_MASKS[engine.current_pass]
-            clear = Clear(color=None, depth=1.0) if engine.current_pass == 1 else None
+        mask = ANAGLYPH_MASKS[index] if self.mode == "anaglyph" else None
+        if copy:
+            if not through_pipeline:
+                return False
+            inputs = {"u_eye": (_EYE.name, "color"), "u_eye_depth": (_EYE.name, "depth")}
+            fullscreen = FullScreen(_EYE_COPY, inputs=inputs,
+                                    blend=True, depth=True, label="stereo eye copy",
+                                    # the anaglyph's second eye starts from a cleared depth, as in forward
+                                    depth_test=None if mask is not None and index == 1 else "lequal")  # fmt: skip
+            engine.set_pass(Pass(f"{name} copy", fullscreen=fullscreen, viewport=box, state=(mask,) if mask else ()))
+            return True
+        if self.screen is not None:
+            view, p = self.screen_eye(engine, sign, w / h)
+        else:
+            view, p = eye_matrices(
+                engine.frame_view, proj, w / h, sign, self.eye_separation, self.convergence_for(engine)
+            )
+        if through_pipeline:  # the whole pipeline into an eye-sized target (cleared transparent), copied next
+            target = Target(_EYE.name, size=(w, h))
+            engine.set_pass(Pass(name, camera=(view, p), target=target, clear=Clear(), technique="pipeline"))
+        elif self.mode == "anaglyph":
+            clear = Clear(color=None, depth=1.0) if index == 1 else None
             engine.set_pass(Pass(name, camera=(view, p), state=(mask,), clear=clear))
         else:
             engine.set_pass(Pass(name, camera=(view, p), viewport=box))
+        return True
 
 
 class StereoStage(FrameStage):

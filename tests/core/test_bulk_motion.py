@@ -1,0 +1,167 @@
+"""Setting transforms from what a simulation holds, and moving thousands through one bound array (issue 22).
+
+Every input a simulation loop writes (Python floats, ints, numpy rows, numpy
+scalars) takes the setters' fast path and means exactly what the validating
+path means; bad values are refused by the validating path with its message.
+``om.TranslationArray`` binds many translations to one array: a ``touch()``
+changes each of them as an assignment would (versions, owners, journals).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.core.component import ChangeJournal
+from omnirender.core.transform import plain_triple
+
+INPUTS = [
+    (1.0, 2.0, 3.0),
+    (1, 2.0, 3),
+    [1.0, 2, 3.0],
+    np.array([1.0, 2.0, 3.0]),
+    np.array([1, 2, 3]),
+    np.array([1.0, 2.0, 3.0], np.float32),
+    (np.float64(1.0), np.float64(2.0), np.float64(3.0)),
+    (np.float32(1.0), np.int64(2), 3.0),
+    np.arange(6.0).reshape(2, 3)[0] + 1.0,  # a row of the application's array
+]
+
+
+@pytest.mark.parametrize("value", INPUTS, ids=range(len(INPUTS)))
+def test_every_plain_input_takes_the_fast_path_and_gives_python_floats(value):
+    fast = plain_triple(value)
+    assert fast == (1.0, 2.0, 3.0)
+    assert all(type(c) is float for c in fast)
+    t = om.Translation()
+    node = om.Node("n", [t])
+    before, node_before = t.version, node.version
+    t.offset = value
+    assert t.offset == (1.0, 2.0, 3.0) and all(type(c) is float for c in t.offset)
+    assert t.version == before + 1 and node.version > node_before
+    assert np.array_equal(t.matrix[:3, 3], [1.0, 2.0, 3.0])
+    s = om.Scaling()
+    s.factors = value
+    assert s.factors == (1.0, 2.0, 3.0)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        (1.0, float("nan"), 0.0),
+        (float("inf"), 0.0, 0.0),
+        (1e16, 0.0, 0.0),
+        (10**400, 0, 0),
+        np.array([0.0, np.nan, 0.0]),
+        np.array([1.0, 2.0]),
+        (1.0, 2.0),
+        "abc",
+        (None, 0.0, 0.0),
+    ],
+)
+def test_bad_values_leave_the_fast_path_and_are_refused_with_the_validating_message(value):
+    assert plain_triple(value) is None
+    t = om.Translation(0.5, 0.5, 0.5)
+    with pytest.raises(ValueError, match="Translation: offset"):
+        t.offset = value
+    assert t.offset == (0.5, 0.5, 0.5)
+
+
+def test_zero_scaling_factors_still_refused_and_rotation_angle_takes_numpy_numbers():
+    s = om.Scaling()
+    with pytest.raises(ValueError, match="non-zero"):
+        s.factors = np.array([1.0, 0.0, 1.0])
+    r = om.Rotation(10, (0, 1, 0))
+    r.angle = np.float32(30.0)
+    assert r.angle == 30.0 and type(r.angle) is float
+    r.angle = 45
+    assert r.angle == 45.0 and type(r.angle) is float
+    with pytest.raises(ValueError):
+        r.angle = float("nan")
+
+
+def test_a_change_reaches_every_live_journal_and_a_collected_journal_leaves_none_behind():
+    from omnirender.core import component
+
+    t = om.Translation()
+    a, b = ChangeJournal(), ChangeJournal()
+    t.offset = np.array([1.0, 0.0, 0.0])
+    assert a.drain() == [t] and b.drain() == [t]
+    own = b._changed
+    assert any(d is own for d in component._JOURNALS)
+    del b
+    import gc
+
+    gc.collect()
+    assert not any(d is own for d in component._JOURNALS)
+    t.offset = (2.0, 0.0, 0.0)
+    assert a.drain() == [t] and not own
+
+
+def translation_array_scene(n: int = 5) -> tuple[om.Node, om.TranslationArray, np.ndarray]:
+    positions = np.zeros((n, 3))
+    positions[:, 0] = np.arange(n)
+    moves = om.TranslationArray(positions)
+    scene = om.Node("scene")
+    for i in range(n):
+        scene.add(om.Node(f"b{i}", [moves[i], om.Sphere(radius=0.2)]))
+    return scene, moves, positions
+
+
+def test_a_translation_array_holds_the_array_and_touch_changes_every_translation_like_an_assignment():
+    scene, moves, positions = translation_array_scene()
+    assert moves.array is positions and len(moves) == 5
+    assert [t.offset for t in moves] == [(float(i), 0.0, 0.0) for i in range(5)]
+    journal = ChangeJournal()
+    versions = [t.version for t in moves]
+    node_versions = [scene.child(f"b{i}").version for i in range(5)]
+    root = scene.version
+    positions[:, 1] = 2.0  # written in place: nothing changes until touch()
+    assert moves[3].offset == (3.0, 0.0, 0.0)
+    moves.touch()
+    assert [t.offset for t in moves] == [(float(i), 2.0, 0.0) for i in range(5)]
+    assert all(type(c) is float for t in moves for c in t.offset)
+    assert [t.version for t in moves] == [v + 1 for v in versions]
+    assert all(scene.child(f"b{i}").version > node_versions[i] for i in range(5))
+    assert scene.version > root
+    assert journal.drain() == list(moves)
+    assert np.array_equal(moves[2].matrix[:3, 3], [2.0, 2.0, 0.0])
+    assert moves.version == 1
+
+
+def test_a_translation_array_refuses_bad_rows_naming_the_translation_and_its_node():
+    scene, moves, positions = translation_array_scene()
+    positions[3, 2] = np.inf
+    with pytest.raises(ValueError, match=r"translation 3 .* \(in node /scene/b3\).*finite"):
+        moves.touch()
+    assert moves[3].offset == (3.0, 0.0, 0.0)  # nothing applied
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        om.TranslationArray(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="finite"):
+        om.TranslationArray([[0.0, np.nan, 0.0]])
+
+
+def test_a_translation_array_from_a_list_or_another_dtype_converts_once():
+    moves = om.TranslationArray([[1, 2, 3], [4, 5, 6]])
+    assert moves[1].offset == (4.0, 5.0, 6.0)
+    f32 = np.zeros((2, 3), np.float32)
+    moves = om.TranslationArray(f32)
+    f32[1] = (1.5, 0, 0)
+    moves.touch()
+    assert moves.array is f32 and moves[1].offset == (1.5, 0.0, 0.0)
+
+
+def test_translations_of_an_array_mean_the_same_to_bounds_and_picking():
+    scene, moves, positions = translation_array_scene()
+    plain = om.Node(
+        "scene", [om.Node(f"b{i}", [om.Translation(i, 1.0, -1.0), om.Sphere(radius=0.2)]) for i in range(5)]
+    )
+    positions[:, 1:] = (1.0, -1.0)
+    moves.touch()
+    assert np.allclose(om.bounds(scene), om.bounds(plain))
+    cam = om.Camera.look_at((2, 1, 6), (2, 1, -1), fov=50)
+    a = om.pick(om.Node("a", [cam, scene]), pixel=(80, 60), size=(160, 120))
+    b = om.pick(om.Node("b", [cam, plain]), pixel=(80, 60), size=(160, 120))
+    assert [h.path for h in a] and [h.path.replace("/a/", "/") for h in a] == [h.path.replace("/b/", "/") for h in b]
+    assert [h.distance for h in a] == pytest.approx([h.distance for h in b])
