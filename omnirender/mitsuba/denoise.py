@@ -1,22 +1,20 @@
 """Intel Open Image Denoise for Mitsuba's previews (the PyPI package ``pyoidn`` ships the library).
 
 A path tracer's image at a few samples per pixel is grainy; OIDN's ``RT``
-filter, given the noisy linear radiance with the first hit's albedo and
-shading normal (auxiliary images Mitsuba's ``aov`` integrator writes in the
-same pass, almost free), returns a clean image.  :func:`denoise` is the only
-place that talks to pyoidn.
+filter, given the noisy linear radiance (optionally with the first hit's albedo
+and shading normal), returns a clean image.  The Mitsuba renderer passes the
+colour alone (see docs/NOTES.md: the auxiliary images cost more than they
+gain there).  :func:`denoise` is the only place that talks to pyoidn.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["available", "denoise", "INSTALL", "AOVS"]
+__all__ = ["available", "denoise", "INSTALL"]
 
 #: What installs the denoiser.
 INSTALL = "pip install 'omnirender[mitsuba]' (or pip install pyoidn)"
-#: The ``aov`` integrator's outputs the denoiser uses (after R, G, B, A of the image): albedo, then normal.
-AOVS = "albedo:albedo,normal:sh_normal"
 
 
 def available() -> bool:

@@ -112,14 +112,14 @@ def render(
     chosen = engine.integrator_dict(integrator)
     if integrator is None and engine.integrator is None:
         chosen["max_depth"] = preset.max_depth
-    # the denoiser's albedo and normal come from the same pass, through Mitsuba's aov integrator
-    traced = {"type": "aov", "aovs": denoiser.AOVS, "image": chosen} if denoise else chosen
-    mi_scene = engine.load(integrator=traced, rfilter=rfilter)
+    # The denoiser gets the colour alone: Mitsuba's aov integrator (albedo and normal for OIDN) made the
+    # scalar path tracer several times slower here, more than the auxiliary images gain (docs/NOTES.md).
+    mi_scene = engine.load(integrator=chosen, rfilter=rfilter)
     t1 = time.perf_counter()
     data = _render(mi_scene, spp, seed, progress, size)
     t2 = time.perf_counter()
     if denoise:
-        data[:, :, :3] = denoiser.denoise(data[:, :, :3], data[:, :, 4:7], data[:, :, 7:10])
+        data[:, :, :3] = denoiser.denoise(data[:, :, :3])
     t3 = time.perf_counter()
     # Coverage and depth from a cheap first-hit pass: the main integrator's
     # alpha is 1 wherever an environment is visible.
