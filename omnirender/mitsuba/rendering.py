@@ -131,6 +131,8 @@ def render(
     t4 = time.perf_counter()
     alpha = np.clip(hits[:, :, 3], 0.0, 1.0)
     premultiplied = bool(chosen.get("hide_emitters", False)) or not engine.has_environment()
+    if denoise and premultiplied:  # the denoiser blurs light a pixel past silhouettes: no hit, no light
+        data[:, :, :3][alpha <= 0.0] = 0.0
     hdr = np.concatenate([data[:, :, :3], alpha[..., None]], axis=2)
     camera, _ = engine.camera_or_default()
     image = develop(hdr, background=shown_background(engine.background), premultiplied=premultiplied)
