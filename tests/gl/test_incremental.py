@@ -73,10 +73,13 @@ def test_mask_selects_groups_and_invalidates(engine):
     b = s.add(om.Node("right", groups=["right"]))
     b.add(om.Translation(1, 0, 0))
     b.add(om.Sphere(radius=0.5))
-    left = engine.render(s, mask="left")
-    assert left.mask[24, 16] and not left.mask[24, 48]
-    right = engine.render(s, mask="right")
-    assert right.mask[24, 48] and not right.mask[24, 16]
+    try:
+        left = engine.render(s, mask="left")
+        assert left.mask[24, 16] and not left.mask[24, 48]
+        right = engine.render(s, mask="right")
+        assert right.mask[24, 48] and not right.mask[24, 16]
+    finally:
+        engine.mask = None  # a mask given to render() stays the engine's: the module shares this engine
 
 
 def test_light_added_later_lights_everything(engine):
