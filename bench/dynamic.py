@@ -34,7 +34,11 @@ import numpy as np
 import omnirender as om
 from omnirender.attributes.photometry import GLOBAL_AMBIENT, srgb_to_linear
 from omnirender.gl import GLEngine
-from omnirender.gl.engine.context import gl_renderer
+
+try:
+    from omnirender.gl.engine.context import gl_renderer
+except ImportError:  # the layout before issue 22 (bench/frame_cost.py measures baselines on older checkouts)
+    from omnirender.gl.context import gl_renderer
 
 SIZE = (256, 256)
 

@@ -41,6 +41,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from dynamic import camera_for, grid  # noqa: E402  (the same grid and camera as bench/dynamic.py)
+
 import omnirender as om  # noqa: E402
 from omnirender.gl import GLEngine  # noqa: E402
 
@@ -63,18 +65,6 @@ def timed(fn: Callable[[], object]) -> float:
     t = clock()
     fn()
     return clock() - t
-
-
-def grid(n: int, spacing: float = 1.5) -> np.ndarray:
-    side = int(np.ceil(n ** (1 / 3)))
-    idx = np.arange(n)
-    pos = np.stack([idx % side, (idx // side) % side, idx // (side * side)], axis=1).astype(np.float64)
-    return (pos - (side - 1) / 2.0) * spacing
-
-
-def camera_for(n: int) -> om.Camera:
-    d = np.ceil(n ** (1 / 3)) * 1.5 * 2.2 + 3
-    return om.Camera.look_at((d * 0.6, d * 0.5, d), (0, 0, 0), fov=40, near=0.5, far=d * 3)
 
 
 def node_scene(
