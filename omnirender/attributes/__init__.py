@@ -34,7 +34,6 @@ __all__ = [
     "DirectionalLight",
     "PointLight",
     "SpotLight",
-    "AreaLight",
     "RectLight",
     "DiscLight",
     "AmbientLight",
