@@ -91,8 +91,8 @@ class GaussianSplats(Shape):
     #: No default simplifier on purpose (a mesh cannot stand for semi-transparent Gaussians): engines
     #: without a splat painter refuse the shape with this hint in their ``NoHandlerError``.
     no_handler_hint = (
-        "om.GaussianSplats has no mesh simplification: it needs an engine with a splat painter "
-        "(the GL engine draws it); see docs/DESIGN.md, 'Gaussian splats'"
+        "om.GaussianSplats has no mesh simplification: it needs an engine with a splat painter; "
+        "docs/DESIGN.md, 'Gaussian splats', lists the engines that draw it"
     )
 
     __slots__ = ("_positions", "_rotations", "_scales", "_opacities", "_sh", "_sh_degree", "_checked")
