@@ -107,6 +107,15 @@ def _samples(tmp: Path) -> dict[str, list]:
             ),
         ],
         "InstanceId": [om.InstanceId(7)],
+        "GaussianSplats": [
+            om.GaussianSplats(
+                np.array([(0, 0, 0), (1, 2, 3)], float),
+                np.array([(1, 0, 0, 0), (0, 1, 0, 0)], float),
+                np.full((2, 3), 0.1),
+                np.array([0.5, 1.0]),
+                np.zeros((2, 4, 3)),
+            )
+        ],
         "LevelOfDetail": [
             om.LevelOfDetail([om.Sphere(), om.Box()], distances=[10], center=(1, 0, 0), offline="distance")
         ],
