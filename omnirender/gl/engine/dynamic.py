@@ -276,15 +276,38 @@ def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
 
 
 class TransformUpdater:
-    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: the compile's fast path for moved transforms and arrays."""
+    """The compile's fast path for moved transforms and instance arrays: a collaborator of the GL engine.
 
-    def _moves(self) -> MovePlan:
-        plan = self._move_plan
+    It owns the :class:`MovePlan` of the installed items (made on the first
+    move, followed through splices, dropped when a new list is installed) and
+    is handed the render index (whose items and bounds it updates), a callback
+    telling the frame that placements changed, and the compiler's
+    ``instance_state`` (the draw state of an instance set's template).
+    """
+
+    def __init__(self, index: Any, placements_changed: Any, instance_state: Any) -> None:
+        self.index = index
+        self._placements_changed = placements_changed
+        self._instance_state = instance_state
+        self._plan: MovePlan | None = None
+
+    def forget(self) -> None:
+        """A new draw list was installed: the plan is made again on the next move."""
+        self._plan = None
+
+    def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
+        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
+        if self._plan is not None:
+            self._plan.splice(removed, added, moved)
+
+    def plan(self) -> MovePlan:
+        """The installed items' :class:`MovePlan` (made now when there is none)."""
+        plan = self._plan
         if plan is None:
-            plan = self._move_plan = MovePlan(self.draw_items)
+            plan = self._plan = MovePlan(list(self.index.items()))
         return plan
 
-    def _apply_changes(self, changed: list[Any]) -> int | None:
+    def apply(self, changed: list[Any]) -> int | None:
         """Apply ``changed`` without a traversal when it holds only static transforms and instance sets.
 
         Returns how many items changed, or None when the compile must run (an
@@ -320,12 +343,12 @@ class TransformUpdater:
             _install_rows(item, made)
         if updates:
             self.index.moved(None)  # instance rows replaced: every bound again
-            self.frame_runner.placements_changed()
+            self._placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
-        plan = self._moves()
+        plan = self.plan()
         out = []
         for shape in {id(s): s for s in sets}.values():
             items = plan.sources.get(id(shape))
@@ -344,7 +367,7 @@ class TransformUpdater:
                 )
                 if (
                     made.transparent != item.transparent
-                    or self.instance_state(template, made.mirrored) is not item.state
+                    or self._instance_state(template, made.mirrored) is not item.state
                 ):
                     return None
                 out.append((item, made))
@@ -355,7 +378,7 @@ class TransformUpdater:
 
         Touched translation arrays go first, each at once where it can (:meth:`MovePlan.apply_arrays`).
         """
-        plan = self._moves()
+        plan = self.plan()
         plan.moved_rows = []
         count = 0
         if arrays:
@@ -367,13 +390,8 @@ class TransformUpdater:
             # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
             # bounds follow the moved rows; mirror planes are read from the rows every frame
             self.index.moved(plan.moved_rows)
-            self.frame_runner.placements_changed()
+            self._placements_changed()
         return count
-
-    def _refresh_declarations(self, scene: Any) -> None:
-        """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""
-        self.declared = self.preevaluate(scene)
-        self.camera = self.declared.camera
 
 
 def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:

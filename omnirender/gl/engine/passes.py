@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from .attributes import _DEPTH_FUNCS
+from .attributes import DEPTH_FUNCS  # depth comparisons by name -> moderngl's depth_func strings
 from .glenum import GL_R11F_G11F_B10F
 
 __all__ = [
@@ -78,8 +78,6 @@ FORMATS = {
 #: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);
 #: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``).
 TECHNIQUES = (None, "engine", "pipeline")
-#: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
-DEPTH_FUNCS = _DEPTH_FUNCS
 
 
 def _classes(items: Any) -> frozenset[str]:
@@ -98,7 +96,9 @@ def _classes(items: Any) -> frozenset[str]:
     return chosen
 
 
-def _pairs(values: Mapping[str, Any] | Iterable[tuple[str, Any]] | None, owner: str) -> tuple[tuple[str, Any], ...]:
+def uniform_pairs(
+    values: Mapping[str, Any] | Iterable[tuple[str, Any]] | None, owner: str
+) -> tuple[tuple[str, Any], ...]:
     """Uniform values as a sorted tuple of (name, hashable value) pairs."""
     if values is None:
         return ()
@@ -311,7 +311,7 @@ class Shader:
             )
         if self.surface and "pass_surface" not in self.surface:
             raise ValueError("Shader: the surface snippet must define void pass_surface(Surface s)")
-        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
+        object.__setattr__(self, "uniforms", uniform_pairs(self.uniforms, "Shader"))
         object.__setattr__(self, "defines", _defines(self.defines))
         object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
         object.__setattr__(self, "textures", _textures(self.textures, "Shader"))
@@ -405,7 +405,7 @@ class FullScreen:
         if self.depth_test is not None and not self.depth:
             raise ValueError("FullScreen: depth_test compares the effect's depth: give depth=True and effect_depth")
         object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
-        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
+        object.__setattr__(self, "uniforms", uniform_pairs(self.uniforms, "FullScreen"))
         object.__setattr__(self, "textures", _textures(self.textures, "FullScreen"))
         if not isinstance(self.label, str):
             raise ValueError(f"FullScreen: label must be a string, got {self.label!r:.60}")
@@ -477,7 +477,7 @@ class Pass:
         object.__setattr__(self, "_state", self._captured("state"))
         object.__setattr__(self, "_fallback", self._captured("fallback"))
         if self.camera is not None:
-            object.__setattr__(self, "camera", _camera(self.camera, self.name))
+            object.__setattr__(self, "camera", pass_camera(self.camera, self.name))
 
     def _captured(self, name: str) -> tuple[tuple[int, Any], ...]:
         from .attributes import GLState
@@ -534,7 +534,7 @@ class Pass:
         return hash(self.key())
 
 
-def _camera(value: Any, name: str) -> tuple[np.ndarray, np.ndarray | None]:
+def pass_camera(value: Any, name: str) -> tuple[np.ndarray, np.ndarray | None]:
     """(view, projection or None) from an om.Camera (projection made per frame aspect) or two matrices."""
     from ...core.camera import Camera
 
