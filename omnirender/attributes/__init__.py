@@ -17,7 +17,16 @@ from ..core.light import Light, LightSwitch
 from ..core.transform import Matrix, Rotation, Scaling, Transform, Translation
 from .appearance import BumpMap, Color, DrawStyle, Material, MultiTexture, PBRMaterial, Texture, TextureLayer
 from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
-from .lights import AmbientLight, AreaLight, DirectionalLight, DiscLight, LightSource, PointLight, RectLight, SpotLight
+from .lights import (
+    AmbientLight,
+    AreaLight,  # noqa: F401 - the area lights' base, for engines' isinstance tests (not om.X)
+    DirectionalLight,
+    DiscLight,
+    LightSource,
+    PointLight,
+    RectLight,
+    SpotLight,
+)
 from .shadowing import Mirror, Shadowing
 from .transforms import Billboard, BillboardSimplifier, DirectionOfFlight, LookAt, Polar, Reflection
 
