@@ -268,6 +268,17 @@ class GLEngine(Engine):
         """
         return self._pipeline_technique or self.technique
 
+    def frame_level_technique(self) -> Technique:
+        """The technique a frame runs over the installed scene: a post-processing chain holding the whole scene
+        (around the pipeline), else :attr:`frame_technique`."""
+        root = self.root_scope
+        return self.frame_technique if root is None else self.frame_runner.frame_level(root)[0]
+
+    def at_frame_level(self) -> bool:
+        """Whether the technique running now runs over a whole frame: the frame's own, or a frame drawn into a
+        target by a ``Pass(technique="frame")`` (a stereo eye); not a technique met in a node."""
+        return len(self.technique_frames) == self.frame_runner.frame_base + 1
+
     @property
     def stereo(self) -> Any:
         """The frame's :class:`~.stereo.Stereo` technique (two eyes with off-axis projections), or None."""

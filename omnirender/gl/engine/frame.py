@@ -80,6 +80,9 @@ class FrameRunner:
         #: the frame's stages, in order
         self.stages = stages
         self._requests: list[Any] = []
+        #: how many technique frames enclose the technique running over a whole frame (0: the frame's own;
+        #: a stereo eye drawn whole runs it inside the stereo technique)
+        self.frame_base = 0
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
@@ -309,6 +312,26 @@ class FrameRunner:
                 self._unbind_target(saved_target)
         return calls
 
+    def frame_level(self, root: Scope) -> tuple[Any, Scope]:
+        """(technique, scope) a frame runs over ``root``: the frame's pipeline over it, or the frame-level
+        technique (a post-processing chain) of a root that is one scope of it, around the pipeline."""
+        whole = root.entries[0] if len(root.entries) == 1 else None
+        if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
+            return whole.technique, whole
+        return self.engine.frame_technique, root
+
+    def run_frame_level(self, root: Scope, composed: Composed) -> int:
+        """Run what a frame runs over ``root`` (:meth:`frame_level`) as a frame of the target bound now: its
+        techniques see themselves at the frame's level and targets relative to the frame take its size."""
+        technique, scope = self.frame_level(root)
+        base, size = self.frame_base, self.targets.frame_size(self.state.target_size)
+        self.frame_base = len(self.engine.technique_frames)
+        try:
+            return self.run(technique, scope, composed, item_level=True)
+        finally:
+            self.frame_base = base
+            self.targets.frame_size(size)
+
     def _nested(self, scope: Scope, composed: Composed) -> int:
         return self.run(scope.technique, scope, composed, item_level=False)
 
@@ -319,6 +342,8 @@ class FrameRunner:
         if composed.scopes == "items":
             return sum(self.drawer.draw_items(s, composed, None) for s in scope.walk())
         engine = self.engine
+        if technique == "frame":
+            return self.run_frame_level(scope, composed)
         if technique is not None:
             runner = engine.frame_technique if technique == "pipeline" else engine.technique
             return self.run(runner, scope, composed, item_level=True)
@@ -481,7 +506,8 @@ class FrameRunner:
         raster[PolygonOffset.index] = None
         if effect.depth:
             raster[DepthTest.index] = effect.depth_test or "always"
-            raster[ColorMask.index] = (True, True, True, True)
+            if not any(raster[ColorMask.index]):  # inside a depth-only pass a depth sprite still draws colour;
+                raster[ColorMask.index] = (True, True, True, True)  # a pass's partial mask (an anaglyph eye) holds
             raster[DepthMask.index] = True
         else:
             raster[DepthTest.index] = None
