@@ -1,4 +1,4 @@
-"""GL rectangle and disc lights: linearly transformed cosines against the exact form factor, sides, shadows (issue 26)."""
+"""GL rectangle and disc lights: LTC shading against the exact form factor, sides, soft shadows (issue 26)."""
 
 from __future__ import annotations
 
