@@ -52,9 +52,8 @@ def test_diffuse_light_is_kd_l_times_the_exact_form_factor(light, pipeline):
     got = linear(img)
     bright = expected > 0.02
     err = np.abs(got - expected)[bright] / expected[bright]
-    print(
-        f"{type(light).__name__} {pipeline}: median relative error {np.median(err):.3f}, 95th {np.quantile(err, 0.95):.3f}"
-    )
+    name = type(light).__name__
+    print(f"{name} {pipeline}: median relative error {np.median(err):.3f}, 95th {np.quantile(err, 0.95):.3f}")
     assert np.median(err) < 0.03  # sRGB quantisation is ~1 % at these levels; LTC's horizon clipping is approximate
     assert np.quantile(err, 0.95) < 0.10
 
