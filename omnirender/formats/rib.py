@@ -6,8 +6,8 @@ handlers: the camera as ``Projection`` + a world-to-camera ``Transform``
 -1`` after the GL view matrix), ``Format`` and ``Display``; inside
 ``WorldBegin``/``WorldEnd`` the lights (``pointlight``, ``distantlight``,
 ``spotlight``, ``ambientlight``; ``om.RectLight``/``om.DiscLight`` as an
-``AreaLightSource "arealight"`` on the light's polygon, of intensity its radiance) and one ``AttributeBegin``/``AttributeEnd``
-block per scene-graph node with the ``ConcatTransform`` accumulated since its
+``AreaLightSource "arealight"`` on the light's polygon, of intensity its radiance)
+and one ``AttributeBegin``/``AttributeEnd`` block per scene-graph node with the ``ConcatTransform`` accumulated since its
 parent.  Each shape gets its own block with its transform relative to the node,
 ``Color``/``Opacity`` and a ``Surface`` ("plastic" with a specular colour,
 "matte" otherwise, or the shader of an active :class:`Surface`).  Sphere,
