@@ -6,11 +6,12 @@ handlers: the camera as ``Projection`` + a world-to-camera ``Transform``
 -1`` after the GL view matrix), ``Format`` and ``Display``; inside
 ``WorldBegin``/``WorldEnd`` the lights (``pointlight``, ``distantlight``,
 ``spotlight``, ``ambientlight``; ``om.RectLight``/``om.DiscLight`` as an
-``AreaLightSource "arealight"`` on the light's polygon, of intensity its radiance)
-and one ``AttributeBegin``/``AttributeEnd`` block per scene-graph node with the ``ConcatTransform`` accumulated since its
-parent.  Each shape gets its own block with its transform relative to the node,
+``AreaLightSource "arealight"`` on the light's polygon, of intensity its
+radiance) and one ``AttributeBegin``/``AttributeEnd`` block per scene-graph
+node with the ``ConcatTransform`` accumulated since its parent. Each shape
+gets its own block with its transform relative to the node,
 ``Color``/``Opacity`` and a ``Surface`` ("plastic" with a specular colour,
-"matte" otherwise, or the shader of an active :class:`Surface`).  Sphere,
+"matte" otherwise, or the shader of an active :class:`Surface`). Sphere,
 cylinder, cone, torus and disk are RenderMan quadrics (z-up: a rotation turns
 them to our y axis), rectangles ``Polygon``, triangle sets ``PointsPolygons``,
 line sets ``Curves`` and point sets ``Points``; everything else is simplified.
