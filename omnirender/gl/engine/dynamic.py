@@ -474,7 +474,7 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
         batch, _ = item.slot
         if batch.rows is not item.instances:
             batch.rows[:, _TRANSLATION] = world
-        batch.changed(0, len(batch.rows))
+        batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
 
 
 def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
