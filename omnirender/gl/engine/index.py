@@ -133,51 +133,41 @@ class RenderIndex:
         self._casters = ((lo, hi),)
 
     def batch_edits(self, batch: Any, edits: list[tuple[Any, ...]]) -> None:
-        """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow."""
+        """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow; for a
+        shadow-casting batch the journal gets a removed row's old box and an added row's box, and the casters'
+        bounds follow."""
         found = self._boxes.get(id(batch))
-        if casts_shadows(batch):
-            self._caster_edits(batch, edits, found)
-        if found is None:
-            return
-        _, lo, hi = found
-        for op, index, _ in edits:
-            if op == "remove":
-                lo[index], hi[index] = lo[len(lo) - 1], hi[len(hi) - 1]
-                lo, hi = lo[:-1], hi[:-1]
-            else:
-                a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
-                lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
-        if len(lo) == len(batch.rows):
-            self._boxes[id(batch)] = (batch, lo, hi)
-        else:
-            del self._boxes[id(batch)]
-
-    def _caster_edits(self, batch: Any, edits: list[tuple[Any, ...]], found: Any) -> None:
-        """A shadow-casting batch's row edits: the journal gets a removed row's old box and an added row's box,
-        the casters' bounds follow."""
+        caster = casts_shadows(batch)
         lo = hi = None
         if found is not None and found[0] is batch:
             lo, hi = found[1], found[2]
         for op, index, _ in edits:
             if op == "remove":
                 if lo is None or index >= len(lo):
-                    self._journal = self._casters = None  # the removed row's place is not known
-                    return
-                old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
-                self._follow_casters(old, None)
-                if self._room(1):
-                    self._note(CasterChange(batch, *old, False))
-                if index != len(lo) - 1:
-                    lo, hi = lo.copy(), hi.copy()
-                    lo[index], hi[index] = lo[-1], hi[-1]
+                    if caster:
+                        self._journal = self._casters = None  # the removed row's place is not known
+                    lo = hi = None
+                    continue
+                if caster:
+                    old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
+                    self._follow_casters(old, None)
+                    if self._room(1):
+                        self._note(CasterChange(batch, *old, False))
+                last = len(lo) - 1
+                lo[index], hi[index] = lo[last], hi[last]
                 lo, hi = lo[:-1], hi[:-1]
             else:
                 a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
-                self._follow_casters(None, (a, b))
-                if self._room(1):
-                    self._note(CasterChange(batch, a, b, True))
+                if caster:
+                    self._follow_casters(None, (a, b))
+                    if self._room(1):
+                        self._note(CasterChange(batch, a, b, True))
                 if lo is not None:
                     lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+        if lo is not None and len(lo) == len(batch.rows):
+            self._boxes[id(batch)] = (batch, lo, hi)
+        else:
+            self._boxes.pop(id(batch), None)
 
     def _room(self, rows: int) -> bool:
         """Whether the journal takes ``rows`` more rows (False: it says "everything changed" now)."""
