@@ -31,6 +31,8 @@ in every call).
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -131,6 +133,28 @@ class FrameRunner:
         applier.forget()
         applier.apply(defaults())
         applier.forget()
+
+    @contextlib.contextmanager
+    def between_frames(self) -> Iterator[RasterApplier]:
+        """GL state for drawing outside a frame (a depth sprite drawn back, a target pushed): an applier with the
+        engine's framebuffer bound and every kind at its default, so :meth:`apply_gl_state` and the others work
+        as in a pass; afterwards GL is at its defaults with the engine's framebuffer bound, as after a frame.
+        Inside a frame (a custom pass) it is the frame's own applier."""
+        state = self.state
+        if state.drawing:
+            yield state.applier
+            return
+        engine = self.engine
+        fbo, size = engine.framebuffer, tuple(engine.size)
+        outer = state.applier
+        state.applier = applier = RasterApplier(GLCalls(self.ctx, self.raw, fbo, size))
+        applier.begin(fbo, size)
+        try:
+            yield applier
+        finally:
+            applier.restore_defaults()
+            applier.bind(fbo, size)
+            state.applier = outer
 
     @property
     def current_framebuffer(self) -> Any:
@@ -403,13 +427,10 @@ class FrameRunner:
             writes = color is not None
             applier.override({ColorMask.index: (writes,) * 4, DepthMask.index: clear.depth is not None,
                               ScissorTest.index: None})  # fmt: skip
-            fbo.depth_mask = clear.depth is not None  # moderngl applies the framebuffer's own depth mask when it clears
+            depth = 1.0 if clear.depth is None else float(clear.depth)
             # moderngl clears a viewport rectangle (GL's bottom-left origin) under a scissor of its own
             area = None if box is None else (box[0], applier.gl.size[1] - box[1] - box[3], box[2], box[3])
-            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth),
-                      viewport=area)  # fmt: skip
-            fbo.depth_mask = True
-            applier.reassert()  # GL holds the masks the applier set again
+            applier.clear(fbo, color or (0.0, 0.0, 0.0, 0.0), depth, clear.depth is not None, area)
         if clear.stencil is not None:
             ops = applier.value(StencilOp)
             applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: box})  # glClear obeys both
