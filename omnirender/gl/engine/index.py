@@ -83,7 +83,8 @@ class RenderIndex:
         self._journal = None
 
     def moved(self, rows: list[tuple[Any, np.ndarray | None]] | None) -> None:
-        """Rows moved in place: ``(batch, row indices or None for all)`` pairs, or None (any row anywhere).
+        """Rows moved in place: ``(batch, row indices, a slice of them or None for all)`` pairs, or None (any row
+        anywhere).
 
         The bounds are stale; the lists of items, mirrors and casters are not.
         The rows' boxes are made again, the others kept.
@@ -97,6 +98,8 @@ class RenderIndex:
         for batch, where in rows:
             found = boxes.get(id(batch))
             caster = casts_shadows(batch)  # a batch's items share geometry and state: the batch decides
+            if isinstance(where, slice):  # a run of rows (a bound array's): its indices
+                where = np.arange(len(batch.rows))[where]
             if caster and where is not None and len(where) > JOURNAL_ROWS:  # many moved: the maps in full
                 self._journal = self._casters = None
             if found is None or where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
