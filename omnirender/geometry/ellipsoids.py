@@ -1,6 +1,6 @@
 """Ellipsoids of Gaussian splats: world bounds and ray crossings at a confidence of ``sigma`` standard deviations.
 
-A splat (centre ``p``, unit quaternion ``q`` as rotation ``R``, standard
+A splat (centre ``p``, rotation matrix ``R`` of its unit quaternion, standard
 deviations ``s``) is the Gaussian of covariance ``R S S^T R^T``; its
 ``sigma``-ellipsoid is ``{x : |S^-1 R^T (x - p)| <= sigma}``, the surface the
 analysis engines use for the splat (3 by default: the support of the
@@ -13,30 +13,15 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["rotation_matrices", "ellipsoid_bounds", "ray_ellipsoids"]
-
-
-def rotation_matrices(quaternions: Any) -> np.ndarray:
-    """(N, 3, 3) rotation matrices of (N, 4) unit quaternions in (w, x, y, z) order."""
-    q = np.asarray(quaternions, np.float64).reshape(-1, 4)
-    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    r = np.empty((len(q), 3, 3))
-    r[:, 0, 0] = 1 - 2 * (y * y + z * z)
-    r[:, 0, 1] = 2 * (x * y - w * z)
-    r[:, 0, 2] = 2 * (x * z + w * y)
-    r[:, 1, 0] = 2 * (x * y + w * z)
-    r[:, 1, 1] = 1 - 2 * (x * x + z * z)
-    r[:, 1, 2] = 2 * (y * z - w * x)
-    r[:, 2, 0] = 2 * (x * z - w * y)
-    r[:, 2, 1] = 2 * (y * z + w * x)
-    r[:, 2, 2] = 1 - 2 * (x * x + y * y)
-    return r
+__all__ = ["ellipsoid_bounds", "ray_ellipsoids"]
 
 
 def ellipsoid_bounds(
-    centres: Any, quaternions: Any, scales: Any, matrix: np.ndarray | None = None, sigma: float = 3.0
+    centres: Any, rotations: Any, scales: Any, matrix: np.ndarray | None = None, sigma: float = 3.0
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """World AABB of the ``sigma``-ellipsoids after the affine ``matrix`` (exact; None for no splats).
+
+    ``rotations`` are (N, 3, 3) matrices (``GaussianSplats.rotation_matrices()``).
 
     The half extent of an ellipsoid ``{A u : |u| <= 1}`` along axis ``i`` is
     the length of row ``i`` of ``A``; here ``A = M R S sigma``.
@@ -45,16 +30,18 @@ def ellipsoid_bounds(
     if not len(p):
         return None
     m = np.eye(4) if matrix is None else np.asarray(matrix, np.float64)
-    a = m[:3, :3] @ (rotation_matrices(quaternions) * (sigma * np.asarray(scales, np.float64).reshape(-1, 1, 3)))
+    a = m[:3, :3] @ (np.asarray(rotations, np.float64) * (sigma * np.asarray(scales, np.float64).reshape(-1, 1, 3)))
     half = np.linalg.norm(a, axis=2)
     world = p @ m[:3, :3].T + m[:3, 3]
     return (world - half).min(axis=0), (world + half).max(axis=0)
 
 
 def ray_ellipsoids(
-    origin: Any, direction: Any, centres: Any, quaternions: Any, scales: Any, sigma: float = 3.0
+    origin: Any, direction: Any, centres: Any, rotations: Any, scales: Any, sigma: float = 3.0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every crossing of the ray ``origin + t direction`` with the ``sigma``-ellipsoids (one coordinate frame).
+
+    ``rotations`` are (N, 3, 3) matrices (``GaussianSplats.rotation_matrices()``).
 
     Returns ``(t, index, normals)``: the ray parameters of the entry and exit
     points (``direction`` is not normalised, so ``t`` is in its units), the
@@ -66,7 +53,7 @@ def ray_ellipsoids(
     p = np.asarray(centres, np.float64).reshape(-1, 3)
     if not len(p):
         return np.zeros(0), np.zeros(0, np.int64), np.zeros((0, 3))
-    r = rotation_matrices(quaternions)
+    r = np.asarray(rotations, np.float64).reshape(-1, 3, 3)
     s = sigma * np.asarray(scales, np.float64).reshape(-1, 3)
     # the ray in each ellipsoid's unit-sphere frame: u = S^-1 R^T (x - p)
     ou = np.einsum("nji,nj->ni", r, o - p) / s

@@ -142,14 +142,8 @@ class PickEngine(AnalysisEngine):
             self._local_key = m
         return self._local  # type: ignore[return-value]
 
-    def report(
-        self, t: np.ndarray, local_normals: np.ndarray, primitives: Any = -1, part: Any = None, instances: Any = None
-    ) -> None:
-        """Record crossings at ray parameters ``t`` with normals in the current model frame.
-
-        ``instances`` gives each crossing's ``Hit.instance`` (the splat of an
-        ``om.GaussianSplats``); by default the active ``InstanceId``'s index.
-        """
+    def report(self, t: np.ndarray, local_normals: np.ndarray, primitives: Any = -1, part: Any = None) -> None:
+        """Record crossings at ray parameters ``t`` with normals in the current model frame."""
         t = np.asarray(t, dtype=np.float64).reshape(-1)
         if not t.size:
             return
@@ -170,21 +164,10 @@ class PickEngine(AnalysisEngine):
         shape = self.scene_shape
         ids = self.poly(InstanceId)
         instance = ids[-1].index if ids else -1
-        each = np.broadcast_to(np.asarray(instance if instances is None else instances), t.shape)
         pick_ids = self.pick_ids()
         for i in np.nonzero(keep)[0]:
             self.hits.append(
-                Hit(
-                    float(t[i]),
-                    points[i],
-                    normals[i],
-                    shape,
-                    self.scene_path,
-                    int(prims[i]),
-                    part,
-                    int(each[i]),
-                    pick_ids,
-                )
+                Hit(float(t[i]), points[i], normals[i], shape, self.scene_path, int(prims[i]), part, instance, pick_ids)
             )
         if self.nearest and self.hits:
             best = min(self.hits, key=lambda h: h.distance)

@@ -3,9 +3,8 @@
 A splat's extent is its ellipsoid at :data:`SPLAT_SIGMA` standard deviations
 (the support of the rasteriser's kernel, and of ``KHR_gaussian_splatting``'s
 ellipse kernel): ``om.bounds`` is the exact box of those ellipsoids, and
-``om.pick`` reports each crossing of the ray with one of them, with the
-splat's index in ``Hit.instance`` (as for the instances of an
-``om.InstanceSet``) and ``Hit.primitive``.  Collisions are not computed for
+``om.pick`` reports each crossing of the ray with one of them (entry and
+exit), with the splat's index in ``Hit.primitive`` (also ``Hit.splat``).  Collisions are not computed for
 splats (a cloud of Gaussians has no surface; ``om.collisions`` leaves them
 out, see :mod:`omnirender.techniques.collision`).
 """
@@ -29,11 +28,8 @@ SPLAT_SIGMA = 3.0
 
 
 def _arrays(shape: GaussianSplats) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return (
-        np.asarray(shape.positions, np.float64),
-        np.asarray(shape.rotations, np.float64),
-        np.asarray(shape.scales, np.float64),
-    )
+    checked = shape.checked()
+    return checked.positions, shape.rotation_matrices(), checked.scales
 
 
 @default_for(BoundsEngine)
@@ -49,7 +45,7 @@ class GaussianSplatsBounds(BoundsHandler):
 
 @default_for(PickEngine)
 class GaussianSplatsIntersector(RayIntersector):
-    """Every crossing of the ray with a splat's 3-sigma ellipsoid; ``Hit.instance`` is the splat's index."""
+    """Every crossing of the ray with a splat's 3-sigma ellipsoid; ``Hit.splat`` is the splat's index."""
 
     __slots__ = ()
     target = GaussianSplats
@@ -58,4 +54,4 @@ class GaussianSplatsIntersector(RayIntersector):
         o, d, _ = engine.local_ray()
         t, which, normals = ray_ellipsoids(o, d, *_arrays(shape), SPLAT_SIGMA)
         if len(t):
-            engine.report(t, normals, which, shape, instances=which)
+            engine.report(t, normals, which, shape)

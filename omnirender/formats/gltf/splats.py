@@ -57,11 +57,9 @@ def _semantic(k: int) -> str:
 
 def _baked(splats: GaussianSplats, matrix: np.ndarray) -> dict[str, np.ndarray]:
     """The splats with an affine ``matrix`` a glTF node cannot hold (shear) applied to centres and covariances."""
-    from ...geometry.ellipsoids import rotation_matrices
-
     a = np.asarray(matrix, np.float64)[:3, :3]
     p = np.asarray(splats.positions, np.float64)
-    r = rotation_matrices(splats.rotations) * np.asarray(splats.scales, np.float64)[:, None, :]
+    r = splats.rotation_matrices() * np.asarray(splats.scales, np.float64)[:, None, :]
     cov = a @ r @ np.swapaxes(r, 1, 2) @ a.T
     values, vectors = np.linalg.eigh(cov)
     vectors[np.linalg.det(vectors) < 0, :, 0] *= -1.0  # proper rotations

@@ -73,7 +73,7 @@ class GaussianSplatsWriter(ShapePainter):
             Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(sh.reshape(-1, 3)))
         )
         if n:
-            lo, hi = ellipsoid_bounds(p, shape.rotations, s, None, 3.0)
+            lo, hi = ellipsoid_bounds(p, shape.rotation_matrices(), s, None, 3.0)
             field.CreateExtentAttr(Vt.Vec3fArray([tuple(map(float, lo)), tuple(map(float, hi))]))
         dc = np.clip(0.5 + _C0 * sh[:, 0, :].astype(np.float64), 0.0, 1.0)
         field.CreateDisplayColorPrimvar("vertex").Set(
