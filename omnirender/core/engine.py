@@ -640,6 +640,35 @@ class Engine:
         finally:
             self._running -= 1
 
+    def run_partial(self, root: Any, body: Callable[[], Any]) -> Any:
+        """Evaluate parts of ``root`` in the state its pre-evaluation makes: ``body()`` runs them.
+
+        Like :meth:`run`, but the caller chooses what is evaluated: ``body``
+        runs programs (:meth:`run_program`, :attr:`ops`) for some of ``root``'s
+        subtrees after ``begin(root)``; ``end(root)`` follows.  An exception
+        from ``body`` rolls the traversal state back (the engine stays usable)
+        and propagates; otherwise ``body``'s result is returned.  An engine
+        that compiles only the subtrees an edit touched uses it.
+        """
+        self._running += 1
+        snapshot = self._snapshot()
+        try:
+            self.begin(root)
+            result = body()
+        except BaseException:
+            self._reset(snapshot)
+            raise
+        else:
+            self.end(root)
+        finally:
+            self._running -= 1
+        return result
+
+    @property
+    def ops(self) -> list[Callable[[Any], Any]]:
+        """The dispatch table of compiled programs, indexed by opcode (``ops[ENTER](node)`` runs one op)."""
+        return self._ops
+
     def _snapshot(self) -> tuple[dict, dict, dict, int]:
         ctx = self.context
         return (

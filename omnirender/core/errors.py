@@ -10,7 +10,11 @@ class OmnirenderError(Exception):
 
 
 class NoHandlerError(OmnirenderError, LookupError):
-    """No handler was found for a component, not even through simplification."""
+    """No handler was found for a component, not even through simplification.
+
+    A shape class without a default simplifier on purpose may say why, and which engines
+    draw it, in a class attribute ``no_handler_hint`` (appended to the message).
+    """
 
     def __init__(self, service: str, target: type, path: str = "", engine: str = "") -> None:
         self.service = service
@@ -22,7 +26,7 @@ class NoHandlerError(OmnirenderError, LookupError):
             f"no handler for service {service!r} and shape class {target.__name__}{where}{on}: "
             f"install a handler for ({service!r}, {target.__name__}) or a 'simplify' handler "
             f"for {target.__name__} (or one of its base classes), or create the engine with "
-            f"on_missing='warn' or 'skip'"
+            f"on_missing='warn' or 'skip'" + (f" ({hint})" if (hint := getattr(target, "no_handler_hint", "")) else "")
         )
 
 

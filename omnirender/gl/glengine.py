@@ -18,21 +18,21 @@ from __future__ import annotations
 
 import contextlib
 import importlib
-import weakref
 from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 
-from ..attributes import Tessellation
+from ..attributes import Background, Tessellation
 from ..attributes.environment import DEFAULT_BACKGROUND  # the clear colour without an om.Background (shared)
 from ..core.camera import Camera
-from ..core.component import ChangeJournal
 from ..core.engine import Engine
 from ..core.technique import Technique
 from ..image import Image
 from .deferred.materials import MaterialTable
+from .deferred.models import MaterialDescription
 from .deferred.pipeline import Deferred
+from .engine.compile_state import CompileState
 from .engine.compiler import DrawListCompiler
 from .engine.context import (
     GLError,
@@ -51,14 +51,12 @@ from .engine.frame_state import FrameState
 from .engine.geometry import Geometry, GeometryCache, unit_mesh
 from .engine.imagespace import RenderTarget
 from .engine.index import RenderIndex
-from .engine.layout import ROW
-from .engine.passes import Pass, Target, _camera
-from .engine.renderer import BatchRenderer
+from .engine.passes import Pass, Target, pass_camera
+from .engine.renderer import BatchInstaller
 from .engine.report import PassReport
 from .engine.resources import gpu_call
 from .engine.shaders import ProgramCache
 from .engine.stages import FrameStage, PipelinesStage, StageList, TechniqueStage
-from .engine.state import defaults, kinds
 from .engine.targets import FrameTargets
 from .engine.technique import GLTechnique
 from .techniques.forward import Forward
@@ -72,7 +70,7 @@ __all__ = ["GLEngine", "GLTechnique", "DEFAULT_BACKGROUND", "PIPELINES"]
 PIPELINES = ("forward", "deferred")
 
 
-class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
+class GLEngine(Engine):
     """Real-time OpenGL engine (moderngl): headless EGL by default, or a given moderngl context.
 
     ``GLEngine(size=(w, h), samples=4)``; ``engine.render(scene) -> om.Image``
@@ -144,8 +142,6 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         #: render textures (chained pipelines): the frame engine's PipelineSet, or its host's in a pipeline
         self._pipelines: Any = None
         self._pipelines_scanned = -1
-        #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
-        self.draw_list_version = 0
         #: measure each pass's GPU time with timer queries (stats["passes"][i]["gpu_ms"])
         self.timing = bool(timing)
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
@@ -170,50 +166,10 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         self._target_stack: list[Any] = []
         self._preevaluated = False
         self._make_targets()
-        # compile state
-        self._immediate = Scope()  # what painters submit outside a compile (the viewer's frames)
-        self._scope: Scope = self._immediate
-        self._root: Scope | None = None
-        self._compile_frames: list[list[Any]] = []
-        self._group_path: list[tuple[frozenset[str], ...]] = [()]
-        self._technique_path: tuple[Any, ...] = ()
-        self._node_cache: dict[int, Any] = {}
-        #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
-        self._occurrences: dict[tuple[int, int], int] = {}
-        self._next_occurrence = 0
-        #: id(node) -> (its occurrence key (-1: compiled more than once), ref), for compiling only edited subtrees
-        self._occurrence_of: dict[int, tuple[int, Any]] = {}
-        #: id(node) -> (ref, structure version, its components when they all precede its children, else None)
-        self._leading_cache: dict[int, tuple[Any, int, Any]] = {}
-        self._prune_limit = 4096
-        self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
-        self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
-        self._move_plan: Any = None  # dynamic.MovePlan of the installed items, made on the first move
-        self._full_key: Any = None
-        self._surface: list[Any] = []
-        self._clips: list[tuple[Any, tuple[float, float, float, float]]] = []
-        self._state_dirty = True
-        self._surface_dirty = True
-        self._state_base: tuple = ()
-        self._states: dict[tuple, DrawState] = {}
-        self._surface_row = np.zeros(ROW.stride, np.float32)
-        self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
         #: the material descriptions of compiled items by id (the deferred pipeline's material table)
         self.material_table = MaterialTable()
-        self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
-        self._texset: Any = None
-        self._point_size = 1.0
-        self._blend_on = False
-        self._alpha_tested = False
-        self._auto_cull = True
-        self._fill = "filled"
-        self._kinds_seen = len(kinds())
-        # draw state
-        self._batch_pool: dict[tuple, Batch] = {}
-        self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
         #: the installed draw list and its derived lists (items, mirrors, bounds), kept up to date by change kind
         self.index = RenderIndex(mirror_items)
-        self._defaults = defaults()
         self.stats: dict[str, Any] = {}
         with self.current():
             self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
@@ -221,7 +177,6 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
             #: largest 2D texture side and 3D texture side this GPU accepts (checked before creating textures)
             self.max_texture_size = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
             self.max_texture_size_3d = int(info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
-        self._checked_textures: dict[int, tuple[Any, int]] = {}
         # the frame side's collaborators, made once and handed to each other (three.js's WebGLRenderer is
         # assembled the same way): what the pass sees, its targets, its report, the drawer, the frame runner
         self.frame_state = FrameState(self._size)
@@ -232,6 +187,21 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         self.frame_runner = FrameRunner(
             self, self.frame_state, self.drawer, self.frame_targets, self.pass_report, stages
         )
+        # the compile side's collaborators: the updater moves installed rows, the installer installs compiled
+        # scopes as batches, the compiler owns the compile state and hands its results to both
+        placements_changed = self.frame_runner.placements_changed
+        self.updater = TransformUpdater(self.index, placements_changed, self.instance_state)
+        self.installer = BatchInstaller(
+            self.ctx,
+            self.index,
+            self.updater,
+            self.drawer,
+            self.geometry_cache,
+            self.stats,
+            placements_changed,
+            self._follow_splice,
+        )
+        self.compiler = DrawListCompiler(self, self.installer, self.updater, MaterialDescription)
 
     def check_texture_size(self, what: str, shape: tuple[int, ...], limit: int) -> None:
         """ValueError naming ``what`` and the node path when a side of ``shape`` exceeds the GPU's ``limit``.
@@ -401,13 +371,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
                 self.compile(scene, mask=mask)
             else:
                 # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
-                self._journal.drain()  # nothing compiled to update in place: forget what changed
-                self._journal.drain_edits()
-                self._install(self._immediate)
-                self._move_plan = None
-                self._immediate = Scope()
-                self._scope = self._immediate
-                self._compiled = None
+                self.compiler.install_immediate()
                 if not self._preevaluated:
                     # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
                     self.camera = None
@@ -415,6 +379,94 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
             self._preevaluated = False
             self.draw(background=background)
             return self.read(read_depth=read_depth)
+
+    # -- the compile (the compiler and the installer do it) -----------------------------------------
+    def compile(self, scene: Any, mask: Any = None) -> Scope:
+        """Compile ``scene`` (a Node or components) into the root scope; cached while nothing changed."""
+        return self.compiler.compile(scene, mask)
+
+    @property
+    def compile_state(self) -> CompileState:
+        """What attribute painters change during a compile (surface stack, clip planes): a ``CompileState``."""
+        return self.compiler.state
+
+    def on_enter(self, node: Any) -> None:
+        self.compiler.on_enter(node)
+
+    def on_leave(self, node: Any) -> None:
+        self.compiler.on_leave(node)
+
+    def eval_node(self, node: Any) -> Any:
+        """A child node: replayed from the compiler's per-occurrence cache when unchanged, else its local program."""
+        return self.compiler.eval_node(node)
+
+    def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
+        """A technique's scope: compiled once into a nested Scope; its passes run when the frame is drawn."""
+        self.compiler.run_technique(technique, program)
+
+    def begin(self, root: Any) -> None:
+        """The core's pre-evaluation; a following ``render(None)`` uses its camera and lights (the viewer's way)."""
+        super().begin(root)
+        self._preevaluated = True
+        self.compiler.state.invalidate()
+
+    def submit(
+        self,
+        geometry: Geometry,
+        local: np.ndarray | None = None,
+        kind: str | None = None,
+        extra: Any = None,
+        transparent: bool | None = None,
+    ) -> DrawItem:
+        """Append a draw item for ``geometry`` in the current state (model matrix, material, GL state).
+
+        ``local`` is a shape-local matrix applied after the model matrix (the
+        native painters scale a unit mesh with it).  Painters call this; it
+        issues no GL call.
+        """
+        return self.compiler.submit(geometry, local, kind, extra, transparent)
+
+    def capture(self, shape: Any) -> list[DrawItem]:
+        """The draw items ``shape`` makes in the current state, without drawing them (instance sets use it)."""
+        return self.compiler.capture(shape)
+
+    def submit_instances(
+        self, source: Any, template: DrawItem, matrices: np.ndarray, colors: np.ndarray | None, may_mirror: bool
+    ) -> DrawItem:
+        """An item drawing ``template`` once per matrix (``(N, 4, 4)``, after the current model matrix)."""
+        return self.compiler.submit_instances(source, template, matrices, colors, may_mirror)
+
+    def instance_state(self, template: DrawItem, mirrored: bool) -> DrawState:
+        """The template's state, or the same without face culling when some instance mirrors."""
+        return self.compiler.instance_state(template, mirrored)
+
+    def upload(self, geometry: Geometry) -> None:
+        """Make sure ``geometry`` has its GPU buffers (drawers call it)."""
+        self.installer.upload(geometry)
+
+    def filtered_batches(self, scope: Scope, composed: Any) -> dict[int, list[Batch]]:
+        """Batches of the opaque items a mask/predicate keeps, per segment index (cached until the scope changes)."""
+        return self.installer.filtered_batches(scope, composed)
+
+    def _follow_splice(self, version: int, added: list[DrawItem]) -> None:
+        """The pipelines scan of ``version`` still holds after a splice when no added item reads a render texture."""
+        if self._pipelines is None and self._pipelines_scanned == version:
+            if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
+                self._pipelines_scanned = self.installer.version
+
+    @property
+    def scene_background(self) -> Any:
+        """The first ``om.Background`` of the last pre-evaluated scene, or None."""
+        declared = self.declared
+        if declared is None:
+            return None
+        found = declared.first(Background)
+        return None if found is None else found[0]
+
+    @property
+    def scene_lights(self) -> list[tuple[Any, np.ndarray]]:
+        """The enabled lights of the last pre-evaluated scene with their world matrices."""
+        return [] if self.declared is None else [(light, m) for light, m in self.declared.lights if light.enabled]
 
     @property
     def draw_items(self) -> list[DrawItem]:
@@ -432,7 +484,8 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
     @property
     def scopes(self) -> list[Scope]:
         """The installed root scope and every technique scope below it, depth first."""
-        return [] if self._root is None else self._root.walk()
+        root = self.installer.root
+        return [] if root is None else root.walk()
 
     def scene_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World-space (min, max) of the compiled draw list, or None when it is empty."""
@@ -474,12 +527,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
 
     def live_buffers(self) -> int:
         """GPU buffers this engine holds now (geometry, instance data, transient), for leak checks."""
-        n = sum(len(g.buffers) for g in self._uploaded_set if g.buffers is not None)
-        n += sum(1 for b in self._batch_pool.values() if b.buffer is not None)
-        n += sum(1 for s in self.scopes for group in s.filtered.values() for bs in group.values() for b in bs
-                 if b.buffer is not None)  # fmt: skip
-        n += self.drawer.live_buffers()
-        return n
+        return self.installer.live_buffers() + self.drawer.live_buffers()
 
     def release(self) -> None:
         """Free every GPU resource (and the context when the engine created it); calling it again does nothing."""
@@ -504,37 +552,31 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
             self.deferred_renderer.release()
             self.deferred_renderer = None
         self.material_table.release()
-        for batch in self._batch_pool.values():
-            batch.release()
-        self._batch_pool.clear()
-        for scope in self.scopes:
-            for group in scope.filtered.values():
-                for batches in group.values():
-                    for batch in batches:
-                        batch.release()
+        self.installer.release()
         self.drawer.release()
-        for g in list(self._uploaded_set):
-            g.release()
         self.frame_targets.release()
         self.frame_runner.release()
         self.pass_report.release()
         if self._own_programs:
             self.programs.release()
         self._release_targets()
-        self._root = None
-        self._node_cache.clear()
-        self._compiled = None
+        self.compiler.forget()
 
     # -- the installed draw list -------------------------------------------------------------
     @property
     def root_scope(self) -> Scope | None:
         """The installed root scope (None before the first frame)."""
-        return self._root
+        return self.installer.root
 
     @property
     def item_count(self) -> int:
         """How many draw items the installed list holds (nested scopes included)."""
-        return len(self.index.items()) if self._root is not None else 0
+        return len(self.index.items()) if self.installer.root is not None else 0
+
+    @property
+    def draw_list_version(self) -> int:
+        """Bumped whenever a compiled draw list is installed or spliced (per-frame caches of techniques key on it)."""
+        return self.installer.version
 
     # -- framebuffers pushed by a FramebufferStack ----------------------------------------------
     @property
@@ -603,7 +645,7 @@ class GLEngine(DrawListCompiler, TransformUpdater, BatchRenderer, Engine):
         """
         if framebuffer is not None and not hasattr(framebuffer, "use"):
             raise TypeError(f"GLEngine.draw: framebuffer must be a moderngl Framebuffer, got {framebuffer!r:.60}")
-        override = None if camera is None else _camera(camera, "GLEngine.draw")
+        override = None if camera is None else pass_camera(camera, "GLEngine.draw")
         with self.current():
             self.frame_runner.draw(background, clear, override, framebuffer)
 

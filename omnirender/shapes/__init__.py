@@ -15,6 +15,7 @@ from .lod import LevelOfDetail
 from .meshes import LineSet, PointSet, Polygon, Polyline, TriangleSet
 from .nurbs import NURBSSurface, TrimCurve
 from .primitives import Arrow, Box, Cone, Cylinder, Disk, Rectangle, Sphere, Torus
+from .splats import GaussianSplats
 from .text import Text
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "CSG",
     "InstanceId",
     "InstanceSet",
+    "GaussianSplats",
     "LevelOfDetail",
     "NURBSSurface",
     "TrimCurve",

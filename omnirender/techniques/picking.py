@@ -31,6 +31,7 @@ from ..geometry import intersect as gi
 from ..geometry.bvh import bvh_for, embree_available
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polyline, Rectangle, Sphere, TriangleSet
 from ..shapes.instances import InstanceId
+from ..shapes.splats import GaussianSplats
 from .base import AnalysisEngine, check_scene, root_of, run_analysis
 from .bounds import analytic_bounds
 
@@ -47,7 +48,8 @@ class Hit:
     world space (the geometric normal, unit length, turned towards the ray's
     origin side); ``shape`` the shape the scene holds and ``path`` its node
     path; ``primitive`` the triangle index in the (possibly simplified)
-    triangle set, -1 for analytic shapes; ``part`` the shape actually
+    triangle set, the splat's index for an ``om.GaussianSplats`` (also as
+    ``splat``), -1 for analytic shapes; ``part`` the shape actually
     intersected (a simplifier's triangle set, or ``shape`` itself).
     ``pick_ids`` are the ids of the ``om.PickId`` attributes active for the
     shape, outermost first (ids nest), and ``pick_id`` the innermost one (None
@@ -66,6 +68,11 @@ class Hit:
     instance: int = -1
     #: the ids of the active ``om.PickId`` attributes, outermost first
     pick_ids: tuple[int | str, ...] = ()
+
+    @property
+    def splat(self) -> int:
+        """The index of the splat hit when ``shape`` is an ``om.GaussianSplats`` (its ``primitive``), else -1."""
+        return self.primitive if isinstance(self.shape, GaussianSplats) else -1
 
     @property
     def pick_id(self) -> int | str | None:

@@ -235,6 +235,8 @@ def test_every_shape_has_a_default_simplifier():
         if isinstance(cls, type) and issubclass(cls, om.Shape) and cls not in (om.TriangleSet, om.LineSet, om.PointSet):
             if cls is om.DeclaredShape:
                 continue
+            if cls is om.GaussianSplats:  # on purpose: engines paint or refuse it (test_splats.py)
+                continue
             assert engine.find_handler(om.SIMPLIFY, cls) is not None, name
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import time
 import weakref
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -170,6 +171,10 @@ class _Textures:
 class LightFieldRenderer(Renderer):
     """Draws a :class:`~.data.LightField` from any view by unstructured lumigraph rendering.
 
+    Several light fields of one scene (a list) are drawn as one
+    (:meth:`LightField.combine`): moving between the regions they captured,
+    the view passes smoothly from one field to the other.
+
     ``cell`` is the screen mesh's spacing in pixels, ``k`` the number of
     cameras blended per vertex (the ``k``-th best sets the threshold, so
     ``k - 1`` contribute), ``geometry_views`` how many depth maps give the
@@ -187,7 +192,7 @@ class LightFieldRenderer(Renderer):
 
     def __init__(
         self,
-        light_field: LightField,
+        light_field: LightField | Sequence[LightField],
         cell: int = 8,
         k: int = 4,
         geometry_views: int = 4,
@@ -197,6 +202,8 @@ class LightFieldRenderer(Renderer):
         min_alpha: float = 0.1,
     ) -> None:
         super().__init__()
+        if isinstance(light_field, (list, tuple)):
+            light_field = LightField.combine(*light_field)
         if not isinstance(light_field, LightField):
             raise TypeError(
                 f"LightFieldRenderer: light_field must be an om.compositing.LightField, got {light_field!r:.60}"

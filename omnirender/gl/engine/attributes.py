@@ -51,7 +51,8 @@ _FACTORS = (
 )
 _EQUATIONS = ("add", "subtract", "reverse_subtract", "min", "max")
 _STENCIL_OPS = ("keep", "zero", "replace", "incr", "decr", "invert", "incr_wrap", "decr_wrap")
-_DEPTH_FUNCS = {
+#: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
+DEPTH_FUNCS = {
     "never": "0",
     "less": "<",
     "equal": "==",
@@ -131,7 +132,7 @@ class DepthTest(GLState):
             ctx.disable(ctx.DEPTH_TEST)
         else:
             ctx.enable(ctx.DEPTH_TEST)
-            ctx.depth_func = _DEPTH_FUNCS[value]
+            ctx.depth_func = DEPTH_FUNCS[value]
 
     @classmethod
     def orders(cls, value: Any) -> bool:

@@ -27,22 +27,22 @@ from typing import Any
 
 import numpy as np
 
-from ...attributes import Background, BumpMap, DrawStyle, Fog, Highlight, MultiTexture, Texture
+from ...attributes import BumpMap, DrawStyle, Fog, Highlight, MultiTexture, Texture
 from ...attributes.photometry import linear_rgb
 from ...attributes.surface import Appearance, appearance_key, resolve_appearance
-from ...core.component import RenderingComponent
+from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform
 from ...scene.node import Node
-from ..deferred.models import MaterialDescription
 from .attributes import CullFace, GLState
+from .compile_state import CompileState
 from .drawlist import DrawItem, DrawState, Scope
 from .geometry import Geometry
 from .instancing import instance_rows
 from .layout import PBR, PHONG, ROW
 from .shaders import LAYER_BLENDS
-from .state import FillMode, LineWidth, defaults, kinds
+from .state import FillMode, LineWidth, kinds
 
 __all__ = ["DrawListCompiler", "TextureSet", "linear_rgb"]
 
@@ -167,7 +167,74 @@ def _same_declarations(a: Any, b: Any) -> bool:
 
 
 class DrawListCompiler:
-    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: the compile traversal's hooks, state capture, ``submit``."""
+    """Compiles scenes into draw items: a collaborator of the GL engine that owns the compile state.
+
+    Made once by :class:`~omnirender.gl.glengine.GLEngine` and handed the
+    engine (whose public interpreter API runs the traversal: ``run``,
+    ``run_program``, ``mono``, ``model_matrix``...), the
+    :class:`~.renderer.BatchInstaller` that installs what it compiled, and the
+    :class:`~.dynamic.TransformUpdater` that applies moved transforms without
+    a traversal.  It owns the per-occurrence node cache, the change journal,
+    the interned draw states and the :class:`~.compile_state.CompileState`
+    attribute painters change (:attr:`state`).  The engine's interpreter hooks
+    (``on_enter``, ``eval_node``, ``run_technique``) and the painters' calls
+    (``submit``, ``capture``, ``submit_instances``) come here through the
+    engine's methods of the same names.
+    """
+
+    def __init__(self, engine: Any, installer: Any, updater: Any, description: type | None = None) -> None:
+        self.engine = engine
+        self.installer = installer
+        self.updater = updater
+        #: the attribute class naming a surface's shading model and material description (the deferred
+        #: pipeline's ``MaterialDescription``, handed in by the facade: the engine package imports no technique)
+        self.description = description
+        #: what attribute painters change (surface stack, clip planes, dirty flags)
+        self.state = CompileState()
+        self._immediate = Scope()  # what painters submit outside a compile (the viewer's frames)
+        self._scope: Scope = self._immediate
+        self._compile_frames: list[list[Any]] = []
+        self._group_path: list[tuple[frozenset[str], ...]] = [()]
+        self._technique_path: tuple[Any, ...] = ()
+        self._node_cache: dict[int, Any] = {}
+        #: (parent occurrence, ordinal) -> occurrence key of a node in the compiled graph
+        self._occurrences: dict[tuple[int, int], int] = {}
+        self._next_occurrence = 0
+        #: id(node) -> (its occurrence key (-1: compiled more than once), ref), for compiling only edited subtrees
+        self._occurrence_of: dict[int, tuple[int, Any]] = {}
+        #: id(node) -> (ref, structure version, its components when they all precede its children, else None)
+        self._leading_cache: dict[int, tuple[Any, int, Any]] = {}
+        self._prune_limit = 4096
+        self._compiled: tuple[Any, int, Any, int] | None = None  # (scene ref, version, mask key, structure)
+        self._journal = ChangeJournal()  # what changed since the last frame (dynamic.py's fast path)
+        self._full_key: Any = None
+        self._state_base: tuple = ()
+        self._states: dict[tuple, DrawState] = {}
+        self._surface_row = np.zeros(ROW.stride, np.float32)
+        self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
+        self._texset: Any = None
+        self._point_size = 1.0
+        self._blend_on = False
+        self._alpha_tested = False
+        self._auto_cull = True
+        self._fill = "filled"
+        self._kinds_seen = len(kinds())
+        self._checked_textures: dict[int, tuple[Any, int]] = {}
+
+    def install_immediate(self) -> None:
+        """Install what painters submitted outside a compile (``render(None)``) and start a new immediate list."""
+        self._journal.drain()  # nothing compiled to update in place: forget what changed
+        self._journal.drain_edits()
+        self.installer.install(self._immediate)
+        self._immediate = Scope()
+        self._scope = self._immediate
+        self._compiled = None
+
+    def forget(self) -> None:
+        """Drop the node cache and what was compiled (the engine releases its GPU resources)."""
+        self._node_cache.clear()
+        self._compiled = None
 
     # -- the interpreter's hooks --------------------------------------------------
     def on_enter(self, node: Any) -> None:
@@ -199,7 +266,7 @@ class DrawListCompiler:
                 self._scope.entries.extend(entry.entries)
                 return None
         groups = node.groups
-        if groups and not self.admits(groups):
+        if groups and not self.engine.admits(groups):
             return None
         local = getattr(node, "local_program", None)
         if local is None or not frames:  # a viewer snapshot, or immediate mode: nothing to cache
@@ -221,39 +288,32 @@ class DrawListCompiler:
 
     def run_technique(self, technique: Any, program: list[tuple[int, Any]]) -> None:
         """A technique's scope: compiled once into a nested Scope; its passes run when the frame is drawn."""
-        if not technique.supported(self):
-            self.run_program(program)  # ignored: what it scopes is evaluated once, as if it were not there
+        if not technique.supported(self.engine):
+            self.engine.run_program(program)  # ignored: what it scopes is evaluated once, as if it were not there
             return
         scope = Scope(technique)
         outer = self._scope
         outer.entries.append(scope)
         self._scope = scope
-        previous = self.technique
-        self.technique = technique  # its service and handler overrides apply to what it scopes
+        previous = self.engine.technique
+        self.engine.technique = technique  # its service and handler overrides apply to what it scopes
         path = self._technique_path
         self._technique_path = (*path, technique)
         try:
-            self.run_program(program)
+            self.engine.run_program(program)
         finally:
-            self.technique = previous
+            self.engine.technique = previous
             self._scope = outer
             self._technique_path = path
-
-    def begin(self, root: Any) -> None:
-        """The core's pre-evaluation; a following ``render(None)`` uses its camera and lights (the viewer's way)."""
-        super().begin(root)  # type: ignore[misc]
-        self._preevaluated = True
-        self._state_dirty = True
-        self._surface_dirty = True
 
     # -- compile ---------------------------------------------------------------------
     def compile(self, scene: Any, mask: Any = None) -> Scope:
         """Compile ``scene`` (a Node or components) into the root scope; cached while nothing changed."""
         if mask is not None:
-            self.mask = mask
+            self.engine.mask = mask
         if not hasattr(scene, "local_program"):
             scene = Node.transient([scene] if isinstance(scene, RenderingComponent) else scene)
-        mask_key = self._mask
+        mask_key = self.engine.mask
         c = self._compiled
         changed = self._journal.drain()
         edits = self._journal.drain_edits()
@@ -262,27 +322,30 @@ class DrawListCompiler:
             c = None
         if c is not None and c[0]() is scene and c[2] == mask_key:
             if c[1] == scene.version:
-                self.stats["compiled"] = False
-                return self._root
+                self.engine.stats["compiled"] = False
+                return self.installer.root
             if c[3] == scene.structure_version:
                 # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
-                count = self._apply_changes(changed)
+                count = self.updater.apply(changed)
                 if count is not None:
-                    self.stats["incremental"] = count
-                    self._refresh_declarations(scene)
+                    self.engine.stats["incremental"] = count
+                    # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation again
+                    engine = self.engine
+                    engine.declared = engine.preevaluate(scene)
+                    engine.camera = engine.declared.camera
                     self._compiled = (c[0], scene.version, mask_key, c[3])
-                    self.stats["compiled"] = False
-                    return self._root
-            elif edits and self._root is not None and self._full_key is not None:
+                    self.engine.stats["compiled"] = False
+                    return self.installer.root
+            elif edits and self.installer.root is not None and self._full_key is not None:
                 # nodes added or removed, attributes replaced: compile only the subtrees the edits touch
                 count = self._splice(scene, edits, changed)
                 if count is not None:
-                    self.stats["incremental"] = count
+                    self.engine.stats["incremental"] = count
                     self._compiled = (c[0], scene.version, mask_key, scene.structure_version)
-                    self.stats["compiled"] = "subtrees"
-                    return self._root
-        self.sync_registry()
-        camera = scene.declarations(self.mask_function).camera
+                    self.engine.stats["compiled"] = "subtrees"
+                    return self.installer.root
+        self.engine.sync_registry()
+        camera = scene.declarations(self.engine.mask_function).camera
         full_key = (mask_key, camera[0].mask if camera is not None else None)
         if c is None or c[0]() is not scene or c[2] != mask_key or self._full_key != full_key:
             self._node_cache.clear()
@@ -292,20 +355,19 @@ class DrawListCompiler:
         root = Scope(None)
         self._scope = root
         self._compile_frames = [[0, 0, False]]
-        generation = self.material_table.generation
+        generation = self.engine.material_table.generation
         try:
-            self.run(scene)
-            if self.material_table.generation != generation:  # the material table started again: every id anew
+            self.engine.run(scene)
+            if self.engine.material_table.generation != generation:  # the material table started again: every id anew
                 self._node_cache.clear()
                 self._occurrence_of.clear()
                 self._surface_memo.clear()
-                self._state_dirty = self._surface_dirty = True
+                self.state.state_dirty = self.state.surface_dirty = True
                 root = self._scope = Scope(None)
                 self._compile_frames = [[0, 0, False]]
-                self.run(scene)
+                self.engine.run(scene)
         except BaseException:
-            self._surface.clear()
-            self._clips.clear()
+            self.state.clear()
             self._node_cache.clear()
             self._occurrence_of.clear()
             self._compiled = None
@@ -315,9 +377,8 @@ class DrawListCompiler:
             self._scope = self._immediate
         self._compiled = (weakref.ref(scene), scene.version, mask_key, scene.structure_version)
         self._prune_caches()
-        self._install(root)
-        self._move_plan = None
-        self.stats["compiled"] = True
+        self.installer.install(root)
+        self.engine.stats["compiled"] = True
         return root
 
     # -- compiling only the subtrees that list edits touched --------------------------------
@@ -330,7 +391,7 @@ class DrawListCompiler:
         compiled in is rebuilt by evaluating the components of its ancestors
         (their shapes go to a scope that is dropped): the ancestors must each
         hold their components before their child nodes and have one parent.
-        The new items replace the old in their batches (:meth:`_splice_install`).
+        The new items replace the old in their batches (``BatchInstaller.splice``).
         Returns how many items were removed and added, or None when the full
         compile must run (nothing installed has changed then).
         """
@@ -338,15 +399,14 @@ class DrawListCompiler:
         if plan is None:
             return None
         leaves, groups = plan
-        old_declared = self.declared
-        self._running += 1
-        snapshot = self._snapshot()
-        generation = self.material_table.generation
+        engine = self.engine
+        old_declared = engine.declared
+        generation = engine.material_table.generation
         removed: list[Any] = []
         added: list[Any] = []
-        try:
-            self.begin(scene)
-            if not _same_declarations(old_declared, self.declared):
+
+        def compile_subtrees() -> None:  # run in the state scene's pre-evaluation makes (engine.run_partial)
+            if not _same_declarations(old_declared, engine.declared):
                 raise _Bail
             for node, key, path in leaves:
                 removed.extend(self._node_cache[key].entries)
@@ -359,19 +419,17 @@ class DrawListCompiler:
                     self._next_occurrence += 1
                     added.extend(self._compile_at(child, self._next_occurrence, (*path, node)))
                 self._node_cache.pop(key, None)  # its list changed: compiled again by the next full compile
-            if self.material_table.generation != generation:
+            if engine.material_table.generation != generation:
                 raise _Bail
+
+        try:
+            engine.run_partial(scene, compile_subtrees)
         except BaseException:
-            self._reset(snapshot)
             self._scope = self._immediate
             self._compile_frames = []
             self._node_cache.clear()  # some entries may be half made: the full compile starts afresh
             self._occurrence_of.clear()
             return None
-        else:
-            self.end(scene)
-        finally:
-            self._running -= 1
         self._scope = self._immediate
         self._compile_frames = []
         for _, _, path in leaves:
@@ -380,7 +438,7 @@ class DrawListCompiler:
         for _, _, path, _, _ in groups:
             for above in path:
                 self._drop_entry(above)
-        if not self._splice_install(removed, added):
+        if not self.installer.splice(removed, added):
             self._node_cache.clear()
             self._occurrence_of.clear()
             return None
@@ -513,7 +571,7 @@ class DrawListCompiler:
 
     def _compile_at(self, node: Any, key: int, path: tuple[Any, ...]) -> list[Any]:
         """Compile ``node`` (occurrence ``key``) in the state its ancestors ``path`` make; returns its entries."""
-        ops = self._ops
+        ops = self.engine.ops
         sink = Scope()
         self._scope = sink
         undos = []
@@ -531,7 +589,7 @@ class DrawListCompiler:
         self._scope = target
         own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
         self._compile_frames = [[key, 0, True]]
-        self.run_program(node.local_program())
+        self.engine.run_program(node.local_program())
         self._compile_frames = []
         self._node_cache[key] = _NodeEntry(node, own, list(target.entries))
         self._occurrence_of[id(node)] = (key, weakref.ref(node))
@@ -545,11 +603,10 @@ class DrawListCompiler:
     def _new_state_kinds(self) -> None:
         """A GL state class was defined since the last compile: items must capture one more value."""
         self._kinds_seen = len(kinds())
-        self._defaults = defaults()
         self._states.clear()
         self._node_cache.clear()
         self._compiled = None
-        self._state_dirty = True
+        self.state.state_dirty = True
 
     def _prune_caches(self) -> None:
         """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
@@ -574,13 +631,13 @@ class DrawListCompiler:
         native painters scale a unit mesh with it).  Painters call this; it
         issues no GL call.
         """
-        if self._state_dirty or len(self._state_base[0]) != self._kinds_seen:
+        if self.state.state_dirty or len(self._state_base[0]) != self._kinds_seen:
             if len(kinds()) != self._kinds_seen:
                 self._new_state_kinds()
             self._resolve_state()
-        if self._surface_dirty:
+        if self.state.surface_dirty:
             self._resolve_surface()
-        m = self.model_matrix()
+        m = self.engine.model_matrix()
         if local is not None:
             m = m @ local
         row = self._surface_row.copy()
@@ -609,9 +666,9 @@ class DrawListCompiler:
             state,
             row,
             transparent,
-            self.current_node,
+            self.engine.current_node,
             self._group_path[-1],
-            tuple(self.context.mono_stack(Transform)),
+            tuple(self.engine.context.mono_stack(Transform)),
             local,
             self._technique_path,
         )
@@ -624,7 +681,7 @@ class DrawListCompiler:
         outer = self._scope
         self._scope = scope
         try:
-            self.eval(shape)
+            self.engine.eval(shape)
         finally:
             self._scope = outer
         return scope.all_items()
@@ -640,7 +697,7 @@ class DrawListCompiler:
         the item is drawn as one instanced batch.
         """
         made = instance_rows(
-            template.row, template.local, template.transparent, self.model_matrix(), matrices, colors, may_mirror
+            template.row, template.local, template.transparent, self.engine.model_matrix(), matrices, colors, may_mirror
         )
         item = DrawItem(
             template.geometry,
@@ -672,7 +729,7 @@ class DrawListCompiler:
         return state
 
     def _resolve_state(self) -> None:
-        mono = self.mono
+        mono = self.engine.mono
         style = mono(DrawStyle)
         self._fill = style.mode if style is not None else "filled"
         # without a DrawStyle: DrawStyle's default (1 px), as in POV-Ray and Mitsuba
@@ -717,7 +774,7 @@ class DrawListCompiler:
         self._alpha_tested = raster[AlphaTest.index] is not None
         cull_value = raster[CullFace.index]
         # automatic back-face culling only where nothing decides culling and nothing shows the inside
-        self._auto_cull = not cull_set and cull_value == "none" and not self._clips and self._fill != "wireframe"
+        self._auto_cull = not cull_set and cull_value == "none" and not self.state.clips and self._fill != "wireframe"
         fog = mono(Fog)
         fog_key = None
         if fog is not None:
@@ -734,12 +791,12 @@ class DrawListCompiler:
             tuple(uniforms),
             tuple(code),
             special,
-            tuple(plane for _, plane in self._clips),
+            tuple(plane for _, plane in self.state.clips),
             fog_key,
             mono(LightSwitch),
             style is not None and style.shading == "flat",
         )
-        self._state_dirty = False
+        self.state.state_dirty = False
 
     def _check_texture(self, texture: Any) -> None:
         if getattr(texture, "rendered", False):
@@ -750,11 +807,11 @@ class DrawListCompiler:
         try:
             h, w = texture.image_array().shape[:2]
         except (OSError, ValueError) as exc:  # a missing or unreadable image file: say where it is used
-            where = f" in node {self.node_path}" if self.node_path else ""
+            where = f" in node {self.engine.node_path}" if self.engine.node_path else ""
             raise type(exc)(
                 f"GLEngine: {exc}{where}; fix the path or pass an array (om.Texture(numpy_array))"
             ) from None
-        self.check_texture_size(f"Texture (image {w}x{h})", (w, h), self.max_texture_size)
+        self.engine.check_texture_size(f"Texture (image {w}x{h})", (w, h), self.engine.max_texture_size)
         if len(self._checked_textures) > 4096:
             self._checked_textures.clear()
         self._checked_textures[id(texture)] = (weakref.ref(texture), texture.version)
@@ -819,19 +876,19 @@ class DrawListCompiler:
 
     def _resolve_surface(self) -> None:
         """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
-        mono = self.mono
+        mono = self.engine.mono
         texture, layers, bump = mono(Texture), mono(MultiTexture), mono(BumpMap)
         highlight = mono(Highlight)
-        description = mono(MaterialDescription)
+        description = None if self.description is None else mono(self.description)
         key = (
-            appearance_key(self._surface, texture, layers, bump),
+            appearance_key(self.state.surface, texture, layers, bump),
             None if highlight is None else (id(highlight), highlight.version),
             None if description is None else (id(description), description.version),
         )
         memo = self._surface_memo
         entry = memo.get(key)
         if entry is None:
-            app = resolve_appearance(self._surface, texture, layers, bump)
+            app = resolve_appearance(self.state.surface, texture, layers, bump)
             for tex in app.textures:
                 self._check_texture(tex)
             # the attributes are kept alive with the entry, so the ids in its key stay theirs
@@ -839,7 +896,7 @@ class DrawListCompiler:
             # the shading model and the id of the material description (the deferred pipeline's material table)
             if description is not None:
                 row[_SHADING_MODEL] = description.model.number
-            row[_MATERIAL_ID] = self.material_table.for_appearance(app, description)
+            row[_MATERIAL_ID] = self.engine.material_table.for_appearance(app, description)
             entry = (app, row, TextureSet(app), (texture, layers, bump, highlight, description))
             if len(memo) > 256:
                 memo.clear()
@@ -852,7 +909,7 @@ class DrawListCompiler:
         self._appearance = app
         self._texset = texset
         self._surface_row = row
-        self._surface_dirty = False
+        self.state.surface_dirty = False
 
     def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
         """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
@@ -870,18 +927,3 @@ class DrawListCompiler:
             row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
         row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
         return row
-
-    # -- queries ----------------------------------------------------------------------
-    @property
-    def scene_background(self) -> Any:
-        """The first ``om.Background`` of the last pre-evaluated scene, or None."""
-        declared = self.declared
-        if declared is None:
-            return None
-        found = declared.first(Background)
-        return None if found is None else found[0]
-
-    @property
-    def scene_lights(self) -> list[tuple[Any, np.ndarray]]:
-        """The enabled lights of the last pre-evaluated scene with their world matrices."""
-        return [] if self.declared is None else [(light, m) for light, m in self.declared.lights if light.enabled]

@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from ...core.transform import Transform
+from ...core.transform import Transform, TranslationArray
 from ...shapes import InstanceSet
+from .bulk import BulkMap
 from .instancing import InstanceRows, instance_rows, set_arrays
 from .layout import ROW
 
@@ -76,8 +77,10 @@ class MovePlan:
         batches: dict[int, int] = {}
         self._batch_index = batches
         self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
-        #: (batch, row indices or None: all) the last apply() rewrote, for the render index's bounds
+        #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
+        #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
+        self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -94,6 +97,7 @@ class MovePlan:
 
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
+        self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -151,9 +155,39 @@ class MovePlan:
             self.batch_of[i] = b
             self.row_of[i] = row
 
+    def apply_arrays(self, arrays: list[Any]) -> tuple[int, list[Any]]:
+        """Write the snapshots of touched ``om.TranslationArray`` objects into the rows below them.
+
+        One numpy write per batch (:class:`~.bulk.BulkMap`).  Returns the count
+        of items moved and the translations of the arrays that must take the
+        general path (an item below two translations of one array), for
+        :meth:`apply`.  Call before :meth:`apply` of the same frame:
+        transforms changed one by one since are recomposed from the matrices
+        this leaves.
+        """
+        count = 0
+        general: list[Any] = []
+        for array in arrays:
+            entry = self.bulk.get(id(array))
+            if entry is None or entry[0] is not array:
+                entry = self.bulk[id(array)] = (array, BulkMap(self, array))
+            bulk = entry[1]
+            if not bulk.valid:
+                general.extend(array)
+                continue
+            bulk.apply(self, array.offsets)
+            count += bulk.count
+            if self.instance_items:
+                count += self._apply_instances(set(bulk.positions.tolist()))
+        return count, general
+
     def apply(self, changed: list[Any]) -> int:
-        """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count."""
-        self.moved_rows = []
+        """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count.
+
+        After :meth:`apply_arrays` in the same frame, the rows it moved are kept in :attr:`moved_rows`.
+        """
+        if not changed:
+            return 0
         # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
         found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
         keep = found >= 0
@@ -174,6 +208,9 @@ class MovePlan:
         affected = np.flatnonzero(hit[self.chain].any(axis=1))
         if not len(affected):
             return 0
+        for key, (_, bulk) in list(self.bulk.items()):
+            if bulk.covers[affected].any():  # a transform above or below an array's translation moved
+                del self.bulk[key]
         chain = self.chain[affected]
         models = self.matrices[chain[:, 0]]
         for k in range(1, chain.shape[1]):
@@ -239,15 +276,38 @@ def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
 
 
 class TransformUpdater:
-    """Mixin of :class:`~omnirender.gl.engine.GLEngine`: the compile's fast path for moved transforms and arrays."""
+    """The compile's fast path for moved transforms and instance arrays: a collaborator of the GL engine.
 
-    def _moves(self) -> MovePlan:
-        plan = self._move_plan
+    It owns the :class:`MovePlan` of the installed items (made on the first
+    move, followed through splices, dropped when a new list is installed) and
+    is handed the render index (whose items and bounds it updates), a callback
+    telling the frame that placements changed, and the compiler's
+    ``instance_state`` (the draw state of an instance set's template).
+    """
+
+    def __init__(self, index: Any, placements_changed: Any, instance_state: Any) -> None:
+        self.index = index
+        self._placements_changed = placements_changed
+        self._instance_state = instance_state
+        self._plan: MovePlan | None = None
+
+    def forget(self) -> None:
+        """A new draw list was installed: the plan is made again on the next move."""
+        self._plan = None
+
+    def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
+        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
+        if self._plan is not None:
+            self._plan.splice(removed, added, moved)
+
+    def plan(self) -> MovePlan:
+        """The installed items' :class:`MovePlan` (made now when there is none)."""
+        plan = self._plan
         if plan is None:
-            plan = self._move_plan = MovePlan(self.draw_items)
+            plan = self._plan = MovePlan(list(self.index.items()))
         return plan
 
-    def _apply_changes(self, changed: list[Any]) -> int | None:
+    def apply(self, changed: list[Any]) -> int | None:
         """Apply ``changed`` without a traversal when it holds only static transforms and instance sets.
 
         Returns how many items changed, or None when the compile must run (an
@@ -258,6 +318,11 @@ class TransformUpdater:
         if not changed:
             return None
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
+        arrays: list[Any] = []
+        if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
+            arrays = [c for c in changed if c.__class__ is TranslationArray]
+            changed = [c for c in changed if c.__class__ is not TranslationArray]
+            classes.discard(TranslationArray)
         if all(issubclass(cls, Transform) and cls.static for cls in classes):
             moved, sets = changed, []
         else:
@@ -273,17 +338,17 @@ class TransformUpdater:
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
-        count = self._apply_moves(moved) if moved else 0
+        count = self._apply_moves(moved, arrays) if moved or arrays else 0
         for item, made in updates:
             _install_rows(item, made)
         if updates:
             self.index.moved(None)  # instance rows replaced: every bound again
-            self.frame_runner.placements_changed()
+            self._placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
-        plan = self._moves()
+        plan = self.plan()
         out = []
         for shape in {id(s): s for s in sets}.values():
             items = plan.sources.get(id(shape))
@@ -302,27 +367,31 @@ class TransformUpdater:
                 )
                 if (
                     made.transparent != item.transparent
-                    or self.instance_state(template, made.mirrored) is not item.state
+                    or self._instance_state(template, made.mirrored) is not item.state
                 ):
                     return None
                 out.append((item, made))
         return out
 
-    def _apply_moves(self, changed: list[Any]) -> int:
-        """Recompose the model matrix of every item below a changed transform; returns how many rows changed."""
-        plan = self._moves()
-        count = plan.apply(changed)
+    def _apply_moves(self, changed: list[Any], arrays: list[Any] | None = None) -> int:
+        """Recompose the model matrix of every item below a changed transform; returns how many rows changed.
+
+        Touched translation arrays go first, each at once where it can (:meth:`MovePlan.apply_arrays`).
+        """
+        plan = self.plan()
+        plan.moved_rows = []
+        count = 0
+        if arrays:
+            count, general = plan.apply_arrays(arrays)
+            if general:
+                changed = [*changed, *general]
+        count += plan.apply(changed)
         if count:
             # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
             # bounds follow the moved rows; mirror planes are read from the rows every frame
             self.index.moved(plan.moved_rows)
-            self.frame_runner.placements_changed()
+            self._placements_changed()
         return count
-
-    def _refresh_declarations(self, scene: Any) -> None:
-        """Lights and the camera may sit below a moved transform: take the (incremental) pre-evaluation again."""
-        self.declared = self.preevaluate(scene)
-        self.camera = self.declared.camera
 
 
 def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:

@@ -384,14 +384,16 @@ class FrameRunner:
         self.state.target_size = saved[1]
 
     def _clear(self, clear: Any) -> None:
-        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit, no scissor)."""
+        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit; no scissor,
+        or the clear's ``box``)."""
         applier = self.state.applier
         fbo = applier.gl.framebuffer
+        box = clear.box  # None: the whole target
         if clear.color is None and clear.depth is not None and self.raw.available:
             # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
             # clear colour would be lost), so clear only the depth buffer with a raw call
-            applier.override({ScissorTest.index: None, DepthMask.index: True})
-            clear_depth(self.raw, float(clear.depth))
+            applier.override({ScissorTest.index: box, DepthMask.index: True})
+            clear_depth(self.raw, float(clear.depth), scissored=box is not None)
         elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self.state.linear_output:
@@ -402,12 +404,15 @@ class FrameRunner:
             applier.override({ColorMask.index: (writes,) * 4, DepthMask.index: clear.depth is not None,
                               ScissorTest.index: None})  # fmt: skip
             fbo.depth_mask = clear.depth is not None  # moderngl applies the framebuffer's own depth mask when it clears
-            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth))
+            # moderngl clears a viewport rectangle (GL's bottom-left origin) under a scissor of its own
+            area = None if box is None else (box[0], applier.gl.size[1] - box[1] - box[3], box[2], box[3])
+            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth),
+                      viewport=area)  # fmt: skip
             fbo.depth_mask = True
             applier.reassert()  # GL holds the masks the applier set again
         if clear.stencil is not None:
             ops = applier.value(StencilOp)
-            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: None})  # glClear obeys both
+            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: box})  # glClear obeys both
             clear_stencil(self.raw, int(clear.stencil))
 
     # -- image-space passes --------------------------------------------------------------

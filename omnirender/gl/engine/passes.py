@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from .attributes import _DEPTH_FUNCS
+from .attributes import DEPTH_FUNCS  # depth comparisons by name -> moderngl's depth_func strings
 from .glenum import GL_R11F_G11F_B10F
 
 __all__ = [
@@ -78,8 +78,6 @@ FORMATS = {
 #: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);
 #: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``).
 TECHNIQUES = (None, "engine", "pipeline")
-#: Depth comparisons by name (as om.gl.DepthTest's ``func``) -> moderngl's depth_func strings.
-DEPTH_FUNCS = _DEPTH_FUNCS
 
 
 def _classes(items: Any) -> frozenset[str]:
@@ -98,7 +96,9 @@ def _classes(items: Any) -> frozenset[str]:
     return chosen
 
 
-def _pairs(values: Mapping[str, Any] | Iterable[tuple[str, Any]] | None, owner: str) -> tuple[tuple[str, Any], ...]:
+def uniform_pairs(
+    values: Mapping[str, Any] | Iterable[tuple[str, Any]] | None, owner: str
+) -> tuple[tuple[str, Any], ...]:
     """Uniform values as a sorted tuple of (name, hashable value) pairs."""
     if values is None:
         return ()
@@ -234,13 +234,26 @@ class Target:
 
 @dataclass(frozen=True)
 class Clear:
-    """What a pass clears before drawing: colour (RGBA display values), depth, stencil; None keeps it."""
+    """What a pass clears before drawing: colour (RGBA display values), depth, stencil; None keeps it.
+
+    ``box = (x, y, width, height)`` clears only that pixel rectangle of the bound target (measured from its
+    top-left corner, like ``ScissorTest``); None clears all of it.
+    """
 
     color: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0)
     depth: float | None = 1.0
     stencil: int | None = None
+    box: tuple[int, int, int, int] | None = None
 
     def __post_init__(self) -> None:
+        if self.box is not None:
+            try:
+                box = tuple(int(v) for v in self.box)
+            except (TypeError, ValueError):
+                box = ()
+            if len(box) != 4 or box[0] < 0 or box[1] < 0 or box[2] <= 0 or box[3] <= 0:
+                raise ValueError(f"Clear: box must be (x, y, width, height) pixels, got {self.box!r}")
+            object.__setattr__(self, "box", box)
         if self.color is not None:
             object.__setattr__(self, "color", _rgba(self.color, "Clear", "color"))
         if self.depth is not None and not (isinstance(self.depth, (int, float)) and 0.0 <= self.depth <= 1.0):
@@ -311,7 +324,7 @@ class Shader:
             )
         if self.surface and "pass_surface" not in self.surface:
             raise ValueError("Shader: the surface snippet must define void pass_surface(Surface s)")
-        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "Shader"))
+        object.__setattr__(self, "uniforms", uniform_pairs(self.uniforms, "Shader"))
         object.__setattr__(self, "defines", _defines(self.defines))
         object.__setattr__(self, "inputs", _inputs(self.inputs, "Shader"))
         object.__setattr__(self, "textures", _textures(self.textures, "Shader"))
@@ -405,7 +418,7 @@ class FullScreen:
         if self.depth_test is not None and not self.depth:
             raise ValueError("FullScreen: depth_test compares the effect's depth: give depth=True and effect_depth")
         object.__setattr__(self, "inputs", _inputs(self.inputs, "FullScreen"))
-        object.__setattr__(self, "uniforms", _pairs(self.uniforms, "FullScreen"))
+        object.__setattr__(self, "uniforms", uniform_pairs(self.uniforms, "FullScreen"))
         object.__setattr__(self, "textures", _textures(self.textures, "FullScreen"))
         if not isinstance(self.label, str):
             raise ValueError(f"FullScreen: label must be a string, got {self.label!r:.60}")
@@ -477,7 +490,7 @@ class Pass:
         object.__setattr__(self, "_state", self._captured("state"))
         object.__setattr__(self, "_fallback", self._captured("fallback"))
         if self.camera is not None:
-            object.__setattr__(self, "camera", _camera(self.camera, self.name))
+            object.__setattr__(self, "camera", pass_camera(self.camera, self.name))
 
     def _captured(self, name: str) -> tuple[tuple[int, Any], ...]:
         from .attributes import GLState
@@ -534,7 +547,7 @@ class Pass:
         return hash(self.key())
 
 
-def _camera(value: Any, name: str) -> tuple[np.ndarray, np.ndarray | None]:
+def pass_camera(value: Any, name: str) -> tuple[np.ndarray, np.ndarray | None]:
     """(view, projection or None) from an om.Camera (projection made per frame aspect) or two matrices."""
     from ...core.camera import Camera
 

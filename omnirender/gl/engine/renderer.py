@@ -8,6 +8,7 @@ the :class:`~.drawer.BatchDrawer`'s job.
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 import numpy as np
@@ -18,22 +19,55 @@ from .geometry import Geometry
 from .layout import ROW
 from .passes import Composed
 
-__all__ = ["BatchRenderer", "item_filter"]
+__all__ = ["BatchInstaller", "item_filter"]
 
 
-class BatchRenderer:
-    """Mixin of :class:`~omnirender.gl.glengine.GLEngine`: install the compiled scopes as batches.
+class BatchInstaller:
+    """Installs compiled root scopes as batches: a collaborator of the GL engine that owns the installed list.
 
-    (The draw side is the :class:`~.drawer.BatchDrawer` collaborator; this install side becomes one with the
-    render index.)
+    It holds the installed root scope, the batch pool (batches kept between
+    installs by their place), the geometry it uploaded and the draw-list
+    version.  It is handed the context (uploads), the render index, the
+    :class:`~.dynamic.TransformUpdater` (told about new lists and splices),
+    the drawer (which sweeps its transient buffers), the geometry cache, the
+    engine's stats and two callbacks: placements changed (the frame runner)
+    and a splice that keeps the pipelines scan (the engine).  Drawing is the
+    :class:`~.drawer.BatchDrawer`'s job.
     """
 
+    def __init__(
+        self,
+        ctx: Any,
+        index: Any,
+        updater: Any,
+        drawer: Any,
+        geometry_cache: Any,
+        stats: dict[str, Any],
+        placements_changed: Any,
+        spliced: Any,
+    ) -> None:
+        self.ctx = ctx
+        self.index = index
+        self.updater = updater
+        self.drawer = drawer
+        self.geometry_cache = geometry_cache
+        self.stats = stats
+        self._placements_changed = placements_changed
+        self._spliced = spliced
+        #: the installed root scope (None before the first install)
+        self.root: Scope | None = None
+        #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
+        self.version = 0
+        self._batch_pool: dict[tuple, Batch] = {}
+        self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
+
     # -- installing a compiled root scope ------------------------------------------------
-    def _install(self, root: Scope) -> None:
+    def install(self, root: Scope) -> None:
         """Make ``root`` the draw list: rewrite changed rows in place when the structure is the same, else re-plan."""
-        old = self._root
-        self.draw_list_version += 1
-        self.frame_runner.placements_changed()  # stages of users may derive things from placements
+        old = self.root
+        self.version += 1
+        self.updater.forget()
+        self._placements_changed()  # stages of users may derive things from placements
         if old is not None and old is not root and old.entries and _same_shape(old, root):
             self.stats["incremental"] = self._update_in_place(old, root)
             self.index.install(old)
@@ -47,9 +81,32 @@ class BatchRenderer:
         if old is not None and old is not root:
             for scope in old.walk():
                 _release_filtered(scope)
-        self._root = root
+        self.root = root
         self.index.install(root)
         self._sweep(root)
+
+    def live_buffers(self) -> int:
+        """GPU buffers of the uploaded geometry and of the batches (pooled and filtered) held now."""
+        n = sum(len(g.buffers) for g in self._uploaded_set if g.buffers is not None)
+        n += sum(1 for b in self._batch_pool.values() if b.buffer is not None)
+        scopes = [] if self.root is None else self.root.walk()
+        n += sum(1 for s in scopes for group in s.filtered.values() for bs in group.values() for b in bs
+                 if b.buffer is not None)  # fmt: skip
+        return n
+
+    def release(self) -> None:
+        """Free the batches (pooled and filtered) and the uploaded geometry; nothing is installed afterwards."""
+        for batch in self._batch_pool.values():
+            batch.release()
+        self._batch_pool.clear()
+        for scope in [] if self.root is None else self.root.walk():
+            for group in scope.filtered.values():
+                for batches in group.values():
+                    for batch in batches:
+                        batch.release()
+        for g in list(self._uploaded_set):
+            g.release()
+        self.root = None
 
     def _plan(self, scope: Scope, where: tuple, pool: dict[tuple, Batch]) -> None:
         parts: list[Segment | Scope] = []
@@ -107,7 +164,7 @@ class BatchRenderer:
                     item.row = slot[0].rows[slot[1]]
         return segment
 
-    def _splice_install(self, removed: list[Any], added: list[Any]) -> bool:
+    def splice(self, removed: list[Any], added: list[Any]) -> bool:
         """Take ``removed`` out of the installed draw list and put ``added`` in, patching batch rows in place.
 
         A removed row is filled by its batch's last row; an added item becomes
@@ -118,7 +175,7 @@ class BatchRenderer:
         nothing changed, for what this does not handle: nested technique
         scopes, instance sets, states whose order matters.
         """
-        root = self._root
+        root = self.root
         if root is None or not root.parts or not isinstance(root.parts[-1], Segment):
             return False
         last = root.parts[-1]
@@ -181,7 +238,7 @@ class BatchRenderer:
         else:
             self._follow_splice(root, ops)
         self.index.spliced(removed, added)
-        self.frame_runner.placements_changed()
+        self._placements_changed()
         kept = {id(it.geometry) for it in added}
         if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
             # what only removed items used is released now (their geometry, textures, transient buffers)
@@ -190,18 +247,11 @@ class BatchRenderer:
                 it for p in parts for it in p.others])  # fmt: skip
         for batch, edits in ops.values():
             self.index.batch_edits(batch, edits)
-        version = self.draw_list_version
-        self.draw_list_version += 1
-        self._follow_version(version, added)
-        if self._move_plan is not None:
-            self._move_plan.splice(removed, added, moved_items)
+        version = self.version
+        self.version += 1
+        self._spliced(version, added)
+        self.updater.splice(removed, added, moved_items)
         return True
-
-    def _follow_version(self, version: int, added: list[DrawItem]) -> None:
-        """The pipelines scan of ``version`` still holds when no added item reads a render texture."""
-        if self._pipelines is None and self._pipelines_scanned == version:
-            if not any(getattr(t, "rendered", False) for it in added for _, t, _ in it.state.textures):
-                self._pipelines_scanned = self.draw_list_version
 
     def _follow_splice(self, scope: Scope, ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]]) -> None:
         """Patch the rows the scope's filtered batches select after rows of their sources were removed or added.

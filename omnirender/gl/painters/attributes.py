@@ -1,5 +1,8 @@
 """Attribute painters of the GL engine: they only mark what the next draw item must re-read.
 
+They change the compile through its public compile state (``engine.compile_state``, a
+:class:`~..engine.compile_state.CompileState`), never the compiler's own attributes.
+
 Material, PBRMaterial and Color go on one surface stack so the innermost of
 them decides (a Color inside a Material tints it; a Material inside a Color
 replaces it).  Raster-state attributes (every ``om.gl.GLState`` subclass,
@@ -43,16 +46,10 @@ class SurfacePainter(AttributePainter):
     service = "gl.paint"
 
     def exec(self, attribute: Any, engine: GLEngine) -> None:
-        engine._surface.append(attribute)
-        engine._surface_dirty = True
+        engine.compile_state.push_surface(attribute)
 
     def unexec(self, attribute: Any, engine: GLEngine) -> None:
-        surface = engine._surface
-        for i in range(len(surface) - 1, -1, -1):
-            if surface[i] is attribute:
-                del surface[i]
-                break
-        engine._surface_dirty = True
+        engine.compile_state.remove_surface(attribute)
 
 
 class HighlightPainter(AttributePainter):
@@ -61,7 +58,7 @@ class HighlightPainter(AttributePainter):
     target = Highlight
 
     def exec(self, attribute: Any, engine: GLEngine) -> None:
-        engine._surface_dirty = True
+        engine.compile_state.surface_changed()
 
     unexec = exec
 
@@ -73,8 +70,7 @@ class StatePainter(AttributePainter):
     service = "gl.paint"
 
     def exec(self, attribute: Any, engine: GLEngine) -> None:
-        engine._state_dirty = True
-        engine._surface_dirty = True
+        engine.compile_state.state_changed()
 
     unexec = exec
 
@@ -87,22 +83,17 @@ class ClipPlanePainter(AttributePainter):
     target = ClipPlane
 
     def exec(self, attribute: ClipPlane, engine: GLEngine) -> None:
-        if len(engine._clips) >= MAX_CLIP_PLANES:
+        state = engine.compile_state
+        if state.clip_count >= MAX_CLIP_PLANES:
             raise ValueError(
                 f"ClipPlane in node {engine.node_path}: at most {MAX_CLIP_PLANES} clip planes can be active at once "
                 f"in the GL engine; remove one"
             )
         plane = attribute.world_plane(engine.model_matrix())
-        engine._clips.append((attribute, tuple(float(x) for x in plane)))
-        engine._state_dirty = True
+        state.push_clip(attribute, tuple(float(x) for x in plane))  # type: ignore[arg-type]
 
     def unexec(self, attribute: ClipPlane, engine: GLEngine) -> None:
-        clips = engine._clips
-        for i in range(len(clips) - 1, -1, -1):
-            if clips[i][0] is attribute:
-                del clips[i]
-                break
-        engine._state_dirty = True
+        engine.compile_state.remove_clip(attribute)
 
 
 def _register() -> None:

@@ -463,14 +463,14 @@ def _snippet(owner: str, value: Any) -> str:
 
 
 def _uniforms(owner: str, value: Any) -> dict[str, Any]:
-    from ..engine.passes import _pairs
+    from ..engine.passes import uniform_pairs
 
     if not isinstance(value, Mapping):
         raise ValueError(f"{owner}: uniforms must map uniform names to numbers, got {value!r:.60}")
     reserved = {"u_input", "u_depth", "u_proj", "u_inv_proj", "u_resolution"} & set(value)
     if reserved:
         raise ValueError(f"{owner}: uniforms {sorted(reserved)} are set by the chain; give your uniforms other names")
-    _pairs(value, owner)  # names are identifiers, values finite numbers
+    uniform_pairs(value, owner)  # names are identifiers, values finite numbers
     return dict(value)
 
 
