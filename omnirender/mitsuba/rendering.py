@@ -128,7 +128,7 @@ def render(
     # alpha is 1 wherever an environment is visible.
     mi = mitsuba()
     if getattr(engine, "splat_depth", 0):
-        hits = _splat_coverage(mi, engine, mi_scene, min(spp, 64), seed)
+        hits = _splat_coverage(mi, engine, mi_scene, max(min(spp, 64), SPLAT_COVERAGE_SPP), seed)
     else:
         hits = np.array(
             mi.render(mi_scene, integrator=mi.load_dict(engine.coverage_integrator()), spp=min(spp, 64), seed=seed),
@@ -157,6 +157,11 @@ def render(
         "shapes": len(engine.shapes),
     }
     return Image(image, depth=dmap, hdr=hdr, engine="mitsuba", info=info, coverage=alpha)
+
+
+#: Samples per pixel of the coverage pass of a scene with splats at least (their faint halos are covered by a few
+#: per cent: at 8 samples most of their pixels counted no hit, and the rule "no hit, no light" blackened them).
+SPLAT_COVERAGE_SPP = 32
 
 
 def _splat_coverage(mi: Any, engine: Any, mi_scene: Any, spp: int, seed: int) -> np.ndarray:

@@ -142,7 +142,11 @@ class GaussianSplatsPainter(ShapePainter):
                 }
                 cover = {
                     **geometry,
-                    "bsdf": {"type": "mask", "opacity": {"type": "mesh_attribute", "name": "face_opacity"}, "bsdf": STOP},
+                    "bsdf": {
+                        "type": "mask",
+                        "opacity": {"type": "mesh_attribute", "name": "face_opacity"},
+                        "bsdf": STOP,
+                    },
                 }
                 name = engine.unique_name("splats")
                 engine.shapes[name] = engine.instantiate(colour, "GaussianSplats shells")

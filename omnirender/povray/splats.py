@@ -15,8 +15,6 @@ that rays pass many shells.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from ..core import ShapePainter, default_for

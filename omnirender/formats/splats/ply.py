@@ -170,6 +170,7 @@ def read_splat_ply(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         names = [p for p, _ in props]
         if len(set(names)) != len(names):
             raise _error(path, "the vertex element names a property twice")
+        _layout(path, names)  # a file of something else is refused before its data is read
         if header.format == "ascii":
             table = _read_ascii(path, fh, header.offset, skip_lines, count, dtype, size)
         else:
@@ -222,7 +223,8 @@ def _column(path: Path, table: np.ndarray, name: str) -> np.ndarray:
     return np.asarray(table[name], dtype=np.float64)
 
 
-def _activate(path: Path, table: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
+def _layout(path: Path, names: list[str]) -> tuple[list[str], list[str]]:
+    """The colour and ``f_rest_*`` properties of a splat file's vertex element; SplatFileError when it is not one."""
     present = set(names)
     rest = sorted((n for n in names if n.startswith("f_rest_")), key=lambda n: int(n[7:]) if n[7:].isdigit() else -1)
     need = ["x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
@@ -242,6 +244,11 @@ def _activate(path: Path, table: np.ndarray, names: list[str]) -> dict[str, np.n
             f"the file has {len(rest)} f_rest_* properties; spherical harmonics of degree 0..3 need 0, 9, 24 or 45 "
             "numbered from f_rest_0",
         )
+    return colour, rest
+
+
+def _activate(path: Path, table: np.ndarray, names: list[str]) -> dict[str, np.ndarray]:
+    colour, rest = _layout(path, names)
     k = _SH_COUNTS[len(rest)]
     n = len(table)
 
