@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ...gl import Clear, Target
+from ...gl import Blend, Clear, CullFace, DepthTest, Target
 from ..canvas import Canvas, eye_distance, target_name
 from ..renderer import Bounds, Renderer
 from .blending import ScreenMesh, eye_of, relevant_views, screen_mesh
@@ -273,9 +273,7 @@ class LightFieldRenderer(Renderer):
         ctx = canvas.ctx
         textures = self._textures(canvas.engine)
         prog = canvas.program("compositing.lumigraph-surface", _SURFACE_VERTEX, _SURFACE_FRAGMENT)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-        ctx.depth_func = "<"
+        canvas.engine.apply_gl_state(DepthTest(), Blend(False), CullFace("none"))  # through the engine's applier
         prog["u_view_proj"].write(canvas.view_projection.T.astype(np.float32).tobytes())
         calls = 0
         for i in views:
@@ -298,11 +296,8 @@ class LightFieldRenderer(Renderer):
         index = ctx.buffer(reserve=max(4, mesh.triangles.nbytes))
         vao = ctx.vertex_array(prog, [(positions, "3f", "in_position"), (weight, "1f", "in_weight")], index, 4)
         try:
-            ctx.enable(ctx.BLEND | ctx.DEPTH_TEST)
-            ctx.disable(ctx.CULL_FACE)
-            ctx.blend_func = (ctx.ONE, ctx.ONE)
-            ctx.blend_equation = ctx.FUNC_ADD
-            ctx.depth_func = "1"  # every camera's pass writes the same mesh depth
+            # additive, and every camera's pass writes the same mesh depth (through the engine's applier)
+            canvas.engine.apply_gl_state(Blend(src="one", dst="one"), DepthTest(func="always"), CullFace("none"))
             prog["u_view_proj"].write(canvas.view_projection.T.astype(np.float32).tobytes())
             prog["u_inv_view_proj"].write(np.linalg.inv(canvas.view_projection).T.astype(np.float32).tobytes())
             prog["u_viewport"].value = tuple(float(v) for v in canvas.size)

@@ -76,8 +76,11 @@ FORMATS = {
 }
 #: What draws a pass's items (``Pass.technique``): None the pass itself at the frame's level and the engine's
 #: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);
-#: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``).
-TECHNIQUES = (None, "engine", "pipeline")
+#: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``);
+#: ``"frame"`` what a frame runs over the whole scene (the pipeline, inside the scene's frame-level
+#: post-processing chain when it has one), as a frame of the pass's target: targets sized relative to the
+#: frame are sized to it (a stereo eye drawn whole into an eye-sized target).
+TECHNIQUES = (None, "engine", "pipeline", "frame")
 
 
 def _classes(items: Any) -> frozenset[str]:
