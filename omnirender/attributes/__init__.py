@@ -3,7 +3,7 @@
 Appearance (``Color``, ``Material``, ``PBRMaterial``, ``Texture``,
 ``DrawStyle``, ``BumpMap``, ``MultiTexture``; combined by the one appearance
 model of :mod:`.surface`), lights with OpenGL's parameters (``DirectionalLight``,
-``PointLight``, ``SpotLight``, ``AmbientLight``), transforms (``LookAt``,
+``PointLight``, ``SpotLight``, ``RectLight``, ``DiscLight``, ``AmbientLight``), transforms (``LookAt``,
 ``Billboard``) and environment attributes (``ClipPlane``, ``Fog``,
 ``Background``, ``Tessellation``, ``Highlight``, ``PickId``, ``Collidable``).
 Every class validates at construction and rebuilds from ``parameters()``.
@@ -17,7 +17,16 @@ from ..core.light import Light, LightSwitch
 from ..core.transform import Matrix, Rotation, Scaling, Transform, Translation
 from .appearance import BumpMap, Color, DrawStyle, Material, MultiTexture, PBRMaterial, Texture, TextureLayer
 from .environment import Background, ClipPlane, Collidable, Fog, Highlight, PickId, Tessellation
-from .lights import AmbientLight, DirectionalLight, LightSource, PointLight, SpotLight
+from .lights import (
+    AmbientLight,
+    AreaLight,  # noqa: F401 - the area lights' base, for engines' isinstance tests (not om.X)
+    DirectionalLight,
+    DiscLight,
+    LightSource,
+    PointLight,
+    RectLight,
+    SpotLight,
+)
 from .shadowing import Mirror, Shadowing
 from .transforms import Billboard, BillboardSimplifier, DirectionOfFlight, LookAt, Polar, Reflection
 
@@ -34,6 +43,8 @@ __all__ = [
     "DirectionalLight",
     "PointLight",
     "SpotLight",
+    "RectLight",
+    "DiscLight",
     "AmbientLight",
     "LookAt",
     "Reflection",

@@ -13,6 +13,11 @@ multiplies it by ``spot_factor(cos_angle) = cos_angle ** exponent`` inside the
 cone (angle to the spot axis <= ``cutoff`` degrees) and 0 outside.  A point or
 spot light's ``reach()`` is where its contribution falls below ``threshold``
 (the GL deferred pipeline draws the light only that far).
+
+Area lights (``RectLight``, ``DiscLight``) are flat emitters of uniform
+radiance ``diffuse`` (``color * intensity``) on one side (``two_sided``: both);
+they fall off physically, by their form factor, and have no OpenGL
+attenuation: the rule is :func:`omnirender.attributes.photometry.area_form_factor`.
 """
 
 from __future__ import annotations
@@ -35,7 +40,17 @@ from ._params import (
     optional,
 )
 
-__all__ = ["LightSource", "DirectionalLight", "PointLight", "SpotLight", "AmbientLight", "default_lights"]
+__all__ = [
+    "LightSource",
+    "DirectionalLight",
+    "PointLight",
+    "SpotLight",
+    "AreaLight",
+    "RectLight",
+    "DiscLight",
+    "AmbientLight",
+    "default_lights",
+]
 
 _nonneg = check_number(0.0)
 #: Default ``threshold`` of point and spot lights: a light's reach ends where it adds less than 1/1024 of its
@@ -257,6 +272,197 @@ class SpotLight(_Attenuated):
         """The unit spot axis in world coordinates under ``matrix``."""
         d = np.asarray(matrix, dtype=np.float64)[:3, :3] @ np.asarray(self._direction)
         return d / np.linalg.norm(d)
+
+
+def _check_size(owner: str, name: str, value: Any) -> float:
+    x = check_number(0.0, min_open=True)(owner, name, value)
+    return float(x)
+
+
+class AreaLight(LightSource):
+    """Base of the flat area lights: a shape of uniform radiance at ``position``, emitting along ``direction``.
+
+    The light's plane is perpendicular to ``direction`` (the side it lights;
+    ``two_sided=True`` lights both sides); ``up`` turns the shape about
+    ``direction`` (a rectangle's ``height`` runs along it).  Position, size and
+    orientation are in the coordinates of the place the light sits: the
+    transforms in effect move, turn and scale it (a non-uniform scaling makes a
+    disc an ellipse).
+
+    Photometry (one rule, :mod:`.photometry`): the surface emits the radiance
+    ``diffuse`` (``color * intensity``, W/(m^2 sr) per RGB channel in the
+    physically based engines), so a diffuse surface of colour ``kd`` shows
+    ``kd * diffuse * F``, ``F`` the light's form factor seen from the point
+    (:func:`.photometry.area_form_factor`); under a very large light this is a
+    directional light's ``kd * diffuse`` head-on.  One side emits the power
+    ``pi * diffuse * area`` (W per channel).
+    """
+
+    __slots__ = ("_position", "_direction", "_up", "_two_sided")
+    position = Param(check_vector(3), "centre of the light in the light's coordinates")
+    direction = Param(check_direction, "the light's normal: the side it lights (normalised)")
+    up = Param(
+        optional(check_direction),
+        "turns the shape about direction (a rectangle's height runs along it); None: +y, or -z for a light along y",
+    )
+    two_sided = Param(check_bool, "True: both faces emit (each with the full radiance)")
+
+    def _init_area(self, position: Sequence[float], direction: Sequence[float], up: Sequence[float],
+                   two_sided: bool) -> None:  # fmt: skip
+        self.position = position
+        self.direction = direction
+        self.up = up
+        self.two_sided = two_sided
+        if self._up is not None and abs(float(np.dot(self._direction, self._up))) > 1.0 - 1e-9:
+            raise ValueError(
+                f"{type(self).__name__}: up {self._up} is parallel to direction {self._direction}; "
+                "give an up that is not along the light's direction"
+            )
+
+    def _half_axes(self) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def local_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Unit vectors (u, v, n) in the light's coordinates: width axis, height axis (``up``), normal."""
+        n = np.asarray(self._direction, np.float64)
+        up = self._up
+        if up is None:
+            up = (0.0, 1.0, 0.0) if abs(n[1]) < 0.999 else (0.0, 0.0, -1.0)
+        v = np.asarray(up, np.float64) - n * float(np.dot(n, up))
+        v /= np.linalg.norm(v)
+        return np.cross(n, v), v, n
+
+    def world_frame(self, matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(centre, half_u, half_v, normal)`` in world coordinates under ``matrix`` (the light's world matrix).
+
+        ``half_u`` and ``half_v`` are the shape's half extents as vectors (a
+        rectangle's corners are ``centre +- half_u +- half_v``; a disc is the
+        ellipse they span), ``normal`` the unit normal of the lit side.
+        """
+        m = np.asarray(matrix, np.float64)
+        hu, hv = self._half_axes()
+        centre = (m @ np.array([*self._position, 1.0]))[:3]
+        half_u, half_v = m[:3, :3] @ hu, m[:3, :3] @ hv
+        normal = np.cross(half_u, half_v)
+        length = float(np.linalg.norm(normal))
+        scale = float(np.linalg.norm(half_u) * np.linalg.norm(half_v))
+        if not scale > 0.0 or length <= 1e-9 * scale:
+            raise ValueError(
+                f"{type(self).__name__}: the transforms in effect flatten the light to zero area; "
+                "scale it by non-zero factors in its plane"
+            )
+        # the lit side follows the transformed direction (a mirroring transform flips the axes' cross product)
+        local = float(np.dot(np.cross(hu, hv), self._direction))
+        det = float(np.linalg.det(m[:3, :3]))
+        normal *= math.copysign(1.0, local) * (-1.0 if det < 0.0 else 1.0) / length
+        return centre, half_u, half_v, normal
+
+    def world_area(self, matrix: np.ndarray) -> float:
+        """The area of one face in world units."""
+        _, hu, hv, _ = self.world_frame(matrix)
+        return self._area_factor * float(np.linalg.norm(np.cross(hu, hv)))
+
+    _area_factor = 4.0
+
+    def world_polygon(self, matrix: np.ndarray, segments: int = 32) -> np.ndarray:
+        """The outline in world coordinates, counter-clockwise seen from the lit side (``(k, 3)`` array).
+
+        A rectangle gives its 4 corners; a disc ``segments`` points on its
+        ellipse, pushed outwards so that the polygon has the ellipse's area.
+        """
+        c, hu, hv, n = self.world_frame(matrix)
+        if isinstance(self, RectLight):
+            pts = np.array([c - hu - hv, c + hu - hv, c + hu + hv, c - hu + hv])
+        else:
+            t = np.arange(segments) * (2.0 * math.pi / segments)
+            grow = math.sqrt(2.0 * math.pi / (segments * math.sin(2.0 * math.pi / segments)))
+            pts = c + grow * (np.cos(t)[:, None] * hu + np.sin(t)[:, None] * hv)
+        if float(np.dot(np.cross(pts[1] - pts[0], pts[2] - pts[0]), n)) < 0.0:
+            pts = pts[::-1].copy()
+        return pts
+
+    def world_position(self, matrix: np.ndarray) -> np.ndarray:
+        """The centre in world coordinates under ``matrix``."""
+        return (np.asarray(matrix, dtype=np.float64) @ np.array([*self._position, 1.0]))[:3]
+
+    def world_direction(self, matrix: np.ndarray) -> np.ndarray:
+        """The unit normal of the lit side in world coordinates."""
+        return self.world_frame(matrix)[3]
+
+
+class RectLight(AreaLight):
+    """A rectangle of ``width`` x ``height`` emitting uniformly (see :class:`AreaLight` for placement and units).
+
+    ``width`` runs along ``cross(direction, up)``, ``height`` along ``up``.
+    Every engine: GL by linearly transformed cosines with soft shadows,
+    POV-Ray ``area_light``, Mitsuba an ``area`` emitter on a ``rectangle``,
+    Radiance a ``light`` polygon, RIB ``PxrRectLight``, USD ``RectLight``.
+    """
+
+    __slots__ = ("_width", "_height")
+    width = Param(_check_size, "extent along cross(direction, up) (> 0)")
+    height = Param(_check_size, "extent along up (> 0)")
+
+    def __init__(
+        self,
+        position: Sequence[float] = (0.0, 0.0, 0.0),
+        direction: Sequence[float] = (0.0, 0.0, -1.0),
+        width: float = 1.0,
+        height: float = 1.0,
+        up: Sequence[float] | None = None,
+        two_sided: bool = False,
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
+        enabled: bool = True,
+    ) -> None:
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows, enabled)
+        self.width = width
+        self.height = height
+        self._init_area(position, direction, up, two_sided)
+
+    def _half_axes(self) -> tuple[np.ndarray, np.ndarray]:
+        u, v, _ = self.local_frame()
+        return u * (0.5 * self._width), v * (0.5 * self._height)
+
+
+class DiscLight(AreaLight):
+    """A disc of ``radius`` emitting uniformly (see :class:`AreaLight` for placement and units).
+
+    Every engine: GL by linearly transformed cosines over an equal-area
+    polygon, POV-Ray a ``circular`` ``area_light``, Mitsuba an ``area`` emitter
+    on a ``disk``, Radiance a ``light`` ring, RIB ``PxrDiskLight``, USD ``DiskLight``.
+    """
+
+    __slots__ = ("_radius",)
+    radius = Param(_check_size, "radius (> 0)")
+    _area_factor = math.pi
+
+    def __init__(
+        self,
+        position: Sequence[float] = (0.0, 0.0, 0.0),
+        direction: Sequence[float] = (0.0, 0.0, -1.0),
+        radius: float = 0.5,
+        up: Sequence[float] | None = None,
+        two_sided: bool = False,
+        color: Sequence[float] = (1.0, 1.0, 1.0),
+        intensity: float = 1.0,
+        ambient: Sequence[float] = (0.0, 0.0, 0.0),
+        diffuse: Sequence[float] | None = None,
+        specular: Sequence[float] | None = None,
+        casts_shadows: bool = True,
+        enabled: bool = True,
+    ) -> None:
+        super().__init__(color, intensity, ambient, diffuse, specular, casts_shadows, enabled)
+        self.radius = radius
+        self._init_area(position, direction, up, two_sided)
+
+    def _half_axes(self) -> tuple[np.ndarray, np.ndarray]:
+        u, v, _ = self.local_frame()
+        return u * self._radius, v * self._radius
 
 
 class AmbientLight(LightSource):

@@ -10,6 +10,12 @@ reflects ``kd * E / pi`` of an irradiance ``E``, so the same picture needs
   gives the GL brightness exactly at the distance ``d`` from the light where it is
   matched (:func:`intensity_scale`); a light with OpenGL attenuation ``(0, 0, Q)``
   already falls off as ``1 / d^2`` and gets ``I = pi * c / Q`` at every distance;
+- a rectangle or disc light (``om.RectLight``, ``om.DiscLight``) of colour ``c``: a surface of
+  uniform radiance ``L = c`` (W/(m^2 sr); one side, or both when ``two_sided``), so a
+  diffuse surface shows ``kd * c * F`` with ``F`` the light's form factor
+  (:func:`area_form_factor`; 1 under an infinite light, as a head-on directional light
+  of the same colour) and one side emits the power ``pi * c * area`` (:func:`area_power`).
+  No OpenGL attenuation: the falloff is the form factor's, the same in every engine;
 - ambient light: the global ambient (0.2) plus every light's ambient term is a uniform
   environment radiance, reflected with the diffuse colour (:func:`ambient_total`);
 - Phong shininess ``n`` (the exponent of the reflected-light lobe, as in POV-Ray's
@@ -39,6 +45,9 @@ __all__ = [
     "headlight_direction",
     "phong_roughness",
     "spot_beam",
+    "area_radiance",
+    "area_power",
+    "area_form_factor",
 ]
 
 #: OpenGL's global ambient light, added to the lights' ambient terms.
@@ -119,3 +128,69 @@ def spot_beam(light: Any) -> float:
     if light.exponent <= 0:
         return cutoff
     return min(cutoff, math.degrees(math.acos(0.5 ** (1.0 / float(light.exponent)))))
+
+
+def area_radiance(light: Any) -> np.ndarray:
+    """The emitted radiance of an area light (W/(m^2 sr) per channel): its ``diffuse`` colour, unscaled."""
+    return np.asarray(light.diffuse, dtype=np.float64)
+
+
+def area_power(light: Any, matrix: np.ndarray) -> np.ndarray:
+    """Total power (W per channel) an area light under world ``matrix`` emits: ``pi * L * area`` per lit side."""
+    sides = 2.0 if light.two_sided else 1.0
+    return sides * math.pi * area_radiance(light) * light.world_area(matrix)
+
+
+def area_form_factor(points: Any, normals: Any, polygon: Any, two_sided: bool = False) -> np.ndarray:
+    """Form factor from surface points to a flat emitting polygon (Lambert's exact contour integral).
+
+    ``points`` and ``normals`` are ``(..., 3)`` (normals of unit length),
+    ``polygon`` ``(k, 3)`` counter-clockwise seen from its lit side (as
+    ``AreaLight.world_polygon`` gives it).  ``F = 1/(2 pi) sum_i theta_i
+    (n . (v_i x v_{i+1}) / |v_i x v_{i+1}|)`` over the edges as seen from the point, with
+    the polygon clipped to the point's horizon first; points behind the lit
+    side get 0 (unless ``two_sided``).  A diffuse surface of colour ``kd`` under a
+    light of colour ``c`` shows ``kd * c * F`` in every engine.
+    """
+    p = np.asarray(points, np.float64)
+    nrm = np.asarray(normals, np.float64)
+    poly = np.asarray(polygon, np.float64)
+    shape = p.shape[:-1]
+    p, nrm = p.reshape(-1, 3), np.broadcast_to(nrm, p.shape if nrm.ndim > 1 else (p.shape[0], 3)).reshape(-1, 3)
+    light_n = np.cross(poly[1] - poly[0], poly[2] - poly[0])
+    light_n /= np.linalg.norm(light_n)
+    out = np.zeros(p.shape[0])
+    for i in range(p.shape[0]):
+        side = float(np.dot(p[i] - poly[0], light_n))
+        if side <= 0.0 and not two_sided:
+            continue
+        verts = _clip_to_horizon(poly - p[i], nrm[i])
+        if len(verts) < 3:
+            continue
+        total = 0.0
+        for a, b in zip(verts, np.roll(verts, -1, axis=0), strict=True):
+            a_n, b_n = a / np.linalg.norm(a), b / np.linalg.norm(b)
+            cross = np.cross(a_n, b_n)
+            length = float(np.linalg.norm(cross))
+            if length < 1e-15:
+                continue
+            theta = math.atan2(length, float(np.dot(a_n, b_n)))
+            total += theta * float(np.dot(cross, nrm[i])) / length
+        out[i] = abs(total) / (2.0 * math.pi)
+    return out.reshape(shape)
+
+
+def _clip_to_horizon(verts: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """The part of a polygon (relative to the point) above the plane through the point with ``normal``."""
+    h = verts @ normal
+    out = []
+    k = len(verts)
+    for i in range(k):
+        a, b = verts[i], verts[(i + 1) % k]
+        ha, hb = h[i], h[(i + 1) % k]
+        if ha > 0.0:
+            out.append(a)
+        if (ha > 0.0) != (hb > 0.0):
+            t = ha / (ha - hb)
+            out.append(a + t * (b - a))
+    return np.asarray(out)

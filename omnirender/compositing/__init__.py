@@ -4,7 +4,8 @@ Leaves are renderers (:class:`SceneRenderer`, :class:`VolumeRenderer`,
 :class:`LightFieldRenderer`, your own :class:`Renderer` subclasses) and filters
 (:class:`LuminanceFilter`, :class:`BufferDebugFilter`, :class:`GLSLFilter`);
 inner nodes are renderer groups (:class:`DepthGroup`, :class:`OcclusionGroup`,
-:class:`ShadowGroup`, your own :class:`RendererGroup` subclasses).  A tree
+:class:`ShadowGroup`, :class:`DepthPeelGroup`,
+:class:`DistanceGroup`, your own :class:`RendererGroup` subclasses).  A tree
 renders with ``tree.render(size)`` or ``om.render(tree, engine="gl")``, or sits
 in a scene graph as a technique.  :func:`check_rules` checks a renderer
 against the four integration rules of DESIGN.md, :func:`check_tree` a tree
@@ -29,6 +30,8 @@ __all__ = [
     "DepthGroup",
     "OcclusionGroup",
     "ShadowGroup",
+    "DepthPeelGroup",
+    "DistanceGroup",
     "LuminanceFilter",
     "BufferDebugFilter",
     "GLSLFilter",
@@ -54,6 +57,8 @@ _WHERE = {
     "DepthGroup": "groups",
     "OcclusionGroup": "groups",
     "ShadowGroup": "shadow",
+    "DepthPeelGroup": "peeling",
+    "DistanceGroup": "distance",
     "LuminanceFilter": "filters",
     "BufferDebugFilter": "filters",
     "GLSLFilter": "filters",

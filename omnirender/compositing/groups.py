@@ -91,6 +91,14 @@ class DepthGroup(RendererGroup):
             return
         merge_by_depth(canvas, draw_offscreen(canvas, self, children))
 
+    def draws_layers(self) -> bool:
+        return all(child.draws_layers() for child in self.children)
+
+    def draw_layer(self, canvas: Canvas, peel: str | None) -> None:
+        """In a ``DepthPeelGroup`` the children's layers are drawn together (offscreen or not)."""
+        for child in self.children:
+            child.draw_layer(canvas, peel)
+
 
 class OcclusionGroup(RendererGroup):
     """Shows what its children draw (image B) even where what is already there (image A) hides it.

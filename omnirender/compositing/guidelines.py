@@ -9,7 +9,13 @@ broken guideline (an empty list for a well-formed tree):
 3. ``only-filters``: a group has at least one child that is not a filter;
 4. ``empty``: a group has children;
 5. ``cycle``: no renderer is its own ancestor (a renderer shared by two
-   groups is fine: trees may be DAGs).
+   groups is fine: trees may be DAGs);
+6. ``peel-layers``: every renderer below a :class:`DepthPeelGroup` can draw
+   depth-peeled layers (``draws_layers()``: scene renderers and groups of
+   them; a volume or a filter cannot);
+7. ``distance-pair``: a :class:`DistanceGroup` has exactly two children, the
+   surface it colours and the reference it measures to, and neither is a
+   filter.
 
 Each problem names the path of the renderer (``DepthGroup/[1]LuminanceFilter``)
 and what to change.  Only the tree's structure is judged; :func:`check_rules`
@@ -26,7 +32,7 @@ from .renderer import Filter, Renderer, RendererGroup
 __all__ = ["TreeProblem", "check_tree", "GUIDELINES"]
 
 #: The guideline names :func:`check_tree` reports, in the order of the module docstring.
-GUIDELINES = ("root", "first-filter", "only-filters", "empty", "cycle")
+GUIDELINES = ("root", "first-filter", "only-filters", "empty", "cycle", "peel-layers", "distance-pair")
 
 
 @dataclass(frozen=True)
@@ -70,5 +76,41 @@ def _walk(node: Renderer, path: str, ancestors: tuple[int, ...], problems: list[
                                     "after the renderers whose output it changes"))  # fmt: skip
     if all(isinstance(child, Filter) for child in children):
         problems.append(TreeProblem("only-filters", path, "the group holds only filters; add a renderer before them"))
+    _special(node, path, children, problems)
     for i, child in enumerate(children):
         _walk(child, f"{path}/[{i}]{type(child).__name__}", (*ancestors, id(node)), problems)
+
+
+def _special(node: RendererGroup, path: str, children: tuple[Any, ...], problems: list[TreeProblem]) -> None:
+    """The guidelines of the depth-peeling and distance groups."""
+    from .distance import DistanceGroup
+    from .peeling import DepthPeelGroup
+
+    if isinstance(node, DepthPeelGroup):
+        for i, child in enumerate(children):
+            for where, leaf in _no_layers(child, f"{path}/[{i}]{type(child).__name__}", ()):
+                problems.append(TreeProblem("peel-layers", where, f"a {type(leaf).__name__} cannot draw "
+                                            "depth-peeled layers; draw it outside the DepthPeelGroup (e.g. "
+                                            "DepthGroup([DepthPeelGroup([...]), it]))"))  # fmt: skip
+    if isinstance(node, DistanceGroup):
+        if len(children) != 2:
+            message = f"a DistanceGroup has {len(children)} children; give two: the surface, then the reference"
+            problems.append(TreeProblem("distance-pair", path, message))
+        for i, child in enumerate(children):
+            if isinstance(child, Filter) and i > 0:  # a first filter is reported as first-filter already
+                problems.append(TreeProblem("distance-pair", f"{path}/[{i}]{type(child).__name__}",
+                                            "a filter has no surface to measure; give a renderer"))  # fmt: skip
+
+
+def _no_layers(node: Any, path: str, ancestors: tuple[int, ...]) -> list[tuple[str, Any]]:
+    """(path, renderer) of the renderers below ``node`` (itself included) that cannot draw peeled layers."""
+    if id(node) in ancestors:
+        return []  # a cycle: reported as such
+    if not isinstance(node, RendererGroup):
+        return [] if node.draws_layers() else [(path, node)]
+    if type(node).draws_layers is Renderer.draws_layers:  # a group that does not pass layers on
+        return [(path, node)]
+    found = []
+    for i, child in enumerate(node.children):
+        found += _no_layers(child, f"{path}/[{i}]{type(child).__name__}", (*ancestors, id(node)))
+    return found

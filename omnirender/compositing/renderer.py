@@ -69,6 +69,18 @@ class Renderer(GLTechnique):
         """Bounds while a frame is drawn (the node content's bounds are known only then)."""
         return self.bounds()
 
+    def draws_layers(self) -> bool:
+        """Whether :meth:`draw_layer` is implemented (the renderer can be a ``DepthPeelGroup``'s child)."""
+        return False
+
+    def draw_layer(self, canvas: Canvas, peel: str | None) -> None:
+        """Draw one depth-peeled layer (see :mod:`~omnirender.compositing.peeling`): the nearest fragments
+        behind the depth of target ``peel`` (None: the nearest fragments), colour unblended (RGB and alpha
+        as shaded), depth written, depth-tested ``less`` against what ``canvas`` holds."""
+        raise NotImplementedError(
+            f"{type(self).__name__} cannot draw depth-peeled layers (draw_layer); draw it outside a DepthPeelGroup"
+        )
+
     def scene_camera(self) -> tuple[Camera, np.ndarray] | None:
         """A camera this renderer's data brings along, as ``(camera, world matrix)``, or None."""
         return None

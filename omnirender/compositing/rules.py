@@ -34,11 +34,8 @@ from ..gl import Target
 from ..gl.engine.glenum import (
     GL_ALWAYS,
     GL_FRONT,
-    GL_FRONT_AND_BACK,
     GL_LEQUAL,
     GL_ONE,
-    GL_SCISSOR_TEST,
-    GL_STENCIL_BUFFER_BIT,
     GL_ZERO,
 )
 from ..gl.engine.technique import GLTechnique
@@ -178,24 +175,14 @@ def _unusual(state: Any, size: tuple[int, int]) -> Any:
 
 def _fill(canvas: Canvas, pattern: dict[str, np.ndarray]) -> None:
     """Write the pattern's colour, depth and stencil into the framebuffer."""
-    from ..gl.engine.glstate import preserved_state
+    from ..gl.engine.glstate import write_stencil
 
     name = "check-rules.pattern"
     target = canvas.copy(Target(name))
     target.texture("color").write(np.ascontiguousarray(pattern["color"][::-1]).tobytes())
     target.depth.write(np.ascontiguousarray(pattern["depth"][::-1], dtype=np.float32).tobytes())
     canvas.fullscreen("pattern", _RESTORE, {"u_color": (name, "color"), "u_depth": (name, "depth")}, depth=True)
-    raw = canvas.engine.raw
-    stencil = pattern["stencil"]
-    h = stencil.shape[0]
-    with preserved_state(canvas.framebuffer):
-        raw.glEnable(GL_SCISSOR_TEST)
-        raw.glStencilMaskSeparate(GL_FRONT_AND_BACK, 0xFF)
-        for y in range(0, h, _CELL):
-            for x in range(0, stencil.shape[1], _CELL):
-                raw.glScissor(x, h - y - _CELL, _CELL, _CELL)
-                raw.glClearStencil(int(stencil[y, x]))
-                raw.glClear(GL_STENCIL_BUFFER_BIT)
+    write_stencil(canvas.framebuffer, pattern["stencil"], _CELL)  # scissored clears, the state put back after
 
 
 def _read(canvas: Canvas) -> dict[str, np.ndarray]:

@@ -8,6 +8,14 @@ into the tree's current framebuffer with the tree's camera
 copied: the scene's fragments are depth-tested against what earlier renderers
 drew, so colour and depth stay consistent, and the scene is compiled once and
 replayed on later frames while it does not change.
+
+Colour and depth stay consistent for translucent surfaces too (integration
+rule 2): where no technique is given, the scene is drawn by
+:class:`TreeForward`, the engine's forward technique whose transparent-depth
+pass writes the depth of every translucent fragment that shows (alpha at
+least 1/255), not only of the mostly opaque ones as an image's depth does.
+A :class:`~omnirender.compositing.DepthPeelGroup` draws the scene's layers
+with a second engine of its own (:meth:`SceneRenderer.draw_layer`).
 """
 
 from __future__ import annotations
@@ -20,11 +28,32 @@ import numpy as np
 from ..core.camera import Camera
 from ..core.component import RenderingComponent
 from ..core.technique import Technique
+from ..gl import Blend, ColorMask, DepthMask, Pass, Shader
+from ..gl.techniques.forward import Forward
 from ..scene.node import Node
 from .canvas import Canvas
 from .renderer import Bounds, Renderer
 
-__all__ = ["SceneRenderer", "VolumeRenderer"]
+__all__ = ["SceneRenderer", "VolumeRenderer", "TreeForward"]
+
+
+class TreeForward(Forward):
+    """``om.gl.Forward`` whose transparent-depth pass writes depth wherever a translucent fragment adds colour
+    (alpha >= 1/255): in a renderer tree every coloured pixel has a depth (integration rule 2)."""
+
+    __slots__ = ()
+    PASSES = tuple(
+        Pass(
+            "transparent depth",
+            items="transparent",
+            scopes=False,
+            state=(ColorMask(False, False, False, False), DepthMask(True), Blend(None)),
+            shader=Shader(depth_only=True, alpha_cutoff=1.0 / 255.0),
+        )
+        if p.name == "transparent depth"
+        else p
+        for p in Forward.PASSES
+    )
 
 
 class SceneRenderer(Renderer):
@@ -40,8 +69,12 @@ class SceneRenderer(Renderer):
     part of a graph where it sits, give the whole graph and a group mask.
     """
 
-    __slots__ = ("scene", "mask", "technique", "on_missing", "_engines", "_bounds")
-    _transient = {"_engines": weakref.WeakKeyDictionary, "_bounds": lambda: None}
+    __slots__ = ("scene", "mask", "technique", "on_missing", "_engines", "_bounds", "_peelers")
+    _transient = {
+        "_engines": weakref.WeakKeyDictionary,
+        "_bounds": lambda: None,
+        "_peelers": weakref.WeakKeyDictionary,
+    }
 
     def __init__(
         self, scene: Any, mask: str | None = None, technique: Technique | None = None, on_missing: str = "raise"
@@ -69,6 +102,7 @@ class SceneRenderer(Renderer):
         self.technique = technique
         self.on_missing = on_missing
         object.__setattr__(self, "_engines", weakref.WeakKeyDictionary())
+        object.__setattr__(self, "_peelers", weakref.WeakKeyDictionary())
         object.__setattr__(self, "_bounds", None)
 
     def engine(self, host: Any) -> Any:
@@ -81,17 +115,48 @@ class SceneRenderer(Renderer):
             return found[1]
         if found is not None:
             found[1].release()
-        engine = GLEngine(
-            size=(1, 1), samples=0, context=host.ctx, technique=self.technique, on_missing=self.on_missing
-        )
+        technique = self.technique if self.technique is not None else TreeForward()
+        engine = GLEngine(size=(1, 1), samples=0, context=host.ctx, technique=technique, on_missing=self.on_missing)
         self._engines[host] = (key, engine)
         return engine
+
+    def peeler(self, host: Any) -> tuple[Any, Any]:
+        """(engine, its :class:`~omnirender.compositing.peeling.PeelLayer` technique) drawing this scene's
+        depth-peeled layers in frames of ``host`` (made on first use)."""
+        from ..gl.glengine import GLEngine
+        from .peeling import PeelLayer
+
+        found = self._peelers.get(host)
+        key = (self.mask, self.on_missing)
+        if found is not None and found[0] == key:
+            return found[1], found[2]
+        if found is not None:
+            found[1].release()
+        technique = PeelLayer()
+        engine = GLEngine(size=(1, 1), samples=0, context=host.ctx, technique=technique, on_missing=self.on_missing)
+        self._peelers[host] = (key, engine, technique)
+        return engine, technique
 
     def draw(self, canvas: Canvas) -> None:
         with canvas.preserved():  # making an engine or drawing changes GL state: put it back
             engine = self.engine(canvas.engine)
             engine.compile(self.scene, mask=self.mask)
             engine.draw(clear=False, camera=(canvas.view, canvas.projection), framebuffer=canvas.framebuffer)
+        canvas.count(engine.stats["draw_calls"], engine.stats["items"])
+
+    def draws_layers(self) -> bool:
+        return True
+
+    def draw_layer(self, canvas: Canvas, peel: str | None) -> None:
+        """One depth-peeled layer of the scene (forward shading; a ``technique`` given does not apply)."""
+        with canvas.preserved():
+            engine, technique = self.peeler(canvas.engine)
+            object.__setattr__(technique, "peel", None if peel is None else canvas.target(peel).depth)
+            engine.compile(self.scene, mask=self.mask)
+            try:
+                engine.draw(clear=False, camera=(canvas.view, canvas.projection), framebuffer=canvas.framebuffer)
+            finally:
+                object.__setattr__(technique, "peel", None)
         canvas.count(engine.stats["draw_calls"], engine.stats["items"])
 
     def bounds(self) -> Bounds | None:
@@ -115,6 +180,9 @@ class SceneRenderer(Renderer):
         for _, engine in list(self._engines.values()):
             engine.release()
         self._engines.clear()
+        for _, engine, _ in list(self._peelers.values()):
+            engine.release()
+        self._peelers.clear()
 
 
 class VolumeRenderer(SceneRenderer):
@@ -138,3 +206,6 @@ class VolumeRenderer(SceneRenderer):
 
     def scene_camera(self) -> tuple[Camera, np.ndarray] | None:
         return None
+
+    def draws_layers(self) -> bool:
+        return False  # ray casting is not peeled: draw the volume outside a DepthPeelGroup

@@ -16,11 +16,15 @@ empty and are recomputed on first use.
 from __future__ import annotations
 
 import weakref
+from collections import deque
 from collections.abc import Callable
+from itertools import chain
+from operator import attrgetter
 from typing import Any
 
 __all__ = [
     "ChangeJournal",
+    "note_change",
     "note_edit",
     "RenderingComponent",
     "Shape",
@@ -93,6 +97,17 @@ def _forget_journal(changed: dict[int, RenderingComponent], edits: list) -> None
                 break
 
 
+def note_change(what: Any) -> None:
+    """Tell the live journals that ``what`` changed: it is among the next :meth:`ChangeJournal.drain`.
+
+    :meth:`RenderingComponent.touch` does this for a component; a bulk change
+    (``om.TranslationArray.touch``) records its one array instead of each of
+    its components, for an engine that applies the whole array at once.
+    """
+    for changed in _JOURNALS:
+        changed[id(what)] = what
+
+
 def note_edit(container: Any, op: str, item: Any, index: int) -> None:
     """Tell the live journals that ``container``'s list changed: ``op`` ("insert", "remove", or another word for
     a change they cannot follow) of ``item`` at ``index``.  Nodes call it; engines read it with
@@ -154,17 +169,20 @@ class RenderingComponent:
                 node.touch()
 
     @staticmethod
-    def touch_all(components: list[RenderingComponent]) -> None:
-        """:meth:`touch` every one of ``components`` (distinct), the journals told in one update per journal."""
-        for c in components:
-            _set_version(c, c._version + 1)
-        for changed in _JOURNALS:
-            changed.update(zip(map(id, components), components, strict=True))
-        for c in components:
-            owners = c._owners
-            if owners:
-                for node in owners:
-                    node.touch()
+    def touch_all(components: list[RenderingComponent], *, journal_entry: Any = None) -> None:
+        """:meth:`touch` every one of ``components`` (distinct), in loops that take no Python step per component.
+
+        The journals are told in one update each: of every component, or, with
+        ``journal_entry``, of that one object instead (see :func:`note_change`).
+        """
+        deque(map(_set_version, components, map(_PLUS_ONE, map(_VERSION_OF, components))), 0)
+        if journal_entry is not None:
+            note_change(journal_entry)
+        else:
+            for changed in _JOURNALS:
+                changed.update(zip(map(id, components), components, strict=True))
+        for owner in chain.from_iterable(filter(None, map(_OWNERS_OF, components))):
+            owner.touch()
 
     def attach_owner(self, owner: Any) -> None:
         """Make ``owner`` (anything with ``touch()``: a node, a shape built from this one) hear of changes."""
@@ -228,6 +246,9 @@ class RenderingComponent:
 
 #: The ``_version`` slot's setter: a change bumps the version without going through ``__setattr__``.
 _set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
+_VERSION_OF = attrgetter("_version")
+_OWNERS_OF = attrgetter("_owners")
+_PLUS_ONE = (1).__add__
 
 _SLOTS: dict[type, tuple[str, ...]] = {}
 _TRANSIENT: dict[type, dict[str, Callable[[], Any]]] = {}

@@ -8,8 +8,9 @@ convention is column vectors and pre-multiplication (``p' = M @ p``), float64.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Sequence
-from itertools import chain
+from itertools import chain, repeat
 from operator import attrgetter
 from typing import Any
 
@@ -79,10 +80,15 @@ def plain_triple(value: object) -> tuple[float, float, float] | None:
             except OverflowError:  # an integer beyond float's range
                 return None
     elif cls is np.ndarray:
-        if value.shape != (3,) or value.dtype.kind not in _REAL_KINDS:  # type: ignore[attr-defined]
+        if value.dtype.kind not in _REAL_KINDS:  # type: ignore[attr-defined]
             return None
-        x, y, z = value.tolist()  # type: ignore[attr-defined]
-        if x.__class__ is not float:  # an integer array
+        try:
+            x, y, z = value.tolist()  # type: ignore[attr-defined]  (shape (3,); another shape fails or nests)
+        except (TypeError, ValueError):
+            return None
+        if x.__class__ is not float:  # an integer array, or nested lists of another shape
+            if x.__class__ is not int:
+                return None
             x, y, z = float(x), float(y), float(z)
     else:
         return None
@@ -209,9 +215,29 @@ class Translation(Transform):
             self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
 
     def __setattr__(self, name: str, value: Any) -> None:
-        # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames
+        # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames; a
+        # numpy row or three Python floats without a call to plain_triple (the other plain inputs take it)
         if name == "offset":
-            offset = plain_triple(value)
+            cls = value.__class__
+            x = y = z = None
+            if cls is np.ndarray:
+                try:
+                    x, y, z = value.tolist()  # shape (3,): three Python numbers; any other shape fails or nests
+                except (TypeError, ValueError):
+                    pass
+            elif cls is tuple and len(value) == 3:
+                x, y, z = value
+            if (
+                x.__class__ is float
+                and y.__class__ is float
+                and z.__class__ is float
+                and -_MAX <= x <= _MAX  # False for NaN: a non-finite number takes the validating path
+                and -_MAX <= y <= _MAX
+                and -_MAX <= z <= _MAX
+            ):
+                offset = (x, y, z)
+            else:
+                offset = plain_triple(value)
             if offset is not None:
                 _set_offset(self, offset)
                 _set_matrix(self, None)
@@ -433,12 +459,14 @@ class TranslationArray(Sequence[Translation]):
     translations keep the offsets of the last one.
     """
 
-    __slots__ = ("_array", "_translations", "_version")
+    __slots__ = ("_array", "_translations", "_offsets", "_version")
 
     def __init__(self, offsets: np.ndarray | Sequence[Sequence[float]]) -> None:
         a = self._checked(offsets if isinstance(offsets, np.ndarray) else np.asarray(offsets, dtype=np.float64))
         self._array = offsets if isinstance(offsets, np.ndarray) else a
         self._translations = [Translation(offset=row) for row in a.tolist()]
+        self._offsets = a.copy()
+        self._offsets.setflags(write=False)
         self._version = 0
 
     @property
@@ -451,6 +479,11 @@ class TranslationArray(Sequence[Translation]):
         """Counter bumped by every :meth:`touch`."""
         return self._version
 
+    @property
+    def owners(self) -> tuple[Any, ...]:
+        """The nodes that hold its translations (what a change journal's reader asks of what changed)."""
+        return tuple(chain.from_iterable(t.owners for t in self._translations))
+
     def __len__(self) -> int:
         return len(self._translations)
 
@@ -460,15 +493,32 @@ class TranslationArray(Sequence[Translation]):
     def __iter__(self):
         return iter(self._translations)
 
+    @property
+    def offsets(self) -> np.ndarray:
+        """The offsets as of the last :meth:`touch` (or construction): a read-only ``(N, 3)`` float64 copy.
+
+        Engines that apply the whole array at once read it (the GL engine
+        writes it into its batch rows in one numpy operation per batch).
+        """
+        return self._offsets
+
     def touch(self) -> None:
-        """Every translation takes its row of the array (written in place since); one change per translation."""
+        """Every translation takes its row of the array (written in place since), in loops with no Python step per row.
+
+        Each translation's version and its nodes' versions move as if its
+        ``offset`` had been assigned; the engines' change journals record the
+        array once (:func:`~omnirender.core.component.note_change`), so an
+        engine that knows it applies the rows at once.
+        """
         a = self._checked(self._array)
         translations = self._translations
-        for t, (x, y, z) in zip(translations, a.tolist(), strict=True):
-            _set_offset(t, (x, y, z))
-            _set_matrix(t, None)
-        Translation.touch_all(translations)
+        offsets = a.copy()
+        offsets.setflags(write=False)
+        deque(map(_set_offset, translations, zip(*offsets.T.tolist(), strict=True)), 0)  # tuples of 3 floats
+        deque(map(_set_matrix, translations, repeat(None)), 0)
+        self._offsets = offsets
         self._version += 1
+        Translation.touch_all(translations, journal_entry=self)
 
     def _checked(self, offsets: np.ndarray) -> np.ndarray:
         a = np.asarray(offsets, dtype=np.float64) if offsets.dtype != np.float64 else offsets

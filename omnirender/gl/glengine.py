@@ -171,8 +171,7 @@ class GLEngine(Engine):
         #: the installed draw list and its derived lists (items, mirrors, bounds), kept up to date by change kind
         self.index = RenderIndex(mirror_items)
         self.stats: dict[str, Any] = {}
-        with self.current():
-            self.ctx.enable(self.ctx.PROGRAM_POINT_SIZE)
+        with self.current():  # (PROGRAM_POINT_SIZE is enabled by the state applier when a frame begins)
             info = self.ctx.info
             #: largest 2D texture side and 3D texture side this GPU accepts (checked before creating textures)
             self.max_texture_size = int(info.get("GL_MAX_TEXTURE_SIZE", 16384))
@@ -268,6 +267,17 @@ class GLEngine(Engine):
         Nested techniques' passes always draw their items with :attr:`technique` (forward).
         """
         return self._pipeline_technique or self.technique
+
+    def frame_level_technique(self) -> Technique:
+        """The technique a frame runs over the installed scene: a post-processing chain holding the whole scene
+        (around the pipeline), else :attr:`frame_technique`."""
+        root = self.root_scope
+        return self.frame_technique if root is None else self.frame_runner.frame_level(root)[0]
+
+    def at_frame_level(self) -> bool:
+        """Whether the technique running now runs over a whole frame: the frame's own, or a frame drawn into a
+        target by a ``Pass(technique="frame")`` (a stereo eye); not a technique met in a node."""
+        return len(self.technique_frames) == self.frame_runner.frame_base + 1
 
     @property
     def stereo(self) -> Any:
@@ -702,6 +712,13 @@ class GLEngine(Engine):
         """From a custom pass: draw into ``framebuffer`` (a moderngl framebuffer of ``size`` pixels) through the
         engine's state applier (moderngl's ``use()`` resets masks and scissor behind the engine's back)."""
         self.frame_runner.bind_framebuffer(framebuffer, size)
+
+    def between_frames(self) -> contextlib.AbstractContextManager[Any]:
+        """``with engine.between_frames():`` set GL state outside a frame through the engine's state applier:
+        inside, :meth:`apply_gl_state`, :meth:`default_gl_state` and :meth:`bind_framebuffer` work as in a pass
+        (the engine's framebuffer bound, every state at its default first); afterwards GL holds its defaults with
+        the engine's framebuffer bound, as after a frame.  Inside a frame it uses the frame's state."""
+        return self.frame_runner.between_frames()
 
     def reset_gl_state(self) -> None:
         """Put every GL state kind at its default (no blending, culling, stencil, scissor, wireframe, offset),

@@ -17,11 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import AmbientLight, Color, DirectionalLight, PointLight, SpotLight
+from ..attributes import AmbientLight, AreaLight, Color, DirectionalLight, DiscLight, PointLight, SpotLight
 from ..attributes.photometry import (
     GLOBAL_AMBIENT,
     HEADLIGHT,
     ambient_total,
+    area_radiance,
     headlight_direction,
     intensity_scale,
     linear_to_srgb,
@@ -158,6 +159,38 @@ def light_emitter(light: Any, world: np.ndarray, reference: np.ndarray) -> dict[
             "intensity": intensity,
         }
     return None
+
+
+#: How far the two faces of a two-sided area light sit apart, as a fraction of its larger half extent.
+TWO_SIDED_GAP = 1e-4
+
+
+def area_light_shapes(light: AreaLight, world: np.ndarray) -> list[dict[str, Any]]:
+    """A ``rectangle`` (or ``disk``) shape with an ``area`` emitter of the light's radiance, per lit side.
+
+    The rule of :mod:`omnirender.attributes.photometry`: radiance ``diffuse``
+    (linear RGB, W/(m^2 sr)).  Mitsuba's area emitters light the side their
+    normal points to; a two-sided light is two shapes facing away from each
+    other, ``TWO_SIDED_GAP`` apart.  The shape is black (it reflects nothing)
+    and the camera sees it, as it sees any emitter.
+    """
+    centre, hu, hv, normal = light.world_frame(world)
+    gap = TWO_SIDED_GAP * max(float(np.linalg.norm(hu)), float(np.linalg.norm(hv)))
+    out = []
+    for side in (1.0, -1.0) if light.two_sided else (1.0,):
+        n = side * normal
+        m = np.eye(4)
+        m[:3, 0], m[:3, 1], m[:3, 2] = hu, hv, n
+        m[:3, 3] = centre + (n * gap if light.two_sided else 0.0)
+        out.append(
+            {
+                "type": "disk" if isinstance(light, DiscLight) else "rectangle",
+                "to_world": m,
+                "emitter": {"type": "area", "radiance": rgb(area_radiance(light), linearize=False)},
+                "bsdf": {"type": "diffuse", "reflectance": rgb((0.0, 0.0, 0.0), linearize=False)},
+            }
+        )
+    return out
 
 
 #: Emitter plugins that are environments (Mitsuba allows one per scene).

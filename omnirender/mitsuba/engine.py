@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import BumpMap, Mirror, MultiTexture, Texture
+from ..attributes import AreaLight, BumpMap, Mirror, MultiTexture, Texture
 from ..attributes.clipping import ClipRecords
 from ..attributes.conversion import native_to
 from ..attributes.photometry import ambient_total, linear_to_srgb, srgb_to_linear
@@ -483,6 +483,11 @@ class MitsubaEngine(Engine):
             self.add_emitter(convert.headlight_emitter(*self.camera_or_default()), "headlight")
         reference = self.reference_point()
         for light, matrix in self.pending_lights:
+            if isinstance(light, AreaLight):  # an emitting shape, not a scene-level emitter
+                for shape in convert.area_light_shapes(light, matrix):
+                    shape["to_world"] = transform(shape["to_world"])
+                    self.shapes[self.unique_name(type(light).__name__.lower())] = shape
+                continue
             plugin = convert.light_emitter(light, matrix, reference)
             if plugin is not None:
                 if "to_world" in plugin:

@@ -300,6 +300,10 @@ def _shadowless(light_text: str) -> str:
     """A ``light_source`` text made ``shadowless`` (once)."""
     if " shadowless" in light_text:
         return light_text
+    if light_text.count("light_source") > 1:  # a two-sided area light: one light_source per side
+        return "".join(
+            _shadowless(part) for part in light_text.replace("light_source", "\0light_source").split("\0")[1:]
+        )
     end = light_text.rindex("}")
     return f"{light_text[:end]}shadowless {light_text[end:]}"
 

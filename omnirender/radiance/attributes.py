@@ -169,12 +169,15 @@ class Options(Parameterised, MonoAttribute):
     accuracy (0 turns the ambient cache off), ``ar`` ambient resolution,
     ``lw`` limit weight, ``lr`` limit reflection, ``dt`` direct threshold [0:
     every light is shadow-tested], ``dc`` direct certainty [1], ``dj`` direct
-    jitter (soft shadows), ``ss`` specular sampling, ``st`` specular threshold.
+    jitter (soft shadows), ``ss`` specular sampling, ``st`` specular threshold,
+    ``ds`` direct (source) subdivision [0.2: an area light is split until each
+    piece is smaller than 0.2 of its distance; smaller values smooth the penumbra
+    of ``RectLight``/``DiscLight`` shadows].
     The last ``Options`` met in the scene applies to the whole render;
     ``render(..., options=...)`` overrides it.
     """
 
-    __slots__ = ("_ab", "_ad", "_as_", "_aa", "_ar", "_lw", "_lr", "_dt", "_dc", "_dj", "_ss", "_st")
+    __slots__ = ("_ab", "_ad", "_as_", "_aa", "_ar", "_lw", "_lr", "_dt", "_dc", "_dj", "_ss", "_st", "_ds")
     ab = Param(_optional(check_number(0.0, 100.0, integer=True)), "ambient bounces")
     ad = Param(_optional(_int_ge1), "ambient divisions")
     as_ = Param(_optional(_int_ge0), "ambient super-samples")
@@ -187,6 +190,7 @@ class Options(Parameterised, MonoAttribute):
     dj = Param(_optional(_unit), "direct jitter")
     ss = Param(_optional(_ge0), "specular sampling")
     st = Param(_optional(_unit), "specular threshold")
+    ds = Param(_optional(_ge0), "direct (source) subdivision")
 
     #: omnirender's values for parameters left at None (Radiance's own defaults otherwise).
     DEFAULTS: dict[str, float] = {"ab": 0, "dt": 0.0, "dc": 1.0, "dj": 0.0}
@@ -205,10 +209,12 @@ class Options(Parameterised, MonoAttribute):
         dj: float | None = None,
         ss: float | None = None,
         st: float | None = None,
+        ds: float | None = None,
     ) -> None:
         super().__init__()
         self.ab, self.ad, self.as_, self.aa, self.ar, self.lw = ab, ad, as_, aa, ar, lw
         self.lr, self.dt, self.dc, self.dj, self.ss, self.st = lr, dt, dc, dj, ss, st
+        self.ds = ds
 
     def arguments(self) -> list[str]:
         """Command-line arguments (``-ab 2 -ad 512 ...``) with omnirender's defaults filled in."""

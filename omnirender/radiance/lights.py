@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from ..attributes import AmbientLight, DirectionalLight, PointLight, SpotLight
-from ..attributes.photometry import headlight_direction, intensity_scale
+from ..attributes import AmbientLight, AreaLight, DirectionalLight, DiscLight, PointLight, SpotLight
+from ..attributes.photometry import area_radiance, headlight_direction, intensity_scale
 from . import rad
 from .attributes import Sky
 
@@ -83,6 +83,25 @@ def _sphere_light(engine: Any, light: Any, world: np.ndarray) -> str:
     return out + rad.primitive(mat, "sphere", ident, (), [*p, radius])
 
 
+def _area_light(engine: Any, light: AreaLight, world: np.ndarray) -> str:
+    centre, hu, hv, normal = light.world_frame(world)
+    lu, lv = float(np.linalg.norm(hu)), float(np.linalg.norm(hv))
+    gap = 1e-4 * max(lu, lv)
+    mat = engine.new_id("l")
+    out = rad.primitive("void", "light", mat, (), area_radiance(light))
+    for side in (1.0, -1.0) if light.two_sided else (1.0,):
+        shift = side * normal * gap if light.two_sided else np.zeros(3)
+        ident = engine.new_id("s")
+        if isinstance(light, DiscLight) and abs(lu - lv) <= 1e-9 * max(lu, lv) and abs(float(np.dot(hu, hv))) < 1e-9:
+            out += rad.primitive(mat, "ring", ident, (), [*(centre + shift), *(side * normal), 0.0, lu])
+            continue
+        pts = light.world_polygon(world, 48) + shift
+        if side < 0.0:
+            pts = pts[::-1]
+        out += rad.primitive(mat, "polygon", ident, (), pts.reshape(-1))
+    return out
+
+
 def _sky(engine: Any, sky: Sky, world: np.ndarray) -> str:
     up = np.asarray(world, np.float64)[:3, :3] @ np.asarray(sky.up)
     up /= np.linalg.norm(up)
@@ -106,6 +125,8 @@ def lights_text(engine: Any) -> str:
             continue  # in the ambient value
         if isinstance(light, Sky):
             parts.append(_sky(engine, light, world))
+        elif isinstance(light, AreaLight):
+            parts.append(_area_light(engine, light, world))
         elif isinstance(light, DirectionalLight):
             towards = -light.world_direction(world)
             parts.append(_source(engine, towards, math.pi * np.asarray(light.diffuse, np.float64)))

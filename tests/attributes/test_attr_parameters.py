@@ -34,6 +34,8 @@ def _examples():
         om.PointLight(position=(1, 2, 3), linear=0.1, quadratic=0.01, diffuse=(0.5, 0.5, 0.5)),
         om.SpotLight(position=(0, 5, 0), direction=(0, -1, 0), cutoff=20, exponent=4, specular=(1, 1, 1)),
         om.AmbientLight(color=(0.2, 0.3, 0.4), intensity=0.5),
+        om.RectLight(position=(0, 3, 0), direction=(0, -1, 0), width=2, height=0.5, up=(1, 0, 0), two_sided=True),
+        om.DiscLight(position=(0, 3, 0), direction=(0, -1, 0), radius=0.4, casts_shadows=False, intensity=3),
         om.LookAt(eye=(1, 2, 3), center=(0, 0, 0), up=(0, 0, 1)),
         om.Reflection(normal=(0, 1, 0), point=(0, 2, 0)),
         om.DirectionOfFlight(velocity=(1, 0, 1), up=(0, 1, 0), position=(1, 2, 3)),

@@ -12,9 +12,10 @@ CAMERA = om.Camera.look_at((0, 1.0, 6.0), (0, 0, 0), fov=40)
 LIGHT = om.PointLight(position=(3, 5, 4))
 
 
-def ball(center=(-0.5, 0, 0), radius=1.0, color=(1.0, 0.3, 0.2), light=True) -> om.Node:
+def ball(center=(-0.5, 0, 0), radius=1.0, color=(1.0, 0.3, 0.2), light=True, opacity=1.0) -> om.Node:
     items = [LIGHT] if light else []
-    return om.Node("ball", [*items, om.Material(diffuse=color), om.Sphere(center=center, radius=radius)])
+    material = om.Material(diffuse=color, opacity=opacity)
+    return om.Node("ball", [*items, material, om.Sphere(center=center, radius=radius)])
 
 
 def cube(center=(0.6, 0, 0.3), size=1.5, color=(0.2, 0.4, 1.0), light=True) -> om.Node:

@@ -16,6 +16,7 @@ C = om.compositing
 def built_ins() -> dict[str, C.Renderer]:
     a, b = C.SceneRenderer(om.Node("a", [CAMERA, *ball().items])), C.SceneRenderer(cube())
     volume = C.VolumeRenderer(fog_volume(), om.Translation(0.3, 0.2, 0.5))
+    glass = C.SceneRenderer(ball(center=(0.2, 0.1, 0.4), radius=0.8, opacity=0.35))
     return {
         "SceneRenderer": a,
         "VolumeRenderer": volume,
@@ -30,6 +31,9 @@ def built_ins() -> dict[str, C.Renderer]:
         "BufferDebugFilter(stencil)": C.BufferDebugFilter("stencil"),
         "GLSLFilter": C.GLSLFilter("vec4 filter_color(vec4 c, float d, vec2 uv) { return vec4(1.0 - c.rgb, c.a); }"),
         "filter in an offscreen group": C.DepthGroup([a, C.LuminanceFilter()], offscreen=True),
+        "DepthPeelGroup": C.DepthPeelGroup([glass, C.DepthGroup([b])], layers=4),
+        "DistanceGroup": C.DistanceGroup([b, glass], range=2.0),
+        "DistanceGroup(signed)": C.DistanceGroup([glass, a], range=1.0, signed=True, missing=(0, 0, 0, 0)),
     }
 
 

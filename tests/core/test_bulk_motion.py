@@ -125,7 +125,10 @@ def test_a_translation_array_holds_the_array_and_touch_changes_every_translation
     assert [t.version for t in moves] == [v + 1 for v in versions]
     assert all(scene.child(f"b{i}").version > node_versions[i] for i in range(5))
     assert scene.version > root
-    assert journal.drain() == list(moves)
+    assert journal.drain() == [moves]  # the array once: an engine that knows it applies its rows at once
+    assert np.array_equal(moves.offsets, positions) and moves.offsets is not positions
+    assert not moves.offsets.flags.writeable
+    assert set(moves.owners) == {scene.child(f"b{i}") for i in range(5)}
     assert np.array_equal(moves[2].matrix[:3, 3], [2.0, 2.0, 0.0])
     assert moves.version == 1
 

@@ -72,6 +72,8 @@ def _samples(tmp: Path) -> dict[str, list]:
         "DirectionalLight": [om.DirectionalLight(direction=(1, -1, 0), intensity=2)],
         "PointLight": [om.PointLight(position=(1, 2, 3), linear=0.1, diffuse=(0.5, 0.5, 0.5))],
         "SpotLight": [om.SpotLight(position=(0, 5, 0), direction=(0, -1, 0), cutoff=20, exponent=4)],
+        "RectLight": [om.RectLight(position=(0, 3, 0), direction=(0, -1, 0), width=2, height=0.5, two_sided=True)],
+        "DiscLight": [om.DiscLight(position=(0, 3, 0), direction=(0, -1, 0), radius=0.4, up=(1, 0, 0))],
         "AmbientLight": [om.AmbientLight(color=(0.2, 0.3, 0.4), intensity=0.5)],
         "LookAt": [om.LookAt(eye=(1, 2, 3), center=(0, 0, 0), up=(0, 0, 1))],
         "Reflection": [om.Reflection(normal=(0, 1, 0), point=(0, 2, 0))],

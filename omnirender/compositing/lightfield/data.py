@@ -208,6 +208,25 @@ class LightField:
         self._bounds: tuple[np.ndarray, np.ndarray] | None = None
         self._points: dict[tuple[int, int], np.ndarray] = {}
 
+    @classmethod
+    def combine(cls, *fields: LightField) -> LightField:
+        """Several light fields of one scene as one: all their views (in order), one blending field.
+
+        Rendered by a :class:`~.renderer.LightFieldRenderer`, a camera moving from
+        the region one field captured to another's passes smoothly from the one
+        to the other: the unstructured lumigraph's blending weights are
+        continuous in the viewer's position, so the cameras of the field left
+        behind fade out as those of the field approached fade in, and where only
+        one field's cameras are among the ``k`` best the image is that field's
+        alone.
+        """
+        for i, lf in enumerate(fields):
+            if not isinstance(lf, LightField):
+                raise TypeError(f"LightField.combine: field {i} is a {type(lf).__name__}, not a LightField")
+        if not fields:
+            raise ValueError("LightField.combine: give one or more light fields")
+        return cls([view for lf in fields for view in lf.views])
+
     def __len__(self) -> int:
         return len(self.views)
 

@@ -25,11 +25,12 @@ from __future__ import annotations
 
 import time
 import weakref
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from ...gl import Clear, Target
+from ...gl import Blend, Clear, CullFace, DepthTest, Target
 from ..canvas import Canvas, eye_distance, target_name
 from ..renderer import Bounds, Renderer
 from .blending import ScreenMesh, eye_of, relevant_views, screen_mesh
@@ -170,6 +171,10 @@ class _Textures:
 class LightFieldRenderer(Renderer):
     """Draws a :class:`~.data.LightField` from any view by unstructured lumigraph rendering.
 
+    Several light fields of one scene (a list) are drawn as one
+    (:meth:`LightField.combine`): moving between the regions they captured,
+    the view passes smoothly from one field to the other.
+
     ``cell`` is the screen mesh's spacing in pixels, ``k`` the number of
     cameras blended per vertex (the ``k``-th best sets the threshold, so
     ``k - 1`` contribute), ``geometry_views`` how many depth maps give the
@@ -187,7 +192,7 @@ class LightFieldRenderer(Renderer):
 
     def __init__(
         self,
-        light_field: LightField,
+        light_field: LightField | Sequence[LightField],
         cell: int = 8,
         k: int = 4,
         geometry_views: int = 4,
@@ -197,6 +202,8 @@ class LightFieldRenderer(Renderer):
         min_alpha: float = 0.1,
     ) -> None:
         super().__init__()
+        if isinstance(light_field, (list, tuple)):
+            light_field = LightField.combine(*light_field)
         if not isinstance(light_field, LightField):
             raise TypeError(
                 f"LightFieldRenderer: light_field must be an om.compositing.LightField, got {light_field!r:.60}"
@@ -266,9 +273,7 @@ class LightFieldRenderer(Renderer):
         ctx = canvas.ctx
         textures = self._textures(canvas.engine)
         prog = canvas.program("compositing.lumigraph-surface", _SURFACE_VERTEX, _SURFACE_FRAGMENT)
-        ctx.enable(ctx.DEPTH_TEST)
-        ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-        ctx.depth_func = "<"
+        canvas.engine.apply_gl_state(DepthTest(), Blend(False), CullFace("none"))  # through the engine's applier
         prog["u_view_proj"].write(canvas.view_projection.T.astype(np.float32).tobytes())
         calls = 0
         for i in views:
@@ -291,11 +296,8 @@ class LightFieldRenderer(Renderer):
         index = ctx.buffer(reserve=max(4, mesh.triangles.nbytes))
         vao = ctx.vertex_array(prog, [(positions, "3f", "in_position"), (weight, "1f", "in_weight")], index, 4)
         try:
-            ctx.enable(ctx.BLEND | ctx.DEPTH_TEST)
-            ctx.disable(ctx.CULL_FACE)
-            ctx.blend_func = (ctx.ONE, ctx.ONE)
-            ctx.blend_equation = ctx.FUNC_ADD
-            ctx.depth_func = "1"  # every camera's pass writes the same mesh depth
+            # additive, and every camera's pass writes the same mesh depth (through the engine's applier)
+            canvas.engine.apply_gl_state(Blend(src="one", dst="one"), DepthTest(func="always"), CullFace("none"))
             prog["u_view_proj"].write(canvas.view_projection.T.astype(np.float32).tobytes())
             prog["u_inv_view_proj"].write(np.linalg.inv(canvas.view_projection).T.astype(np.float32).tobytes())
             prog["u_viewport"].value = tuple(float(v) for v in canvas.size)

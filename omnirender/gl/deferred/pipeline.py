@@ -232,7 +232,7 @@ class DeferredRenderer:
 
     def describe_pass(self, technique: Deferred, engine: Any, index: int) -> Pass:
         """The description of pass ``index`` of ``technique`` in this frame (``Deferred.PASSES[index]``)."""
-        frame_level = len(engine.technique_frames) == 1
+        frame_level = engine.at_frame_level()
         samples = current_samples(engine)
         key = (index, samples, frame_level)
         found = self._passes.get(key)

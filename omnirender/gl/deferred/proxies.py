@@ -96,13 +96,13 @@ class LightTable:
     """
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], shadow_faces: dict[int, tuple[int, int]]) -> None:
-        from ...attributes import AmbientLight, DirectionalLight, SpotLight
+        from ...attributes import AmbientLight, AreaLight, DirectionalLight, SpotLight
 
         rows: dict[tuple[str, str], list[np.ndarray]] = {}
         self.count = 0
         self.headlight = not lights
         for light, matrix in lights:
-            if isinstance(light, AmbientLight) or not hasattr(light, "diffuse"):
+            if isinstance(light, (AmbientLight, AreaLight)) or not hasattr(light, "diffuse"):
                 continue
             row = np.zeros(STRIDE, np.float64)  # world-space data; the view is applied per frame
             row[20:23] = light.diffuse

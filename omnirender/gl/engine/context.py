@@ -397,9 +397,11 @@ def clear_stencil_value(raw: RawGL, value: int = 0) -> None:
         raw.glClear(GL_STENCIL_BUFFER_BIT)
 
 
-def clear_depth(raw: RawGL, value: float = 1.0) -> None:
-    """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off)."""
-    raw.glDisable(GL_SCISSOR_TEST)
+def clear_depth(raw: RawGL, value: float = 1.0, scissored: bool = False) -> None:
+    """Clear the depth buffer of the bound framebuffer only (colour and stencil untouched; scissor test off, or
+    with ``scissored`` the scissor the caller set through the state applier)."""
+    if not scissored:
+        raw.glDisable(GL_SCISSOR_TEST)
     raw.glDepthMask(1)
     raw.glClearDepth(float(value))
     raw.glClear(GL_DEPTH_BUFFER_BIT)

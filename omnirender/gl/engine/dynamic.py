@@ -20,8 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from ...core.transform import Transform
+from ...core.transform import Transform, TranslationArray
 from ...shapes import InstanceSet
+from .bulk import BulkMap
 from .instancing import InstanceRows, instance_rows, set_arrays
 from .layout import ROW
 
@@ -76,8 +77,10 @@ class MovePlan:
         batches: dict[int, int] = {}
         self._batch_index = batches
         self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
-        #: (batch, row indices or None: all) the last apply() rewrote, for the render index's bounds
+        #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
+        #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
+        self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -94,6 +97,7 @@ class MovePlan:
 
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
+        self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -151,9 +155,39 @@ class MovePlan:
             self.batch_of[i] = b
             self.row_of[i] = row
 
+    def apply_arrays(self, arrays: list[Any]) -> tuple[int, list[Any]]:
+        """Write the snapshots of touched ``om.TranslationArray`` objects into the rows below them.
+
+        One numpy write per batch (:class:`~.bulk.BulkMap`).  Returns the count
+        of items moved and the translations of the arrays that must take the
+        general path (an item below two translations of one array), for
+        :meth:`apply`.  Call before :meth:`apply` of the same frame:
+        transforms changed one by one since are recomposed from the matrices
+        this leaves.
+        """
+        count = 0
+        general: list[Any] = []
+        for array in arrays:
+            entry = self.bulk.get(id(array))
+            if entry is None or entry[0] is not array:
+                entry = self.bulk[id(array)] = (array, BulkMap(self, array))
+            bulk = entry[1]
+            if not bulk.valid:
+                general.extend(array)
+                continue
+            bulk.apply(self, array.offsets)
+            count += bulk.count
+            if self.instance_items:
+                count += self._apply_instances(set(bulk.positions.tolist()))
+        return count, general
+
     def apply(self, changed: list[Any]) -> int:
-        """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count."""
-        self.moved_rows = []
+        """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count.
+
+        After :meth:`apply_arrays` in the same frame, the rows it moved are kept in :attr:`moved_rows`.
+        """
+        if not changed:
+            return 0
         # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
         found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
         keep = found >= 0
@@ -174,6 +208,9 @@ class MovePlan:
         affected = np.flatnonzero(hit[self.chain].any(axis=1))
         if not len(affected):
             return 0
+        for key, (_, bulk) in list(self.bulk.items()):
+            if bulk.covers[affected].any():  # a transform above or below an array's translation moved
+                del self.bulk[key]
         chain = self.chain[affected]
         models = self.matrices[chain[:, 0]]
         for k in range(1, chain.shape[1]):
@@ -281,6 +318,11 @@ class TransformUpdater:
         if not changed:
             return None
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
+        arrays: list[Any] = []
+        if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
+            arrays = [c for c in changed if c.__class__ is TranslationArray]
+            changed = [c for c in changed if c.__class__ is not TranslationArray]
+            classes.discard(TranslationArray)
         if all(issubclass(cls, Transform) and cls.static for cls in classes):
             moved, sets = changed, []
         else:
@@ -296,7 +338,7 @@ class TransformUpdater:
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
-        count = self._apply_moves(moved) if moved else 0
+        count = self._apply_moves(moved, arrays) if moved or arrays else 0
         for item, made in updates:
             _install_rows(item, made)
         if updates:
@@ -331,10 +373,19 @@ class TransformUpdater:
                 out.append((item, made))
         return out
 
-    def _apply_moves(self, changed: list[Any]) -> int:
-        """Recompose the model matrix of every item below a changed transform; returns how many rows changed."""
+    def _apply_moves(self, changed: list[Any], arrays: list[Any] | None = None) -> int:
+        """Recompose the model matrix of every item below a changed transform; returns how many rows changed.
+
+        Touched translation arrays go first, each at once where it can (:meth:`MovePlan.apply_arrays`).
+        """
         plan = self.plan()
-        count = plan.apply(changed)
+        plan.moved_rows = []
+        count = 0
+        if arrays:
+            count, general = plan.apply_arrays(arrays)
+            if general:
+                changed = [*changed, *general]
+        count += plan.apply(changed)
         if count:
             # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
             # bounds follow the moved rows; mirror planes are read from the rows every frame

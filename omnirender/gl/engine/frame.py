@@ -31,6 +31,8 @@ in every call).
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -78,6 +80,9 @@ class FrameRunner:
         #: the frame's stages, in order
         self.stages = stages
         self._requests: list[Any] = []
+        #: how many technique frames enclose the technique running over a whole frame (0: the frame's own;
+        #: a stereo eye drawn whole runs it inside the stereo technique)
+        self.frame_base = 0
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
@@ -131,6 +136,28 @@ class FrameRunner:
         applier.forget()
         applier.apply(defaults())
         applier.forget()
+
+    @contextlib.contextmanager
+    def between_frames(self) -> Iterator[RasterApplier]:
+        """GL state for drawing outside a frame (a depth sprite drawn back, a target pushed): an applier with the
+        engine's framebuffer bound and every kind at its default, so :meth:`apply_gl_state` and the others work
+        as in a pass; afterwards GL is at its defaults with the engine's framebuffer bound, as after a frame.
+        Inside a frame (a custom pass) it is the frame's own applier."""
+        state = self.state
+        if state.drawing:
+            yield state.applier
+            return
+        engine = self.engine
+        fbo, size = engine.framebuffer, tuple(engine.size)
+        outer = state.applier
+        state.applier = applier = RasterApplier(GLCalls(self.ctx, self.raw, fbo, size))
+        applier.begin(fbo, size)
+        try:
+            yield applier
+        finally:
+            applier.restore_defaults()
+            applier.bind(fbo, size)
+            state.applier = outer
 
     @property
     def current_framebuffer(self) -> Any:
@@ -288,6 +315,26 @@ class FrameRunner:
                 self._unbind_target(saved_target)
         return calls
 
+    def frame_level(self, root: Scope) -> tuple[Any, Scope]:
+        """(technique, scope) a frame runs over ``root``: the frame's pipeline over it, or the frame-level
+        technique (a post-processing chain) of a root that is one scope of it, around the pipeline."""
+        whole = root.entries[0] if len(root.entries) == 1 else None
+        if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
+            return whole.technique, whole
+        return self.engine.frame_technique, root
+
+    def run_frame_level(self, root: Scope, composed: Composed) -> int:
+        """Run what a frame runs over ``root`` (:meth:`frame_level`) as a frame of the target bound now: its
+        techniques see themselves at the frame's level and targets relative to the frame take its size."""
+        technique, scope = self.frame_level(root)
+        base, size = self.frame_base, self.targets.frame_size(self.state.target_size)
+        self.frame_base = len(self.engine.technique_frames)
+        try:
+            return self.run(technique, scope, composed, item_level=True)
+        finally:
+            self.frame_base = base
+            self.targets.frame_size(size)
+
     def _nested(self, scope: Scope, composed: Composed) -> int:
         return self.run(scope.technique, scope, composed, item_level=False)
 
@@ -298,6 +345,8 @@ class FrameRunner:
         if composed.scopes == "items":
             return sum(self.drawer.draw_items(s, composed, None) for s in scope.walk())
         engine = self.engine
+        if technique == "frame":
+            return self.run_frame_level(scope, composed)
         if technique is not None:
             runner = engine.frame_technique if technique == "pipeline" else engine.technique
             return self.run(runner, scope, composed, item_level=True)
@@ -387,14 +436,16 @@ class FrameRunner:
         self.state.target_size = saved[1]
 
     def _clear(self, clear: Any) -> None:
-        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit, no scissor)."""
+        """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit; no scissor,
+        or the clear's ``box``)."""
         applier = self.state.applier
         fbo = applier.gl.framebuffer
+        box = clear.box  # None: the whole target
         if clear.color is None and clear.depth is not None and self.raw.available:
             # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
             # clear colour would be lost), so clear only the depth buffer with a raw call
-            applier.override({ScissorTest.index: None, DepthMask.index: True})
-            clear_depth(self.raw, float(clear.depth))
+            applier.override({ScissorTest.index: box, DepthMask.index: True})
+            clear_depth(self.raw, float(clear.depth), scissored=box is not None)
         elif clear.color is not None or clear.depth is not None:
             color = clear.color
             if color is not None and self.state.linear_output:
@@ -404,13 +455,13 @@ class FrameRunner:
             writes = color is not None
             applier.override({ColorMask.index: (writes,) * 4, DepthMask.index: clear.depth is not None,
                               ScissorTest.index: None})  # fmt: skip
-            fbo.depth_mask = clear.depth is not None  # moderngl applies the framebuffer's own depth mask when it clears
-            fbo.clear(*(color or (0.0, 0.0, 0.0, 0.0)), depth=1.0 if clear.depth is None else float(clear.depth))
-            fbo.depth_mask = True
-            applier.reassert()  # GL holds the masks the applier set again
+            depth = 1.0 if clear.depth is None else float(clear.depth)
+            # moderngl clears a viewport rectangle (GL's bottom-left origin) under a scissor of its own
+            area = None if box is None else (box[0], applier.gl.size[1] - box[1] - box[3], box[2], box[3])
+            applier.clear(fbo, color or (0.0, 0.0, 0.0, 0.0), depth, clear.depth is not None, area)
         if clear.stencil is not None:
             ops = applier.value(StencilOp)
-            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: None})  # glClear obeys both
+            applier.override({StencilOp.index: (*ops[:3], 0xFF), ScissorTest.index: box})  # glClear obeys both
             clear_stencil(self.raw, int(clear.stencil))
 
     # -- image-space passes --------------------------------------------------------------
@@ -458,7 +509,8 @@ class FrameRunner:
         raster[PolygonOffset.index] = None
         if effect.depth:
             raster[DepthTest.index] = effect.depth_test or "always"
-            raster[ColorMask.index] = (True, True, True, True)
+            if not any(raster[ColorMask.index]):  # inside a depth-only pass a depth sprite still draws colour;
+                raster[ColorMask.index] = (True, True, True, True)  # a pass's partial mask (an anaglyph eye) holds
             raster[DepthMask.index] = True
         else:
             raster[DepthTest.index] = None

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .context import set_masks
+from .attributes import DepthTest
 
 __all__ = ["OffscreenTarget", "FramebufferStack", "DepthSprite"]
 
@@ -90,8 +90,7 @@ class FramebufferStack:
         e = self.engine
         with e.current():
             target = OffscreenTarget(e.ctx, size or e.size, e.current)
-            if clear:
-                target.fbo.use()
+            if clear:  # (moderngl binds the framebuffer it clears for the clear, and the bound one again after)
                 target.fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
         e.push_target(target)
         return target
@@ -100,8 +99,8 @@ class FramebufferStack:
         """Return to the previous target; the popped one is handed back (release it when done)."""
         e = self.engine
         target = e.pop_target()
-        with e.current():
-            e.framebuffer.use()
+        with e.current(), e.between_frames():
+            pass  # the engine's own framebuffer bound again (the popped one may be released), GL at its defaults
         return target
 
     def __len__(self) -> int:
@@ -138,20 +137,15 @@ class DepthSprite:
             prog = e.programs.get("sprite")
             quad = ctx.buffer(np.array([-1, -1, 3, -1, -1, 3], np.float32).tobytes())
             vao = ctx.vertex_array(prog, [(quad, "2f", "in_pos")])
-            fbo = e.framebuffer
-            fbo.use()
-            ctx.enable(ctx.DEPTH_TEST)
-            ctx.disable(ctx.BLEND | ctx.CULL_FACE)
-            ctx.depth_func = "<="
-            set_masks(ctx, e.raw, fbo, color=(True, True, True, True), depth=True)
-            self.target.color.use(0)
-            self.target.depth.use(1)
-            prog["u_color"].value = 0
-            prog["u_depth"].value = 1
-            vao.render()
+            with e.between_frames():  # every state at its default (no blend, no culling, all masks written)
+                e.apply_gl_state(DepthTest(func="lequal"))
+                self.target.color.use(0)
+                self.target.depth.use(1)
+                prog["u_color"].value = 0
+                prog["u_depth"].value = 1
+                vao.render()
             vao.release()
             quad.release()
-            ctx.depth_func = "<"
 
     def release(self) -> None:
         if self.target is not None:

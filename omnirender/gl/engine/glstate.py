@@ -86,6 +86,7 @@ from .glenum import (
     GL_STENCIL_BACK_REF,
     GL_STENCIL_BACK_VALUE_MASK,
     GL_STENCIL_BACK_WRITEMASK,
+    GL_STENCIL_BUFFER_BIT,
     GL_STENCIL_FAIL,
     GL_STENCIL_FUNC,
     GL_STENCIL_INDEX,
@@ -316,6 +317,21 @@ def stencil_bits() -> int:
         GL_DRAW_FRAMEBUFFER, attachment, GL_ATTACHMENT_STENCIL_SIZE, ctypes.byref(bits)
     )
     return int(bits.value)
+
+
+def write_stencil(framebuffer: Any, stencil: np.ndarray, cell: int) -> None:
+    """Write ``stencil`` ((H, W) values, top row first) into ``framebuffer``'s stencil buffer, one value per
+    ``cell`` x ``cell`` block (its top-left pixel's), with scissored clears; the raster state is put back after."""
+    gl = _gl()
+    h = stencil.shape[0]
+    with preserved_state(framebuffer):
+        gl.glEnable(GL_SCISSOR_TEST)
+        gl.glStencilMaskSeparate(GL_FRONT_AND_BACK, 0xFF)
+        for y in range(0, h, cell):
+            for x in range(0, stencil.shape[1], cell):
+                gl.glScissor(x, h - y - cell, cell, cell)
+                gl.glClearStencil(int(stencil[y, x]))
+                gl.glClear(GL_STENCIL_BUFFER_BIT)
 
 
 def read_stencil(framebuffer: Any, size: tuple[int, int]) -> np.ndarray:

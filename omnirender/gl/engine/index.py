@@ -14,6 +14,13 @@ keeps its prims' derived data the same way):
 
 Bounds are computed per batch from its rows (one vectorised product per
 geometry), never by visiting the items one by one.
+
+The index also keeps a **caster journal** for the shadow maps: the world
+boxes of the shadow casters' rows that moved, left or came since the shadow
+stage last read it (:meth:`RenderIndex.take_caster_changes`), each with its
+batch and whether it is the old or the new place.  A new structure, moves the
+index cannot follow row by row, or more rows than :data:`JOURNAL_ROWS` make
+it "everything changed" (None).
 """
 
 from __future__ import annotations
@@ -27,15 +34,28 @@ from .drawlist import DrawItem, Scope, Segment
 from .layout import ROW
 from .state import casts_shadows, not_mirror
 
-__all__ = ["RenderIndex", "rows_bounds"]
+__all__ = ["RenderIndex", "CasterChange", "rows_bounds", "JOURNAL_ROWS"]
 
 _MODEL = ROW.slice("model")
+#: the most caster rows the journal holds between two reads (more: everything changed, the maps are redrawn in full)
+JOURNAL_ROWS = 512
+
+
+class CasterChange:
+    """Boxes of a shadow-casting batch's rows that changed: ``lo``, ``hi`` (N, 3) world boxes, ``new`` (False:
+    the places the rows left, True: the places they took)."""
+
+    __slots__ = ("batch", "lo", "hi", "new")
+
+    def __init__(self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool) -> None:
+        self.batch, self.lo, self.hi, self.new = batch, lo, hi, new
 
 
 class RenderIndex:
     """The installed root scope with its derived lists; ``install`` on a new structure, ``moved`` on moves."""
 
-    __slots__ = ("root", "version", "_items", "_mirrors", "_bounds", "_casters", "_boxes", "_find_mirrors")
+    __slots__ = ("root", "version", "_items", "_mirrors", "_bounds", "_casters", "_boxes", "_find_mirrors",
+                 "_journal", "_journal_rows")  # fmt: skip
 
     def __init__(self, find_mirrors: Callable[[list[DrawItem]], list[tuple[Any, Any]]]) -> None:
         #: the mirror technique's rule: (item, pass predicate) pairs of the mirrors among the items
@@ -49,6 +69,9 @@ class RenderIndex:
         self._casters: tuple[tuple[np.ndarray, np.ndarray] | None] | None = None
         #: id(batch) -> (batch, lo, hi): each row's world box, kept up to date row by row
         self._boxes: dict[int, tuple[Any, np.ndarray, np.ndarray]] = {}
+        #: the casters' changed boxes since the shadow stage last read them; None: everything changed
+        self._journal: list[CasterChange] | None = None
+        self._journal_rows = 0
 
     def install(self, root: Scope | None) -> None:
         """``root`` is the draw list now (a new structure or rows replaced): every derived list is stale."""
@@ -57,6 +80,7 @@ class RenderIndex:
         self._items = self._mirrors = None
         self._bounds = self._casters = None
         self._boxes = {}
+        self._journal = None
 
     def moved(self, rows: list[tuple[Any, np.ndarray | None]] | None) -> None:
         """Rows moved in place: ``(batch, row indices or None for all)`` pairs, or None (any row anywhere).
@@ -64,25 +88,53 @@ class RenderIndex:
         The bounds are stale; the lists of items, mirrors and casters are not.
         The rows' boxes are made again, the others kept.
         """
-        self._bounds = self._casters = None
+        self._bounds = None  # transparent items' moves are not among the rows: the scene's bounds again
         if rows is None:
             self._boxes = {}
+            self._journal = self._casters = None
             return
         boxes = self._boxes
         for batch, where in rows:
             found = boxes.get(id(batch))
-            if found is None:
-                continue
-            if where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
-                del boxes[id(batch)]
+            caster = casts_shadows(batch)  # a batch's items share geometry and state: the batch decides
+            if found is None or where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
+                if found is not None:
+                    del boxes[id(batch)]
+                if caster:
+                    self._journal = self._casters = None  # the old places are not known
                 continue
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
+            if caster:
+                old = (found[1][where], found[2][where])  # copies (fancy index)
+                self._follow_casters(old, (lo, hi))
+                if self._room(len(lo)):
+                    self._note(CasterChange(batch, *old, False))
+                    self._note(CasterChange(batch, lo, hi, True))
             found[1][where] = lo
             found[2][where] = hi
+
+    def _follow_casters(
+        self, old: tuple[np.ndarray, np.ndarray] | None, new: tuple[np.ndarray, np.ndarray] | None
+    ) -> None:
+        """Caster rows left the boxes ``old`` and took ``new`` ((lo, hi) (N, 3) arrays or None): the casters'
+        bounds follow without a pass over every caster while the old boxes lay strictly inside them."""
+        cached = self._casters
+        if cached is None or cached[0] is None:
+            self._casters = None
+            return
+        lo, hi = cached[0]
+        if old is not None and len(old[0]) and not ((old[0] > lo).all() and (old[1] < hi).all()):
+            self._casters = None  # a row on the bounds left: they may shrink
+            return
+        if new is not None and len(new[0]):
+            lo, hi = np.minimum(lo, _column_min(new[0])), np.maximum(hi, _column_max(new[1]))
+        self._casters = ((lo, hi),)
 
     def batch_edits(self, batch: Any, edits: list[tuple[Any, ...]]) -> None:
         """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow."""
         found = self._boxes.get(id(batch))
+        if casts_shadows(batch):
+            self._caster_edits(batch, edits, found)
         if found is None:
             return
         _, lo, hi = found
@@ -98,6 +150,73 @@ class RenderIndex:
         else:
             del self._boxes[id(batch)]
 
+    def _caster_edits(self, batch: Any, edits: list[tuple[Any, ...]], found: Any) -> None:
+        """A shadow-casting batch's row edits: the journal gets a removed row's old box and an added row's box,
+        the casters' bounds follow."""
+        lo = hi = None
+        if found is not None and found[0] is batch:
+            lo, hi = found[1], found[2]
+        for op, index, _ in edits:
+            if op == "remove":
+                if lo is None or index >= len(lo):
+                    self._journal = self._casters = None  # the removed row's place is not known
+                    return
+                old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
+                self._follow_casters(old, None)
+                if self._room(1):
+                    self._note(CasterChange(batch, *old, False))
+                if index != len(lo) - 1:
+                    lo, hi = lo.copy(), hi.copy()
+                    lo[index], hi[index] = lo[-1], hi[-1]
+                lo, hi = lo[:-1], hi[:-1]
+            else:
+                a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
+                self._follow_casters(None, (a, b))
+                if self._room(1):
+                    self._note(CasterChange(batch, a, b, True))
+                if lo is not None:
+                    lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+
+    def _room(self, rows: int) -> bool:
+        """Whether the journal takes ``rows`` more rows (False: it says "everything changed" now)."""
+        if self._journal is None:
+            return False
+        if self._journal_rows + rows > JOURNAL_ROWS:
+            self._journal = None
+            return False
+        return True
+
+    def _note(self, change: CasterChange) -> None:
+        assert self._journal is not None
+        self._journal.append(change)
+        self._journal_rows += len(change.lo)
+
+    def take_caster_changes(self) -> list[CasterChange] | None:
+        """The casters' changed boxes since the last call (None: everything may have changed); the journal is
+        empty afterwards."""
+        out = self._journal
+        self._journal = []
+        self._journal_rows = 0
+        return out
+
+    def caster_boxes(self) -> list[tuple[Any, np.ndarray, np.ndarray]] | None:
+        """Every shadow-casting batch with its rows' world boxes ``(batch, lo, hi)``; None when some caster is
+        not in a batch (a scope not planned)."""
+        if self.root is None:
+            return []
+        out = []
+        for scope in self.root.walk():
+            if scope.parts is None:
+                if any(not item.transparent and casts_shadows(item) for item in scope.items()):
+                    return None
+                continue
+            for part in scope.parts:
+                if isinstance(part, Segment):
+                    for batch in part.batches:
+                        if len(batch.rows) and casts_shadows(batch):
+                            out.append((batch, *self._batch_boxes(batch)))
+        return out
+
     def spliced(self, removed: list[DrawItem], added: list[DrawItem]) -> None:
         """Items left and came without a new plan: the item list follows, mirrors only when one is among them.
 
@@ -110,7 +229,8 @@ class RenderIndex:
             self._items.extend(added)
         if any(not not_mirror(it) for it in (*removed, *added)):
             self._mirrors = None
-        self._bounds = self._casters = None
+        # the casters' bounds follow the batches' row edits (batch_edits); every caster is in a batch
+        self._bounds = None
 
     def items(self) -> list[DrawItem]:
         """Every item of the draw list, nested scopes included, in compile order (computed once per structure)."""
@@ -131,7 +251,7 @@ class RenderIndex:
         return self._bounds[0]
 
     def caster_bounds(self) -> tuple[tuple[np.ndarray, np.ndarray] | None]:
-        """``(bounds,)`` of the opaque shadow casters; a new tuple after every move (shadow maps compare it)."""
+        """``(bounds,)`` of the opaque shadow casters (a new tuple when casters moved, left or came)."""
         if self._casters is None:
             self._casters = (self._compute(lambda item: not item.transparent and casts_shadows(item)),)
         return self._casters
@@ -166,8 +286,8 @@ class RenderIndex:
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
         for a, b in boxes:
-            lo = np.minimum(lo, a.min(axis=0))
-            hi = np.maximum(hi, b.max(axis=0))
+            lo = np.minimum(lo, _column_min(a))
+            hi = np.maximum(hi, _column_max(b))
         for geometry, rows in parts.values():
             found = rows_bounds(geometry, rows[0] if len(rows) == 1 else np.concatenate(rows))
             if found is not None:
@@ -183,6 +303,16 @@ class RenderIndex:
             lo, hi = row_boxes(batch.geometry, batch.rows)
             found = self._boxes[id(batch)] = (batch, lo, hi)
         return found[1], found[2]
+
+
+def _column_min(a: np.ndarray) -> np.ndarray:
+    """``a.min(axis=0)`` of an (N, 3) array, column by column (numpy's axis-0 reduction of narrow rows is slow)."""
+    return np.array([a[:, 0].min(), a[:, 1].min(), a[:, 2].min()])
+
+
+def _column_max(a: np.ndarray) -> np.ndarray:
+    """``a.max(axis=0)`` of an (N, 3) array, column by column."""
+    return np.array([a[:, 0].max(), a[:, 1].max(), a[:, 2].max()])
 
 
 def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -38,7 +38,7 @@ class LightUniforms:
     )
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], view: np.ndarray, headlight: bool) -> None:
-        from ...attributes import AmbientLight, DirectionalLight, SpotLight
+        from ...attributes import AmbientLight, AreaLight, DirectionalLight, SpotLight
 
         pos = np.zeros((MAX_LIGHTS, 4), np.float32)
         diffuse = np.zeros((MAX_LIGHTS, 3), np.float32)
@@ -59,7 +59,7 @@ class LightUniforms:
             amb = getattr(light, "ambient", None)
             if amb is not None:
                 ambient += np.asarray(amb, dtype=np.float64)
-            if isinstance(light, AmbientLight):
+            if isinstance(light, (AmbientLight, AreaLight)):
                 continue
             if n == MAX_LIGHTS:
                 self.dropped += 1

@@ -76,8 +76,11 @@ FORMATS = {
 }
 #: What draws a pass's items (``Pass.technique``): None the pass itself at the frame's level and the engine's
 #: technique below it; ``"engine"`` the engine's technique (``om.gl.Forward``: opaque, transparent, overlay);
-#: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``).
-TECHNIQUES = (None, "engine", "pipeline")
+#: ``"pipeline"`` the frame's pipeline (``om.gl.Deferred`` with ``GLEngine(pipeline="deferred")``);
+#: ``"frame"`` what a frame runs over the whole scene (the pipeline, inside the scene's frame-level
+#: post-processing chain when it has one), as a frame of the pass's target: targets sized relative to the
+#: frame are sized to it (a stereo eye drawn whole into an eye-sized target).
+TECHNIQUES = (None, "engine", "pipeline", "frame")
 
 
 def _classes(items: Any) -> frozenset[str]:
@@ -234,13 +237,26 @@ class Target:
 
 @dataclass(frozen=True)
 class Clear:
-    """What a pass clears before drawing: colour (RGBA display values), depth, stencil; None keeps it."""
+    """What a pass clears before drawing: colour (RGBA display values), depth, stencil; None keeps it.
+
+    ``box = (x, y, width, height)`` clears only that pixel rectangle of the bound target (measured from its
+    top-left corner, like ``ScissorTest``); None clears all of it.
+    """
 
     color: tuple[float, float, float, float] | None = (0.0, 0.0, 0.0, 0.0)
     depth: float | None = 1.0
     stencil: int | None = None
+    box: tuple[int, int, int, int] | None = None
 
     def __post_init__(self) -> None:
+        if self.box is not None:
+            try:
+                box = tuple(int(v) for v in self.box)
+            except (TypeError, ValueError):
+                box = ()
+            if len(box) != 4 or box[0] < 0 or box[1] < 0 or box[2] <= 0 or box[3] <= 0:
+                raise ValueError(f"Clear: box must be (x, y, width, height) pixels, got {self.box!r}")
+            object.__setattr__(self, "box", box)
         if self.color is not None:
             object.__setattr__(self, "color", _rgba(self.color, "Clear", "color"))
         if self.depth is not None and not (isinstance(self.depth, (int, float)) and 0.0 <= self.depth <= 1.0):

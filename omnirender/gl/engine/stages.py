@@ -78,14 +78,9 @@ class TechniqueStage(FrameStage):
     name = "technique"
 
     def draw(self, frame: Any, root: Scope) -> int:
-        engine = frame.engine
-        if engine.stereo is not None:
+        if frame.engine.stereo is not None:
             return 0
-        technique, scope = engine.frame_technique, root
-        whole = root.entries[0] if len(root.entries) == 1 else None
-        if isinstance(whole, Scope) and getattr(whole.technique, "frame_level", False):
-            technique, scope = whole.technique, whole  # e.g. a post-processing chain around the pipeline
-        return frame.run(technique, scope, Composed(), item_level=True)
+        return frame.run_frame_level(root, Composed())  # e.g. a post-processing chain around the pipeline
 
 
 class StageList:

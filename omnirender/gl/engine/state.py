@@ -278,6 +278,23 @@ class RasterApplier:
                 ctx.disable_direct(GL_CLIP_DISTANCE0 + i)
         self.clip_count = count
 
+    def clear(
+        self,
+        framebuffer: Any,
+        color: tuple[float, ...],
+        depth: float,
+        write_depth: bool,
+        viewport: tuple[int, int, int, int] | None = None,
+    ) -> None:
+        """Clear ``framebuffer`` with moderngl (colour ``color`` where the colour mask writes, depth ``depth``
+        when ``write_depth``; only the pixel rectangle ``viewport``, GL's bottom-left origin, when given), then
+        issue the tracked masks again.  moderngl applies the framebuffer's own depth mask when it clears: it is
+        set for the clear and back to its default after."""
+        framebuffer.depth_mask = write_depth
+        framebuffer.clear(*color, depth=depth, viewport=viewport)
+        framebuffer.depth_mask = True
+        self.reassert()
+
     def begin(self, framebuffer: Any, size: tuple[int, int]) -> None:
         """A frame starts: ``framebuffer`` bound, every kind at its default (what a clear needs: every channel
         written, no scissor), point sizes taken from the programs."""

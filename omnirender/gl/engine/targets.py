@@ -29,6 +29,14 @@ class FrameTargets:
         self._used = set()
         self._named = {}
 
+    def frame_size(self, size: tuple[int, int] | None = None) -> tuple[int, int]:
+        """The size targets relative to the frame are made at; with ``size``, set it (a frame drawn inside a
+        target of that size, e.g. a stereo eye) and return the previous one, to be set back."""
+        previous = self._frame_size
+        if size is not None:
+            self._frame_size = (int(size[0]), int(size[1]))
+        return previous
+
     def named(self, name: str) -> RenderTarget:
         """The target ``name`` of the current frame (KeyError naming the fix when no pass made it)."""
         found = self._named.get(name)

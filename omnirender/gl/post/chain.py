@@ -141,7 +141,7 @@ class PostProcess(GLTechnique):
 
     def plan(self, engine: Any) -> list[Pass]:
         """This frame's passes: scene, depth effects, transparent items, colour effects, output, overlay."""
-        top = len(engine.technique_frames) <= 1
+        top = engine.at_frame_level()
         proj = engine.frame_projection
         camera = {"u_proj": tuple(proj.T.ravel()), "u_inv_proj": tuple(np.linalg.inv(proj).T.ravel())}
         background = engine.clear_color(engine.frame_background)  # draw(background=...) wins

@@ -43,7 +43,8 @@ from typing import Any
 import numpy as np
 
 from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
-from ..engine.drawlist import Scope, world_bounds
+from ..engine.attributes import ScissorTest
+from ..engine.drawlist import Batch, Scope, Segment, uniform_material, world_bounds
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from ..engine.stages import FrameStage
@@ -60,7 +61,9 @@ __all__ = [
     "caster_bounds",
     "auto_resolution",
     "frustum_crop",
+    "fit_bounds",
     "MAX_ATLAS",
+    "PARTIAL_MAX",
 ]
 
 #: Name of the frame's shadow-map atlas target.
@@ -322,50 +325,297 @@ def caster_bounds(root: Scope) -> tuple[np.ndarray, np.ndarray] | None:
 class ShadowMapStage(FrameStage):
     """The frame stage that draws the shadow-map atlas (before the frame technique, whose lit shaders read it).
 
-    The maps are drawn again only when the casters' bounds, the lights, the settings or the frame size
-    changed since the last frame that drew them (the camera is free to move).
+    The maps follow changes (the camera is free to move): a face of the atlas
+    is kept while its light camera and tile are the ones it was drawn with and
+    no caster changed inside it.  The render index's caster journal says which
+    casters' boxes changed (old and new places; a row that left and came back
+    in the same place, e.g. a replaced ``Material``, cancels out): the region
+    they cover in a face (in texels, one texel of margin) is cleared under a
+    scissor and only the casters whose boxes meet it are drawn into it again
+    (:data:`PARTIAL_MAX` of the face or less; more is redrawn in full).  The
+    faces are fitted to the casters' bounds snapped outward to a grid
+    (:func:`fit_bounds`), so a move that stays inside it keeps every face's
+    projection; one that leaves it redraws the faces in full.
+
+    ``engine.stats["shadow_maps"]`` says what each frame did: ``full``,
+    ``partial`` and ``kept`` (faces), ``pixels`` (texels redrawn by partial
+    updates) and ``regions`` (face index, (x, y, width, height) atlas texels from
+    the bottom-left corner, of each partial update).
     """
 
     name = "shadow maps"
 
     def __init__(self) -> None:
         self._cache: Any = None  # (key, plan, its technique)
-        self._drawn: Any = None  # (key, caster bounds, size) of the maps the atlas holds
+        #: what the atlas holds: its description and, per tile, the signature of the face drawn into it
+        self._atlas: Target | None = None
+        self._held: dict[tuple[int, int], bytes] = {}
+        #: id(batch) -> (batch, the batch of its rows a partial update draws)
+        self._scratch: dict[int, tuple[Any, Batch]] = {}
 
     def changed(self) -> None:
-        """Nothing to forget: the engine's render index keeps the casters' bounds up to date."""
+        """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
+
+    def release(self) -> None:
+        for _, batch in self._scratch.values():
+            batch.release()
+        self._scratch.clear()
+
+    def _forget(self) -> int:
+        self._atlas = None
+        self._held = {}
+        return 0
 
     def draw(self, frame: Any, root: Scope) -> int:
         engine = frame.engine
-        settings = frame_settings(root if engine.root_scope is not None else None, engine.shadows)
+        report = {"full": 0, "partial": 0, "kept": 0, "pixels": 0, "regions": []}
+        engine.stats["shadow_maps"] = report
+        installed = engine.root_scope is not None
+        changes = engine.index.take_caster_changes() if installed else None
+        settings = frame_settings(root if installed else None, engine.shadows)
         if settings is None:
-            return 0
+            return self._forget()
         lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
         if not lights:
-            return 0
-        # the render index keeps the casters' bounds: a new tuple whenever casters moved (compared below)
-        casters = engine.index.caster_bounds() if engine.root_scope is not None else (caster_bounds(root),)
-        bounds = casters[0]
+            return self._forget()
+        bounds = engine.index.caster_bounds()[0] if installed else caster_bounds(root)
         if bounds is None:
-            return 0
-        key = (id(settings), settings.version, bounds[0].tobytes(), bounds[1].tobytes(),
+            return self._forget()
+        lo, hi = fit_bounds(*bounds)
+        key = (id(settings), settings.version, lo.tobytes(), hi.tobytes(),
                tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
         if plan is None:
-            plan = ShadowPlan(settings, lights, bounds, tuple(engine.size))
+            plan = ShadowPlan(settings, lights, (lo, hi), tuple(engine.size))
             self._cache = (key, plan, plan.technique())
         technique = self._cache[2]
         if technique is None:
-            return 0
+            return self._forget()
         frame.state.shadow_plan = plan
-        drawn = (key, casters, tuple(engine.size))
-        last = self._drawn
-        fresh = last is not None and last[0] == key and last[1] is drawn[1] and last[2] == drawn[2]
-        if fresh and frame.keep_target(plan.target):
-            return 0  # casters and lights unchanged: the maps of the last frame still hold (the camera is free)
-        calls = frame.run(technique, root)
-        self._drawn = drawn
+        faces = [(k, face) for k, face in enumerate(plan.faces) if face.tile is not None]
+        held = self._held if self._atlas == plan.target and frame.keep_target(plan.target) else {}
+        self._atlas, self._held = plan.target, {face.tile: _signature(face, plan.resolution) for _, face in faces}
+        if not held:  # a new atlas: every face, under one clear
+            report["full"] = len(faces)
+            return frame.run(technique, root)
+        full: list[tuple[int, _Face]] = []
+        partial: list[tuple[int, _Face, tuple[int, int, int, int]]] = []
+        boxes = None if changes is None else _changed_boxes(changes)
+        for k, face in faces:
+            if held.get(face.tile) != self._held[face.tile] or boxes is None:
+                full.append((k, face))
+                continue
+            region = _face_region(face, plan.resolution, *boxes) if len(boxes[0]) else None
+            if region is None:
+                report["kept"] += 1
+            elif region[2] * region[3] > PARTIAL_MAX * plan.resolution**2:
+                full.append((k, face))
+            else:
+                partial.append((k, face, region))
+        calls = 0
+        if full:
+            calls += frame.run(_MapPasses([_face_pass(plan, k, face, None) for k, face in full]), root)
+            report["full"] = len(full)
+        if partial:
+            casters = engine.index.caster_boxes() if installed else None
+            for k, face, region in partial:
+                if casters is None:  # some caster is not in a batch: the face is drawn in full
+                    calls += frame.run(_MapPasses([_face_pass(plan, k, face, None)]), root)
+                    report["full"] += 1
+                    continue
+                scope = self._casters_in(casters, face, plan.resolution, region)
+                calls += frame.run(_MapPasses([_face_pass(plan, k, face, region)]), scope)
+                col, row = face.tile
+                r = plan.resolution
+                report["partial"] += 1
+                report["pixels"] += region[2] * region[3]
+                report["regions"].append((k, (col * r + region[0], row * r + region[1], region[2], region[3])))
         return calls
+
+    def _casters_in(
+        self, casters: list[tuple[Any, np.ndarray, np.ndarray]], face: _Face, resolution: int,
+        region: tuple[int, int, int, int],
+    ) -> Scope:  # fmt: skip
+        """A scope of the casters whose boxes meet ``region`` of ``face`` (rows picked from their batches)."""
+        batches = []
+        for batch, lo, hi in casters:
+            picks = np.flatnonzero(_meets(face, resolution, lo, hi, region))
+            if not len(picks):
+                continue
+            found = self._scratch.get(id(batch))
+            if found is None or found[0] is not batch:
+                if found is not None:
+                    found[1].release()
+                found = self._scratch[id(batch)] = (batch, Batch(batch.geometry, batch.state))
+            part = found[1]
+            part.rows = batch.rows[picks]
+            part.items = [batch.items[i] for i in picks] if len(batch.items) == len(batch.rows) else list(batch.items)
+            part.uniform = uniform_material(part.rows)
+            part.dirty, part.sparse, part.position = (0, len(picks)), None, None
+            batches.append(part)
+        if len(self._scratch) > 2 * len(casters) + 16:  # batches that are gone: their parts are freed
+            alive = {id(batch) for batch, _, _ in casters}
+            for key in [key for key in self._scratch if key not in alive]:
+                self._scratch.pop(key)[1].release()
+        segment = Segment([])
+        segment.batches = batches
+        scope = Scope()
+        scope.parts = [segment]
+        return scope
+
+
+#: a face whose changed region covers more than this fraction of it is redrawn in full
+PARTIAL_MAX = 0.5
+#: fitted bounds are snapped outward to a grid of 2**-FIT_GRID of their extent (rounded up to a power of two)
+FIT_GRID = 5
+
+
+def fit_bounds(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The casters' bounds the faces are fitted to: ``[lo, hi]`` snapped outward to a grid of 1/32 to 1/16 of
+    its extent, so casters that move inside it keep every face's projection (and the maps drawn)."""
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    extent = float((hi - lo).max())
+    if not math.isfinite(extent) or extent <= 0.0:
+        return lo, hi
+    step = 2.0 ** (math.ceil(math.log2(extent)) - FIT_GRID)
+    return np.floor(lo / step) * step, np.ceil(hi / step) * step
+
+
+def _signature(face: _Face, resolution: int) -> bytes:
+    """What a face's texels depend on: its light camera, its tile and the resolution."""
+    return face.view.tobytes() + face.proj.tobytes() + bytes(repr((face.tile, resolution)), "ascii")
+
+
+def _face_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int] | None) -> Pass:
+    """The depth pass of face ``k``: the whole tile cleared and every caster drawn (``region`` None), or the
+    ``region`` (x, y, width, height texels of the tile from its bottom-left corner) cleared and drawn under a
+    scissor (the pass then draws the scope it is run on: the casters that meet the region)."""
+    r = plan.resolution
+    col, row = face.tile
+    height = plan.target.size[1]
+    if region is None:
+        box = (col * r, height - (row + 1) * r, r, r)  # the tile, from the atlas's top-left corner
+    else:
+        x, y, w, h = region
+        box = (col * r + x, height - (row * r + y) - h, w, h)
+    return Pass(
+        f"shadow-map[{k}]" if region is None else f"shadow-map[{k}] partial",
+        items="opaque",
+        select=casts_shadows if region is None else None,
+        scopes="items",
+        source="scene" if region is None else "scope",
+        target=plan.target,
+        viewport=(col * r, row * r, r, r),
+        clear=Clear(color=None, depth=1.0, box=box),
+        state=((ScissorTest, box),),  # a (kind, value) pair: no component is made per frame
+        camera=(face.view, face.proj),
+        shader=Shader(depth_only=True),
+    )
+
+
+def _changed_boxes(changes: list[Any]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The boxes of the journal's changes, old and new, less the rows that left and came back to the same place
+    in the same batch (a replaced ``Material``); None when too many to say."""
+    olds = [c for c in changes if not c.new]
+    news = [c for c in changes if c.new]
+    rows = sum(len(c.lo) for c in changes)
+    if olds and news and rows <= 64:  # few: cancel what left and came back (same batch, same box)
+        count: dict[tuple[int, bytes], int] = {}
+        for c in olds:
+            for a, b in zip(c.lo, c.hi, strict=True):
+                key = (id(c.batch), a.tobytes() + b.tobytes())
+                count[key] = count.get(key, 0) + 1
+        lo, hi = [], []
+        for c in news:
+            for a, b in zip(c.lo, c.hi, strict=True):
+                key = (id(c.batch), a.tobytes() + b.tobytes())
+                if count.get(key, 0) > 0 and _depth_only_state(c.batch):
+                    count[key] -= 1
+                else:
+                    lo.append(a)
+                    hi.append(b)
+        for c in olds:
+            for a, b in zip(c.lo, c.hi, strict=True):
+                key = (id(c.batch), a.tobytes() + b.tobytes())
+                if count.get(key, 0) > 0:
+                    count[key] -= 1
+                    lo.append(a)
+                    hi.append(b)
+        if not lo:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return np.array(lo), np.array(hi)
+    if not changes:
+        return np.zeros((0, 3)), np.zeros((0, 3))
+    return np.concatenate([c.lo for c in changes]), np.concatenate([c.hi for c in changes])
+
+
+def _depth_only_state(batch: Any) -> bool:
+    """Whether a batch's depth depends only on its geometry and placement (no alpha test reading the rows'
+    colours): then a row that left and came back to the same place changed nothing in the maps."""
+    from ..engine.attributes import AlphaTest
+
+    return batch.state.value(AlphaTest) is None
+
+
+def _ndc_rects(face: _Face, lo: np.ndarray, hi: np.ndarray) -> tuple[list[np.ndarray], Any, Any]:
+    """The rectangles [x0, y0, x1, y1] (four arrays, the face's normalised coordinates) that the boxes [lo, hi]
+    may cover in ``face``, with which reach behind its light camera (then they may cover all of it) and which
+    lie wholly behind it (none of it); both None for an orthographic face."""
+    m = face.proj @ face.view
+    if m[3, 0] == 0.0 and m[3, 1] == 0.0 and m[3, 2] == 0.0:  # orthographic: centre and half extent
+        # column by column, in arrays of N: numpy's (N, 3) @ (3, 2) products and axis-0 reductions are many
+        # times slower, and (N, 4) arrays are big enough for allocations that map fresh pages
+        total = [lo[:, k] + hi[:, k] for k in range(3)]
+        size = [hi[:, k] - lo[:, k] for k in range(3)]
+        rect: list[np.ndarray] = [np.empty(0)] * 4
+        for j in range(2):
+            a = m[j, :3] / (2.0 * m[3, 3])
+            c = total[0] * a[0] + total[1] * a[1] + total[2] * a[2] + m[j, 3] / m[3, 3]
+            e = size[0] * abs(a[0]) + size[1] * abs(a[1]) + size[2] * abs(a[2])
+            rect[j], rect[j + 2] = c - e, c + e
+        return rect, None, None
+    pick = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)
+    corners = np.where(pick[None, :, :], hi[:, None, :], lo[:, None, :])  # (N, 8, 3)
+    w = corners @ m[3, :3] + m[3, 3]
+    ahead = w > 1e-9
+    w = np.where(ahead, w, 1.0)
+    x = (corners @ m[0, :3] + m[0, 3]) / w
+    y = (corners @ m[1, :3] + m[1, 3]) / w
+    return [x.min(axis=1), y.min(axis=1), x.max(axis=1), y.max(axis=1)], ~ahead.all(axis=1), ~ahead.any(axis=1)
+
+
+def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -> tuple[int, int, int, int] | None:
+    """The texel rectangle (x, y, width, height from the tile's bottom-left corner, one texel of margin) the boxes
+    [lo, hi] may cover in ``face``; None when they cover none of it."""
+    (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
+    if behind is not None:
+        x0, y0, x1, y1 = (np.where(behind, edge, v) for v, edge in zip((x0, y0, x1, y1), (-1, -1, 1, 1), strict=True))
+    half = resolution / 2.0
+    x0 = np.clip(np.floor((x0 + 1.0) * half) - 1, 0, resolution)
+    y0 = np.clip(np.floor((y0 + 1.0) * half) - 1, 0, resolution)
+    x1 = np.clip(np.ceil((x1 + 1.0) * half) + 1, 0, resolution)
+    y1 = np.clip(np.ceil((y1 + 1.0) * half) + 1, 0, resolution)
+    inside = (x1 > x0) & (y1 > y0)
+    if away is not None:
+        inside &= ~away
+    if not inside.any():
+        return None
+    left, bottom = int(x0[inside].min()), int(y0[inside].min())
+    return left, bottom, int(x1[inside].max()) - left, int(y1[inside].max()) - bottom
+
+
+def _meets(
+    face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray, region: tuple[int, int, int, int]
+) -> np.ndarray:
+    """Which boxes [lo, hi] may cover texels of ``region`` (x, y, width, height of the tile) in ``face``."""
+    (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
+    x, y, w, h = region
+    to_ndc = 2.0 / resolution
+    hit = (x0 <= (x + w) * to_ndc - 1.0) & (x1 >= x * to_ndc - 1.0)
+    hit &= (y0 <= (y + h) * to_ndc - 1.0) & (y1 >= y * to_ndc - 1.0)
+    if behind is not None:
+        hit = (hit | behind) & ~away
+    return hit
 
 
 def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

@@ -14,6 +14,14 @@ farther ones diverge up to ``eye_separation`` on that window at infinity.
 The horizontal disparity of a point at distance ``d`` on an eye image ``w``
 pixels wide is ``x_left - x_right = e w / (2 tan(fov_x / 2)) (1/d - 1/c)``
 pixels (:func:`disparity_pixels`).
+
+A stereo frame whose scene is drawn by more than the forward technique -- the
+deferred pipeline, or a post-processing chain at the top of the scene -- draws
+each eye whole, as a frame of its own (``Pass(technique="frame")``), into an
+eye-sized target, then copies it into its place: the chain's effects run on
+each eye's image (a vignette is centred per eye, FXAA sees one eye's edges),
+and the eye target is multisampled as the engine is (the deferred pipeline
+shades the samples of edges one by one), resolved by the copy.
 """
 
 from __future__ import annotations
@@ -40,6 +48,28 @@ _EYE_COPY = """uniform sampler2D u_eye;
 uniform sampler2D u_eye_depth;
 vec4 effect(vec2 uv) { return texture(u_eye, uv); }
 float effect_depth(vec2 uv) { return texture(u_eye_depth, uv).r; }
+"""
+#: A multisampled eye copied: its samples averaged (premultiplied: the eye target starts transparent, so an edge
+#: keeps what the frame holds under its uncovered samples), the nearest sample's depth.
+_EYE_RESOLVE = """uniform sampler2DMS u_eye;
+uniform sampler2DMS u_eye_depth;
+uniform int u_count;
+uniform vec2 u_size;
+float g_depth;
+vec4 effect(vec2 uv) {
+    ivec2 p = ivec2(min(uv * u_size, u_size - 1.0));
+    vec4 sum = vec4(0.0);
+    g_depth = 1.0;
+    for (int i = 0; i < u_count; ++i) {
+        vec4 c = texelFetch(u_eye, p, i);
+        sum += vec4(c.rgb * c.a, c.a);
+        g_depth = min(g_depth, texelFetch(u_eye_depth, p, i).r);
+    }
+    sum /= float(u_count);
+    if (sum.a <= 0.0) discard;
+    return vec4(sum.rgb / sum.a, sum.a);
+}
+float effect_depth(vec2 uv) { return g_depth; }
 """
 
 
@@ -172,6 +202,18 @@ class Stereo(GLTechnique):
             return (0, h - half, w, half) if sign < 0 else (0, 0, w, h - half)
         return None
 
+    def whole_eyes(self, engine: Any) -> bool:
+        """Whether each eye is drawn whole into an eye-sized target and copied (see the module docstring): the
+        frame's stereo over a scene drawn by more than the forward technique."""
+        frame_stereo = len(engine.technique_frames) == 1  # GLEngine(stereo=...), not a Stereo in a node
+        return frame_stereo and engine.frame_level_technique() is not engine.technique
+
+    def eye_samples(self, engine: Any) -> int:
+        """Samples of the eye target: the engine's where the pipeline draws into it (a post-processing chain
+        multisamples its own scene target and writes its output once per pixel)."""
+        samples = int(getattr(engine, "samples", 0) or 0)
+        return samples if samples > 1 and engine.frame_level_technique() is engine.frame_technique else 0
+
     def convergence_for(self, engine: Any) -> float:
         """The convergence distance used with ``engine``'s frame camera."""
         if self.convergence is not None:
@@ -199,14 +241,17 @@ class Stereo(GLTechnique):
         size = engine.target_size
         box = self.viewport(sign, size)
         w, h = (box[2], box[3]) if box is not None else size
-        through_pipeline = engine.frame_technique is not engine.technique  # e.g. the deferred pipeline
+        # the deferred pipeline, or a post-processing chain around the frame: each eye a frame of its own
+        whole = self.whole_eyes(engine)
         name = "left eye" if sign < 0 else "right eye"
         mask = ANAGLYPH_MASKS[index] if self.mode == "anaglyph" else None
+        samples = self.eye_samples(engine) if whole else 0
         if copy:
-            if not through_pipeline:
+            if not whole:
                 return False
             inputs = {"u_eye": (_EYE.name, "color"), "u_eye_depth": (_EYE.name, "depth")}
-            fullscreen = FullScreen(_EYE_COPY, inputs=inputs,
+            code, uniforms = (_EYE_RESOLVE, {"u_count": samples, "u_size": (w, h)}) if samples else (_EYE_COPY, {})
+            fullscreen = FullScreen(code, inputs=inputs, uniforms=uniforms,
                                     blend=True, depth=True, label="stereo eye copy",
                                     # the anaglyph's second eye starts from a cleared depth, as in forward
                                     depth_test=None if mask is not None and index == 1 else "lequal")  # fmt: skip
@@ -218,9 +263,9 @@ class Stereo(GLTechnique):
             view, p = eye_matrices(
                 engine.frame_view, proj, w / h, sign, self.eye_separation, self.convergence_for(engine)
             )
-        if through_pipeline:  # the whole pipeline into an eye-sized target (cleared transparent), copied next
-            target = Target(_EYE.name, size=(w, h))
-            engine.set_pass(Pass(name, camera=(view, p), target=target, clear=Clear(), technique="pipeline"))
+        if whole:  # the eye's frame into an eye-sized target (cleared transparent), copied next
+            target = Target(_EYE.name, size=(w, h), samples=samples)
+            engine.set_pass(Pass(name, camera=(view, p), target=target, clear=Clear(), technique="frame"))
         elif self.mode == "anaglyph":
             clear = Clear(color=None, depth=1.0) if index == 1 else None
             engine.set_pass(Pass(name, camera=(view, p), state=(mask,), clear=clear))
