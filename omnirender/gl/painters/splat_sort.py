@@ -30,7 +30,7 @@ import numpy as np
 
 from ..engine.resources import gpu_call
 
-__all__ = ["GPUSplatSorter", "NumpySplatSorter", "sorter_for", "compute_available", "BLOCK"]
+__all__ = ["GPUSplatSorter", "NumpySplatSorter", "SortPrograms", "sorter_for", "compute_available", "BLOCK"]
 
 #: pairs sorted by one workgroup in shared memory (512 invocations, two pairs each)
 BLOCK = 1024
@@ -134,8 +134,8 @@ def compute_available(ctx: Any) -> bool:
     return int(getattr(ctx, "version_code", 0)) >= 430
 
 
-class _Programs:
-    """The three compute programs of one context (made on first use, kept with the sorter's owner)."""
+class SortPrograms:
+    """The three compute programs of the GPU sort on one context (made once per engine)."""
 
     def __init__(self, ctx: Any) -> None:
         self.keys = ctx.compute_shader(_KEYS)
@@ -207,7 +207,7 @@ class GPUSplatSorter(_Sorter):
 
     method = "gpu bitonic"
 
-    def __init__(self, ctx: Any, count: int, label: str, programs: _Programs) -> None:
+    def __init__(self, ctx: Any, count: int, label: str, programs: SortPrograms) -> None:
         super().__init__(ctx, count, label)
         self.programs = programs
         total = BLOCK
@@ -268,7 +268,7 @@ def _log2(n: int) -> int:
 
 
 def sorter_for(ctx: Any, positions: np.ndarray, label: str, programs: Any) -> _Sorter:
-    """A GPU sorter where compute shaders run (``programs`` a :class:`_Programs` maker), else the numpy one."""
+    """A GPU sorter where compute shaders run (``programs`` a :class:`SortPrograms` maker), else the numpy one."""
     if programs is not None:
         return GPUSplatSorter(ctx, len(positions), label, programs)
     return NumpySplatSorter(ctx, positions, label)

@@ -40,7 +40,7 @@ from ..engine.geometry import Geometry
 from ..engine.layout import ROW
 from ..engine.resources import gpu_call
 from ..glengine import GLEngine
-from .splat_sort import _Programs, compute_available, sorter_for
+from .splat_sort import SortPrograms, compute_available, sorter_for
 from .splats_glsl import SPLAT_FRAGMENT, SPLAT_VERTEX
 
 __all__ = ["SplatGeometry", "SplatPainter", "draw_splats", "sort_method"]
@@ -167,7 +167,7 @@ def _sort_programs(engine: GLEngine) -> Any:
         programs = None
         if compute_available(engine.ctx):
             try:
-                programs = _Programs(engine.ctx)
+                programs = SortPrograms(engine.ctx)
             except Exception:  # a driver that reports 4.3 but fails to build them: the fallback still draws
                 programs = None
         _SORT_PROGRAMS[engine] = programs

@@ -1,6 +1,7 @@
 """GLSL of the Gaussian-splat painter: the EWA projection, the SH colour rule, the Gaussian footprint.
 
-The spherical-harmonics constants are written from :mod:`omnirender.shapes._sh`
+The spherical-harmonics constants are written from :mod:`omnirender.shapes._sh` (through its public
+names in :mod:`omnirender.shapes.splats`)
 (the one implementation of the colour rule), so the two cannot drift apart.
 Splat data lives in two float textures read with ``texelFetch`` (OpenGL 3.3):
 ``u_geom`` holds three texels per splat -- (centre, opacity), (Sigma_xx,
@@ -11,7 +12,7 @@ space -- and ``u_sh`` one RGB texel per SH coefficient.  The instance attribute
 
 from __future__ import annotations
 
-from ...shapes import _sh
+from ...shapes.splats import SH_C0, SH_C1, SH_C2, SH_C3
 
 __all__ = ["SPLAT_VERTEX", "SPLAT_FRAGMENT", "SH_GLSL", "FETCH_GLSL"]
 
@@ -22,10 +23,10 @@ def _floats(values: tuple[float, ...]) -> str:
 
 #: The SH colour rule of ``_sh.sh_colors``: ``max(0.5 + sum_k Y_k(dir) sh_k, 0)``, same constants and signs.
 SH_GLSL = f"""
-const float SH_C0 = {_sh.C0!r};
-const float SH_C1 = {_sh.C1!r};
-const float SH_C2[5] = float[5]({_floats(_sh.C2)});
-const float SH_C3[7] = float[7]({_floats(_sh.C3)});
+const float SH_C0 = {SH_C0!r};
+const float SH_C1 = {SH_C1!r};
+const float SH_C2[5] = float[5]({_floats(SH_C2)});
+const float SH_C3[7] = float[7]({_floats(SH_C3)});
 vec3 sh_coefficient(int base, int k);
 vec3 sh_color(int base, int degree, vec3 dir) {{
     vec3 c = SH_C0 * sh_coefficient(base, 0);
