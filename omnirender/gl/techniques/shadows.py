@@ -509,8 +509,11 @@ def _face_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, in
         clear=Clear(color=None, depth=1.0, box=box),
         state=((ScissorTest, box),),  # a (kind, value) pair: no component is made per frame
         camera=(face.view, face.proj),
-        shader=Shader(depth_only=True),
+        shader=_DEPTH_ONLY,
     )
+
+
+_DEPTH_ONLY = Shader(depth_only=True)
 
 
 def _changed_boxes(changes: list[Any]) -> tuple[np.ndarray, np.ndarray] | None:
@@ -587,6 +590,8 @@ def _ndc_rects(face: _Face, lo: np.ndarray, hi: np.ndarray) -> tuple[list[np.nda
 def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -> tuple[int, int, int, int] | None:
     """The texel rectangle (x, y, width, height from the tile's bottom-left corner, one texel of margin) the boxes
     [lo, hi] may cover in ``face``; None when they cover none of it."""
+    if len(lo) <= 16:  # a few boxes (what moved in a frame): plain floats, not dozens of tiny numpy calls
+        return _few_region(face, resolution, lo.tolist(), hi.tolist())
     (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
     if behind is not None:
         x0, y0, x1, y1 = (np.where(behind, edge, v) for v, edge in zip((x0, y0, x1, y1), (-1, -1, 1, 1), strict=True))
@@ -602,6 +607,39 @@ def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -
         return None
     left, bottom = int(x0[inside].min()), int(y0[inside].min())
     return left, bottom, int(x1[inside].max()) - left, int(y1[inside].max()) - bottom
+
+
+def _few_region(
+    face: _Face, resolution: int, lows: list[list[float]], highs: list[list[float]]
+) -> tuple[int, int, int, int] | None:
+    """:func:`_face_region` of a few boxes, corner by corner in Python floats."""
+    m = (face.proj @ face.view).tolist()
+    half = resolution / 2.0
+    box: list[float] | None = None
+    for lo, hi in zip(lows, highs, strict=True):
+        xs, ys, ahead = [], [], 0
+        for x in (lo[0], hi[0]):
+            for y in (lo[1], hi[1]):
+                for z in (lo[2], hi[2]):
+                    w = m[3][0] * x + m[3][1] * y + m[3][2] * z + m[3][3]
+                    if w <= 1e-9:
+                        continue
+                    ahead += 1
+                    xs.append((m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]) / w)
+                    ys.append((m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]) / w)
+        if not ahead:
+            continue  # wholly behind the light camera
+        rect = (-1.0, -1.0, 1.0, 1.0) if ahead < 8 else (min(xs), min(ys), max(xs), max(ys))
+        x0 = min(max(math.floor((rect[0] + 1.0) * half) - 1, 0), resolution)
+        y0 = min(max(math.floor((rect[1] + 1.0) * half) - 1, 0), resolution)
+        x1 = min(max(math.ceil((rect[2] + 1.0) * half) + 1, 0), resolution)
+        y1 = min(max(math.ceil((rect[3] + 1.0) * half) + 1, 0), resolution)
+        if x1 <= x0 or y1 <= y0:
+            continue
+        box = [x0, y0, x1, y1] if box is None else [min(box[0], x0), min(box[1], y0), max(box[2], x1), max(box[3], y1)]
+    if box is None:
+        return None
+    return int(box[0]), int(box[1]), int(box[2] - box[0]), int(box[3] - box[1])
 
 
 def _meets(
@@ -628,7 +666,7 @@ def _up_for(axis: np.ndarray) -> np.ndarray:
 
 def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: int) -> list[_Face]:
     """The map faces of one light over the casters' bounds [lo, hi] (empty: the light casts no shadows)."""
-    from ...attributes import DirectionalLight, PointLight, SpotLight
+    from ...attributes import AreaLight, DirectionalLight, PointLight, SpotLight
 
     if not getattr(light, "casts_shadows", False):
         return []
@@ -645,9 +683,9 @@ def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         near, far = float(depth.min()) - 0.01 * radius, float(depth.max()) + 0.01 * radius
         proj = orthographic_matrix(2.0 * half_y, half_x / half_y, near, far)
         return [_Face(view, proj, (2.0 * max(half_x, half_y) / resolution, 0.0))]
-    if not isinstance(light, (PointLight, SpotLight)):
+    if not isinstance(light, (PointLight, SpotLight, AreaLight)):
         return []
-    p = light.world_position(matrix)
+    p = light.world_position(matrix)  # an area light's centre: its soft shadows filter these maps (area_glsl)
     rel = corners - p
     far = float(np.linalg.norm(rel, axis=1).max()) * 1.01
     gap = np.maximum(np.maximum(lo - p, p - hi), 0.0)
