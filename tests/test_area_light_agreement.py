@@ -26,12 +26,14 @@ SIZE = (160, 120)
 FLOOR = (0.7, 0.7, 0.7)
 INTENSITY = 6.0
 IOU = 0.95
-#: POV-Ray's shadows come out about one pixel wider along the light's long side than Mitsuba's and Radiance's
-#: (measured: IoU 0.93-0.955 against 0.957-0.961 between the two path tracers); issue 26's 0.95 holds between those
-POV_IOU = 0.92
+#: POV-Ray's and GL's shadows come out about one pixel wider along the light's long side than Mitsuba's and
+#: Radiance's (measured: IoU 0.92-0.955 against 0.957-0.961 between the two path tracers); issue 26's 0.95 holds
+#: between those two only
+POV_IOU = 0.91
 PENUMBRA = 0.20
 DELTA_E = 8.0
 OPTIONS = {
+    "gl": {"samples": 0},
     "mitsuba": {"spp": 128},
     "radiance": {"global_ambient": 0.0, "options": om.radiance.Options(ds=0.02)},
 }
@@ -89,7 +91,14 @@ def iou(a: np.ndarray, b: np.ndarray) -> float:
     return float((a & b).sum() / max((a | b).sum(), 1))
 
 
-PAIRS = [("povray", "mitsuba"), ("povray", "radiance"), ("mitsuba", "radiance")]
+PAIRS = [
+    ("povray", "gl"),
+    ("mitsuba", "gl"),
+    ("radiance", "gl"),
+    ("povray", "mitsuba"),
+    ("povray", "radiance"),
+    ("mitsuba", "radiance"),
+]
 
 
 @pytest.mark.parametrize("shape", ["rect", "disc"])
@@ -109,13 +118,13 @@ def test_area_light_shadows_and_colours_agree(a, b, shape):
         f"mean dE2000 {de.mean():.2f} on the lit floor"
     )
     print(report)
-    assert score >= (POV_IOU if "povray" in (a, b) else IOU), report
+    assert score >= (POV_IOU if {"povray", "gl"} & {a, b} else IOU), report
     assert abs(width - 1.0) <= PENUMBRA, report
     assert de.mean() <= DELTA_E, report
 
 
 @pytest.mark.parametrize("shape", ["rect", "disc"])
-@pytest.mark.parametrize("engine", [pytest.param(e, marks=marks(e)) for e in ("povray", "mitsuba", "radiance")])
+@pytest.mark.parametrize("engine", [pytest.param(e, marks=marks(e)) for e in ("gl", "povray", "mitsuba", "radiance")])
 def test_unoccluded_floor_shows_the_form_factor(engine, shape):
     """The floor point the camera looks at (0, 0, 0.3): kd * L * F, F the exact form factor, within 8 %."""
     require(engine)

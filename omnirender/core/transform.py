@@ -267,10 +267,15 @@ class Translation(Transform):
         out = np.zeros((len(transforms), 4, 4))
         out[:, _DIAGONAL, _DIAGONAL] = 1.0
         if transforms:
-            n = len(transforms)
-            flat = chain.from_iterable(map(_OFFSET, transforms))  # C-level loops: no Python step per transform
-            out[:, :3, 3] = np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
+            out[:, :3, 3] = Translation.stack_offsets(transforms)  # type: ignore[arg-type]
         return out
+
+    @staticmethod
+    def stack_offsets(translations: Sequence[Translation]) -> np.ndarray:
+        """The ``(N, 3)`` float64 offsets of ``translations``, read with no Python step per translation."""
+        n = len(translations)
+        flat = chain.from_iterable(map(_OFFSET, translations))  # C-level loops
+        return np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
 
     def parameters(self) -> dict:
         return {"offset": list(self.offset)}

@@ -32,7 +32,8 @@ def fresh(scene: om.Node) -> np.ndarray:
 
 def start(n: int = 12) -> np.ndarray:
     i = np.arange(n)
-    return np.stack([(i % 4 - 1.5) * 1.2, (i // 4 - 1.0) * 1.1, 0.3 * (i % 2)], axis=1).astype(np.float64)
+    rows = (n + 5) // 6
+    return np.stack([(i % 6 - 2.5) * 0.9, (i // 6 - rows / 2) * 0.45, 0.3 * (i % 2)], axis=1).astype(np.float64)
 
 
 def scene_of(n: int = 12) -> tuple[om.Node, om.TranslationArray, np.ndarray, om.Rotation]:
@@ -44,8 +45,8 @@ def scene_of(n: int = 12) -> tuple[om.Node, om.TranslationArray, np.ndarray, om.
     scene = om.Node("scene", [om.Camera.look_at((0, 1.0, 9.0), (0, 0, 0), fov=50)])
     scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
     for i in range(n):
-        shape = om.Cone(radius=0.3, height=0.6) if i % 3 == 0 else om.Box(size=0.45)
-        color = om.Material(diffuse=(0.3 + 0.05 * i, 0.5, 0.9 - 0.05 * i), opacity=0.6 if i == 5 else 1.0)
+        shape = om.Cone(radius=0.18, height=0.35) if i % 3 == 0 else om.Box(size=0.3)
+        color = om.Material(diffuse=(0.3 + 0.05 * (i % 12), 0.5, 0.9 - 0.05 * (i % 12)), opacity=0.6 if i == 5 else 1.0)
         node = om.Node(f"n{i}", [moves[i], color, shape])
         (group if i % 2 else scene).add(node)
     scene.add(group)
@@ -64,6 +65,7 @@ def test_a_touched_array_is_written_at_once_and_matches_a_fresh_engine():
             moves.touch()
             image = e.render(scene).array
             assert e.stats["compiled"] is False and e.stats["incremental"] == len(moves)
+            assert (image != image[0, 0]).any(axis=2).mean() > 0.01  # the shapes are in view
             assert np.array_equal(image, fresh(scene))
         assert [t.offset for t in moves] == [tuple(row) for row in positions.tolist()]
 
@@ -152,3 +154,25 @@ def test_a_touch_moves_versions_and_names_a_bad_row_with_its_node():
     with pytest.raises(ValueError, match="translation 2 .*in node /scene/n2"):
         moves.touch()
     assert moves[2].offset == tuple(start(4)[2].tolist())  # nothing applied
+
+
+def test_many_translations_moved_by_setters_take_the_same_rows_write():
+    """A setter loop over most of the plan's translations is written like an array (the plan's own map)."""
+    from omnirender.gl import GLEngine
+
+    n = 96
+    scene, moves, positions, spin = scene_of(n)
+    translations = list(moves)
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene)
+        for step in range(2):
+            for i, t in enumerate(translations):
+                t.offset = positions[i] + (0.1 * step, -0.2, 0.05 * (i % 3))  # a numpy row each
+            if step:
+                spin.angle = 10.0  # another transform in the same frame: the general path
+            image = e.render(scene).array
+            assert e.stats["compiled"] is False and e.stats["incremental"] == n
+            assert np.array_equal(image, fresh(scene))
+        for t in translations[: n // 4]:  # a quarter moved: the general path
+            t.offset = (t.offset[0], t.offset[1] + 0.3, t.offset[2])
+        assert np.array_equal(e.render(scene).array, fresh(scene))

@@ -156,5 +156,5 @@ class BulkMap:
                 for w in part.where.tolist():
                     batch.row_changed(w)
             else:
-                batch.changed(lo, hi)
+                batch.moved(lo, hi)  # translation columns only: the upload rewrites just those (drawer.py)
             plan.moved_rows.append((batch, part.where))

@@ -188,7 +188,9 @@ class BatchDrawer:
                         seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
                         order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
                         batch.drawn = len(seen)
-                    batch.buffer.write(_pack(batch.rows, order, columns))
+                    packed = _pack(batch.rows, order, columns)
+                    batch.buffer.write(packed)
+                    batch.packed = packed  # the buffer's content: moved rows rewrite only their translations
                     batch.position = np.empty(n, np.int64)
                     batch.position[order] = np.arange(n)
                     batch.sorted_for = self.state.view_key if own_view else None
@@ -501,24 +503,54 @@ def _two_faced(geometry: Geometry, state: DrawState) -> bool:
 
 
 def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None) -> None:
-    """Upload the batch's few changed rows (``sparse``) where they lie in its buffer; then the dirty range."""
+    """Upload the batch's few changed rows (``sparse``) where they lie in its buffer; then the dirty range.
+
+    ``batch.packed`` mirrors the buffer: when only translations moved since
+    the last upload (``Batch.moved``), just those columns of the mirror are
+    rewritten before the range is uploaded, instead of packing every field
+    of the rows again.
+    """
     stride = batch.layout.stride * 4
     rows = batch.rows
+    packed = batch.packed
     for index in sorted(set(batch.sparse or ())):
         place = index if position is None else int(position[index])
-        batch.buffer.write(np.take(rows[index], columns).tobytes(), offset=place * stride)
+        data = np.take(rows[index], columns)
+        batch.buffer.write(data, offset=place * stride)
+        if packed is not None:
+            if place < len(packed):
+                packed[place] = data
+            else:
+                packed = batch.packed = None  # a row beyond the mirror: made again with the next full upload
     batch.sparse = None
-    if batch.dirty is not None:
-        lo, hi = batch.dirty
-        if position is None:
-            batch.buffer.write(_pack(rows[lo:hi], None, columns), offset=lo * stride)
-        else:
-            where = position[lo:hi]
-            first, last = int(where.min()), int(where.max()) + 1
-            order = np.empty(len(rows), np.int64)
-            order[position] = _arange(len(rows))
-            batch.buffer.write(_pack(rows, order[first:last], columns), offset=first * stride)
-        batch.dirty = None
+    if batch.dirty is None:
+        return
+    lo, hi = batch.dirty
+    model = batch.layout.offsets.get("model")
+    if packed is not None and model is not None and batch.moved_range == (batch.version, lo, hi):
+        places: Any = slice(lo, hi) if position is None else position[lo:hi]
+        packed[places, model + 12 : model + 15] = rows[lo:hi, _TRANSLATION]
+        first, last = (lo, hi) if position is None else (int(places.min()), int(places.max()) + 1)
+        batch.buffer.write(packed[first:last], offset=first * stride)
+    elif position is None:
+        data = _pack(rows[lo:hi], None, columns)
+        batch.buffer.write(data, offset=lo * stride)
+        if packed is not None and hi <= len(packed):
+            packed[lo:hi] = data
+        elif lo == 0 and hi == len(rows):
+            batch.packed = data
+    else:
+        where = position[lo:hi]
+        first, last = int(where.min()), int(where.max()) + 1
+        order = np.empty(len(rows), np.int64)
+        order[position] = _arange(len(rows))
+        data = _pack(rows, order[first:last], columns)
+        batch.buffer.write(data, offset=first * stride)
+        if packed is not None and last <= len(packed):
+            packed[first:last] = data
+        elif first == 0 and last == len(rows):
+            batch.packed = data
+    batch.dirty = None
 
 
 _ARANGE = np.arange(0)
@@ -532,11 +564,12 @@ def _arange(n: int) -> np.ndarray:
     return _ARANGE[:n]
 
 
-def _pack(rows: np.ndarray, order: np.ndarray | None, columns: np.ndarray) -> bytes:
-    """The GPU bytes of ``rows`` (those of ``order``, in that order; None: all) restricted to ``columns``.
+def _pack(rows: np.ndarray, order: np.ndarray | None, columns: np.ndarray) -> np.ndarray:
+    """The GPU content of ``rows`` (those of ``order``, in that order; None: all) restricted to ``columns``.
 
+    A new C-contiguous float32 array (buffers are written from it directly).
     Rows first, then columns, each a plain ``take`` (one fancy index over both
     axes costs several times more).
     """
     picked = rows if order is None else np.take(rows, order, axis=0)
-    return np.take(picked, columns, axis=1).tobytes()
+    return np.take(picked, columns, axis=1)

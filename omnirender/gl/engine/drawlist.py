@@ -242,7 +242,9 @@ class Batch:
         "layout",
         "vaos",
         "capacity",
-        "dirty",
+        "_dirty",
+        "moved_range",
+        "packed",
         "uniform",
         "sorted_for",
         "position",
@@ -267,7 +269,12 @@ class Batch:
         #: vertex arrays per program
         self.vaos: dict[int, Any] = {}
         self.capacity = 0
-        self.dirty: tuple[int, int] | None = None
+        self._dirty: tuple[int, int] | None = None
+        #: (version, lo, hi) when every change since the last upload was to the rows' translations only
+        #: (:meth:`moved`): the upload then rewrites only those columns of ``packed``; any other change clears it
+        self.moved_range: tuple[int, int, int] | None = None
+        #: the GPU buffer's content, rows in buffer order restricted to ``layout`` (kept by the drawer), or None
+        self.packed: np.ndarray | None = None
         #: True when every instance has the same material apart from its colour (uniforms instead of attributes)
         self.uniform = False
         #: the view (bytes of the view matrix) the instances were last sorted front to back for, or None
@@ -373,6 +380,7 @@ class Batch:
 
     def row_changed(self, index: int) -> None:
         """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
+        self.moved_range = None
         if self.dirty is None and self.sparse is None:
             self.sparse = [index]
         elif self.sparse is not None and len(self.sparse) < 32:
@@ -394,15 +402,34 @@ class Batch:
         """Row ``index`` changed."""
         self.changed(index, index + 1)
 
+    @property
+    def dirty(self) -> tuple[int, int] | None:
+        """The range of rows to upload with the next draw, or None."""
+        return self._dirty
+
+    @dirty.setter
+    def dirty(self, value: tuple[int, int] | None) -> None:
+        self._dirty = value
+        self.moved_range = None  # set from outside: nothing is known about which columns changed
+
+    def moved(self, lo: int, hi: int) -> None:
+        """Rows ``lo:hi`` changed in their translation columns only (positions moved): :meth:`changed`, and the
+        upload rewrites only those columns when nothing else changed since the last one."""
+        only = self.moved_range is not None or (self._dirty is None and not self.sparse)
+        self.changed(lo, hi)
+        if only:
+            lo, hi = self._dirty  # type: ignore[misc]
+            self.moved_range = (self.version, lo, hi)
+
     def changed(self, lo: int, hi: int) -> None:
         """Rows ``lo:hi`` changed: upload them with the next draw, and refresh the batches filtered from this one."""
-        d = self.dirty
+        d = self._dirty
         self.version += 1
         self._log(lo, hi)
         if self.sparse:
             lo, hi = min(lo, *self.sparse), max(hi, max(self.sparse) + 1)
         self.sparse = None
-        self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))
+        self.dirty = (lo, hi) if d is None else (min(d[0], lo), max(d[1], hi))  # (clears moved_range)
 
     def _log(self, lo: int, hi: int) -> None:
         log = self.log
@@ -474,6 +501,7 @@ class Batch:
             self.buffer = None
         self.capacity = 0
         self.layout = None
+        self.packed = None
 
 
 def uniform_material(rows: np.ndarray) -> bool:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ...core.transform import Transform, TranslationArray
+from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .bulk import BulkMap
 from .instancing import InstanceRows, instance_rows, set_arrays
@@ -31,6 +31,10 @@ __all__ = ["MovePlan", "TransformUpdater"]
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _EYE3 = np.eye(3)
+#: moved transforms from which a frame of only Translations takes the array path (bulk.py)
+_MANY = 64
+#: the key of the plan's own translations among its array maps
+_TRANSLATIONS = -1
 
 
 class MovePlan:
@@ -195,10 +199,34 @@ class MovePlan:
             return 0
         positions = found[keep]
         moved = changed if keep.all() else list(compress(changed, keep.tolist()))
+        if len(moved) >= _MANY and set(map(type, moved)) == {Translation}:
+            count = self._apply_translations(positions, moved)
+            if count is not None:
+                return count
         for cls, members in _by_class(positions.tolist(), moved).items():
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
         count = self._apply_items(positions)
         return count + self._apply_instances(set(positions.tolist()))
+
+    def _apply_translations(self, positions: np.ndarray, moved: list[Any]) -> int | None:
+        """Many plain ``Translation`` objects moved (a simulation's setter loop): written like an array's rows.
+
+        The plan's translations are taken as one array (:class:`~.bulk.BulkMap`
+        over all of them): the moved offsets go into the plan's matrices, and
+        every row below a translation takes its translation column from them.
+        None when fewer than half of them moved (the rows below the others
+        would be uploaded for nothing) or an item lies below two translations.
+        """
+        entry = self.bulk.get(_TRANSLATIONS)
+        if entry is None:
+            own = [t for t in self.transforms if t.__class__ is Translation]
+            entry = self.bulk[_TRANSLATIONS] = (own, BulkMap(self, own))
+        own, bulk = entry
+        if not bulk.valid or 2 * len(moved) < len(own):
+            return None
+        self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
+        bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
+        return bulk.count + self._apply_instances(set(positions.tolist()))
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -446,7 +474,7 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
         batch, _ = item.slot
         if batch.rows is not item.instances:
             batch.rows[:, _TRANSLATION] = world
-        batch.changed(0, len(batch.rows))
+        batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
 
 
 def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:

@@ -628,7 +628,7 @@ def _up_for(axis: np.ndarray) -> np.ndarray:
 
 def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: int) -> list[_Face]:
     """The map faces of one light over the casters' bounds [lo, hi] (empty: the light casts no shadows)."""
-    from ...attributes import DirectionalLight, PointLight, SpotLight
+    from ...attributes import AreaLight, DirectionalLight, PointLight, SpotLight
 
     if not getattr(light, "casts_shadows", False):
         return []
@@ -645,9 +645,9 @@ def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         near, far = float(depth.min()) - 0.01 * radius, float(depth.max()) + 0.01 * radius
         proj = orthographic_matrix(2.0 * half_y, half_x / half_y, near, far)
         return [_Face(view, proj, (2.0 * max(half_x, half_y) / resolution, 0.0))]
-    if not isinstance(light, (PointLight, SpotLight)):
+    if not isinstance(light, (PointLight, SpotLight, AreaLight)):
         return []
-    p = light.world_position(matrix)
+    p = light.world_position(matrix)  # an area light's centre: its soft shadows filter these maps (area_glsl)
     rel = corners - p
     far = float(np.linalg.norm(rel, axis=1).max()) * 1.01
     gap = np.maximum(np.maximum(lo - p, p - hi), 0.0)
