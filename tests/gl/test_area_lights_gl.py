@@ -36,7 +36,7 @@ def pixel_points() -> np.ndarray:
     return np.stack([x, np.zeros_like(x), z], axis=-1)
 
 
-@pytest.mark.parametrize("pipeline", ["forward"])
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
 @pytest.mark.parametrize(
     "light",
     [

@@ -38,6 +38,7 @@ __all__ = [
     "POLY_VERTS",
     "AREA_CODE",
     "AREA_SHADOW_CODE",
+    "LTC_CORE",
     "LTC_UNIT",
     "area_code",
     "AreaUniforms",
@@ -52,9 +53,8 @@ POLY_VERTS = 8
 #: The texture unit of the LTC tables (after the 16 of :mod:`.units`; every GL 3.3 driver we target has 32).
 LTC_UNIT = 16
 
-AREA_CODE = """
-uniform vec4 u_lpoly[MAX_AREA_LIGHTS * 8];  // view-space polygon; [k*8].w vertex count, [k*8+1].w two-sided
-uniform sampler2D u_ltc;                    // LTC tables: rows 0-63 the inverse matrices, 64-127 norm and Fresnel
+#: The LTC integral over a polygon (shared by the forward and the deferred pipelines).
+LTC_CORE = """
 vec3 ltc_edge(vec3 v1, vec3 v2) {           // three.js's LTC_EdgeVectorFormFactor
     float x = dot(v1, v2);
     float y = abs(x);
@@ -64,32 +64,57 @@ vec3 ltc_edge(vec3 v1, vec3 v2) {           // three.js's LTC_EdgeVectorFormFact
     float theta_sintheta = x > 0.0 ? v : 0.5 * inversesqrt(max(1.0 - x * x, 1e-7)) - v;
     return cross(v1, v2) * theta_sintheta;
 }
-// the integral of the LTC ``minv`` over light k's polygon seen from P (normal N, view V)
-float ltc_integral(int k, vec3 N, vec3 V, vec3 P, mat3 minv) {
-    int base = k * 8;
-    int n = int(u_lpoly[base].w);
-    vec3 p0 = u_lpoly[base].xyz;
-    vec3 ln = cross(u_lpoly[base + 1].xyz - p0, u_lpoly[base + 2].xyz - p0);
-    bool behind = dot(ln, P - p0) < 0.0;
-    if (behind && u_lpoly[base + 1].w < 0.5) return 0.0;
+// the integral of the LTC ``minv`` over the polygon q[0..n) (counter-clockwise from its lit side) seen from P
+// (normal N, view V); ``dir`` gets the vector form factor's direction (eye space): where the light comes from
+float ltc_polygon(vec3 q[8], int n, bool two_sided, vec3 N, vec3 V, vec3 P, mat3 minv, out vec3 dir) {
+    dir = N;
+    vec3 ln = cross(q[1] - q[0], q[2] - q[0]);
+    bool behind = dot(ln, P - q[0]) < 0.0;
+    if (behind && !two_sided) return 0.0;
     vec3 T1 = V - N * dot(V, N);
     T1 = dot(T1, T1) > 1e-12 ? normalize(T1) : (abs(N.x) < 0.9 ? normalize(cross(N, vec3(1.0, 0.0, 0.0)))
                                                                 : normalize(cross(N, vec3(0.0, 1.0, 0.0))));
     vec3 T2 = -cross(N, T1);  // three.js's (left-handed) frame: a polygon counter-clockwise from its lit side
-    mat3 m = minv * transpose(mat3(T1, T2, N));
-    vec3 first = normalize(m * (p0 - P));
+    mat3 frame = transpose(mat3(T1, T2, N));
+    mat3 m = minv * frame;
+    vec3 first = normalize(m * (q[0] - P));
     vec3 prev = first;
     vec3 f = vec3(0.0);
     for (int j = 1; j < 8; ++j) {
         if (j >= n) break;
-        vec3 cur = normalize(m * (u_lpoly[base + j].xyz - P));
+        vec3 cur = normalize(m * (q[j] - P));
         f += ltc_edge(prev, cur);
         prev = cur;
     }
     f += ltc_edge(prev, first);
     if (behind) f = -f;  // a two-sided light seen from its back: the same polygon, wound the other way
     float l = length(f);
+    if (l > 1e-12) dir = normalize(transpose(frame) * f);
     return max((l * l + f.z) / (l + 1.0), 0.0);  // horizon clipping: the sphere approximation
+}
+// the polygon of a rectangle (4 corners) or disc (8-gon of the disc's area) around C with half axes HU, HV
+int area_polygon(vec3 C, vec3 HU, vec3 HV, bool disc, out vec3 q[8]) {
+    if (!disc) {
+        q[0] = C - HU - HV; q[1] = C + HU - HV; q[2] = C + HU + HV; q[3] = C - HU + HV;
+        q[4] = q[5] = q[6] = q[7] = C;
+        return 4;
+    }
+    for (int j = 0; j < 8; ++j) {
+        float t = float(j) * 0.78539816;
+        q[j] = C + 1.0539 * (cos(t) * HU + sin(t) * HV);  // sqrt(2 pi / (8 sin(pi / 4))): the disc's area
+    }
+    return 8;
+}
+"""
+
+AREA_CODE = """
+uniform vec4 u_lpoly[MAX_AREA_LIGHTS * 8];  // view-space polygon; [k*8].w vertex count, [k*8+1].w two-sided
+uniform sampler2D u_ltc;                    // LTC tables: rows 0-63 the inverse matrices, 64-127 norm and Fresnel
+float ltc_integral(int k, vec3 N, vec3 V, vec3 P, mat3 minv) {
+    vec3 q[8];
+    for (int j = 0; j < 8; ++j) q[j] = u_lpoly[k * 8 + j].xyz;
+    vec3 dir;
+    return ltc_polygon(q, int(u_lpoly[k * 8].w), u_lpoly[k * 8 + 1].w > 0.5, N, V, P, minv, dir);
 }
 vec4 ltc_table(float roughness, vec3 N, vec3 V, float half_) {
     vec2 uv = vec2(roughness, sqrt(1.0 - clamp(dot(N, V), 0.0, 1.0))) * (63.0 / 64.0) + 0.5 / 64.0;
@@ -123,7 +148,6 @@ vec3 area_pbr(int i, int k, vec3 P, vec3 N, vec3 V, vec3 albedo, vec3 F0, float 
 
 #: Soft shadows of area lights (needs the shadow maps' ``MAPS_CORE`` and ``u_lshadow``).
 AREA_SHADOW_CODE = """
-uniform vec4 u_larea[MAX_AREA_LIGHTS * 3];  // world: centre (w: 1 for a disc), half axes u and v
 vec2 area_sample(vec2 s, bool disc) {       // a point of [-1, 1]^2 on the light's shape (Shirley's disc map)
     if (!disc || (s.x == 0.0 && s.y == 0.0)) return s;
     float r, phi;
@@ -139,14 +163,11 @@ bool receiver_plane(mat4 M, vec3 C, vec3 X, vec3 W, vec3 NW, out vec4 clip) {
     clip = M * vec4(C + (X - C) * (dot(W - C, NW) / denom), 1.0);
     return clip.w > 0.0;
 }
-float area_shadow(int i, int k, vec3 P, vec3 N) {
-    int count = int(u_lshadow[i].y);
+// soft shadow of an area light (world centre C, half axes HU, HV) with map faces [f, f + count)
+float area_shadow_faces(int f, int count, vec3 C, vec3 HU, vec3 HV, bool disc, vec3 P, vec3 N) {
     if (count == 0) return 1.0;
     vec3 W = (u_eye_to_world * vec4(P, 1.0)).xyz;
     vec3 NW = mat3(u_eye_to_world) * N;
-    vec3 C = u_larea[k * 3].xyz, HU = u_larea[k * 3 + 1].xyz, HV = u_larea[k * 3 + 2].xyz;
-    bool disc = u_larea[k * 3].w > 0.5;
-    int f = int(u_lshadow[i].x);
     if (count == 6) {
         vec3 d = W - C;
         vec3 a = abs(d);
@@ -196,6 +217,15 @@ float area_shadow(int i, int k, vec3 P, vec3 N) {
     }
     return lit / 36.0;
 }
+"""
+
+#: The forward light loops' look-up: light i's faces, area slot k's frame.
+AREA_SHADOW_FORWARD = """
+uniform vec4 u_larea[MAX_AREA_LIGHTS * 3];  // world: centre (w: 1 for a disc), half axes u and v
+float area_shadow(int i, int k, vec3 P, vec3 N) {
+    return area_shadow_faces(int(u_lshadow[i].x), int(u_lshadow[i].y), u_larea[k * 3].xyz, u_larea[k * 3 + 1].xyz,
+                             u_larea[k * 3 + 2].xyz, u_larea[k * 3].w > 0.5, P, N);
+}
 #define AREA_SHADOW_MAP_ATT(i, k) att *= area_shadow(i, k, P, N);
 """
 
@@ -204,10 +234,10 @@ def area_code(features: dict[str, Any]) -> str:
     """The GLSL of a program variant whose lights include area lights ("" otherwise); defines ``AREA_SHADOW_ATT``."""
     if "a" not in str(features.get("LIGHTS", "")):
         return ""
-    parts = [f"#define MAX_AREA_LIGHTS {MAX_AREA_LIGHTS}", AREA_CODE]
+    parts = [f"#define MAX_AREA_LIGHTS {MAX_AREA_LIGHTS}", LTC_CORE, AREA_CODE]
     calls = []
     if features.get("SHADOW_MAPS"):
-        parts.append(AREA_SHADOW_CODE)
+        parts += [AREA_SHADOW_CODE, AREA_SHADOW_FORWARD]
         calls.append("AREA_SHADOW_MAP_ATT(i, k)")
     if features.get("LIGHT_SELECT"):
         calls.append("att *= u_light_on[i];")
@@ -240,7 +270,9 @@ class AreaUniforms:
         self.poly[base : base + len(eye), :3] = eye
         self.poly[base, 3] = len(eye)
         self.poly[base + 1, 3] = 1.0 if light.two_sided else 0.0
-        centre, hu, hv, _ = light.world_frame(matrix)
+        centre, hu, hv, normal = light.world_frame(matrix)
+        if float(np.dot(np.cross(hu, hv), normal)) < 0.0:
+            hu = -hu  # HU x HV on the lit side (the shape is symmetric)
         self.world[3 * k, :3], self.world[3 * k, 3] = centre, 1.0 if disc else 0.0
         self.world[3 * k + 1, :3], self.world[3 * k + 2, :3] = hu, hv
         self.count += 1
