@@ -29,6 +29,11 @@ Russian-roulette depth of the default ``path`` integrator.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -74,6 +79,28 @@ def world_ellipsoids(shape: GaussianSplats, model: np.ndarray) -> tuple[np.ndarr
     vectors[np.linalg.det(vectors) < 0, :, 0] *= -1.0
     quats = SciRotation.from_matrix(vectors).as_quat()  # (x, y, z, w), Mitsuba's order
     return p @ m[:3, :3].T + m[:3, 3], quats, np.sqrt(np.maximum(values, 1e-30))
+
+
+@contextlib.contextmanager
+def _quiet_tensor_casts() -> Iterator[None]:
+    """Drop nanobind's "implicit conversion from type 'TensorXf' ... failed!" lines from the process's stderr.
+
+    Mitsuba's property parser tries a tensor against its colour and vector overloads first and nanobind prints a
+    line for each failed try (six lines per ``ellipsoids`` shape); everything else written meanwhile is kept.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            kept = [ln for ln in capture.read().splitlines(keepends=True) if b"implicit conversion from type" not in ln]
+            if kept:
+                os.write(2, b"".join(kept))
 
 
 def _groups(premultiplied: np.ndarray) -> list[np.ndarray]:
@@ -149,5 +176,6 @@ class GaussianSplatsPainter(ShapePainter):
                     },
                 }
                 name = engine.unique_name("splats")
-                engine.shapes[name] = engine.instantiate(colour, "GaussianSplats shells")
-                covers[name] = engine.instantiate(cover, "GaussianSplats coverage shells")
+                with _quiet_tensor_casts():
+                    engine.shapes[name] = engine.instantiate(colour, "GaussianSplats shells")
+                    covers[name] = engine.instantiate(cover, "GaussianSplats coverage shells")
