@@ -1,7 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
 Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
-     [deferred] [postfx] [pipelines] [assets]
+     [deferred] [postfx] [pipelines] [assets] [splats]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -271,6 +271,18 @@ def asset_suite_images(size: tuple[int, int] = (128, 96)) -> None:
     print("wrote", HERE / "asset_suite.png")
 
 
+def splat_images() -> None:
+    """The README's Gaussian-splat block (a planet of splats with a box half inside), run as it is written."""
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "om.GaussianSplats(" in b)
+    with tempfile.TemporaryDirectory() as tmp:
+        exec(compile(block.replace('"splats.png"', repr(str(Path(tmp) / "splats.png"))), "README", "exec"), {})
+        shutil.copy(Path(tmp) / "splats.png", HERE / "splats.png")
+    print("wrote", HERE / "splats.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -283,6 +295,7 @@ SECTIONS = {
     "pipelines": pipeline_images,
     "usd": usd_images,
     "assets": asset_suite_images,
+    "splats": splat_images,
 }
 
 if __name__ == "__main__":

@@ -17,7 +17,11 @@ each light with the attenuation the glTF exporter keeps in its ``extras``:
 intensities are multiplied by pi (three.js divides a Lambertian albedo by pi)
 and a point or spot light falls off with the exponent of its attenuation (none
 for the default ``constant=1``), so the page is about as bright as the other
-engines' pictures.  Mouse: left drag orbits around the camera's centre, right
+engines' pictures.  ``om.RectLight``/``om.DiscLight`` (a spot with the area light in its
+extras in the glTF) become three.js ``RectAreaLight``s of the light's radiance (a disc a
+square of its area); three.js draws no shadows for them and lights only physically based
+materials with them, so a page with area lights shows Phong materials as
+``MeshStandardMaterial`` of the Phong exponent's roughness.  Mouse: left drag orbits around the camera's centre, right
 drag pans, the wheel zooms.
 """
 

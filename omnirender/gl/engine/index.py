@@ -43,12 +43,15 @@ JOURNAL_ROWS = 512
 
 class CasterChange:
     """Boxes of a shadow-casting batch's rows that changed: ``lo``, ``hi`` (N, 3) world boxes, ``new`` (False:
-    the places the rows left, True: the places they took)."""
+    the places the rows left, True: the places they took), ``rows`` their row indices and ``edit``: False for
+    rows moved in place; True for a row removed (the last row moved into its place) or appended."""
 
-    __slots__ = ("batch", "lo", "hi", "new")
+    __slots__ = ("batch", "lo", "hi", "new", "rows", "edit")
 
-    def __init__(self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool) -> None:
-        self.batch, self.lo, self.hi, self.new = batch, lo, hi, new
+    def __init__(
+        self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool, rows: np.ndarray, edit: bool = False
+    ) -> None:
+        self.batch, self.lo, self.hi, self.new, self.rows, self.edit = batch, lo, hi, new, rows, edit
 
 
 class RenderIndex:
@@ -113,8 +116,8 @@ class RenderIndex:
                 old = (found[1][where], found[2][where])  # copies (fancy index)
                 self._follow_casters(old, (lo, hi))
                 if self._room(len(lo)):
-                    self._note(CasterChange(batch, *old, False))
-                    self._note(CasterChange(batch, lo, hi, True))
+                    self._note(CasterChange(batch, *old, False, where))
+                    self._note(CasterChange(batch, lo, hi, True, where))
             found[1][where] = lo
             found[2][where] = hi
 
@@ -155,7 +158,7 @@ class RenderIndex:
                     old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
                     self._follow_casters(old, None)
                     if self._room(1):
-                        self._note(CasterChange(batch, *old, False))
+                        self._note(CasterChange(batch, *old, False, np.array([index]), True))
                 last = len(lo) - 1
                 lo[index], hi[index] = lo[last], hi[last]
                 lo, hi = lo[:-1], hi[:-1]
@@ -164,7 +167,7 @@ class RenderIndex:
                 if caster:
                     self._follow_casters(None, (a, b))
                     if self._room(1):
-                        self._note(CasterChange(batch, a, b, True))
+                        self._note(CasterChange(batch, a, b, True, np.array([index]), True))
                 if lo is not None:
                     lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
         if lo is not None and len(lo) == len(batch.rows):
