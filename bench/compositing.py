@@ -10,6 +10,9 @@ the same run:
 * the same in an offscreen ``DepthGroup`` (one offscreen target, one merge);
 * a ``ShadowGroup`` (2048 x 2048 shadow map, offscreen children, shading pass);
 * an ``OcclusionGroup`` with the sphere as its child;
+* a ``DepthPeelGroup`` of the scene (at most 8 layers, a pass of the scene and a composite each; it stops at
+  the first empty layer);
+* a ``DistanceGroup`` colouring the scene by its distance to the sphere (two offscreen children, one pass);
 * the ``LightFieldRenderer`` of a light field captured from 20 cameras on a
   sphere cap, from three novel views, with its PSNR on the foreground against
   the GL render of the real scene.
@@ -72,6 +75,8 @@ def main() -> None:
         "offscreen DepthGroup": C.DepthGroup([C.SceneRenderer(scene)], offscreen=True),
         "ShadowGroup (2048^2 map)": C.ShadowGroup(light, [C.SceneRenderer(scene)]),
         "OcclusionGroup": C.DepthGroup([C.SceneRenderer(scene), C.OcclusionGroup([C.SceneRenderer(sphere)])]),
+        "DepthPeelGroup (8 layers)": C.DepthGroup([C.DepthPeelGroup([C.SceneRenderer(scene)])]),
+        "DistanceGroup": C.DepthGroup([C.DistanceGroup([C.SceneRenderer(scene), C.SceneRenderer(sphere)])]),
     }
     with GLEngine(size=SIZE) as engine:
         baseline = om.Node.transient([camera, scene])

@@ -5,11 +5,13 @@ handlers: the camera as ``Projection`` + a world-to-camera ``Transform``
 (RenderMan's camera space is left-handed, z into the screen: a ``Scale 1 1
 -1`` after the GL view matrix), ``Format`` and ``Display``; inside
 ``WorldBegin``/``WorldEnd`` the lights (``pointlight``, ``distantlight``,
-``spotlight``, ``ambientlight``) and one ``AttributeBegin``/``AttributeEnd``
-block per scene-graph node with the ``ConcatTransform`` accumulated since its
-parent.  Each shape gets its own block with its transform relative to the node,
+``spotlight``, ``ambientlight``; ``om.RectLight``/``om.DiscLight`` as an
+``AreaLightSource "arealight"`` on the light's polygon, of intensity its
+radiance) and one ``AttributeBegin``/``AttributeEnd`` block per scene-graph
+node with the ``ConcatTransform`` accumulated since its parent. Each shape
+gets its own block with its transform relative to the node,
 ``Color``/``Opacity`` and a ``Surface`` ("plastic" with a specular colour,
-"matte" otherwise, or the shader of an active :class:`Surface`).  Sphere,
+"matte" otherwise, or the shader of an active :class:`Surface`). Sphere,
 cylinder, cone, torus and disk are RenderMan quadrics (z-up: a rotation turns
 them to our y axis), rectangles ``Polygon``, triangle sets ``PointsPolygons``,
 line sets ``Curves`` and point sets ``Points``; everything else is simplified.
@@ -42,6 +44,7 @@ import numpy as np
 
 from ..attributes import (
     AmbientLight,
+    AreaLight,
     ClipPlane,
     DirectionalLight,
     DrawStyle,
@@ -348,6 +351,17 @@ class RIBEngine(NodeTrackingEngine):
                 out.append(
                     f'LightSource "distantlight" {handle} "from" [0 0 0] "to" {rib_numbers(d)} '
                     f'"intensity" {rib_numbers(light.intensity)} "lightcolor" {color}'
+                )
+            elif isinstance(light, AreaLight):
+                # RI 3.04's area light: the standard "arealight" shader on the light's polygon (world
+                # coordinates; a disc as a 32-gon of its area), radiance L; the renderer samples the shape
+                pts = light.world_polygon(world, 32)
+                sides = "Sides 2" if light.two_sided else "Sides 1"
+                out.append(
+                    f"AttributeBegin  # {type(light).__name__}, radiance {float(light.intensity):g}\n"
+                    f'  {sides}\n  AreaLightSource "arealight" {handle} "intensity" {rib_numbers(light.intensity)} '
+                    f'"lightcolor" {color}\n'
+                    f'  Polygon "P" {rib_numbers(pts.reshape(-1))}\nAttributeEnd\nIlluminate {handle} 1'
                 )
             elif isinstance(light, (PointLight, SpotLight)):
                 p = light.world_position(world)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import struct
 
 import numpy as np
@@ -313,3 +314,30 @@ def test_node_matrices_gltf_cannot_hold_are_applied_to_the_meshes_below(tmp_path
 
     assert all(decomposable(np.array(n["matrix"]).reshape(4, 4).T) for n in doc["nodes"] if "matrix" in n)
     np.testing.assert_allclose(np.array(om.bounds(om.load_gltf(path))), np.array(om.bounds(scene)), atol=1e-6)
+
+
+def test_area_lights_are_spots_with_an_extras_record_that_load_gltf_reads(tmp_path):
+    """KHR_lights_punctual has no area lights: a far-field spot (I = L A) plus extras.omnirender.area_light."""
+    root = om.Node("scene", [om.Camera.look_at((0, 3, 6), (0, 0, 0))])
+    lamp = root.add(om.Node("lamp", [om.Translation((0, 2, 0)), om.Scaling(2.0)]))
+    lamp.add(om.RectLight(direction=(0, -1, 0), width=1.0, height=0.5, intensity=3.0, two_sided=True))
+    root.add(
+        om.Node("disc", [om.DiscLight(position=(1, 2, 0), direction=(0, -1, 0), radius=0.25, casts_shadows=False)])
+    )
+    root.add(om.Node("box", [om.Box()]))
+    path = om.export(root, tmp_path / "area.glb")
+    doc, _ = _parse(path.read_bytes())
+    lights = doc["extensions"]["KHR_lights_punctual"]["lights"]
+    rect = next(light for light in lights if light["name"] == "RectLight")
+    assert rect["type"] == "spot" and rect["spot"]["outerConeAngle"] == pytest.approx(math.pi / 2)
+    assert rect["intensity"] == pytest.approx(3.0 * 2.0 * 1.0)  # L A, the world area 2 x 1
+    record = rect["extras"]["omnirender"]["area_light"]
+    assert record == {"shape": "rect", "two_sided": True, "casts_shadows": True, "radiance": 3.0,
+                      "width": pytest.approx(2.0), "height": pytest.approx(1.0)}  # fmt: skip
+    back = om.load_gltf(path)
+    found = {type(c).__name__: c for node in back.walk() for c in node.components if isinstance(c, om.LightSource)}
+    assert found["RectLight"].two_sided and found["RectLight"].intensity == pytest.approx(3.0)
+    assert found["DiscLight"].radius == pytest.approx(0.25) and not found["DiscLight"].casts_shadows
+    img_a = om.render(root, engine="gl", size=(48, 36), samples=0)
+    img_b = om.render(back, engine="gl", size=(48, 36), samples=0)
+    assert np.abs(img_a.array.astype(int) - img_b.array.astype(int)).mean() < 1.5

@@ -371,3 +371,17 @@ def test_removing_a_whole_scene_plane_before_more_shapes_is_refused():
     engine.remove(clip)
     with pytest.raises(ValueError, match="ClipPlane in a node around the shapes"):
         engine.eval(om.Sphere())
+
+
+def test_area_lights_are_area_light_sources_on_their_polygon(tmp_path):
+    root = om.Node("scene", [om.Camera.look_at((0, 3, 6), (0, 0, 0))])
+    root.add(om.RectLight(position=(0, 2, 0), direction=(0, -1, 0), width=2.0, height=1.0, intensity=3.0))
+    root.add(om.DiscLight(position=(1, 2, 0), direction=(0, -1, 0), radius=0.25, two_sided=True))
+    root.add(om.Box())
+    text = om.export(root, tmp_path / "area.rib").read_text()
+    assert text.count('AreaLightSource "arealight"') == 2 and "Sides 2" in text
+    block = text[text.index('AreaLightSource "arealight" 1') :]
+    block = block[block.index('Polygon "P" [') + len('Polygon "P" [') :]
+    corners = np.array([float(v) for v in block[: block.index("]")].split()]).reshape(-1, 3)
+    assert corners.shape == (4, 3) and np.allclose(corners[:, 1], 2.0)
+    assert np.ptp(corners[:, 0]) == pytest.approx(2.0) and np.ptp(corners[:, 2]) == pytest.approx(1.0)

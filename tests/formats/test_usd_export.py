@@ -147,3 +147,33 @@ def test_without_omnirender_attributes_the_plain_usd_mapping_looks_alike(tmp_pat
     both = a.mask & b.mask
     de = delta_e2000(cielab(a.rgb[both].astype(np.float64)), cielab(b.rgb[both].astype(np.float64)))
     assert float(np.median(de)) <= 8.0, f"median CIEDE2000 {np.median(de):.1f}"
+
+
+def test_area_lights_round_trip_as_usdlux_rect_and_disk_lights(tmp_path):
+    """om.RectLight / om.DiscLight -> UsdLux RectLight / DiskLight (radiance L) -> the same lights (issue 26)."""
+    from pxr import Usd, UsdLux
+
+    root = om.Node("scene", [om.Camera.look_at((0, 3, 6), (0, 0, 0))])
+    lamp = root.add(om.Node("lamp", [om.Translation((0, 2, 0)), om.Scaling(2.0)]))
+    lamp.add(om.RectLight(direction=(0, -1, 0), width=1.0, height=0.5, intensity=3.0, two_sided=True))
+    root.add(
+        om.Node("disc", [om.DiscLight(position=(1, 2, 0), direction=(0, -1, 0), radius=0.25, casts_shadows=False)])
+    )
+    root.add(om.Node("box", [om.Box()]))
+    path = tmp_path / "area.usda"
+    om.export(root, path)
+    stage = Usd.Stage.Open(str(path))
+    rects = [UsdLux.RectLight(p) for p in stage.Traverse() if p.IsA(UsdLux.RectLight)]
+    disks = [UsdLux.DiskLight(p) for p in stage.Traverse() if p.IsA(UsdLux.DiskLight)]
+    assert len(rects) == 1 and len(disks) == 1
+    assert (rects[0].GetWidthAttr().Get(), rects[0].GetHeightAttr().Get()) == pytest.approx((2.0, 1.0))
+    assert rects[0].GetIntensityAttr().Get() == pytest.approx(3.0)
+    assert disks[0].GetRadiusAttr().Get() == pytest.approx(0.25)
+    back = om.load_usd(path)
+    found = {type(c).__name__: c for node in back.walk() for c in node.components if isinstance(c, om.LightSource)}
+    assert found["RectLight"].two_sided and found["RectLight"].intensity == pytest.approx(3.0)
+    assert not found["DiscLight"].casts_shadows
+    # placed by the prims' transforms: the same picture as the original lights give
+    img_a = om.render(root, engine="gl", size=(48, 36), samples=0)
+    img_b = om.render(back, engine="gl", size=(48, 36), samples=0)
+    assert np.abs(img_a.array.astype(int) - img_b.array.astype(int)).mean() < 1.0

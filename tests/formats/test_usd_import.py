@@ -290,10 +290,11 @@ def test_lights_become_omnirender_lights(tmp_path):
     bulb = light("/Bulb")
     assert isinstance(bulb, om.PointLight) and bulb.intensity == pytest.approx(8.0 * 0.25)
     assert (bulb.constant, bulb.quadratic) == (0.0, 1.0)
-    panel = light("/Panel")
-    assert isinstance(panel, om.SpotLight) and panel.cutoff == 90.0 and panel.exponent == 1.0
-    assert panel.intensity == pytest.approx(2.0 / math.pi)  # L A / pi
-    assert isinstance(light("/Disk"), om.SpotLight)
+    panel = light("/Panel")  # USD's radiance is the area lights' radiance: no factor (issue 26)
+    assert isinstance(panel, om.RectLight) and (panel.width, panel.height) == (2.0, 1.0)
+    assert panel.intensity == pytest.approx(1.0) and panel.direction == (0.0, 0.0, -1.0)
+    disk = light("/Disk")
+    assert isinstance(disk, om.DiscLight) and disk.radius == pytest.approx(0.5)
     sky = light("/Sky")
     assert isinstance(sky, om.AmbientLight) and sky.intensity == pytest.approx(0.3)
     assert np.allclose(sky.color, srgb((0.5, 0.5, 0.5)))

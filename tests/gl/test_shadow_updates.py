@@ -208,3 +208,37 @@ def test_a_clear_box_is_validated():
     with pytest.raises(ValueError, match="box"):
         om.gl.Clear(box=(0, 0, 0, 4))
     assert om.gl.Clear(box=(1.0, 2, 3, 4)).box == (1, 2, 3, 4)
+
+
+@pytest.mark.parametrize("light", ["directional", "point"])
+def test_a_sequence_of_edits_keeps_matching_a_fresh_engine(light):
+    """Moves, replaced materials and matrices, nodes added and removed, frame after frame: the partial updates
+    (and the casters' rectangles they keep between frames) give the maps and the picture a fresh engine gives."""
+    lights = {"directional": None, "point": om.PointLight(position=(0.2, 3.5, 0.3))}
+    scene, nodes, box = grid_scene(lights[light])
+    rng = np.random.default_rng(7)
+    partial = 0
+    with engine() as e:
+        e.render(scene)
+        for frame in range(8):
+            for _ in range(2):
+                node = nodes[int(rng.integers(len(nodes)))]
+                what = frame % 4
+                if what == 0:
+                    x, y, z = node.items[0].offset
+                    node.items[0].offset = (x + rng.uniform(-0.2, 0.2), y, z + rng.uniform(-0.2, 0.2))
+                elif what == 1:
+                    node.remove(node.items[1])
+                    node.insert(1, om.Material(diffuse=tuple(rng.uniform(0.2, 1.0, 3))))
+                elif what == 2:
+                    scene.remove(node)
+                    nodes.remove(node)
+                    p = (rng.uniform(-2.5, 2.5), rng.uniform(0.8, 1.7), rng.uniform(-2.5, 2.5))
+                    nodes.append(scene.add(om.Node(f"n{frame}", [om.Translation(*p), om.Material(), box])))
+                else:
+                    x, y, z = node.items[0].offset
+                    node.items[0].offset = (x, y + 0.1, z)
+            image = e.render(scene)
+            partial += e.stats["shadow_maps"]["partial"]
+            same_as_fresh(e, image, scene)
+    assert partial >= 4

@@ -56,7 +56,7 @@ import numpy as np
 
 from ...animation.animation import Animation
 from ...animation.tracks import Keyframes
-from ...attributes import DirectionalLight, PBRMaterial, PointLight, SpotLight, Texture
+from ...attributes import DirectionalLight, DiscLight, PBRMaterial, PointLight, RectLight, SpotLight, Texture
 from ...attributes.imagefile import read_image
 from ...attributes.photometry import srgb_to_linear
 from ...core.camera import Camera
@@ -79,6 +79,7 @@ SUPPORTED_EXTENSIONS = frozenset(
         "KHR_mesh_quantization",
         "KHR_draco_mesh_compression",
         "EXT_mesh_gpu_instancing",
+        "KHR_gaussian_splatting",
     }
 )
 _ALPHA_MODES = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
@@ -447,8 +448,13 @@ class _Reader:
         def read(name: str) -> np.ndarray:
             return draco[name] if name in draco else self.accessor(attrs[name])
 
-        vertices = read("POSITION").astype(np.float32)
         mode = prim.get("mode", 4)
+        splatting = prim.get("extensions", {}).get("KHR_gaussian_splatting")
+        if splatting is not None and mode == 0:
+            from .splats import read_splats
+
+            return Node("primitive", [read_splats(read, attrs, splatting, lambda m: self.error(f"{where}: {m}"))])
+        vertices = read("POSITION").astype(np.float32)
         if "indices" in draco:
             indices = draco["indices"]
         elif "indices" in prim:
@@ -674,6 +680,10 @@ def light_from_gltf(spec: dict[str, Any]) -> Any:
     exponent whose ``cos^exponent`` is one half there.
     """
     color = _linear_to_srgb(spec.get("color", (1.0, 1.0, 1.0)))
+    extras = spec.get("extras")
+    record = extras.get("omnirender", {}).get("area_light") if isinstance(extras, dict) else None
+    if isinstance(record, dict):  # omnirender's area light, written as its far-field spot (see the writer)
+        return _area_light(record, color)
     intensity = float(spec.get("intensity", 1.0)) / math.pi
     kind = spec.get("type")
     if kind == "directional":
@@ -690,6 +700,24 @@ def light_from_gltf(spec: dict[str, Any]) -> Any:
     if kind != "point":
         raise ValueError(f"unknown light type {kind!r}")
     return PointLight(position=(0, 0, 0), color=color, intensity=intensity, constant=0.0, quadratic=1.0)
+
+
+def _area_light(record: dict[str, Any], color: Any) -> Any:
+    """An ``om.RectLight`` / ``om.DiscLight`` from the exporter's ``extras.omnirender.area_light`` record.
+
+    The light faces the node's -z, its width along x, its height along y; ``radiance`` is its intensity.
+    """
+    common = {
+        "direction": (0, 0, -1),
+        "up": (0, 1, 0),
+        "color": color,
+        "intensity": float(record.get("radiance", 1.0)),
+        "two_sided": bool(record.get("two_sided", False)),
+        "casts_shadows": bool(record.get("casts_shadows", True)),
+    }
+    if record.get("shape") == "disc":
+        return DiscLight(radius=float(record["radius"]), **common)
+    return RectLight(width=float(record["width"]), height=float(record["height"]), **common)
 
 
 def _texture_transform(spec: dict[str, Any]) -> tuple[tuple[float, float], tuple[float, float], float]:

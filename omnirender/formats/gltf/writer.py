@@ -26,9 +26,11 @@ import numpy as np
 
 from ...attributes import (
     AmbientLight,
+    AreaLight,
     Background,
     BumpMap,
     DirectionalLight,
+    DiscLight,
     LightSource,
     Material,
     MultiTexture,
@@ -92,6 +94,28 @@ def _transformed(shape: Any, matrix: np.ndarray) -> Any:
     if isinstance(shape, TriangleSet):
         return shape.transformed(matrix)
     return type(shape)(**{**shape.parameters(), "vertices": transform_points(matrix, shape.vertex_array())})
+
+
+def _area_light_record(light: Any, world: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
+    """(node matrix, extras record) of an area light: the node's x along the width, y along the height, -z lit."""
+    centre, hu, hv, normal = light.world_frame(world)
+    lu, lv = float(np.linalg.norm(hu)), float(np.linalg.norm(hv))
+    x, y, z = hu / lu, hv / lv, -normal
+    if float(np.dot(np.cross(x, y), z)) < 0.0:
+        x = -x  # a right-handed frame for a mirrored light (the shape is symmetric)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = x, y, z, centre
+    record: dict[str, Any] = {
+        "shape": "disc" if isinstance(light, DiscLight) else "rect",
+        "two_sided": bool(light.two_sided),
+        "casts_shadows": bool(light.casts_shadows),
+        "radiance": float(light.intensity),
+    }
+    if isinstance(light, DiscLight):
+        record["radius"] = math.sqrt(lu * lv)
+    else:
+        record["width"], record["height"] = 2.0 * lu, 2.0 * lv
+    return matrix, record
 
 
 def _frame_looking(direction: np.ndarray, position: np.ndarray) -> np.ndarray:
@@ -412,6 +436,8 @@ class GLTFEngine(NodeTrackingEngine):
                 physical = 1.0
             elif isinstance(light, DirectionalLight):
                 physical = math.pi
+            elif isinstance(light, AreaLight):
+                physical = light.world_area(world)  # on-axis intensity L A (cd) of a Lambertian emitter
             else:
                 physical = intensity_scale(light, light.world_position(world), self.reference_point())
             entry: dict[str, Any] = {
@@ -419,7 +445,15 @@ class GLTFEngine(NodeTrackingEngine):
                 "color": color,
                 "intensity": float(light.intensity) * physical,
             }
-            if isinstance(light, DirectionalLight):
+            if isinstance(light, AreaLight):
+                # KHR_lights_punctual has no area lights: the closest punctual light is the emitter's far
+                # field, a spot of intensity L A whose cos lobe is half as bright at 60 degrees, out to 90; the
+                # area light itself is kept in the extras, which load_gltf and the HTML page read
+                entry["type"] = "spot"
+                entry["spot"] = {"innerConeAngle": math.radians(60.0), "outerConeAngle": math.pi / 2}
+                matrix, record = _area_light_record(light, world)
+                entry["extras"] = {"omnirender": {"area_light": record}}
+            elif isinstance(light, DirectionalLight):
                 entry["type"] = "directional"
                 matrix = _frame_looking(light.world_direction(world), np.zeros(3))
             elif isinstance(light, (PointLight, SpotLight)):
@@ -673,3 +707,6 @@ def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:
     data = to_bytes(scene, **options)
     with atomic_write(path, "wb") as fh:
         fh.write(data)
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the KHR_gaussian_splatting exporter)

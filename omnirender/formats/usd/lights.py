@@ -13,11 +13,11 @@ convention :func:`~omnirender.formats.gltf.reader.light_from_gltf` uses, so:
 - ``SphereLight``: ``PointLight`` with ``1/d^2`` attenuation and intensity
   ``L r^2`` (radiant intensity ``L pi r^2`` over pi), ``L / (4 pi)`` with
   ``normalize`` or ``treatAsPoint``; with ``shaping:cone:angle`` a ``SpotLight``;
-- ``RectLight`` and ``DiskLight``: no engine-independent area light exists,
-  so the documented closest equivalent is a ``SpotLight`` at the centre
-  facing -z with a 90 degree cut-off and a cosine lobe (exponent 1): the
-  far-field of a Lambertian emitter of area ``A``, intensity ``L A / pi``
-  (``L / pi`` with ``normalize``).  Shadows are sharp, not soft;
+- ``RectLight`` and ``DiskLight``: ``om.RectLight`` (``width`` along x,
+  ``height`` along y) and ``om.DiscLight`` facing -z, of radiance ``L``
+  (``L / area`` with ``normalize``): the area lights' rule of
+  :mod:`omnirender.attributes.photometry` is USD's radiance, so no factor;
+  their shadows are soft in every engine;
 - ``DomeLight``: an ``AmbientLight`` of the dome's colour (times the mean of
   its texture, when Pillow can read the texture; HDR/EXR files cannot be read
   and only the colour is used, with a warning); the dome is not drawn as
@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from ...attributes import AmbientLight, DirectionalLight, PointLight, SpotLight
+from ...attributes import AmbientLight, DirectionalLight, DiscLight, PointLight, RectLight, SpotLight
 from ...attributes.photometry import linear_to_srgb
 from ...core.camera import Camera
 
@@ -111,19 +111,23 @@ def light(prim: Any, time: Any, materials: Any, warn: Callable[[str], None]) -> 
                 constant=0.0, quadratic=1.0, **common,
             )  # fmt: skip
         return PointLight(position=(0, 0, 0), intensity=value, constant=0.0, quadratic=1.0, **common)
-    if prim.IsA(UsdLux.RectLight) or prim.IsA(UsdLux.DiskLight):
-        if prim.IsA(UsdLux.RectLight):
-            rect = UsdLux.RectLight(prim)
-            area = float(rect.GetWidthAttr().Get(time)) * float(rect.GetHeightAttr().Get(time))
-            if rect.GetTextureFileAttr().Get(time):
-                warn(f"{prim.GetPath()}: a rect light's texture is not supported; its colour is used")
-        else:
-            area = math.pi * float(UsdLux.DiskLight(prim).GetRadiusAttr().Get(time)) ** 2
-        value = intensity / math.pi if normalize else intensity * area / math.pi
-        return SpotLight(
-            position=(0, 0, 0), direction=(0, 0, -1), cutoff=90.0, exponent=1.0, intensity=value,
-            constant=0.0, quadratic=1.0, **common,
-        )  # fmt: skip
+    if prim.IsA(UsdLux.RectLight):
+        rect = UsdLux.RectLight(prim)
+        width, height = float(rect.GetWidthAttr().Get(time)), float(rect.GetHeightAttr().Get(time))
+        if rect.GetTextureFileAttr().Get(time):
+            warn(f"{prim.GetPath()}: a rect light's texture is not supported; its colour is used")
+        if width <= 0.0 or height <= 0.0:
+            warn(f"{prim.GetPath()}: a rect light of size {width} x {height} emits nothing; left out")
+            return None
+        value = intensity / (width * height) if normalize else intensity
+        return RectLight(direction=(0, 0, -1), up=(0, 1, 0), width=width, height=height, intensity=value, **common)
+    if prim.IsA(UsdLux.DiskLight):
+        radius = float(UsdLux.DiskLight(prim).GetRadiusAttr().Get(time))
+        if radius <= 0.0:
+            warn(f"{prim.GetPath()}: a disk light of radius {radius} emits nothing; left out")
+            return None
+        value = intensity / (math.pi * radius * radius) if normalize else intensity
+        return DiscLight(direction=(0, 0, -1), up=(0, 1, 0), radius=radius, intensity=value, **common)
     if prim.IsA(UsdLux.DomeLight):
         dome = UsdLux.DomeLight(prim)
         asset = dome.GetTextureFileAttr().Get(time)
@@ -142,7 +146,7 @@ def _omnirender_light(prim: Any) -> Any:
     """The light an omnirender export kept as ``omnirender:*`` attributes (placed by the prim), or None."""
     kind = prim.GetAttribute("omnirender:type")
     classes = {"DirectionalLight": DirectionalLight, "PointLight": PointLight, "SpotLight": SpotLight,
-               "AmbientLight": AmbientLight}  # fmt: skip
+               "AmbientLight": AmbientLight, "RectLight": RectLight, "DiscLight": DiscLight}  # fmt: skip
     if not kind or kind.Get() not in classes:
         return None
     values: dict[str, Any] = {}
@@ -152,10 +156,12 @@ def _omnirender_light(prim: Any) -> Any:
             value = attr.Get()
             values[name[len("omnirender:") :]] = tuple(value) if hasattr(value, "__len__") else value
     cls = classes[kind.Get()]
-    if cls in (PointLight, SpotLight):
+    if cls in (PointLight, SpotLight, RectLight, DiscLight):
         values["position"] = (0.0, 0.0, 0.0)
-    if cls in (DirectionalLight, SpotLight):
+    if cls in (DirectionalLight, SpotLight, RectLight, DiscLight):
         values["direction"] = (0.0, 0.0, -1.0)
+    if cls in (RectLight, DiscLight):
+        values["up"] = (0.0, 1.0, 0.0)  # the prim's frame: x along the width, y along the height
     try:
         return cls(**values)
     except (TypeError, ValueError):

@@ -21,6 +21,7 @@ glTF writer's), so every shape any engine can show is written:
   attributes so :func:`~omnirender.formats.usd.load_usd` rebuilds them exactly;
 - lights as ``UsdLux`` lights (directional -> ``DistantLight``, point ->
   ``SphereLight`` treated as a point, spot -> ``SphereLight`` with a shaping cone,
+  rectangle -> ``RectLight``, disc -> ``DiskLight`` (radiance ``L``, the same rule),
   ambient -> ``DomeLight``) in physical units, matched at the camera's centre
   of interest like the glTF export, with omnirender's OpenGL attenuation kept as
   ``omnirender:*`` attributes; the camera as a ``Camera`` prim;
@@ -46,9 +47,11 @@ from ...attributes import (
     AmbientLight,
     Background,
     DirectionalLight,
+    DiscLight,
     LightSource,
     PBRMaterial,
     PointLight,
+    RectLight,
     SpotLight,
     Texture,
 )
@@ -418,6 +421,24 @@ class USDEngine(NodeTrackingEngine):
                 else:
                     matrix = np.eye(4)
                     matrix[:3, 3] = position
+            elif isinstance(light, (RectLight, DiscLight)):
+                # UsdLux area lights emit radiance L = intensity * colour along their -z: the area lights' rule
+                centre, hu, hv, normal = light.world_frame(world)
+                lu, lv = float(np.linalg.norm(hu)), float(np.linalg.norm(hv))
+                x, y, z = hu / lu, hv / lv, -normal
+                if float(np.dot(np.cross(x, y), z)) < 0.0:
+                    x = -x  # keep a right-handed frame (a mirrored light): the shape is symmetric
+                matrix = np.eye(4)
+                matrix[:3, 0], matrix[:3, 1], matrix[:3, 2], matrix[:3, 3] = x, y, z, centre
+                if isinstance(light, RectLight):
+                    prim = self.UsdLux.RectLight.Define(self.stage, path)
+                    prim.CreateWidthAttr(2.0 * lu)
+                    prim.CreateHeightAttr(2.0 * lv)
+                else:
+                    prim = self.UsdLux.DiskLight.Define(self.stage, path)
+                    prim.CreateRadiusAttr(math.sqrt(lu * lv))  # an ellipse (non-uniform scaling): the same area
+                prim.CreateNormalizeAttr(False)
+                intensity = float(light.intensity)
             else:
                 warnings.warn(f"USD export: {type(light).__name__} is not written (no UsdLux equivalent)", stacklevel=2)
                 continue
@@ -430,9 +451,15 @@ class USDEngine(NodeTrackingEngine):
                 prim.AddTransformOp().Set(_gf(matrix))
             usd = prim.GetPrim()
             usd.CreateAttribute("omnirender:type", Sdf.ValueTypeNames.String, custom=True).Set(type(light).__name__)
+            sizes = {}
+            if isinstance(light, RectLight):
+                sizes = {"width": 2.0 * lu, "height": 2.0 * lv}
+            elif isinstance(light, DiscLight):
+                sizes = {"radius": math.sqrt(lu * lv)}
             for pname, value in light.parameters().items():
-                if pname in ("position", "direction") or value is None:
+                if pname in ("position", "direction", "up") or value is None:
                     continue
+                value = sizes.get(pname, value)  # an area light's size in the prim's (world) frame
                 attr = f"omnirender:{pname}"
                 if isinstance(value, bool):
                     usd.CreateAttribute(attr, Sdf.ValueTypeNames.Bool, custom=True).Set(value)
@@ -899,3 +926,6 @@ def export(scene: Any, path: str | os.PathLike[str], *, size: tuple[int, int] = 
                 shutil.move(str(textures), final)
             os.replace(layer_path, target)
     return target
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the ParticleField3DGaussianSplat writer)

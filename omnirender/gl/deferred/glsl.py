@@ -23,6 +23,7 @@ sample count on a software rasteriser, whatever it shows.
 
 from __future__ import annotations
 
+from ..engine.area_glsl import AREA_SHADOW_CODE, LTC_CORE
 from ..engine.diagnostics import errors
 from ..engine.shaders import MAX_LIGHTS, SRGB_GLSL
 from ..engine.shadow_glsl import MAPS_CORE
@@ -42,7 +43,7 @@ __all__ = [
 ]
 
 #: Light kinds of the lighting programs (the ``LIGHT_KIND`` define).
-LIGHT_KINDS = {"directional": 0, "point": 1, "spot": 2}
+LIGHT_KINDS = {"directional": 0, "point": 1, "spot": 2, "area": 3}
 #: Fog slots of the fixed layer's flags (3 bits; 0 is "no fog").
 FOG_SLOTS = 7
 _STAGE_IDS = {"geometry": 1, "visibility": 2, "lighting": 3, "shading": 4}
@@ -496,9 +497,11 @@ in vec4 i_lspec;    // specular colour
 in vec4 i_latt;     // constant, linear, quadratic attenuation
 in vec4 i_lspot;    // spot axis (eye space), cos(cutoff)
 in vec4 i_lextra;   // spot exponent, first shadow face, shadow face count
+in vec4 i_larea_u;  // an area light's half axis u (eye space), 1 for a disc
+in vec4 i_larea_v;  // its half axis v (eye space), 1 when two-sided
 uniform mat4 u_proj;
 flat out vec4 v_lpos; flat out vec4 v_ldiff; flat out vec4 v_lspec; flat out vec4 v_latt;
-flat out vec4 v_lspot; flat out vec4 v_lextra;
+flat out vec4 v_lspot; flat out vec4 v_lextra; flat out vec4 v_larea_u; flat out vec4 v_larea_v;
 void main() {
 #ifdef FULLSCREEN
     gl_Position = vec4(in_position.xy, 0.0, 1.0);
@@ -506,6 +509,7 @@ void main() {
     gl_Position = u_proj * (i_proxy * vec4(in_position, 1.0));
 #endif
     v_lpos = i_lpos; v_ldiff = i_ldiff; v_lspec = i_lspec; v_latt = i_latt; v_lspot = i_lspot; v_lextra = i_lextra;
+    v_larea_u = i_larea_u; v_larea_v = i_larea_v;
 }
 """
     )
@@ -545,6 +549,14 @@ void main() {
         shadow_call = """
     if ((flags & 1u) != 0u && v_lextra.z > 0.5 && dot(p.N, light.L) > 0.0)
         att *= face_shadow(int(v_lextra.y), int(v_lextra.z), v_lpos.xyz, p.P, p.N, light.L);"""
+        if kind == "area":  # soft shadows from the light's shape (gl/engine/area_glsl.py), in world space
+            shadows += AREA_SHADOW_CODE
+            shadow_call = """
+    if ((flags & 1u) != 0u && v_lextra.z > 0.5 && att > 0.0) {
+        mat3 rot = mat3(u_eye_to_world);
+        att *= area_shadow_faces(int(v_lextra.y), int(v_lextra.z), (u_eye_to_world * vec4(v_lpos.xyz, 1.0)).xyz,
+                                 rot * v_larea_u.xyz, rot * v_larea_v.xyz, v_larea_u.w > 0.5, p.P, p.N);
+    }"""
     light_at = "\n".join(
         [
             f"void light_at({', '.join(['vec2 xy', 'float z', 'int s'] + ([args] if args else []))}) {{",
@@ -555,6 +567,16 @@ void main() {
             "#if LIGHT_KIND == 0",
             "    light.L = v_lpos.xyz;",
             "    light.distance = 0.0;",
+            "#elif LIGHT_KIND == 3",
+            "    // an area light: its form factor F (linearly transformed cosines, gl/engine/area_glsl.py), given to",
+            "    // the model as a light from the form factor's direction L of strength F / (N.L), so that a",
+            "    // Lambertian model's N.L * diffuse is L_e * F",
+            "    vec3 q[8];",
+            "    int nq = area_polygon(v_lpos.xyz, v_larea_u.xyz, v_larea_v.xyz, v_larea_u.w > 0.5, q);",
+            "    float F = ltc_polygon(q, nq, v_larea_v.w > 0.5, p.N, p.V, p.P, mat3(1.0), light.L);",
+            "    if (F <= 0.0) return;",
+            "    light.distance = length(v_lpos.xyz - p.P);",
+            "    att = F / max(dot(p.N, light.L), 1e-4);",
             "#else",
             "    vec3 d = v_lpos.xyz - p.P;",
             "    float dist = length(d);",
@@ -594,7 +616,8 @@ void main() {
             COMMON,
             *_gbuffer_samplers(layout, samples, ambient=False),
             "flat in vec4 v_lpos; flat in vec4 v_ldiff; flat in vec4 v_lspec; flat in vec4 v_latt;",
-            "flat in vec4 v_lspot; flat in vec4 v_lextra;",
+            "flat in vec4 v_lspot; flat in vec4 v_lextra; flat in vec4 v_larea_u; flat in vec4 v_larea_v;",
+            LTC_CORE if kind == "area" else "",
             *decl,
             _fetch(layout, samples, ambient=False, direct=False),
             _SURFACE_AT,

@@ -4,7 +4,8 @@
   falls below its ``threshold``), drawn as the back faces of a mesh that encloses the sphere;
 * spot lights: cones of that length around the cut-off (spheres when the cut-off is wider than
   60 degrees);
-* directional lights, and point or spot lights without attenuation: one full-screen triangle each;
+* directional lights, point or spot lights without attenuation, rectangle and disc lights: one
+  full-screen triangle each;
 * ambient light needs no pass: the geometry pass adds it (the visibility stage has the ambient
   reflectance at hand there).
 
@@ -26,11 +27,12 @@ from ...attributes.photometry import HEADLIGHT
 
 __all__ = ["LightTable", "proxy_meshes", "STRIDE", "FULLSCREEN"]
 
-#: Floats per light instance: proxy matrix (16), position, diffuse + reach, specular, attenuation, spot, extra.
-STRIDE = 40
+#: Floats per light instance: proxy matrix (16), position, diffuse + reach, specular, attenuation, spot, extra,
+#: an area light's half axes (u with the shape, v with two-sidedness).
+STRIDE = 48
 #: Instance attribute names and sizes, in buffer order.
 ATTRIBUTES = (("i_proxy", 16), ("i_lpos", 4), ("i_ldiff", 4), ("i_lspec", 4), ("i_latt", 4), ("i_lspot", 4),
-              ("i_lextra", 4))  # fmt: skip
+              ("i_lextra", 4), ("i_larea_u", 4), ("i_larea_v", 4))  # fmt: skip
 FULLSCREEN = "fullscreen"
 #: Spots wider than this are drawn as spheres (a cone's base would grow without bound).
 MAX_CONE_CUTOFF = 60.0
@@ -96,20 +98,28 @@ class LightTable:
     """
 
     def __init__(self, lights: list[tuple[Any, np.ndarray]], shadow_faces: dict[int, tuple[int, int]]) -> None:
-        from ...attributes import AmbientLight, AreaLight, DirectionalLight, SpotLight
+        from ...attributes import AmbientLight, AreaLight, DirectionalLight, DiscLight, SpotLight
 
         rows: dict[tuple[str, str], list[np.ndarray]] = {}
         self.count = 0
         self.headlight = not lights
         for light, matrix in lights:
-            if isinstance(light, (AmbientLight, AreaLight)) or not hasattr(light, "diffuse"):
+            if isinstance(light, AmbientLight) or not hasattr(light, "diffuse"):
                 continue
             row = np.zeros(STRIDE, np.float64)  # world-space data; the view is applied per frame
             row[20:23] = light.diffuse
             row[24:27] = light.specular
             first, faces = shadow_faces.get(id(light), (0, 0))
             row[37:39] = (first, faces)
-            if isinstance(light, DirectionalLight):
+            if isinstance(light, AreaLight):
+                centre, hu, hv, normal = light.world_frame(matrix)
+                if float(np.dot(np.cross(hu, hv), normal)) < 0.0:
+                    hu = -hu  # HU x HV on the lit side (the shape is symmetric)
+                row[16:19], row[19] = centre, 1.0
+                row[40:43], row[43] = hu, 1.0 if isinstance(light, DiscLight) else 0.0
+                row[44:47], row[47] = hv, 1.0 if light.two_sided else 0.0
+                key = ("area", FULLSCREEN)
+            elif isinstance(light, DirectionalLight):
                 row[16:19] = -light.world_direction(matrix)
                 key = ("directional", FULLSCREEN)
             elif hasattr(light, "world_position"):
@@ -175,6 +185,9 @@ class LightTable:
                 proxies[:, :3, 1] = v * width[:, None]
                 proxies[:, :3, 2] = axis * reach[:, None]
                 proxies[:, :3, 3] = data[:, 16:19]
+            if kind == "area":
+                data[:, 40:43] = data[:, 40:43] @ rot.T
+                data[:, 44:47] = data[:, 44:47] @ rot.T
             if kind == "spot":
                 axis = data[:, 32:35] @ rot.T
                 data[:, 32:35] = axis / np.linalg.norm(axis, axis=1, keepdims=True)

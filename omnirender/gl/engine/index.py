@@ -43,12 +43,15 @@ JOURNAL_ROWS = 512
 
 class CasterChange:
     """Boxes of a shadow-casting batch's rows that changed: ``lo``, ``hi`` (N, 3) world boxes, ``new`` (False:
-    the places the rows left, True: the places they took)."""
+    the places the rows left, True: the places they took), ``rows`` their row indices and ``edit``: False for
+    rows moved in place; True for a row removed (the last row moved into its place) or appended."""
 
-    __slots__ = ("batch", "lo", "hi", "new")
+    __slots__ = ("batch", "lo", "hi", "new", "rows", "edit")
 
-    def __init__(self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool) -> None:
-        self.batch, self.lo, self.hi, self.new = batch, lo, hi, new
+    def __init__(
+        self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool, rows: np.ndarray, edit: bool = False
+    ) -> None:
+        self.batch, self.lo, self.hi, self.new, self.rows, self.edit = batch, lo, hi, new, rows, edit
 
 
 class RenderIndex:
@@ -83,7 +86,8 @@ class RenderIndex:
         self._journal = None
 
     def moved(self, rows: list[tuple[Any, np.ndarray | None]] | None) -> None:
-        """Rows moved in place: ``(batch, row indices or None for all)`` pairs, or None (any row anywhere).
+        """Rows moved in place: ``(batch, row indices, a slice of them or None for all)`` pairs, or None (any row
+        anywhere).
 
         The bounds are stale; the lists of items, mirrors and casters are not.
         The rows' boxes are made again, the others kept.
@@ -97,6 +101,10 @@ class RenderIndex:
         for batch, where in rows:
             found = boxes.get(id(batch))
             caster = casts_shadows(batch)  # a batch's items share geometry and state: the batch decides
+            if isinstance(where, slice):  # a run of rows (a bound array's): its indices
+                where = np.arange(len(batch.rows))[where]
+            if caster and where is not None and len(where) > JOURNAL_ROWS:  # many moved: the maps in full
+                self._journal = self._casters = None
             if found is None or where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
                 if found is not None:
                     del boxes[id(batch)]
@@ -104,12 +112,12 @@ class RenderIndex:
                     self._journal = self._casters = None  # the old places are not known
                 continue
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
-            if caster:
+            if caster and (self._casters is not None or self._journal is not None):
                 old = (found[1][where], found[2][where])  # copies (fancy index)
                 self._follow_casters(old, (lo, hi))
                 if self._room(len(lo)):
-                    self._note(CasterChange(batch, *old, False))
-                    self._note(CasterChange(batch, lo, hi, True))
+                    self._note(CasterChange(batch, *old, False, where))
+                    self._note(CasterChange(batch, lo, hi, True, where))
             found[1][where] = lo
             found[2][where] = hi
 
@@ -131,51 +139,41 @@ class RenderIndex:
         self._casters = ((lo, hi),)
 
     def batch_edits(self, batch: Any, edits: list[tuple[Any, ...]]) -> None:
-        """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow."""
+        """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow; for a
+        shadow-casting batch the journal gets a removed row's old box and an added row's box, and the casters'
+        bounds follow."""
         found = self._boxes.get(id(batch))
-        if casts_shadows(batch):
-            self._caster_edits(batch, edits, found)
-        if found is None:
-            return
-        _, lo, hi = found
-        for op, index, _ in edits:
-            if op == "remove":
-                lo[index], hi[index] = lo[len(lo) - 1], hi[len(hi) - 1]
-                lo, hi = lo[:-1], hi[:-1]
-            else:
-                a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
-                lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
-        if len(lo) == len(batch.rows):
-            self._boxes[id(batch)] = (batch, lo, hi)
-        else:
-            del self._boxes[id(batch)]
-
-    def _caster_edits(self, batch: Any, edits: list[tuple[Any, ...]], found: Any) -> None:
-        """A shadow-casting batch's row edits: the journal gets a removed row's old box and an added row's box,
-        the casters' bounds follow."""
+        caster = casts_shadows(batch)
         lo = hi = None
         if found is not None and found[0] is batch:
             lo, hi = found[1], found[2]
         for op, index, _ in edits:
             if op == "remove":
                 if lo is None or index >= len(lo):
-                    self._journal = self._casters = None  # the removed row's place is not known
-                    return
-                old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
-                self._follow_casters(old, None)
-                if self._room(1):
-                    self._note(CasterChange(batch, *old, False))
-                if index != len(lo) - 1:
-                    lo, hi = lo.copy(), hi.copy()
-                    lo[index], hi[index] = lo[-1], hi[-1]
+                    if caster:
+                        self._journal = self._casters = None  # the removed row's place is not known
+                    lo = hi = None
+                    continue
+                if caster:
+                    old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
+                    self._follow_casters(old, None)
+                    if self._room(1):
+                        self._note(CasterChange(batch, *old, False, np.array([index]), True))
+                last = len(lo) - 1
+                lo[index], hi[index] = lo[last], hi[last]
                 lo, hi = lo[:-1], hi[:-1]
             else:
                 a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
-                self._follow_casters(None, (a, b))
-                if self._room(1):
-                    self._note(CasterChange(batch, a, b, True))
+                if caster:
+                    self._follow_casters(None, (a, b))
+                    if self._room(1):
+                        self._note(CasterChange(batch, a, b, True, np.array([index]), True))
                 if lo is not None:
                     lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+        if lo is not None and len(lo) == len(batch.rows):
+            self._boxes[id(batch)] = (batch, lo, hi)
+        else:
+            self._boxes.pop(id(batch), None)
 
     def _room(self, rows: int) -> bool:
         """Whether the journal takes ``rows`` more rows (False: it says "everything changed" now)."""
@@ -316,13 +314,21 @@ def _column_max(a: np.ndarray) -> np.ndarray:
 
 
 def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre)."""
+    """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre).
+
+    Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows.
+    """
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
-    models = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
-    linear = models[:, :3, :3]  # (M^T)[:3, :3]: row j holds column j of M
-    center = (b0 + b1) / 2.0 @ linear + models[:, 3, :3]
-    half = (b1 - b0) / 2.0 @ np.abs(linear)
-    return center - half, center + half
+    c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
+    m = rows[:, _MODEL].astype(np.float64)  # each row holds M transposed: M[k, j] is m[:, 4 j + k]
+    lo = np.empty((len(rows), 3))
+    hi = np.empty((len(rows), 3))
+    for k in range(3):
+        center = m[:, k] * c[0] + m[:, 4 + k] * c[1] + m[:, 8 + k] * c[2] + m[:, 12 + k]
+        half = np.abs(m[:, k]) * e[0] + np.abs(m[:, 4 + k]) * e[1] + np.abs(m[:, 8 + k]) * e[2]
+        lo[:, k] = center - half
+        hi[:, k] = center + half
+    return lo, hi
 
 
 def rows_bounds(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -3,7 +3,9 @@
 OpenGL's model: directional lights (``w = 0``), point and spot lights with
 attenuation ``1 / (C + L d + Q d^2)`` and a spot factor ``cos^exponent`` inside
 the cut-off cone.  Ambient terms of all lights add up with OpenGL's global
-ambient (0.2).  A scene without any light gets a headlight.
+ambient (0.2).  A scene without any light gets a headlight.  Rectangle and disc
+lights (type ``a``) add their polygons (view space) and frames (world space, for
+their soft shadows) in slots of their own (:mod:`.area_glsl`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ...attributes.photometry import GLOBAL_AMBIENT, HEADLIGHT
+from .area_glsl import MAX_AREA_LIGHTS, AreaUniforms, bind_ltc
 from .shaders import MAX_LIGHTS
 
 __all__ = ["LightUniforms", "GLOBAL_AMBIENT", "HEADLIGHT"]
@@ -34,6 +37,8 @@ class LightUniforms:
         "exponent",
         "ambient",
         "dropped",
+        "dropped_area",
+        "has_area",
         "_bytes",
     )
 
@@ -55,18 +60,28 @@ class LightUniforms:
         order: list[Any] = []  # the light of each index
         #: lights beyond MAX_LIGHTS (their ambient terms still count); warned about where a program lights with them
         self.dropped = 0
+        self.dropped_area = 0  # area lights beyond MAX_AREA_LIGHTS
+        areas = AreaUniforms()
         for light, matrix in lights:
             amb = getattr(light, "ambient", None)
             if amb is not None:
                 ambient += np.asarray(amb, dtype=np.float64)
-            if isinstance(light, (AmbientLight, AreaLight)):
+            if isinstance(light, AmbientLight):
+                continue
+            if isinstance(light, AreaLight) and areas.full():
+                self.dropped_area += 1
                 continue
             if n == MAX_LIGHTS:
                 self.dropped += 1
                 continue
             diffuse[n] = getattr(light, "diffuse", (1.0, 1.0, 1.0))
             specular[n] = getattr(light, "specular", (1.0, 1.0, 1.0))
-            if isinstance(light, DirectionalLight):
+            if isinstance(light, AreaLight):
+                areas.add(light, matrix, view)
+                p = view @ np.append(light.world_position(matrix), 1.0)
+                pos[n] = (p[0], p[1], p[2], 1.0)
+                types.append("a")
+            elif isinstance(light, DirectionalLight):
                 d = rot @ -light.world_direction(matrix)
                 pos[n, :3] = d / np.linalg.norm(d)
                 types.append("d")
@@ -104,7 +119,10 @@ class LightUniforms:
             "u_latt": att,
             "u_lspot": spot,
             "u_lexp": exponent,
+            "u_lpoly": areas.poly,
+            "u_larea": areas.world,
         }
+        self.has_area = areas.count > 0
 
     def apply(self, program: Any) -> None:
         """Write the arrays into ``program``'s uniforms (those it has); warn once when it lights with a subset."""
@@ -120,6 +138,15 @@ class LightUniforms:
             if u is not None:
                 # the compiler trims arrays to the elements a variant uses
                 u.write(data[: u.array_length].tobytes())
+        if self.dropped_area and program.get("u_lpoly", None) is not None:
+            warnings.warn(
+                f"GLEngine: more than {MAX_AREA_LIGHTS} rectangle/disc lights; the rest are ignored "
+                "(GLEngine(pipeline='deferred') draws any number)",
+                stacklevel=4,
+            )
+            self.dropped_area = 0
+        if self.has_area:
+            bind_ltc(program)
         u = program.get("u_ambient", None)
         if u is not None:
             u.write(self.ambient.tobytes())

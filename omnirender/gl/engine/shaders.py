@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .area_glsl import area_code
 from .layout import PBR, PHONG, UNLIT
 from .shadow_glsl import VOLUME_FRAGMENT, VOLUME_GEOMETRY, shadow_code
 
@@ -691,10 +692,17 @@ def instance_fields(kind: str, features: dict[str, Any]) -> tuple[str, ...]:
 
 
 def _light_code(types: str) -> list[str]:
-    """Unrolled light loops for a known list of light types (d: directional, p: point, s: spot)."""
+    """Unrolled light loops for a known list of light types (d: directional, p: point, s: spot, a: area)."""
     calls = {"d": "dir_light({i}, L)", "p": "point_light({i}, P, L)", "s": "spot_light({i}, P, L)"}
     phong, pbr = ["{ vec3 L; float att;"], ["{ vec3 L; float att;"]
+    slot = 0
     for i, t in enumerate(types):
+        if t == "a":  # an area light (area_glsl.py): its own shading and soft shadows, slot-th of its kind
+            att = f"att = 1.0; AREA_SHADOW_ATT({i}, {slot})"
+            phong.append(f"{att} color += att * area_phong({i}, {slot}, P, N, V, kd);")
+            pbr.append(f"{att} color += att * area_pbr({i}, {slot}, P, N, V, albedo, F0, metallic, rough);")
+            slot += 1
+            continue
         att = "att = " + calls[t].format(i=i) + f"; SHADOW_ATT({i})"
         phong.append(f"{att} color += phong_light({i}, att, L, N, V, kd);")
         pbr.append(f"{att} color += pbr_light({i}, att, L, N, V, albedo, F0, metallic, a2, k);")
@@ -704,7 +712,7 @@ def _light_code(types: str) -> list[str]:
         f"#define NLIGHTS {max(len(types), 1)}",
         "#define PHONG_LIGHTS " + " ".join(phong),
         "#define PBR_LIGHTS " + " ".join(pbr),
-    ]
+    ] + (["#define AREA_LIGHTS"] if slot else [])
 
 
 _SNIPPETS = ("PASS_VERTEX", "PASS_FRAGMENT", "PASS_SURFACE")
@@ -786,7 +794,7 @@ def _snippets(source: str, features: dict[str, Any], code: tuple[Any, ...]) -> s
     f_calls = " ".join(f"pass_fragment_{i}(result, P, N);" for i in range(len(fragment)))
     state_code = "\n".join(kind.fragment_code for kind in code)
     if "SHADOW_CODE" in source:
-        source = source.replace("SHADOW_CODE", shadow_code(features))
+        source = source.replace("SHADOW_CODE", shadow_code(features) + area_code(features))
     state_main = "\n    ".join(kind.fragment_main for kind in code if kind.fragment_main)
     layer_uniforms, layer_code = _layer_glsl(int(features.get("LAYERS", 0)))
     return (

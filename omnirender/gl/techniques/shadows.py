@@ -352,6 +352,8 @@ class ShadowMapStage(FrameStage):
         self._held: dict[tuple[int, int], bytes] = {}
         #: id(batch) -> (batch, the batch of its rows a partial update draws)
         self._scratch: dict[int, tuple[Any, Batch]] = {}
+        #: (face signature, id(batch)) -> _Rects: the casters' rectangles in a face, following the journal
+        self._rects: dict[tuple[bytes, int], _Rects] = {}
 
     def changed(self) -> None:
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
@@ -364,7 +366,24 @@ class ShadowMapStage(FrameStage):
     def _forget(self) -> int:
         self._atlas = None
         self._held = {}
+        self._rects = {}
         return 0
+
+    def _follow(self, changes: list[Any] | None, signatures: set[bytes]) -> None:
+        """The cached caster rectangles follow the journal's changes (all forgotten when it cannot say)."""
+        if changes is None:
+            self._rects = {}
+            return
+        if any(key[0] not in signatures for key in self._rects):
+            self._rects = {key: rects for key, rects in self._rects.items() if key[0] in signatures}
+        if not changes or not self._rects:
+            return
+        by_batch: dict[int, list[_Rects]] = {}
+        for (_, batch_id), rects in self._rects.items():
+            by_batch.setdefault(batch_id, []).append(rects)
+        for change in changes:
+            for rects in by_batch.get(id(change.batch), ()):
+                rects.follow(change)
 
     def draw(self, frame: Any, root: Scope) -> int:
         engine = frame.engine
@@ -395,6 +414,7 @@ class ShadowMapStage(FrameStage):
         faces = [(k, face) for k, face in enumerate(plan.faces) if face.tile is not None]
         held = self._held if self._atlas == plan.target and frame.keep_target(plan.target) else {}
         self._atlas, self._held = plan.target, {face.tile: _signature(face, plan.resolution) for _, face in faces}
+        self._follow(changes, set(self._held.values()))
         if not held:  # a new atlas: every face, under one clear
             report["full"] = len(faces)
             return frame.run(technique, root)
@@ -423,7 +443,7 @@ class ShadowMapStage(FrameStage):
                     calls += frame.run(_MapPasses([_face_pass(plan, k, face, None)]), root)
                     report["full"] += 1
                     continue
-                scope = self._casters_in(casters, face, plan.resolution, region)
+                scope = self._casters_in(casters, face, self._held[face.tile], plan.resolution, region)
                 calls += frame.run(_MapPasses([_face_pass(plan, k, face, region)]), scope)
                 col, row = face.tile
                 r = plan.resolution
@@ -433,13 +453,16 @@ class ShadowMapStage(FrameStage):
         return calls
 
     def _casters_in(
-        self, casters: list[tuple[Any, np.ndarray, np.ndarray]], face: _Face, resolution: int,
+        self, casters: list[tuple[Any, np.ndarray, np.ndarray]], face: _Face, signature: bytes, resolution: int,
         region: tuple[int, int, int, int],
     ) -> Scope:  # fmt: skip
         """A scope of the casters whose boxes meet ``region`` of ``face`` (rows picked from their batches)."""
         batches = []
         for batch, lo, hi in casters:
-            picks = np.flatnonzero(_meets(face, resolution, lo, hi, region))
+            rects = self._rects.get((signature, id(batch)))
+            if rects is None or rects.batch is not batch or len(rects.x0) != len(lo):
+                rects = self._rects[(signature, id(batch))] = _Rects(face, batch, lo, hi)
+            picks = np.flatnonzero(rects.meets(resolution, region))
             if not len(picks):
                 continue
             found = self._scratch.get(id(batch))
@@ -462,6 +485,51 @@ class ShadowMapStage(FrameStage):
         scope = Scope()
         scope.parts = [segment]
         return scope
+
+
+class _Rects:
+    """A caster batch's rectangles in a face (:func:`_ndc_rects`), row by row, kept up to date with the caster
+    journal so a partial update does not project every caster again."""
+
+    __slots__ = ("face", "batch", "x0", "y0", "x1", "y1", "behind", "away")
+
+    def __init__(self, face: _Face, batch: Any, lo: np.ndarray, hi: np.ndarray) -> None:
+        self.face, self.batch = face, batch
+        (self.x0, self.y0, self.x1, self.y1), self.behind, self.away = _ndc_rects(face, lo, hi)
+
+    def _arrays(self) -> list[str]:
+        return ["x0", "y0", "x1", "y1"] + (["behind", "away"] if self.behind is not None else [])
+
+    def follow(self, change: Any) -> None:
+        """Take one journal entry of the batch: rows moved, a row removed (the last into its place) or appended."""
+        if not change.edit:
+            if change.new:  # moved rows: their new places
+                (x0, y0, x1, y1), behind, away = _ndc_rects(self.face, change.lo, change.hi)
+                new = {"x0": x0, "y0": y0, "x1": x1, "y1": y1, "behind": behind, "away": away}
+                for name in self._arrays():
+                    getattr(self, name)[change.rows] = new[name]
+            return
+        index = int(change.rows[0])
+        if not change.new:  # removed: the last row takes its place
+            for name in self._arrays():
+                a = getattr(self, name)
+                a[index] = a[len(a) - 1]
+                setattr(self, name, a[:-1])
+            return
+        (x0, y0, x1, y1), behind, away = _ndc_rects(self.face, change.lo, change.hi)
+        new = {"x0": x0, "y0": y0, "x1": x1, "y1": y1, "behind": behind, "away": away}
+        for name in self._arrays():
+            setattr(self, name, np.concatenate([getattr(self, name), new[name]]))
+
+    def meets(self, resolution: int, region: tuple[int, int, int, int]) -> np.ndarray:
+        """Which rows may cover texels of ``region`` (x, y, width, height of the tile)."""
+        x, y, w, h = region
+        to_ndc = 2.0 / resolution
+        hit = (self.x0 <= (x + w) * to_ndc - 1.0) & (self.x1 >= x * to_ndc - 1.0)
+        hit &= (self.y0 <= (y + h) * to_ndc - 1.0) & (self.y1 >= y * to_ndc - 1.0)
+        if self.behind is not None:
+            hit = (hit | self.behind) & ~self.away
+        return hit
 
 
 #: a face whose changed region covers more than this fraction of it is redrawn in full
@@ -509,8 +577,11 @@ def _face_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, in
         clear=Clear(color=None, depth=1.0, box=box),
         state=((ScissorTest, box),),  # a (kind, value) pair: no component is made per frame
         camera=(face.view, face.proj),
-        shader=Shader(depth_only=True),
+        shader=_DEPTH_ONLY,
     )
+
+
+_DEPTH_ONLY = Shader(depth_only=True)
 
 
 def _changed_boxes(changes: list[Any]) -> tuple[np.ndarray, np.ndarray] | None:
@@ -587,6 +658,8 @@ def _ndc_rects(face: _Face, lo: np.ndarray, hi: np.ndarray) -> tuple[list[np.nda
 def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -> tuple[int, int, int, int] | None:
     """The texel rectangle (x, y, width, height from the tile's bottom-left corner, one texel of margin) the boxes
     [lo, hi] may cover in ``face``; None when they cover none of it."""
+    if len(lo) <= 16:  # a few boxes (what moved in a frame): plain floats, not dozens of tiny numpy calls
+        return _few_region(face, resolution, lo.tolist(), hi.tolist())
     (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
     if behind is not None:
         x0, y0, x1, y1 = (np.where(behind, edge, v) for v, edge in zip((x0, y0, x1, y1), (-1, -1, 1, 1), strict=True))
@@ -604,18 +677,37 @@ def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -
     return left, bottom, int(x1[inside].max()) - left, int(y1[inside].max()) - bottom
 
 
-def _meets(
-    face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray, region: tuple[int, int, int, int]
-) -> np.ndarray:
-    """Which boxes [lo, hi] may cover texels of ``region`` (x, y, width, height of the tile) in ``face``."""
-    (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
-    x, y, w, h = region
-    to_ndc = 2.0 / resolution
-    hit = (x0 <= (x + w) * to_ndc - 1.0) & (x1 >= x * to_ndc - 1.0)
-    hit &= (y0 <= (y + h) * to_ndc - 1.0) & (y1 >= y * to_ndc - 1.0)
-    if behind is not None:
-        hit = (hit | behind) & ~away
-    return hit
+def _few_region(
+    face: _Face, resolution: int, lows: list[list[float]], highs: list[list[float]]
+) -> tuple[int, int, int, int] | None:
+    """:func:`_face_region` of a few boxes, corner by corner in Python floats."""
+    m = (face.proj @ face.view).tolist()
+    half = resolution / 2.0
+    box: list[float] | None = None
+    for lo, hi in zip(lows, highs, strict=True):
+        xs, ys, ahead = [], [], 0
+        for x in (lo[0], hi[0]):
+            for y in (lo[1], hi[1]):
+                for z in (lo[2], hi[2]):
+                    w = m[3][0] * x + m[3][1] * y + m[3][2] * z + m[3][3]
+                    if w <= 1e-9:
+                        continue
+                    ahead += 1
+                    xs.append((m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]) / w)
+                    ys.append((m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]) / w)
+        if not ahead:
+            continue  # wholly behind the light camera
+        rect = (-1.0, -1.0, 1.0, 1.0) if ahead < 8 else (min(xs), min(ys), max(xs), max(ys))
+        x0 = min(max(math.floor((rect[0] + 1.0) * half) - 1, 0), resolution)
+        y0 = min(max(math.floor((rect[1] + 1.0) * half) - 1, 0), resolution)
+        x1 = min(max(math.ceil((rect[2] + 1.0) * half) + 1, 0), resolution)
+        y1 = min(max(math.ceil((rect[3] + 1.0) * half) + 1, 0), resolution)
+        if x1 <= x0 or y1 <= y0:
+            continue
+        box = [x0, y0, x1, y1] if box is None else [min(box[0], x0), min(box[1], y0), max(box[2], x1), max(box[3], y1)]
+    if box is None:
+        return None
+    return int(box[0]), int(box[1]), int(box[2] - box[0]), int(box[3] - box[1])
 
 
 def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -628,7 +720,7 @@ def _up_for(axis: np.ndarray) -> np.ndarray:
 
 def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray, resolution: int) -> list[_Face]:
     """The map faces of one light over the casters' bounds [lo, hi] (empty: the light casts no shadows)."""
-    from ...attributes import DirectionalLight, PointLight, SpotLight
+    from ...attributes import AreaLight, DirectionalLight, PointLight, SpotLight
 
     if not getattr(light, "casts_shadows", False):
         return []
@@ -645,9 +737,9 @@ def _light_faces(light: Any, matrix: np.ndarray, lo: np.ndarray, hi: np.ndarray,
         near, far = float(depth.min()) - 0.01 * radius, float(depth.max()) + 0.01 * radius
         proj = orthographic_matrix(2.0 * half_y, half_x / half_y, near, far)
         return [_Face(view, proj, (2.0 * max(half_x, half_y) / resolution, 0.0))]
-    if not isinstance(light, (PointLight, SpotLight)):
+    if not isinstance(light, (PointLight, SpotLight, AreaLight)):
         return []
-    p = light.world_position(matrix)
+    p = light.world_position(matrix)  # an area light's centre: its soft shadows filter these maps (area_glsl)
     rel = corners - p
     far = float(np.linalg.norm(rel, axis=1).max()) * 1.01
     gap = np.maximum(np.maximum(lo - p, p - hi), 0.0)
