@@ -532,8 +532,9 @@ class _Rects:
         return hit
 
 
-#: a face whose changed region covers more than this fraction of it is redrawn in full
-PARTIAL_MAX = 0.5
+#: a face whose changed region covers more than this fraction of it is redrawn in full (where a partial update
+#: stopped paying on llvmpipe: bench/shadow_partial.py)
+PARTIAL_MAX = 0.45
 #: fitted bounds are snapped outward to a grid of 2**-FIT_GRID of their extent (rounded up to a power of two)
 FIT_GRID = 5
 
