@@ -472,6 +472,9 @@ class ShadowMapStage(FrameStage):
                 found = self._scratch[id(batch)] = (batch, Batch(batch.geometry, batch.state))
             part = found[1]
             part.rows = batch.rows[picks]
+            # a batch with storage gets spare room in its GPU buffer: the next update's few more rows reuse the
+            # buffer and its vertex arrays (the storage itself is never written: rows are not appended here)
+            part.storage = part.rows
             part.items = [batch.items[i] for i in picks] if len(batch.items) == len(batch.rows) else list(batch.items)
             part.uniform = uniform_material(part.rows)
             part.dirty, part.sparse, part.position = (0, len(picks)), None, None
