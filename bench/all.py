@@ -30,6 +30,7 @@ SCRIPTS = {
     "soak.py": [],
     "snapshots.py": [],
     "mitsuba_preview.py": [],
+    "splats.py": ["--cpu"],
 }
 QUICK = {
     "gl_objects.py": ["--quick"],
@@ -48,6 +49,7 @@ QUICK = {
     "soak.py": ["--quick"],
     "snapshots.py": ["--quick"],
     "mitsuba_preview.py": ["--repeat", "1"],
+    "splats.py": ["--cpu", "--large", "200000", "--frames", "5"],
 }
 
 

@@ -1,7 +1,7 @@
 """Regenerate the pictures shown in README.md (docs/images/).
 
 Run: .venv/bin/python docs/make_images.py [demo] [agreement] [materials] [gallery] [examples] [compositing]
-     [deferred] [postfx] [pipelines] [assets]
+     [transparency] [deferred] [postfx] [pipelines] [assets] [splats]
 It renders the demo scene with every available engine, puts the images side by
 side with labels, and runs the examples, copying their images here.  Naming
 sections makes only those pictures (default: all).
@@ -165,6 +165,35 @@ def compositing_images() -> None:
             print("wrote", HERE / f"example_{png.stem}.png")
 
 
+def transparency_images(size: tuple[int, int] = (320, 240)) -> None:
+    """Two translucent renderers that interleave (a ball half inside a box): the engine's sorted transparency of
+    one scene, a depth group, the depth-peel group, and the box coloured by its distance to the ball."""
+    C = om.compositing
+    camera = om.Camera.look_at((0.6, 1.2, 5.0), (0.2, 0, 0), fov=40)
+    light = om.PointLight(position=(3, 5, 4))
+    red = om.Material(diffuse=(1, 0.3, 0.2), specular=(0.6, 0.6, 0.6), shininess=40, opacity=0.55)
+    blue = om.Material(diffuse=(0.2, 0.45, 1), specular=(0.6, 0.6, 0.6), shininess=40, opacity=0.45)
+    ball = [red, om.Sphere(center=(-0.2, 0, 0.2), radius=0.9)]
+    box = [blue, om.Rotation(20, (0, 1, 0)), om.Box(size=(1.5, 1.5, 1.5), center=(0.6, 0, -0.2))]
+    one = om.Node("scene", [camera, om.Background((0.15, 0.15, 0.18)), light, om.Node("b", ball), om.Node("x", box)])
+    a = C.SceneRenderer(om.Node("ball", [light, *ball]))
+    b = C.SceneRenderer(om.Node("box", [light, *box]))
+    kw = dict(camera=camera, background=(0.15, 0.15, 0.18))
+    pictures = {
+        "sorted (one scene)": om.render(one, engine="gl", size=size),
+        "DepthGroup": C.DepthGroup([b, a]).render(size, **kw),
+        "DepthPeelGroup": C.DepthGroup([C.DepthPeelGroup([a, b])]).render(size, **kw),
+        "DistanceGroup (box to ball)": C.DepthGroup([C.DistanceGroup([b, a], range=(0, 1.5))]).render(size, **kw),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = []
+        for i, image in enumerate(pictures.values()):
+            paths.append(Path(tmp) / f"{i}.png")
+            image.save(paths[-1])
+        side_by_side(paths, list(pictures), HERE / "compositing_transparency.png")
+    print("wrote", HERE / "compositing_transparency.png")
+
+
 def hundred_lights_scene(lights: int = 128, seed: int = 3) -> om.Node:
     """guacamole's Figure 7c idea: a grid of objects on a dark floor lit only by many small coloured lights,
     each marked by a small glowing ball (its emission, not a light of its own)."""
@@ -271,6 +300,18 @@ def asset_suite_images(size: tuple[int, int] = (128, 96)) -> None:
     print("wrote", HERE / "asset_suite.png")
 
 
+def splat_images() -> None:
+    """The README's Gaussian-splat block (a planet of splats with a box half inside), run as it is written."""
+    import re
+
+    text = (ROOT / "README.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "om.GaussianSplats(" in b)
+    with tempfile.TemporaryDirectory() as tmp:
+        exec(compile(block.replace('"splats.png"', repr(str(Path(tmp) / "splats.png"))), "README", "exec"), {})
+        shutil.copy(Path(tmp) / "splats.png", HERE / "splats.png")
+    print("wrote", HERE / "splats.png")
+
+
 SECTIONS = {
     "demo": demo_images,
     "agreement": agreement_images,
@@ -278,11 +319,13 @@ SECTIONS = {
     "gallery": gl_gallery,
     "examples": example_images,
     "compositing": compositing_images,
+    "transparency": transparency_images,
     "postfx": postfx_images,
     "deferred": deferred_images,
     "pipelines": pipeline_images,
     "usd": usd_images,
     "assets": asset_suite_images,
+    "splats": splat_images,
 }
 
 if __name__ == "__main__":

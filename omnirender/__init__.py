@@ -69,6 +69,8 @@ _LAZY_NAMES = {
     "load_gltf": "formats.gltf",
     "render_to_file": "tiling",
     "load_usd": "formats.usd",
+    "load_splats": "formats.splats",
+    "save_splats": "formats.splats",
 }
 
 __all__ = [

@@ -115,6 +115,11 @@ def test_the_readme_runs_as_one_session(tmp_path, monkeypatch):
     graph = np.asarray(Image.open(tmp_path / "graph.png").convert("RGB")).astype(int)
     assert (graph.min(axis=2) >= 250).mean() < 0.01  # the floor is lit once, not over-exposed to white
 
+    # Gaussian splats: the picture has the planet's blue and green and the box's orange
+    splat_image = np.asarray(Image.open(tmp_path / "splats.png").convert("RGB"), dtype=int)
+    assert splat_image.std() > 20 and (splat_image[..., 2] > splat_image[..., 0] + 60).mean() > 0.05
+    assert (splat_image[..., 0] > splat_image[..., 2] + 80).mean() > 0.05
+
     # post-processing: forward and deferred agree under the chain
     forward = np.asarray(Image.open(tmp_path / "post.png").convert("RGB"), dtype=int)
     deferred = np.asarray(Image.open(tmp_path / "post-deferred.png").convert("RGB"), dtype=int)

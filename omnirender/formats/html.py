@@ -17,7 +17,11 @@ each light with the attenuation the glTF exporter keeps in its ``extras``:
 intensities are multiplied by pi (three.js divides a Lambertian albedo by pi)
 and a point or spot light falls off with the exponent of its attenuation (none
 for the default ``constant=1``), so the page is about as bright as the other
-engines' pictures.  Mouse: left drag orbits around the camera's centre, right
+engines' pictures.  ``om.RectLight``/``om.DiscLight`` (a spot with the area light in its
+extras in the glTF) become three.js ``RectAreaLight``s of the light's radiance (a disc a
+square of its area); three.js draws no shadows for them and lights only physically based
+materials with them, so a page with area lights shows Phong materials as
+``MeshStandardMaterial`` of the Phong exponent's roughness.  Mouse: left drag orbits around the camera's centre, right
 drag pans, the wheel zooms.
 """
 
@@ -88,6 +92,7 @@ def page(
     """The HTML text of the page (see the module docs); ``size`` gives the camera's aspect in the glTF."""
     # the page converts omnirender's light units itself (its attenuation in the lights' extras)
     glb, engine = build(scene, size=size, on_missing=on_missing, mask=mask, physical_lights=False)
+    _warn_splats(engine.gltf.doc)
     settings = json.dumps(_settings(glb, engine), separators=(",", ":"))
     name = title if title is not None else getattr(scene, "name", "scene")
     r, g, b = (round(255 * c) for c in _background(engine)[:3])
@@ -97,6 +102,32 @@ def page(
         bundle=_bundle(),
         settings=settings.replace("</", "<\\/"),
     )
+
+
+def _warn_splats(doc: dict[str, Any]) -> None:
+    """Say that the page shows Gaussian splats as the glTF extension's fallback point cloud, and why.
+
+    three.js 0.187 has a ``GaussianSplat`` object (``examples/jsm/objects``, with a ``KHR_gaussian_splatting``
+    loader plugin) but it renders only with ``WebGPURenderer`` (``three/webgpu``, TSL node materials, a GPU
+    counting sort in compute shaders); the page uses ``WebGLRenderer``, which opens offline in every browser
+    with WebGL.  Without the plugin, three.js draws a splat primitive as the extension's fallback: its
+    ``POINTS`` with ``COLOR_0`` (the DC colour and the opacity), one pixel each.
+    """
+    count = 0
+    for mesh in doc.get("meshes", []):
+        for prim in mesh.get("primitives", []):
+            if "KHR_gaussian_splatting" in prim.get("extensions", {}):
+                count += int(doc["accessors"][prim["attributes"]["POSITION"]]["count"])
+    if count:
+        import warnings
+
+        warnings.warn(
+            f"web page: its {count:,} Gaussian splats are shown as the KHR_gaussian_splatting fallback point "
+            "cloud (one point per splat with its base colour and opacity): three.js 0.187's GaussianSplat renders "
+            "only with WebGPURenderer and this page uses WebGLRenderer; render splats with engine='gl', or export "
+            "a .glb for a splat viewer",
+            stacklevel=4,
+        )
 
 
 def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:

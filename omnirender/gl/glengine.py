@@ -783,6 +783,13 @@ class GLEngine(Engine):
         return self.frame_state.target_size
 
     @property
+    def pass_shading(self) -> dict[str, Any]:
+        """The shader overrides of the pass being drawn as program features (``{"DEPTH_ONLY": True,
+        "PASS_ALPHA_CUTOFF": 0.5}`` in the forward technique's "transparent depth" pass): drawers of custom
+        kinds, which the pass's shader does not reach, read them."""
+        return dict(self.frame_state.shading)
+
+    @property
     def linear_output(self) -> bool:
         """Whether the framebuffer being drawn into holds linear light (a float target), not display values."""
         return self.frame_state.linear_output

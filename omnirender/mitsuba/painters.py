@@ -457,3 +457,6 @@ class ClipPlanePainter(AttributePainter):
 
     def unexec(self, plane: ClipPlane, engine: MitsubaEngine) -> None:
         engine.remove_clip(plane)
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the Gaussian splats painter)

@@ -565,3 +565,6 @@ class ClipPlanePainter(AttributePainter):
 
     def exec(self, plane: ClipPlane, engine: POVRayEngine) -> None:
         engine._clip_matrices[id(plane)] = engine.model_matrix()
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the Gaussian splats handler)

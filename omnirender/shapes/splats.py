@@ -30,7 +30,10 @@ import numpy as np
 from ..core.component import Shape
 from . import _sh
 
-__all__ = ["GaussianSplats", "SplatArrays", "quaternion_matrices"]
+__all__ = ["GaussianSplats", "SplatArrays", "quaternion_matrices", "SH_C0", "SH_C1", "SH_C2", "SH_C3"]
+
+#: The colour rule's SH constants (``_sh.C0`` ... ``_sh.C3``), public for engines that write them into shaders.
+SH_C0, SH_C1, SH_C2, SH_C3 = _sh.C0, _sh.C1, _sh.C2, _sh.C3
 
 #: How far from 1 a quaternion's length may be (the trainer stores unnormalised ones: readers normalise).
 QUATERNION_TOLERANCE = 1e-3

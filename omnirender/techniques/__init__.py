@@ -8,6 +8,7 @@ fallback for everything else.  Importing this package also adds the
 """
 
 from . import csg_picking  # noqa: F401  (registers the CSG intersector)
+from . import splats as _splats  # noqa: F401  (registers the Gaussian splats' bounds and intersector)
 from .base import AnalysisEngine, evaluate_in_place, world_matrix_of
 from .bounds import BoundsEngine, BoundsHandler, analytic_bounds, bounds
 from .collision import CollisionEngine, bodies_collide, collisions

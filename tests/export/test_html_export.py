@@ -203,3 +203,27 @@ def test_the_page_has_gl_shadows_and_no_floor_glare(tmp_path):
     print(f"page darker than GL's unshadowed floor on {darker:.1%} of GL's shadow pixels")
     assert darker > 0.8  # the page's shadows fall where GL's do
     assert np.percentile(page[floor & ~shadow], 99) < np.percentile(lit[floor], 99) + 20  # no glare
+
+
+@pytest.mark.gl
+@pytest.mark.chromium
+@pytest.mark.slow
+def test_chromium_lights_the_floor_with_a_rect_area_light_as_gl_does(tmp_path):
+    """The page turns the glTF's spot + extras record back into a three.js RectAreaLight (issue 26): the floor
+    under it is as bright as GL draws it (no shadows in three.js: the scene has no occluder)."""
+    size = (320, 240)
+    light = om.RectLight(position=(0, 1.2, 0), direction=(0, -1, 0), width=1.5, height=0.8, intensity=2.5)
+    scene = om.Node("scene", [om.Camera.look_at((0, 3, 3.5), (0, 0, 0), fov=45), light])
+    scene.add(om.Background((0.0, 0.0, 0.0)))
+    scene.add(om.Node("floor", [om.Material(diffuse=(0.7, 0.7, 0.7), ambient=(0, 0, 0), specular=(0, 0, 0)),
+                                om.Box(size=(6, 0.1, 6), center=(0, -0.05, 0))]))  # fmt: skip
+    gl = om.render(scene, engine="gl", size=size, samples=0).array[:, :, :3].astype(float)
+    page = tmp_path / "area.html"
+    om.export(scene, page)
+    shot = _chromium_screenshot(page, tmp_path / "area.png", size).astype(float)
+    centre = (slice(size[1] // 2 - 6, size[1] // 2 + 6), slice(size[0] // 2 - 6, size[0] // 2 + 6))
+    corner = (slice(2, 10), slice(2, 10))
+    print(f"centre GL {gl[centre].mean():.1f} page {shot[centre].mean():.1f}")
+    assert shot[centre].mean() > 60  # lit by the area light (a page without it would be black)
+    assert abs(gl[centre].mean() - shot[centre].mean()) < 25
+    assert shot[corner].mean() < shot[centre].mean() - 30  # falls off away from the light

@@ -61,3 +61,28 @@ def test_depth_sprite_restores_colour_and_depth_consistently():
         assert np.allclose(merged.depth[red], first.depth[red], rtol=1e-3)
         assert nearer[24, 20]
         sprite.release()
+
+
+def test_between_frames_sets_state_through_the_applier_and_leaves_the_defaults():
+    """``engine.between_frames()``: states applied inside hold there; afterwards GL is as after a frame (every
+    switch and function in force at its default, the engine's framebuffer bound), whatever was applied."""
+    from omnirender.gl import Blend, CullFace, DepthTest, GLEngine
+    from omnirender.gl.engine.context import RawGL
+    from omnirender.gl.engine.glstate import capture_state
+
+    if not RawGL().available:
+        pytest.skip("no libGL for glGet: the GL state cannot be read back")
+    with GLEngine(size=(32, 24), samples=0) as e:
+        e.render(scene(0, (1, 0, 0)))
+        with e.current():
+            after_frame = capture_state()
+            with e.between_frames():
+                e.apply_gl_state(Blend(src="one", dst="one"), DepthTest(func="always"), CullFace("front"))
+                inside = capture_state()
+            after = capture_state()
+        assert inside["blend"] and inside["cull_face"] and inside["depth_func"] != after_frame["depth_func"]
+        # the factors of a disabled blend and the mode of a disabled cull stay as they were set (after a frame too)
+        off = ("blend_src_rgb", "blend_dst_rgb", "blend_src_alpha", "blend_dst_alpha", "cull_face_mode")
+        differ = [d for d in after.diff(after_frame) if d[0] not in off]
+        assert not differ and not after["blend"] and not after["cull_face"], differ
+        assert after["draw_framebuffer"] == e.framebuffer.glo

@@ -4,6 +4,7 @@
 import * as THREE from "three";
 import { GLTFLoader } from "three/examples/jsm/loaders/GLTFLoader.js";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
+import { RectAreaLightUniformsLib } from "three/examples/jsm/lights/RectAreaLightUniformsLib.js";
 
 function decode(base64) {
   const text = atob(base64);
@@ -60,6 +61,54 @@ function phongMaterial(material, phong) {
   });
 }
 
+// om.RectLight / om.DiscLight: the glTF exporter writes a spot (KHR_lights_punctual has no area lights) with the
+// area light in its extras; the page puts a three.js RectAreaLight in its place (radiance L is three.js's
+// luminance: a diffuse surface shows albedo x L x form factor, the rule of every omnirender engine).  A disc
+// becomes a square of its area, a two-sided light two lights back to back.  three.js's RectAreaLight casts no
+// shadows and lights only physically based materials, so a scene with area lights gets MeshStandardMaterials
+// for its Phong ones (the roughness of the Phong exponent, as omnirender's phong_roughness).
+function areaLights(root) {
+  const found = [];
+  root.traverse((object) => {
+    const record = ((object.userData || {}).omnirender || {}).area_light;
+    if (object.isLight && record) found.push([object, record]);
+  });
+  if (found.length) RectAreaLightUniformsLib.init();
+  for (const [spot, record] of found) {
+    const width = record.shape === "disc" ? record.radius * Math.sqrt(Math.PI) : record.width;
+    const height = record.shape === "disc" ? record.radius * Math.sqrt(Math.PI) : record.height;
+    const sides = record.two_sided ? [0, Math.PI] : [0];
+    for (const turn of sides) {
+      const light = new THREE.RectAreaLight(spot.color, record.radiance, width, height);
+      light.position.copy(spot.position);
+      light.quaternion.copy(spot.quaternion);
+      if (turn) light.rotateY(turn);
+      spot.parent.add(light);
+    }
+    spot.parent.remove(spot);
+  }
+  return found.length > 0;
+}
+
+function standardMaterial(material, phong) {
+  const roughness = Math.sqrt(Math.min(1, Math.max(0.01, Math.sqrt(2 / (4 * Math.max(phong.shininess, 1) + 2)))));
+  return new THREE.MeshStandardMaterial({
+    name: material.name,
+    color: material.color,
+    map: material.map,
+    roughness,
+    metalness: 0,
+    emissive: material.emissive,
+    emissiveMap: material.emissiveMap,
+    normalMap: material.normalMap,
+    side: material.side,
+    transparent: material.transparent,
+    opacity: material.opacity,
+    alphaTest: material.alphaTest,
+    vertexColors: material.vertexColors,
+  });
+}
+
 // Shadow maps on, as in every omnirender engine: every opaque mesh casts and receives, every light casts,
 // with 2048-texel maps, soft PCF, a normal bias of 0.6 % of the scene radius and a camera fitted to it.
 function enableShadows(renderer, root) {
@@ -74,7 +123,7 @@ function enableShadows(renderer, root) {
       object.castShadow = !materials.some((m) => m.transparent);
       object.receiveShadow = true;
     }
-    if (!object.isLight || object.isAmbientLight) return;
+    if (!object.isLight || object.isAmbientLight || object.isRectAreaLight) return;
     object.castShadow = true;
     object.shadow.mapSize.set(2048, 2048);
     object.shadow.bias = -0.0002;
@@ -136,12 +185,13 @@ export function show(container, options) {
     (gltf) => {
       scene.add(gltf.scene);
       gltf.scene.updateMatrixWorld(true);
+      const physical = areaLights(gltf.scene);
       let index = 0;
       gltf.scene.traverse((object) => {
-        if (object.isLight) convertLight(object, (options.lights || [])[index++] || {});
+        if (object.isLight && !object.isRectAreaLight) convertLight(object, (options.lights || [])[index++] || {});
         if (object.isMesh && !Array.isArray(object.material)) {
           const phong = ((object.material.userData || {}).omnirender || {}).phong;
-          if (phong) object.material = phongMaterial(object.material, phong);
+          if (phong) object.material = (physical ? standardMaterial : phongMaterial)(object.material, phong);
         }
       });
       enableShadows(renderer, gltf.scene);

@@ -79,6 +79,7 @@ SUPPORTED_EXTENSIONS = frozenset(
         "KHR_mesh_quantization",
         "KHR_draco_mesh_compression",
         "EXT_mesh_gpu_instancing",
+        "KHR_gaussian_splatting",
     }
 )
 _ALPHA_MODES = {"OPAQUE": "opaque", "MASK": "mask", "BLEND": "blend"}
@@ -447,8 +448,13 @@ class _Reader:
         def read(name: str) -> np.ndarray:
             return draco[name] if name in draco else self.accessor(attrs[name])
 
-        vertices = read("POSITION").astype(np.float32)
         mode = prim.get("mode", 4)
+        splatting = prim.get("extensions", {}).get("KHR_gaussian_splatting")
+        if splatting is not None and mode == 0:
+            from .splats import read_splats
+
+            return Node("primitive", [read_splats(read, attrs, splatting, lambda m: self.error(f"{where}: {m}"))])
+        vertices = read("POSITION").astype(np.float32)
         if "indices" in draco:
             indices = draco["indices"]
         elif "indices" in prim:

@@ -707,3 +707,6 @@ def export(scene: Any, path: str | os.PathLike[str], **options: Any) -> None:
     data = to_bytes(scene, **options)
     with atomic_write(path, "wb") as fh:
         fh.write(data)
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the KHR_gaussian_splatting exporter)

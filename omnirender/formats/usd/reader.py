@@ -348,6 +348,13 @@ class _StageReader:
             for child in self.instancer(UsdGeom.PointInstancer(prim)):
                 node.add(child)
             return
+        if type_name == "ParticleField3DGaussianSplat":
+            from .splats import read_splats
+
+            splats = read_splats(prim, self.time, self.warn)
+            if splats is not None:
+                node.add(splats)
+            return
         if prim.IsA(UsdGeom.Gprim):
             for child in self.gprim(prim, type_name):
                 if isinstance(child, Node):

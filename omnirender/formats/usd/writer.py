@@ -926,3 +926,6 @@ def export(scene: Any, path: str | os.PathLike[str], *, size: tuple[int, int] = 
                 shutil.move(str(textures), final)
             os.replace(layer_path, target)
     return target
+
+
+from . import splats as _splats  # noqa: E402,F401  (registers the ParticleField3DGaussianSplat writer)

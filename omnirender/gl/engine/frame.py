@@ -289,6 +289,8 @@ class FrameRunner:
                 ortho = bool(abs(proj[3, 3] - 1.0) < 1e-9)
             state.set_camera(view, proj, ortho)
         self.report.enter(record)
+        saved_shading = state.shading
+        state.shading = composed.shading()
         try:
             if description.clear is not None:
                 self._clear(description.clear)
@@ -302,6 +304,7 @@ class FrameRunner:
                 calls = self._draw_scope(source, composed, item_level, description.technique)
         finally:
             self.report.leave()
+            state.shading = saved_shading
             if saved_camera is not None:
                 state.set_camera(*saved_camera)
             if saved_viewport is not None:

@@ -48,6 +48,7 @@ class FrameState:
         "frame_view_key",
         "target_size",
         "linear_output",
+        "shading",
         "applier",
         "shadow_plan",
         "background",
@@ -72,6 +73,9 @@ class FrameState:
         self.target_size = tuple(size)
         #: whether the bound target holds linear light (a float target), not display values
         self.linear_output = False
+        #: the shader overrides of the pass being drawn as program features (``Composed.shading()``): drawers of
+        #: custom kinds read them (a depth-only pass, an alpha cutoff)
+        self.shading: tuple[tuple[str, Any], ...] = ()
         #: the frame's RasterApplier (None outside a frame)
         self.applier: Any = None
         #: the frame's ShadowPlan, or None
