@@ -44,7 +44,7 @@ import numpy as np
 
 from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from ..engine.attributes import ScissorTest
-from ..engine.drawlist import Batch, Scope, Segment, uniform_material, world_bounds
+from ..engine.drawlist import Batch, Scope, Segment, world_bounds
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from ..engine.stages import FrameStage
@@ -475,8 +475,9 @@ class ShadowMapStage(FrameStage):
             # a batch with storage gets spare room in its GPU buffer: the next update's few more rows reuse the
             # buffer and its vertex arrays (the storage itself is never written: rows are not appended here)
             part.storage = part.rows
-            part.items = [batch.items[i] for i in picks] if len(batch.items) == len(batch.rows) else list(batch.items)
-            part.uniform = uniform_material(part.rows)
+            items = batch.items
+            part.items = list(map(items.__getitem__, picks.tolist())) if len(items) == len(batch.rows) else list(items)
+            part.uniform = batch.uniform  # rows of a uniform batch are uniform; others read their own materials
             part.dirty, part.sparse, part.position = (0, len(picks)), None, None
             batches.append(part)
         if len(self._scratch) > 2 * len(casters) + 16:  # batches that are gone: their parts are freed
