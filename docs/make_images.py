@@ -300,6 +300,31 @@ def asset_suite_images(size: tuple[int, int] = (128, 96)) -> None:
     print("wrote", HERE / "asset_suite.png")
 
 
+def area_light_images(size: tuple[int, int] = (320, 240)) -> None:
+    """The area-light agreement scene (a rectangle light over a slab) in every engine (area_lights.png)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    import test_area_light_agreement as agree
+
+    agree.SIZE = size
+    names = {"gl": "OpenGL (LTC, soft shadows)", "povray": "POV-Ray area_light", "mitsuba": "Mitsuba 3 area emitter",
+             "radiance": "Radiance light polygon"}  # fmt: skip
+    engines = [n for n in names if om.engines().get(n, (False, ""))[0]]
+    pov = agree.masks("povray", "rect")[0] if "povray" in engines else None
+    sheet = Image.new("RGB", (size[0] * len(engines), size[1] + 40), (255, 255, 255))
+    draw = ImageDraw.Draw(sheet)
+    for j, name in enumerate(engines):
+        occluded, _ = agree.renders(name, "rect")
+        sheet.paste(Image.fromarray(occluded.astype(np.uint8), "RGB"), (j * size[0], 40))
+        draw.text((j * size[0] + 6, 4), names[name], fill=(0, 0, 0))
+        if pov is not None and name != "povray":
+            shadow, penumbra = agree.masks(name, "rect")
+            score = agree.iou(shadow, pov)
+            draw.text((j * size[0] + 6, 20), f"shadow IoU vs POV-Ray {score:.3f}", fill=(0, 0, 0))
+            print(f"{name}: shadow IoU vs POV-Ray {score:.3f}, penumbra {penumbra.sum()} px")
+    sheet.save(HERE / "area_lights.png")
+    print("wrote", HERE / "area_lights.png")
+
+
 def splat_images() -> None:
     """The README's Gaussian-splat block (a planet of splats with a box half inside), run as it is written."""
     import re
@@ -325,6 +350,7 @@ SECTIONS = {
     "pipelines": pipeline_images,
     "usd": usd_images,
     "assets": asset_suite_images,
+    "arealights": area_light_images,
     "splats": splat_images,
 }
 

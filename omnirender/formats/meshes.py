@@ -84,6 +84,14 @@ def read_mesh(
     except ImportError as exc:  # pragma: no cover - trimesh is in the 'mesh' extra
         raise ValueError(f"MeshFile: loading {path!r} needs trimesh (pip install omnirender[mesh]): {exc}") from None
     _check_header(path)
+    if str(path).lower().endswith(".ply"):
+        from .splats.ply import is_splat_ply
+
+        if is_splat_ply(path):
+            raise ValueError(
+                f"MeshFile: {path!r} holds Gaussian splats (its vertices have scale_* and rot_* properties), not a "
+                "mesh; read it with om.load_splats(path)"
+            )
     resolver = _PolicyResolver(path, policy, strict)
     try:
         loaded = trimesh.load(path, process=False, resolver=resolver)

@@ -179,6 +179,9 @@ class GLEngine(Engine):
         # the frame side's collaborators, made once and handed to each other (three.js's WebGLRenderer is
         # assembled the same way): what the pass sees, its targets, its report, the drawer, the frame runner
         self.frame_state = FrameState(self._size)
+        #: (camera, key, view, projection) of the last scene camera (camera_matrices); the read-back's array
+        self._camera_kept: tuple[Any, Any, np.ndarray, np.ndarray] | None = None
+        self._read_scratch: np.ndarray | None = None
         self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
         self.pass_report = PassReport(self.ctx)
         self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
@@ -502,12 +505,25 @@ class GLEngine(Engine):
         return self.index.bounds()
 
     def camera_matrices(self) -> tuple[Camera, np.ndarray, np.ndarray]:
-        """(camera, view, projection) of the scene's camera (else the auto-fit one) at the engine's size."""
+        """(camera, view, projection) of the scene's camera (else the auto-fit one) at the engine's size.
+
+        The scene camera's matrices are kept (read-only) while its version, its
+        placement and the size stay the same: a steady frame makes none.
+        """
         w, h = self._size
         aspect = w / h
         if self.camera is not None:
             camera, world = self.camera
+            key = (camera.version, np.asarray(world).tobytes(), aspect)
+            kept = self._camera_kept
+            if kept is not None and kept[0] is camera and kept[1] == key:
+                return camera, kept[2], kept[3]
             view = camera.view_matrix() @ np.linalg.inv(world)
+            projection = camera.projection_matrix(aspect)
+            view.setflags(write=False)
+            projection.setflags(write=False)
+            self._camera_kept = (camera, key, view, projection)
+            return camera, view, projection
         else:
             camera = self.default_camera()
             view = camera.view_matrix()
@@ -824,8 +840,11 @@ class GLEngine(Engine):
                 self.ctx.copy_framebuffer(t["fbo"], drawn)
             fbo = t["fbo"]
         w, h = self._size
-        data = fbo.read(components=4, alignment=1)
-        array = np.frombuffer(data, np.uint8).reshape(h, w, 4)[::-1]
+        scratch = self._read_scratch
+        if scratch is None or scratch.shape != (h, w, 4):
+            scratch = self._read_scratch = np.empty((h, w, 4), np.uint8)
+        fbo.read_into(scratch, components=4, alignment=1)  # into a kept array: no new buffer per frame
+        array = scratch[::-1]  # copied by the Image below (rows top-down)
         depth = None
         if read_depth:
             raw = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4", alignment=1), np.float32).reshape(

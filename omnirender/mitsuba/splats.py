@@ -18,7 +18,7 @@ its splat's colour (for the camera's eye) times that alpha through an
 as scalars (the ``mask`` opacity, a ``face_opacity`` attribute) but not as
 spectra, so the emitted radiance is constant per shape and the splats of a
 layer are grouped by their premultiplied colour (exact for up to
-:data:`MAX_GROUPS` distinct colours per layer, quantised beyond).  The
+:data:`MAX_GROUPS` distinct colours per layer, k-means clusters beyond).  The
 emitters are never sampled by next-event estimation (the ``ellipsoids`` shape
 cannot be sampled), so splats light nothing, as in the GL engine; but the
 shells do block the shadow rays of lights (splats cast soft shadows here and
@@ -29,6 +29,11 @@ Russian-roulette depth of the default ``path`` integrator.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -76,20 +81,43 @@ def world_ellipsoids(shape: GaussianSplats, model: np.ndarray) -> tuple[np.ndarr
     return p @ m[:3, :3].T + m[:3, 3], quats, np.sqrt(np.maximum(values, 1e-30))
 
 
+@contextlib.contextmanager
+def _quiet_tensor_casts() -> Iterator[None]:
+    """Drop nanobind's "implicit conversion from type 'TensorXf' ... failed!" lines from the process's stderr.
+
+    Mitsuba's property parser tries a tensor against its colour and vector overloads first and nanobind prints a
+    line for each failed try (six lines per ``ellipsoids`` shape); everything else written meanwhile is kept.
+    """
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as capture:
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            kept = [ln for ln in capture.read().splitlines(keepends=True) if b"implicit conversion from type" not in ln]
+            if kept:
+                os.write(2, b"".join(kept))
+
+
 def _groups(premultiplied: np.ndarray) -> list[np.ndarray]:
-    """Indices of the splats grouped by premultiplied colour: exact when few, else quantised (coarser as needed)."""
+    """Indices of the splats grouped by premultiplied colour: exact up to MAX_GROUPS colours, else k-means clusters.
+
+    Uniform quantisation to 256 cells washed out the example's striped ball (8 levels a channel); k-means
+    (scipy, seeded: the same scene gives the same image) spends the groups where the colours are.
+    """
     unique, inverse = np.unique(premultiplied, axis=0, return_inverse=True)
     if len(unique) > MAX_GROUPS:
-        top = max(float(premultiplied.max()), 1e-12)
-        for levels in (64, 32, 16, 8, 4):
-            keys = np.round(premultiplied / top * levels).astype(np.int64)
-            unique, inverse = np.unique(keys, axis=0, return_inverse=True)
-            if len(unique) <= MAX_GROUPS:
-                break
+        from scipy.cluster.vq import kmeans2
+
+        _, inverse = kmeans2(premultiplied.astype(np.float64), MAX_GROUPS, minit="++", seed=0)
     inverse = np.asarray(inverse).reshape(-1)
     order = np.argsort(inverse, kind="stable")
-    bounds = np.searchsorted(inverse[order], np.arange(len(unique) + 1))
-    return [order[bounds[i] : bounds[i + 1]] for i in range(len(unique)) if bounds[i + 1] > bounds[i]]
+    bounds = np.searchsorted(inverse[order], np.arange(int(inverse.max()) + 2))
+    return [order[bounds[i] : bounds[i + 1]] for i in range(len(bounds) - 1) if bounds[i + 1] > bounds[i]]
 
 
 @default_for(MitsubaEngine)
@@ -149,5 +177,6 @@ class GaussianSplatsPainter(ShapePainter):
                     },
                 }
                 name = engine.unique_name("splats")
-                engine.shapes[name] = engine.instantiate(colour, "GaussianSplats shells")
-                covers[name] = engine.instantiate(cover, "GaussianSplats coverage shells")
+                with _quiet_tensor_casts():
+                    engine.shapes[name] = engine.instantiate(colour, "GaussianSplats shells")
+                    covers[name] = engine.instantiate(cover, "GaussianSplats coverage shells")

@@ -126,3 +126,9 @@ def test_other_suffixes_point_at_their_loaders(tmp_path):
         om.load_splats(path)
     with pytest.raises(FileNotFoundError):
         om.load_splats(tmp_path / "missing.ply")
+
+
+def test_mesh_file_refuses_a_splat_ply_naming_load_splats(tmp_path):
+    path = trainer_ply(tmp_path / "s.ply", [_row()], degree1_names())
+    with pytest.raises(ValueError, match=r"holds Gaussian splats .* om.load_splats"):
+        om.MeshFile(path).load()

@@ -5,6 +5,10 @@ read and written by the glTF and USD formats themselves
 (:mod:`omnirender.formats.gltf.splats`, :mod:`omnirender.formats.usd.splats`):
 ``om.load_gltf``/``om.load_usd`` give ``om.GaussianSplats`` where the file has
 splats, and ``om.export`` writes them.
+
+A splat ``.ply`` is not a mesh: ``om.MeshFile`` refuses one (it names
+``om.load_splats``) rather than reading its centres as a point cloud without
+triangles.
 """
 
 from __future__ import annotations
@@ -14,8 +18,15 @@ from typing import Any
 
 from .ply import MAX_HEADER, SplatFileError, is_splat_ply, read_splat_ply, write_splat_ply
 
-__all__ = ["load_splats", "save_splats", "read_splat_ply", "write_splat_ply", "SplatFileError", "is_splat_ply"]
-__all__ += ["MAX_HEADER"]
+__all__ = [
+    "load_splats",
+    "save_splats",
+    "read_splat_ply",
+    "write_splat_ply",
+    "SplatFileError",
+    "is_splat_ply",
+    "MAX_HEADER",
+]
 
 
 def load_splats(path: str | os.PathLike[str]) -> Any:

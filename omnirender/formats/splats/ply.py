@@ -219,10 +219,6 @@ def _numbers(row: str) -> bool:
     return True
 
 
-def _column(path: Path, table: np.ndarray, name: str) -> np.ndarray:
-    return np.asarray(table[name], dtype=np.float64)
-
-
 def _layout(path: Path, names: list[str]) -> tuple[list[str], list[str]]:
     """The colour and ``f_rest_*`` properties of a splat file's vertex element; SplatFileError when it is not one."""
     present = set(names)
@@ -255,7 +251,7 @@ def _activate(path: Path, table: np.ndarray, names: list[str]) -> dict[str, np.n
     def stack(columns: list[str]) -> np.ndarray:
         out = np.empty((n, len(columns)), np.float64)
         for i, c in enumerate(columns):
-            out[:, i] = _column(path, table, c)
+            out[:, i] = np.asarray(table[c], dtype=np.float64)
         return out
 
     raw = {

@@ -18,8 +18,8 @@ plus ``c`` (and ``L``'s product where it is not the identity) into the rows'
 translation columns, and one partial upload of the rows' range.
 
 The map is made when an array is first applied after an install, and made
-again after a splice or after any other change moved one of its items (``P``
-or ``S`` may have changed).
+again after a splice or after a change to another transform in one of its
+items' chains (``P`` or ``S`` changed).
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ class BulkMap:
     moved transform).
     """
 
-    __slots__ = ("positions", "rows", "parts", "covers", "valid", "count")
+    __slots__ = ("positions", "rows", "parts", "fixed", "valid", "count")
 
     def __init__(self, plan: Any, array: Any) -> None:
         translations = array[:]
@@ -85,7 +85,9 @@ class BulkMap:
         self.rows = np.flatnonzero(present)
         self.positions = found[present]
         self.parts: list[_Part] = []
-        self.covers = np.zeros(len(plan.items), bool)
+        #: by place among the plan's matrices: the transforms the map's L and c were made from (a change to
+        #: one of them makes the map stale; the array's own translations do not)
+        self.fixed = np.zeros(len(plan.matrices), bool)
         self.count = 0
         self.valid = True
         if not len(plan.items) or not len(self.rows):
@@ -101,11 +103,14 @@ class BulkMap:
         affected = np.flatnonzero(per_item == 1)
         if not len(affected):
             return
-        self.covers[affected] = True
         self.count = len(affected)
         at = hits[affected].argmax(axis=1)  # where the array's translation is in each chain
         source = chosen[affected, at]
         chain = plan.chain[affected]
+        others = chain.copy()
+        others[np.arange(len(affected)), at] = len(plan.matrices) - 1  # the identity's place
+        self.fixed[others.ravel()] = True
+        self.fixed[-1] = False
         above = np.broadcast_to(np.eye(4), (len(affected), 4, 4)).copy()
         below = above.copy()
         for k in range(chain.shape[1]):

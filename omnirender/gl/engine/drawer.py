@@ -72,6 +72,8 @@ class BatchDrawer:
         self._transient: dict[Any, tuple[Any, ...]] = {}
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
+        #: id(light switch) -> (switch, stamp, any scene light, LightUniforms) of the last frame (_lights_for)
+        self._lights_kept: dict[int, tuple[Any, Any, bool, LightUniforms]] = {}
 
     def draw_items(self, scope: Scope, composed: Composed, nested: Any) -> int:
         """Draw the items of ``scope`` that ``composed`` selects; ``nested(scope)`` runs a nested technique scope.
@@ -280,10 +282,19 @@ class BatchDrawer:
         key = id(switch)
         lu = self.state.lights.get(key)
         if lu is None:
-            lights = self.engine.scene_lights
+            everything = self.engine.scene_lights
+            lights = everything
             if switch is not None:
                 lights = [(light, m) for light, m in lights if switch.allows(light)]
-            lu = LightUniforms(lights, self.state.view, headlight=not self.engine.scene_lights)
+            view = self.state.view
+            # the lights' arrays of an earlier frame while the lights, their placements and the view are the same
+            stamp = (tuple([(id(light), light.version, m.tobytes()) for light, m in lights]), view.tobytes())
+            kept = self._lights_kept.get(key)
+            if kept is not None and kept[0] is switch and kept[1] == stamp and bool(everything) == kept[2]:
+                lu = kept[3]
+            else:
+                lu = LightUniforms(lights, view, headlight=not everything)
+                self._lights_kept[key] = (switch, stamp, bool(everything), lu)
             self.state.lights[key] = lu
         return lu
 

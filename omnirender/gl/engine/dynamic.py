@@ -85,6 +85,8 @@ class MovePlan:
         self.moved_rows: list[tuple[Any, Any]] = []
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
+        #: frames since the last splice in which most of the translations moved (_apply_translations)
+        self.many_moves = 0
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -102,6 +104,7 @@ class MovePlan:
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
+        self.many_moves = 0
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -219,6 +222,11 @@ class MovePlan:
         """
         entry = self.bulk.get(_TRANSLATIONS)
         if entry is None:
+            # made on the second such frame since the last splice: a frame that also adds or removes nodes
+            # would make it for one use (its cost is about the general path's)
+            self.many_moves += 1
+            if self.many_moves < 2:
+                return None
             own = [t for t in self.transforms if t.__class__ is Translation]
             entry = self.bulk[_TRANSLATIONS] = (own, BulkMap(self, own))
         own, bulk = entry
@@ -237,7 +245,7 @@ class MovePlan:
         if not len(affected):
             return 0
         for key, (_, bulk) in list(self.bulk.items()):
-            if bulk.covers[affected].any():  # a transform above or below an array's translation moved
+            if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                 del self.bulk[key]
         chain = self.chain[affected]
         models = self.matrices[chain[:, 0]]

@@ -219,8 +219,10 @@ class FrameRunner:
     def _frame_camera(self, override: Any, size: tuple[int, int]) -> tuple[Any, np.ndarray, np.ndarray]:
         """(camera, view, projection) of a frame: the scene's, or ``override`` (validated ``(view, Camera|proj)``)."""
         if override is None:
-            camera, view, _ = self.engine.camera_matrices()
-            return camera, view, camera.projection_matrix(size[0] / size[1])
+            camera, view, projection = self.engine.camera_matrices()
+            if size != tuple(self.engine.size):  # another framebuffer's aspect
+                projection = camera.projection_matrix(size[0] / size[1])
+            return camera, view, projection
         view, proj = override
         if isinstance(proj, np.ndarray):
             return ProjectionInfo.of(proj), view, proj

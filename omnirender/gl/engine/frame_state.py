@@ -87,15 +87,17 @@ class FrameState:
 
     def set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         """Make (``view``, ``proj``) the camera of the pass being drawn."""
+        key = view.tobytes() + proj.tobytes()
+        if key != getattr(self, "view_key", None):  # the same camera as the last pass's: its uniforms kept
+            self.uniforms = {
+                "u_view": view.T.astype(np.float32).tobytes(),
+                "u_proj": proj.T.astype(np.float32).tobytes(),
+                "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
+            }
         self.view = view
         self.proj = proj
         self.ortho = ortho
-        self.view_key = view.tobytes() + proj.tobytes()
-        self.uniforms = {
-            "u_view": view.T.astype(np.float32).tobytes(),
-            "u_proj": proj.T.astype(np.float32).tobytes(),
-            "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
-        }
+        self.view_key = key
         self.lights = {}
 
     def camera_state(self) -> tuple[np.ndarray, np.ndarray, bool]:
