@@ -141,20 +141,23 @@ def test_post_processing_blends_in_linear_light():
         e.release()
 
 
-def test_stereo_eyes_match_the_reference_and_keep_their_order():
-    e = om.gl.GLEngine(size=SIZE, samples=0)
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_stereo_eyes_match_the_reference_and_keep_their_order(pipeline):
+    """Side by side: each eye (its own half of the frame, its own view) matches the reference; the deferred
+    pipeline's eyes (drawn whole into an eye target, copied over the frame) match too."""
+    e = om.gl.GLEngine(size=SIZE, samples=0, pipeline=pipeline)
     try:
-        splats = cloud(2000, 0, seed=7)
+        splats = cloud(2000, 1, seed=7)
         scene = scene_of(om.Node("cloud", [splats]))
-        for mode, sign in (("left", -1.0), ("right", 1.0)):
-            e.stereo = om.gl.Stereo(mode, eye_separation=0.3, convergence=4.0)
-            image = e.render(scene)
-            view, proj = eye_matrices(*matrices(e), SIZE[0] / SIZE[1], sign, 0.3, 4.0)
-            expected, _ = ref.render(splats, np.eye(4), view, proj, SIZE)
-            assert ref.psnr(rgb(image), np.clip(expected, 0, 1)) >= 35.0, mode
         e.stereo = om.gl.Stereo("side-by-side", eye_separation=0.3, convergence=4.0)
-        e.render(scene)
-        geometry = next(it.geometry for it in e.draw_items if it.state.kind == "splats")
+        image = rgb(e.render(scene))
+        half = SIZE[0] // 2
+        view, proj = matrices(e)
+        for sign, part in ((-1.0, image[:, :half]), (1.0, image[:, half:])):
+            eye_view, eye_proj = eye_matrices(view, proj, half / SIZE[1], sign, 0.3, 4.0)
+            expected, _ = ref.render(splats, np.eye(4), eye_view, eye_proj, (half, SIZE[1]))
+            assert ref.psnr(part, np.clip(expected, 0, 1)) >= 35.0, sign
+        geometry = _geometry(e)
         sorts = geometry.sorter.sorts
         e.render(scene)  # both eyes' orders are kept: a still stereo camera sorts nothing
         assert geometry.sorter.sorts == sorts
@@ -244,3 +247,44 @@ def test_the_transparent_depth_pass_writes_the_depth_of_dense_splats(engine):
     assert not np.isfinite(image.depth[0, 0])
     # drawn once: the centre is colour * alpha (0.6), not 1 - (1 - 0.6)^2
     assert image.array[SIZE[1] // 2, SIZE[0] // 2, 0] / 255.0 == pytest.approx((0.5 + ref._sh.C0) * 0.6, abs=2 / 255)
+
+
+def test_a_ply_through_gltf_and_usd_renders_the_same_image(tmp_path, engine):
+    """Issue 28's file target: .ply -> omnirender -> glTF -> omnirender -> USD -> omnirender, each scene rendered
+    in GL: the same picture (at most 2/255), and the picture of the arrays written."""
+    pytest.importorskip("pxr")
+    splats = cloud(3000, 3, seed=11)
+    om.save_splats(splats, tmp_path / "capture.ply")
+    first = om.Node(
+        "cloud", [om.Translation(0.2, 0.0, 0.0), om.Rotation(20, (0, 1, 0)), om.load_splats(tmp_path / "capture.ply")]
+    )
+    om.export(om.Node("root", [first]), tmp_path / "capture.glb")
+    second = om.load_gltf(tmp_path / "capture.glb")
+    om.export(om.Node("root", [second]), tmp_path / "capture.usdc")
+    third = om.load_usd(tmp_path / "capture.usdc")
+    images = [engine.render(scene_of(root)).array[..., :3].astype(int) for root in (first, second, third)]
+    assert images[0].std() > 10
+    for other in images[1:]:
+        assert np.abs(other - images[0]).max() <= 2
+    original = engine.render(
+        scene_of(om.Node("cloud", [om.Translation(0.2, 0.0, 0.0), om.Rotation(20, (0, 1, 0)), splats]))
+    )
+    assert np.abs(original.array[..., :3].astype(int) - images[0]).max() <= 2
+
+
+@pytest.mark.parametrize("pipeline", ["forward", "deferred"])
+def test_anaglyph_eyes_keep_their_colour_masks(pipeline):
+    """The pass's colour mask reaches the splat drawer: red is the left eye's image, green and blue the right's."""
+    e = om.gl.GLEngine(size=SIZE, samples=0, pipeline=pipeline)
+    try:
+        scene = scene_of(om.Node("cloud", [cloud(1500, 0, seed=12)]))
+        eyes = {}
+        for mode in ("anaglyph", "left", "right"):
+            e.stereo = om.gl.Stereo(mode, eye_separation=0.3, convergence=4.0)
+            eyes[mode] = e.render(scene).array[..., :3].astype(int)
+        assert np.abs(eyes["anaglyph"][..., 0] - eyes["left"][..., 0]).max() <= 1
+        assert np.abs(eyes["anaglyph"][..., 1:] - eyes["right"][..., 1:]).max() <= 1
+        assert np.abs(eyes["left"] - eyes["right"]).max() > 50  # the eyes differ: the test can fail
+    finally:
+        e.stereo = None
+        e.release()

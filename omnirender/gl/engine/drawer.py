@@ -426,6 +426,9 @@ class BatchDrawer:
         for geometry, state, indices in runs:
             drawer = self.drawers.get(state.kind)
             if drawer is not None:
+                # the item's GL state with the pass's overrides (an anaglyph eye's colour mask, the transparent
+                # depth pass's), as a plain item gets it; the drawer then sets what it needs itself
+                self._apply_raster(composed.raster(state.raster, defaults()), state)
                 made = drawer(self.engine, [items[i] for i in indices], state)
                 self.report.count(made, len(indices))
                 calls += made

@@ -35,7 +35,7 @@ import numpy as np
 
 from ...core.handler import ShapePainter, default_for
 from ...shapes import GaussianSplats
-from ..engine.attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest
+from ..engine.attributes import Blend, CullFace, DepthMask, DepthTest
 from ..engine.geometry import Geometry
 from ..engine.layout import ROW
 from ..engine.resources import gpu_call
@@ -144,14 +144,9 @@ class SplatPainter(ShapePainter):
 #: depth-tested against what is drawn, no depth writes, premultiplied "over", both faces
 _STATE = (DepthTest(True, "less"), DepthMask(False), Blend(True, "one", "one_minus_src_alpha"), CullFace("none"))
 
-#: depth-only passes: no colour, depth written where a splat's alpha reaches the pass's cutoff
-_DEPTH_STATE = (
-    DepthTest(True, "less"),
-    DepthMask(True),
-    Blend(False),
-    CullFace("none"),
-    ColorMask(False, False, False, False),
-)
+#: depth-only passes: depth written where a splat's alpha reaches the pass's cutoff, the colour kept by blending
+#: (zero, one) -- not by a colour mask, which would outlive the pass for the next custom drawer
+_DEPTH_STATE = (DepthTest(True, "less"), DepthMask(True), Blend(True, "zero", "one"), CullFace("none"))
 
 #: per engine: the compute programs of the GPU sort (None where compute shaders are missing)
 _SORT_PROGRAMS: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
@@ -181,7 +176,7 @@ def draw_splats(engine: GLEngine, items: list, state: Any) -> int:
         engine.programs.register("splats", SPLAT_VERTEX, SPLAT_FRAGMENT)
     shading = engine.pass_shading
     if shading.get("DEPTH_ONLY"):
-        # the pass's state does not reach custom drawers: mask colour, write the depth of the denser splats
+        # the pass's state does not reach custom drawers: keep the colour, write the depth of the denser splats
         features: tuple = (("DEPTH_ONLY", True), ("PASS_ALPHA_CUTOFF", float(shading.get("PASS_ALPHA_CUTOFF", 0.5))))
         engine.apply_gl_state(*_DEPTH_STATE)
     else:
@@ -190,7 +185,7 @@ def draw_splats(engine: GLEngine, items: list, state: Any) -> int:
     prog = engine.programs.get("splats", features)
     view, proj = engine.frame_view, engine.frame_projection
     ortho = engine.frame_orthographic
-    size = engine.target_size
+    viewport = tuple(float(v) for v in ctx.viewport)  # the pass's rectangle (a stereo eye's half, a tile)
     near = (proj[2, 3] + 1.0) / proj[2, 2] if ortho else proj[2, 3] / (proj[2, 2] - 1.0)
     calls = 0
     for item in items:
@@ -212,7 +207,7 @@ def draw_splats(engine: GLEngine, items: list, state: Any) -> int:
         uniforms = {
             "u_mv": mv.T.astype(np.float32).tobytes(),
             "u_proj": proj.T.astype(np.float32).tobytes(),
-            "u_viewport": (float(size[0]), float(size[1])),
+            "u_viewport": viewport,
             "u_eye": tuple(float(x) for x in eye),
             "u_near": float(near),
             "u_width": int(geom.width),

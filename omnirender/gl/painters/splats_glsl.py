@@ -70,7 +70,7 @@ uniform int u_degree;
 uniform int u_sh_count;        // SH texels per splat ((degree + 1)^2)
 uniform mat4 u_mv;             // model-view
 uniform mat4 u_proj;
-uniform vec2 u_viewport;       // target size in pixels
+uniform vec4 u_viewport;       // the viewport: origin and size in window pixels (a stereo eye's half, ...)
 uniform vec4 u_eye;            // eye in local space (w = 1) or the viewing direction there (w = 0: orthographic)
 uniform float u_near;
 in vec2 in_corner;             // the quad's corners, (+-1, +-1)
@@ -102,8 +102,8 @@ void main() {
     mat3 cov = mat3(g1.x, g1.y, g1.z, g1.y, g1.w, g2.x, g1.z, g2.x, g2.y);
     mat3 w = mat3(u_mv);
     mat3 cv = w * cov * transpose(w);
-    float fx = u_proj[0][0] * u_viewport.x * 0.5;
-    float fy = u_proj[1][1] * u_viewport.y * 0.5;
+    float fx = u_proj[0][0] * u_viewport.z * 0.5;
+    float fy = u_proj[1][1] * u_viewport.w * 0.5;
     vec3 j0 = vec3(fx, 0.0, 0.0);
     vec3 j1 = vec3(0.0, fy, 0.0);
     if (!ortho) {
@@ -129,14 +129,15 @@ void main() {
     float lambda = mid + sqrt(max(0.1, mid * mid - det));
     float radius = ceil(3.0 * sqrt(lambda));
     v_conic = vec3(c, -b, a) / det;
-    v_mean = (ndc.xy + 1.0) * 0.5 * u_viewport;
+    v_mean = u_viewport.xy + (ndc.xy + 1.0) * 0.5 * u_viewport.zw;
     v_opacity = g0.w;
     vec3 dir = ortho ? normalize(u_eye.xyz) : g0.xyz - u_eye.xyz;
     float len = length(dir);
     dir = len > 0.0 ? dir / len : vec3(0.0, 0.0, 1.0);
     v_color = sh_color(i * u_sh_count, u_degree, dir);
     vec2 px = v_mean + in_corner * radius;
-    gl_Position = culled ? vec4(2.0, 2.0, 2.0, 1.0) : vec4(px / u_viewport * 2.0 - 1.0, ndc.z, 1.0);
+    vec2 xy = (px - u_viewport.xy) / u_viewport.zw * 2.0 - 1.0;
+    gl_Position = culled ? vec4(2.0, 2.0, 2.0, 1.0) : vec4(xy, ndc.z, 1.0);
 }
 """
 )

@@ -46,11 +46,18 @@ ANAGLYPH_MASKS = (ColorMask(True, False, False, True), ColorMask(False, True, Tr
 _EYE = Target("stereo.eye")
 _EYE_COPY = """uniform sampler2D u_eye;
 uniform sampler2D u_eye_depth;
-vec4 effect(vec2 uv) { return texture(u_eye, uv); }
+vec4 effect(vec2 uv) {
+    // the eye target starts transparent, so what is blended "over" into it (transparent shapes, splats) holds
+    // premultiplied colour: made straight again for the pass's "over" blending
+    vec4 c = texture(u_eye, uv);
+    if (c.a <= 0.0) discard;
+    return vec4(c.rgb / c.a, c.a);
+}
 float effect_depth(vec2 uv) { return texture(u_eye_depth, uv).r; }
 """
 #: A multisampled eye copied: its samples averaged (premultiplied: the eye target starts transparent, so an edge
-#: keeps what the frame holds under its uncovered samples), the nearest sample's depth.
+#: keeps what the frame holds under its uncovered samples, and what was blended over it holds premultiplied
+#: colour already), the nearest sample's depth.
 _EYE_RESOLVE = """uniform sampler2DMS u_eye;
 uniform sampler2DMS u_eye_depth;
 uniform int u_count;
@@ -62,7 +69,7 @@ vec4 effect(vec2 uv) {
     g_depth = 1.0;
     for (int i = 0; i < u_count; ++i) {
         vec4 c = texelFetch(u_eye, p, i);
-        sum += vec4(c.rgb * c.a, c.a);
+        sum += c;
         g_depth = min(g_depth, texelFetch(u_eye_depth, p, i).r);
     }
     sum /= float(u_count);
