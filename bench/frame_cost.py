@@ -24,7 +24,8 @@ Python and driver API call runs and nothing is drawn, so the figures are the
 CPU side of a frame, what a user of a real GPU sees.  Without it the figures
 are the current driver's (llvmpipe on a machine without a GPU).
 
-Run: ``.venv/bin/python bench/frame_cost.py --cpu`` (``--quick`` for fewer frames; ``--only nodes`` etc.).
+Run: ``.venv/bin/python bench/frame_cost.py --cpu`` (``--quick`` for fewer frames, ``--frames N``; ``--only nodes``
+etc.; ``--stat min`` on a loaded machine).
 """
 
 from __future__ import annotations
@@ -58,6 +59,9 @@ LIGHT = (-0.4, -0.6, -1.0)
 #: the clock frames are timed with: CPU time of the process (all its threads, llvmpipe's included), so that
 #: other processes on a loaded machine do not count; ``--timer wall`` for a GPU, whose work is not CPU time
 CLOCK = [time.process_time]
+#: how the frames of a figure are summarised: their median (default) or, on a loaded machine, their minimum
+#: (``--stat min``: other processes only ever add time)
+STAT = [statistics.median]
 
 
 def timed(fn: Callable[[], object]) -> float:
@@ -105,7 +109,7 @@ def bench_bulk(n: int, frames: int) -> dict[str, float]:
                 render()
 
             out["all"].append(timed(move_all))
-    return {k: statistics.median(v) for k, v in out.items()}
+    return {k: STAT[0](v) for k, v in out.items()}
 
 
 def bench_nodes(n: int, frames: int, shadows: bool) -> dict[str, float]:
@@ -188,9 +192,9 @@ def bench_nodes(n: int, frames: int, shadows: bool) -> dict[str, float]:
                 render()
 
             run["all"].append(timed(move_all_again))
-    result = {k: statistics.median(v) for k, v in out.items()}
-    result["setters"] = statistics.median(setters)
-    result.update({f"run_{k}": statistics.median(v) for k, v in run.items()})
+    result = {k: STAT[0](v) for k, v in out.items()}
+    result["setters"] = STAT[0](setters)
+    result.update({f"run_{k}": STAT[0](v) for k, v in run.items()})
     return result
 
 
@@ -227,7 +231,7 @@ def bench_instances(n: int, frames: int, hand: bool) -> dict[str, float]:
             if hand_drawer is not None:
                 with engine.current():
                     out["hand"].append(timed(lambda: hand_drawer.frame(positions, linear)))
-    return {k: statistics.median(v) for k, v in out.items() if v}
+    return {k: STAT[0](v) for k, v in out.items() if v}
 
 
 def bench_cubes(n: int, frames: int, users: bool) -> dict[str, float]:
@@ -249,7 +253,7 @@ def bench_cubes(n: int, frames: int, users: bool) -> dict[str, float]:
             out["omni"].append(timed(lambda: engine.render(scene, read_depth=False)))
             with engine.current():
                 out["hand"].append(timed(hand.instanced))
-    return {k: statistics.median(v) for k, v in out.items()}
+    return {k: STAT[0](v) for k, v in out.items()}
 
 
 def setter_costs() -> str:
@@ -320,19 +324,24 @@ def main() -> int:
     parser.add_argument(
         "--timer", choices=("cpu", "wall"), default="cpu", help="CPU time of the process (default) or wall time (GPU)"
     )
+    parser.add_argument(
+        "--stat", choices=("median", "min"), default="median", help="summarise frames by median or minimum"
+    )
+    parser.add_argument("--frames", type=int, default=None, help="frames per figure (default 15, --quick 5)")
     args = parser.parse_args()
     CLOCK[0] = time.process_time if args.timer == "cpu" else time.perf_counter
+    STAT[0] = min if args.stat == "min" else statistics.median
     if args.cpu and os.environ.get("GALLIUM_NOOP") != "1":
         # GALLIUM_THREAD=0: Mesa 22's no-op driver under its threaded context corrupts memory when a buffer
         # that a draw used is partially rewritten (docs/NOTES.md); llvmpipe itself runs unthreaded too
         env = dict(os.environ, GALLIUM_NOOP="1", GALLIUM_THREAD="0")
         argv = [a for a in sys.argv[1:] if a != "--cpu"]
         return os.spawnve(os.P_WAIT, sys.executable, [sys.executable, __file__, *argv], env)
-    frames = 5 if args.quick else 15
+    frames = args.frames or (5 if args.quick else 15)
     parts = set(args.only or ("nodes", "instances", "cubes"))
     noop = os.environ.get("GALLIUM_NOOP") == "1"
     print(
-        f"frame cost after a change, {SIZE[0]}x{SIZE[1]}, MSAA off, median frame = render + colour read-back, "
+        f"frame cost after a change, {SIZE[0]}x{SIZE[1]}, MSAA off, {args.stat} frame = render + colour read-back, "
         f"{'CPU time of the process' if args.timer == 'cpu' else 'wall time'} "
         f"({gl_renderer()}{', GALLIUM_NOOP=1: CPU side only' if noop else ''})",
         flush=True,

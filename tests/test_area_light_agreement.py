@@ -26,10 +26,11 @@ SIZE = (160, 120)
 FLOOR = (0.7, 0.7, 0.7)
 INTENSITY = 6.0
 IOU = 0.95
-#: POV-Ray's and GL's shadows come out about one pixel wider along the light's long side than Mitsuba's and
-#: Radiance's (measured: IoU 0.92-0.955 against 0.957-0.961 between the two path tracers); issue 26's 0.95 holds
-#: between those two only
-POV_IOU = 0.91
+#: POV-Ray's shadows come out about one pixel wider along the light's long side than the others': its area_light
+#: averages its samples' visibility with equal weights where the others weight each point of the light by the form
+#: factor's kernel (see the analytic test below; measured IoU 0.93-0.95 with POV-Ray in the pair, 0.957-0.990
+#: between GL, Mitsuba and Radiance); issue 26's 0.95 holds between those three
+POV_IOU = 0.92
 PENUMBRA = 0.20
 DELTA_E = 8.0
 OPTIONS = {
@@ -120,7 +121,7 @@ def test_area_light_shadows_and_colours_agree(a, b, shape):
         f"mean dE2000 {de.mean():.2f} on the lit floor"
     )
     print(report)
-    assert score >= (POV_IOU if {"povray", "gl", "gl-deferred"} & {a, b} else IOU), report
+    assert score >= (POV_IOU if "povray" in (a, b) else IOU), report
     assert abs(width - 1.0) <= PENUMBRA, report
     assert de.mean() <= DELTA_E, report
 
@@ -139,3 +140,71 @@ def test_unoccluded_floor_shows_the_form_factor(engine, shape):
     expected = float(srgb_to_linear(FLOOR[0])) * INTENSITY * f
     print(f"{engine} {shape}: {value:.4f} vs kd L F = {expected:.4f}")
     assert value == pytest.approx(expected, rel=0.08)
+
+
+# --- against the analytic answer ----------------------------------------------------------------------------------
+#: the occluder's box (as built by :func:`scene`)
+BOX_LO, BOX_HI = np.array([-0.35, 0.65, -0.1]), np.array([0.65, 0.75, 0.7])
+
+
+def light_samples(shape: str, n: int = 48) -> np.ndarray:
+    """Points spread evenly over the light's shape (``n`` x ``n`` cell centres, those inside for a disc)."""
+    c, hu, hv, _ = light(shape).world_frame(np.eye(4))
+    u = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    a, b = (g.ravel() for g in np.meshgrid(u, u))
+    keep = np.ones(a.shape, bool) if shape == "rect" else a * a + b * b <= 1.0
+    return c + a[keep, None] * hu + b[keep, None] * hv
+
+
+@functools.cache
+def visible_fraction(shape: str, weighted: bool) -> np.ndarray:
+    """(H, W): the share of the light each floor pixel sees past the box, by ray casting to every light sample;
+    ``weighted`` weights each sample by the form factor's kernel cos(floor) cos(light) / r^2 (the radiometric
+    answer: occluded / unoccluded irradiance), otherwise all samples count alike."""
+    camera = scene(shape).items[0]
+    w, h = SIZE
+    inverse = np.linalg.inv(camera.projection_matrix(w / h) @ camera.view_matrix())
+    x, y = np.meshgrid((np.arange(w) + 0.5) / w * 2 - 1, 1 - (np.arange(h) + 0.5) / h * 2)
+    ends = [np.stack([x, y, np.full_like(x, z), np.ones_like(x)], -1) @ inverse.T for z in (-1.0, 1.0)]
+    near, far = (e[..., :3] / e[..., 3:] for e in ends)
+    floor = (near + (far - near) * (-near[..., 1] / (far - near)[..., 1])[..., None]).reshape(-1, 3)  # y = 0
+    seen = np.zeros(len(floor))
+    total = np.zeros(len(floor))
+    for s in light_samples(shape):
+        v = s - floor
+        r2 = (v * v).sum(1)
+        kernel = v[:, 1] ** 2 / r2**2 if weighted else np.ones(len(floor))  # both normals are +-y
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t0, t1 = (BOX_LO - floor) / v, (BOX_HI - floor) / v
+        enter = np.nanmax(np.minimum(t0, t1), axis=1)
+        leave = np.nanmin(np.maximum(t0, t1), axis=1)
+        blocked = (leave >= np.maximum(enter, 0.0)) & (enter <= 1.0)
+        total += kernel
+        seen += kernel * ~blocked
+    return (seen / total).reshape(h, w)
+
+
+#: Radiance and Mitsuba weight the light's points by the form factor (they integrate radiance); POV-Ray's
+#: area_light averages its samples' visibility (each sample a light of equal power); GL's PCSS weights 36 taps
+#: of a map drawn from the light's centre by the kernel.  Measured IoU with the analytic shadow (rect / disc, 160x120):
+#: Radiance 0.979 / 0.954 (weighted), Mitsuba 0.958 / 0.970 (weighted), POV-Ray 0.984 / 0.993 (unweighted),
+#: GL 0.978 / 0.977 (weighted: its taps carry the kernel's weights; with equal weights it was 0.934 / 0.934).
+ANALYTIC = {"radiance": (True, 0.95), "mitsuba": (True, 0.95), "povray": (False, 0.95), "gl": (True, 0.95)}
+
+
+@pytest.mark.parametrize("shape", ["rect", "disc"])
+@pytest.mark.parametrize(
+    "engine", [pytest.param(e, marks=marks(e), id=e) for e in ("gl", "povray", "mitsuba", "radiance")]
+)
+def test_area_light_shadow_matches_the_analytic_visibility(engine, shape):
+    """The shadow (floor darker than half its unoccluded value) against the exact one: the visible share of the
+    light from each floor pixel below 0.5, computed by casting rays to 48 x 48 points of the light."""
+    require(engine)
+    weighted, bound = ANALYTIC[engine]
+    shadow, _ = masks(engine, shape)
+    lit = floor_pixels(shape) & (luminance(renders(engine, shape)[1]) > 0.02)
+    exact = lit & (visible_fraction(shape, weighted) < 0.5)
+    assert exact.sum() > 150
+    score = iou(shadow, exact)
+    print(f"{engine} {shape}: IoU with the analytic shadow {score:.3f} ({shadow.sum()} vs {exact.sum()} px)")
+    assert score >= bound, f"{engine} {shape}: shadow IoU {score:.3f} with the analytic one (at least {bound})"

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import struct
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -231,3 +232,25 @@ def test_ply_gltf_usd_round_trip_renders_the_same_gl_image(tmp_path):
     ]
     assert np.abs(images[1] - images[0]).max() <= 2 and np.abs(images[2] - images[0]).max() <= 2
     assert images[0][..., :3].std() > 5  # the splats are drawn
+
+
+@pytest.mark.chromium
+def test_the_web_page_draws_the_fallback_points_beside_the_meshes(tmp_path):
+    """In headless Chromium: the splats' points appear and the page still draws the rest of the scene."""
+    sys.path.insert(0, str(Path(__file__).parent.parent / "export"))
+    from test_html_export import _chromium_screenshot
+
+    arrays = cloud_arrays(400, 1)
+    arrays["opacities"][:] = 1.0
+    box = om.Node("box", [om.Translation(0.8, 0, 0), om.Color(1, 0, 0), om.Box(size=(0.3, 0.3, 0.3))])
+    base = [om.Camera.look_at((0, 0, 2.5), (0, 0, 0)), om.Background((0, 0, 0)), om.PointLight(position=(0, 2, 3)), box]
+    shots = []
+    for name, items in (("without", base), ("with", [*base, om.GaussianSplats(**arrays)])):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the page's fallback warning (tested above)
+            om.export(om.Node("s", items), tmp_path / f"{name}.html")
+        shots.append(_chromium_screenshot(tmp_path / f"{name}.html", tmp_path / f"{name}.png", (320, 240))[..., :3])
+    red = [((s[..., 0] > 150) & (s[..., 1] < 80)).sum() for s in shots]
+    lit = [(s.max(axis=-1) > 30).sum() for s in shots]
+    assert red[0] > 1000 and abs(red[1] - red[0]) < 0.05 * red[0]  # the box is drawn as without splats
+    assert lit[1] - lit[0] > 200  # and a few hundred one-pixel points

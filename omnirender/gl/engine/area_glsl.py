@@ -19,7 +19,10 @@ blockers between it and the light's shape (16 taps half way to the light),
 takes their mean distance from the light, and averages 36 bilinear
 comparisons at the points where the segments from the lit point to a 6 x 6
 grid over the light's shape (a concentric disc grid for a disc) cross the
-blockers' distance.  Each tap compares with the depth of the receiver's plane
+blockers' distance, each weighted by the form factor's kernel
+``cos(receiver) cos(light) / r^2`` of its point of the light (the share of
+irradiance it stands for: the offline engines integrate the same).  Each
+tap compares with the depth of the receiver's plane
 along its ray from the light (a receiver-plane bias: a wide kernel on a
 surface the light grazes does not shadow the surface itself).  The kernel is the light's shape scaled by
 ``(receiver - blocker) / receiver``: the penumbra is as wide as the light's
@@ -204,18 +207,26 @@ float area_shadow_faces(int f, int count, vec3 C, vec3 HU, vec3 HV, bool disc, v
     if (found == 0.0) return 1.0;
     float wb = B / ((sum / found) * 2.0 - 1.0 + A);
     float frac = clamp((clip.w - wb) / clip.w, 0.0, 1.0);  // where the blockers cross the segments to the light
-    float lit = 0.0;
+    // each tap weighted by the form factor's kernel cos(receiver) cos(light) / r^2 of its point of the light
+    // (the share of irradiance it stands for, as the offline engines integrate it)
+    vec3 NL = normalize(cross(HU, HV));
+    float lit = 0.0, total = 0.0;
     for (int b = 0; b < 6; ++b) {
         for (int a = 0; a < 6; ++a) {
             vec2 s = area_sample((vec2(float(a), float(b)) + 0.5) / 3.0 - 1.0, disc);
+            vec3 X = C + s.x * HU + s.y * HV;
+            vec3 v = X - W;
+            float r2 = max(dot(v, v), 1e-12);
+            float k = max(dot(NW, v), 0.0) * abs(dot(NL, v)) / (r2 * r2);
+            total += k;
             vec4 cx;
-            if (!receiver_plane(M, C, mix(W, C + s.x * HU + s.y * HV, frac), W, NW, cx)) { lit += 1.0; continue; }
+            if (!receiver_plane(M, C, mix(W, X, frac), W, NW, cx)) { lit += k; continue; }
             vec2 uv = cx.xy / cx.w * 0.5 + 0.5;
-            if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) { lit += 1.0; continue; }
-            lit += shadow_bilinear(tile, tile.xy + uv * tile.zw, clamp(cx.z / cx.w * 0.5 + 0.5, 0.0, 1.0));
+            if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) { lit += k; continue; }
+            lit += k * shadow_bilinear(tile, tile.xy + uv * tile.zw, clamp(cx.z / cx.w * 0.5 + 0.5, 0.0, 1.0));
         }
     }
-    return lit / 36.0;
+    return total > 0.0 ? lit / total : 1.0;
 }
 """
 

@@ -44,7 +44,7 @@ import numpy as np
 
 from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from ..engine.attributes import ScissorTest
-from ..engine.drawlist import Batch, Scope, Segment, uniform_material, world_bounds
+from ..engine.drawlist import Batch, Scope, Segment, world_bounds
 from ..engine.passes import Clear, Pass, Shader, Target
 from ..engine.shadow_glsl import MAX_SHADOW_FACES, pcf_mode
 from ..engine.stages import FrameStage
@@ -472,8 +472,12 @@ class ShadowMapStage(FrameStage):
                 found = self._scratch[id(batch)] = (batch, Batch(batch.geometry, batch.state))
             part = found[1]
             part.rows = batch.rows[picks]
-            part.items = [batch.items[i] for i in picks] if len(batch.items) == len(batch.rows) else list(batch.items)
-            part.uniform = uniform_material(part.rows)
+            # a batch with storage gets spare room in its GPU buffer: the next update's few more rows reuse the
+            # buffer and its vertex arrays (the storage itself is never written: rows are not appended here)
+            part.storage = part.rows
+            items = batch.items
+            part.items = list(map(items.__getitem__, picks.tolist())) if len(items) == len(batch.rows) else list(items)
+            part.uniform = batch.uniform  # rows of a uniform batch are uniform; others read their own materials
             part.dirty, part.sparse, part.position = (0, len(picks)), None, None
             batches.append(part)
         if len(self._scratch) > 2 * len(casters) + 16:  # batches that are gone: their parts are freed
@@ -532,8 +536,9 @@ class _Rects:
         return hit
 
 
-#: a face whose changed region covers more than this fraction of it is redrawn in full
-PARTIAL_MAX = 0.5
+#: a face whose changed region covers more than this fraction of it is redrawn in full (where a partial update
+#: stopped paying on llvmpipe: bench/shadow_partial.py)
+PARTIAL_MAX = 0.45
 #: fitted bounds are snapped outward to a grid of 2**-FIT_GRID of their extent (rounded up to a power of two)
 FIT_GRID = 5
 
