@@ -306,7 +306,8 @@ def area_light_images(size: tuple[int, int] = (320, 240)) -> None:
     import test_area_light_agreement as agree
 
     agree.SIZE = size
-    names = {"gl": "OpenGL (LTC, soft shadows)", "povray": "POV-Ray area_light", "mitsuba": "Mitsuba 3 area emitter",
+    names = {"gl": "OpenGL (LTC, soft shadows)", "povray": "POV-Ray (spotlight per point)",
+             "mitsuba": "Mitsuba 3 area emitter",
              "radiance": "Radiance light polygon"}  # fmt: skip
     engines = [n for n in names if om.engines().get(n, (False, ""))[0]]
     pov = agree.masks("povray", "rect")[0] if "povray" in engines else None
