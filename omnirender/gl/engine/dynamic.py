@@ -35,10 +35,6 @@ _EYE3 = np.eye(3)
 _MANY = 64
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
-#: moved transforms up to which the items below them are looked up (MovePlan._below), not found by a pass
-_FEW = 32
-#: items added by splices after which the look-up is made again
-_LATE = 1024
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
 _IDENTITY = object()
 
@@ -94,10 +90,6 @@ class MovePlan:
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
         self.many_moves = 0
-        #: which items lie below which transform (:meth:`_below`): the chains' entries sorted, their items, the
-        #: chain length they were made for; and the items added since (looked at one by one)
-        self._users: tuple[np.ndarray, np.ndarray, int] | None = None
-        self._late: list[int] = []
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -163,10 +155,7 @@ class MovePlan:
             self._extend("row_of", len(new))[-len(new) :] = 0
             for item in new:
                 where[id(item)] = len(self.items)
-                self._late.append(len(self.items))
                 self.items.append(item)
-            if len(self._late) > _LATE:
-                self._users, self._late = None, []
         for item in (*new, *moved):
             i = where.get(id(item))
             if i is None or item.slot is None:
@@ -272,7 +261,9 @@ class MovePlan:
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
             return 0
-        affected = self._below(positions)
+        hit = np.zeros(len(self.matrices), bool)
+        hit[positions] = True
+        affected = np.flatnonzero(hit[self.chain].any(axis=1))
         if not len(affected):
             return 0
         for key, (_, bulk) in list(self.bulk.items()):
@@ -305,45 +296,6 @@ class MovePlan:
                 batch.changed(int(where.min()), int(where.max()) + 1)
             self.moved_rows.append((batch, where))
         return len(affected)
-
-    def _below(self, positions: np.ndarray) -> np.ndarray:
-        """The items (ascending indices) whose chains hold a transform at one of ``positions``.
-
-        A few moved transforms are looked up among the chains' entries sorted
-        once per plan (items added by splices since are tested one by one),
-        not found by a pass over every item's chain.
-        """
-        chain = self.chain
-        if len(positions) > _FEW:
-            hit = np.zeros(len(self.matrices), bool)
-            hit[positions] = True
-            return np.flatnonzero(hit[chain].any(axis=1))
-        users = self._users
-        width = chain.shape[1]
-        if users is None or users[2] != width:
-            flat = chain[: len(chain) - len(self._late)].ravel() if users is None else None
-            if flat is None:  # the chains were widened: every item is looked up again
-                self._late = []
-                flat = chain.ravel()
-            order = np.argsort(flat, kind="stable")
-            users = self._users = (flat[order], order // max(width, 1), width)
-        keys, items, _ = users
-        lo = np.searchsorted(keys, positions, "left")
-        hi = np.searchsorted(keys, positions, "right")
-        found = [items[a:b] for a, b in zip(lo.tolist(), hi.tolist(), strict=True) if b > a]
-        if self._late:
-            late = np.array(self._late, np.intp)
-            found.append(late[np.isin(chain[late], positions).any(axis=1)])
-        if not found:
-            return np.empty(0, np.intp)
-        if len(found) == 1 and width == 1:  # one key's items of one-link chains: ascending, each once
-            candidates = found[0]
-        else:
-            candidates = np.unique(np.concatenate(found))
-        # a removed item's chain became the identity's: the chains, not the sorted entries, have the last word
-        links = chain[candidates]
-        keep = links == positions[0] if len(positions) == 1 else np.isin(links, positions)
-        return candidates[keep.any(axis=1)]
 
     def _apply_instances(self, moved: set[int]) -> int:
         count = 0
