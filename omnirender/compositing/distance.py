@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attributes._params import check_rgba
 from .canvas import Canvas
 from .groups import draw_offscreen
 from .renderer import Renderer, RendererGroup
@@ -118,7 +119,7 @@ class DistanceGroup(RendererGroup):
         self.signed = bool(signed)
         self.range = _range(range, self.signed)
         self.colormap = _stops(colormap)
-        self.missing = _color(missing)
+        self.missing = check_rgba("DistanceGroup", "missing", missing)
 
     def composite(self, canvas: Canvas, children: tuple[Renderer, ...]) -> None:
         if len(children) != 2:
@@ -174,15 +175,3 @@ def _stops(colormap: Any) -> tuple[tuple[float, float, float], ...]:
             f"DistanceGroup: colormap must be 2 to {_MAX_STOPS} RGB colours in [0, 1], got {colormap!r:.80}"
         )
     return tuple(tuple(float(v) for v in row) for row in stops)
-
-
-def _color(value: Any) -> tuple[float, float, float, float]:
-    try:
-        c = tuple(float(v) for v in value)
-    except (TypeError, ValueError):
-        c = ()
-    if len(c) == 3:
-        c = (*c, 1.0)
-    if len(c) != 4 or not all(0.0 <= v <= 1.0 for v in c):
-        raise ValueError(f"DistanceGroup: missing must be 3 or 4 numbers in [0, 1], got {value!r}")
-    return c  # type: ignore[return-value]

@@ -94,7 +94,7 @@ def test_distance_group_input_is_validated_with_the_fix():
         C.DistanceGroup([surface(), reference()], range=(1, 1))
     with pytest.raises(ValueError, match="colormap must be 2 to 16 RGB"):
         C.DistanceGroup([surface(), reference()], colormap=[(1, 0, 0)])
-    with pytest.raises(ValueError, match="missing must be"):
+    with pytest.raises(ValueError, match="DistanceGroup: missing values must be in \\[0, 1\\]"):
         C.DistanceGroup([surface(), reference()], missing=(2, 0, 0))
     one = C.DistanceGroup([surface()])
     with pytest.raises(ValueError, match="needs two children"):

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from ...attributes._params import check_rgba
 from .attributes import DEPTH_FUNCS  # depth comparisons by name -> moderngl's depth_func strings
 from .glenum import GL_R11F_G11F_B10F
 
@@ -121,18 +122,6 @@ def uniform_pairs(
             raise ValueError(f"{owner}: uniform {name} is not finite ({value!r})")
         out.append((name, value))
     return tuple(sorted(out))
-
-
-def _rgba(value: Any, owner: str, name: str) -> tuple[float, float, float, float]:
-    try:
-        c = tuple(float(v) for v in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{owner}: {name} must be 3 or 4 numbers in [0, 1], got {value!r}") from None
-    if len(c) == 3:
-        c = (*c, 1.0)
-    if len(c) != 4 or not all(0.0 <= v <= 1.0 for v in c):
-        raise ValueError(f"{owner}: {name} must be 3 or 4 numbers in [0, 1], got {value!r}")
-    return c  # type: ignore[return-value]
 
 
 @dataclass(frozen=True)
@@ -258,7 +247,7 @@ class Clear:
                 raise ValueError(f"Clear: box must be (x, y, width, height) pixels, got {self.box!r}")
             object.__setattr__(self, "box", box)
         if self.color is not None:
-            object.__setattr__(self, "color", _rgba(self.color, "Clear", "color"))
+            object.__setattr__(self, "color", check_rgba("Clear", "color", self.color))
         if self.depth is not None and not (isinstance(self.depth, (int, float)) and 0.0 <= self.depth <= 1.0):
             raise ValueError(f"Clear: depth must be in [0, 1] or None, got {self.depth!r}")
         if self.stencil is not None and (isinstance(self.stencil, bool) or not isinstance(self.stencil, int)):
@@ -312,7 +301,7 @@ class Shader:
         if self.alpha_cutoff is not None and not 0.0 <= float(self.alpha_cutoff) <= 1.0:
             raise ValueError(f"Shader: alpha_cutoff must be in [0, 1] or None, got {self.alpha_cutoff!r}")
         if self.flat_color is not None:
-            object.__setattr__(self, "flat_color", _rgba(self.flat_color, "Shader", "flat_color"))
+            object.__setattr__(self, "flat_color", check_rgba("Shader", "flat_color", self.flat_color))
         for name in ("vertex", "fragment", "surface"):
             code = getattr(self, name)
             if not isinstance(code, str):

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ...attributes._params import check_rgba
 from ..engine.attributes import ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset
 from ..engine.passes import Clear, FullScreen, Pass, Shader, Target
 from ..engine.state import FillMode, LineWidth
@@ -80,18 +81,6 @@ float effect_depth(vec2 uv) { return edge_depth; }
 """
 
 
-def _rgba(value: Any, name: str) -> tuple[float, float, float, float]:
-    try:
-        c = tuple(float(v) for v in value)
-    except (TypeError, ValueError):
-        c = ()
-    if len(c) == 3:
-        c = (*c, 1.0)
-    if len(c) != 4 or not all(0.0 <= v <= 1.0 for v in c):
-        raise ValueError(f"SurfaceStyle: {name} must be 3 or 4 numbers in [0, 1], got {value!r}")
-    return c  # type: ignore[return-value]
-
-
 class SurfaceStyle(GLTechnique):
     """A line style for the subgraph after it: ``"silhouette"``, ``"haloed"`` or ``"hidden-line"``."""
 
@@ -116,7 +105,7 @@ class SurfaceStyle(GLTechnique):
             raise ValueError("SurfaceStyle: the silhouette style needs a line color")
         self.style = style
         self.width = float(width)
-        self.color = None if color is None else _rgba(color, "color")
+        self.color = None if color is None else check_rgba("SurfaceStyle", "color", color)
         self.halo = float(halo)
         self.crease_angle = float(crease_angle)
 
