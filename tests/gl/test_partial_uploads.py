@@ -115,3 +115,66 @@ def test_a_translation_array_and_a_setter_loop_rewrite_only_translations(packs):
         packs.clear()
         image = e.render(scene).array
         assert np.array_equal(image, fresh(scene))
+
+
+@pytest.fixture
+def writes(monkeypatch):
+    """(bytes, offset) of every GPU buffer write, in order."""
+    import moderngl
+
+    calls: list[tuple[int, int]] = []
+    original = moderngl.Buffer.write
+
+    def counting(self, data, offset=0):
+        calls.append((memoryview(data).nbytes, offset))
+        return original(self, data, offset)
+
+    monkeypatch.setattr(moderngl.Buffer, "write", counting)
+    return calls
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_instance_positions_upload_only_the_positions_buffer(writes, dtype):
+    """A positions-only change of a set in view writes the (N, 3) float32 translations (their own buffer) and
+    nothing else; the pictures equal a fresh engine's (default shadows on), culled or not."""
+    from omnirender.gl import GLEngine
+
+    n = 300
+    rng = np.random.default_rng(7)
+    positions = rng.uniform(-3, 3, (n, 3)).astype(dtype)
+    colors = np.concatenate([rng.uniform(0.2, 1.0, (n, 3)), np.ones((n, 1))], axis=1)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene)
+        for step in range(2):
+            positions[:, 1] += 0.1
+            positions[step * 7, 0] -= 0.5
+            balls.touch()
+            writes.clear()
+            image = e.render(scene).array
+            # one write of the N float32 triples per batch drawing the set (the shadow map's and the view's)
+            assert writes and all(w == (n * 12, 0) for w in writes), "positions only: the positions alone"
+            assert np.array_equal(image, fresh_shadowed(scene))
+        camera.eye = (0.0, 1.0, 2.5)  # close up: some instances culled, the rest drawn first
+        e.render(scene)
+        drawn = sum(p["items"] for p in e.stats["passes"] if p["name"] == "opaque")
+        assert 0 < drawn < n
+        positions[:, 2] += 0.05
+        balls.touch()
+        image = e.render(scene).array  # a partly culled set is culled again when it moves (rows re-ordered)
+        assert np.array_equal(image, fresh_shadowed(scene))
+        colors[:20, :3] = (1.0, 0.1, 0.1)  # colours changed: the rows are written again (once per change)
+        balls.touch()
+        writes.clear()
+        image = e.render(scene).array
+        assert any(size > n * 12 for size, _ in writes)
+        assert np.array_equal(image, fresh_shadowed(scene))
+
+
+def fresh_shadowed(scene: om.Node) -> np.ndarray:
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=SIZE, samples=0) as e:
+        return e.render(scene).array

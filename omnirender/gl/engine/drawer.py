@@ -151,11 +151,19 @@ class BatchDrawer:
         highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
         single = n == 1 and batch.uniform and state.kind == "mesh"
         features = self._features(state, batch.uniform, highlight, composed, single)
+        offset = not single and _takes_offsets(batch, state, features)
+        if offset:
+            features = features + (("INSTANCE_OFFSET", True),)
         prog = self.programs.get(state.kind, features, state.code)
         fields = instance_fields(state.kind, dict(features))
         if fields and batch.buffer is not None and batch.layout is not None and batch.layout.names() != fields:
             batch.release()  # a variant reads other fields: re-pack
-        if fields and (batch.buffer is None or batch.capacity < n or batch.geometry.buffers is None):
+        if fields and (
+            batch.buffer is None
+            or batch.capacity < n
+            or batch.geometry.buffers is None
+            or (offset and batch.offsets is None)
+        ):
             batch.release()
             batch.layout = ROW.subset(fields)
             # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
@@ -163,16 +171,24 @@ class BatchDrawer:
             batch.buffer = gpu_call(
                 self.ctx.buffer, reserve=capacity * batch.layout.stride * 4, dynamic=True, what="instance data"
             )
+            if offset:
+                batch.offsets = gpu_call(self.ctx.buffer, reserve=capacity * 12, dynamic=True, what="instance data")
             batch.capacity = capacity
             batch.dirty = (0, n)
             batch.sparse = None
         volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
-            vao = batch.vaos[id(prog)] = self._vao(batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume)
+            vao = batch.vaos[id(prog)] = self._vao(
+                batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume, batch.offsets if offset else None
+            )
         if fields:
             columns = self._columns(batch.layout)
-            if n >= SORT_MIN and not state.special:
+            if offset:
+                n = self._prepare_instance_set(batch, columns, n)
+                if not n:
+                    return 0
+            elif n >= SORT_MIN and not state.special:
                 # big batches: opaque instances front to back (early depth tests skip hidden fragments) and
                 # culled to the frame's view: the buffer holds the visible ones first, then the rest, so
                 # passes from other cameras (shadow maps, mirrors) draw them all from the same buffer; changed
@@ -220,6 +236,36 @@ class BatchDrawer:
         self.report.count(1, n)
         return 1
 
+    def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
+        """Upload what changed of an instance set's batch; returns how many instances to draw.
+
+        Culled to the frame's view like big batches but not sorted: the
+        buffers hold the visible instances in row order, then the rest, so
+        while all are in view a move uploads the application's positions as
+        they are, to the translations' own buffer (:func:`_upload_instance_set`).
+        """
+        own_view = self.state.view_key == self.state.frame_view_key
+        view_key = self.state.view_key
+        if (
+            batch.position is None
+            or len(batch.position) != n
+            or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n)))
+        ):
+            visible = self._cull(batch) if own_view and n >= SORT_MIN and not batch.state.special else None
+            order = None if visible is None else np.concatenate([np.nonzero(visible)[0], np.nonzero(~visible)[0]])
+            batch.drawn = n if visible is None else int(visible.sum())
+            batch.position = np.arange(n)
+            if order is not None:
+                batch.position[order] = np.arange(n)
+            batch.offset_order = order
+            batch.sorted_for = view_key if own_view else None
+            batch.sparse = None
+            batch.dirty = None
+            _upload_instance_set(batch, columns, order, everything=True)
+        elif batch.sparse or batch.dirty is not None:
+            _upload_instance_set(batch, columns, batch.offset_order)
+        return batch.drawn if own_view else n
+
     def _cull(self, batch: Batch) -> np.ndarray | None:
         """Which instances' bounding spheres meet the view frustum (None: all of them)."""
         rows = batch.rows
@@ -245,13 +291,22 @@ class BatchDrawer:
         return cols
 
     def _vao(
-        self, geometry: Geometry, program: Any, buffer: Any, kind: str, layout: Any, adjacency: bool = False
+        self,
+        geometry: Geometry,
+        program: Any,
+        buffer: Any,
+        kind: str,
+        layout: Any,
+        adjacency: bool = False,
+        offsets: Any = None,
     ) -> Any:
         self.engine.upload(geometry)
         content = geometry.content(program)
         if buffer is not None and layout is not None:
             fmt, names = layout.vertex_format()
             content.append((buffer, fmt, *names))
+        if offsets is not None:  # an instance set's translations (the shader's i_offset)
+            content.append((offsets, "3f/i", "i_offset"))
         index = geometry.buffers.get("index") if kind != "points" else None
         if adjacency:
             index = geometry.adjacency_buffer(self.ctx)
@@ -564,6 +619,51 @@ def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None)
             packed[first:last] = data
         elif first == 0 and last == len(rows):
             batch.packed = data
+    batch.dirty = None
+
+
+#: program kinds whose vertex shader reads ``i_offset`` under ``INSTANCE_OFFSET`` (shaders.py)
+_OFFSET_KINDS = frozenset(("mesh", "points", "lines"))
+
+
+def _takes_offsets(batch: Batch, state: DrawState, features: tuple) -> bool:
+    """Whether ``batch`` is an instance set's, drawn with its translations in a buffer of their own."""
+    items = batch.items
+    return (
+        bool(items)
+        and items[0].instances is not None
+        and state.kind in _OFFSET_KINDS
+        and not any(name == "NURBS" for name, _ in features)
+    )
+
+
+def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | None, everything: bool = False) -> None:
+    """Upload an instance set's batch: rows in buffer ``order`` (None: row order), translations in ``offsets``.
+
+    When only the positions moved since the last upload (``Batch.moved`` with
+    ``moved_offsets`` of the same version), only the (N, 3) float32
+    translations are written, to the offsets buffer: the array as it is in
+    row order, else taken in buffer order.  Any other change rewrites both
+    buffers.
+    """
+    moved = batch.moved_offsets  # kept for batches following this one (Batch.follow) while its version holds
+    mr = batch.moved_range
+    if (
+        not everything
+        and moved is not None
+        and mr is not None
+        and mr[0] == batch.version == moved[0]
+        and not batch.sparse
+        and len(moved[1]) == len(batch.rows)
+    ):
+        batch.offsets.write(moved[1] if order is None else np.take(moved[1], order, axis=0))
+        batch.dirty = None
+        return
+    batch.buffer.write(_pack(batch.rows, order, columns))
+    translations = batch.rows[:, _TRANSLATION] if order is None else np.take(batch.rows[:, _TRANSLATION], order, axis=0)
+    batch.offsets.write(np.ascontiguousarray(translations))
+    batch.packed = None
+    batch.sparse = None
     batch.dirty = None
 
 

@@ -137,7 +137,8 @@ class DrawItem:
         "slot",
         "techniques",
         "instances",
-        "instance_models",
+        "_instance_models",
+        "moved_translations",
         "source",
         "template",
         "source_colors",
@@ -172,14 +173,30 @@ class DrawItem:
         self.techniques = techniques
         #: for an instance set: its rows (N, ROW.stride), one per instance, drawn as one batch; else None
         self.instances: np.ndarray | None = None
-        #: for an instance set: (N, 4, 4) matrices after the chain (instance transform @ local)
-        self.instance_models: np.ndarray | None = None
+        self._instance_models: np.ndarray | None = None
+        #: for an instance set: (N, 3) translations of its positions-only change not yet written into
+        #: ``instance_models`` (written when they are next read), or None
+        self.moved_translations: np.ndarray | None = None
         #: for an instance set: the InstanceSet and the item of its shape that each instance repeats
         self.source: Any = None
         self.template: DrawItem | None = None
         #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
         #: only positions changed writes the translations and keeps the converted colours
         self.source_colors: np.ndarray | None = None
+
+    @property
+    def instance_models(self) -> np.ndarray | None:
+        """For an instance set: (N, 4, 4) matrices after the chain (instance transform @ local), else None."""
+        pending = self.moved_translations
+        if pending is not None:
+            self.moved_translations = None
+            self._instance_models[:, :3, 3] = pending  # type: ignore[index]
+        return self._instance_models
+
+    @instance_models.setter
+    def instance_models(self, value: np.ndarray | None) -> None:
+        self._instance_models = value
+        self.moved_translations = None
 
     def rows(self) -> np.ndarray:
         """The rows this item draws: its instances', or its own as a (1, stride) array."""
@@ -250,6 +267,22 @@ def world_bounds(items: Any) -> tuple[np.ndarray, np.ndarray] | None:
     return lo, hi
 
 
+_ROW_TRANSLATION_COLUMNS = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_TRIPLE = np.dtype((np.void, 12))
+#: a row seen as one record whose field ``t`` is the model matrix's translation (three float32s as 12 bytes):
+#: writing (N, 3) float32 translations through it is one copy of N 12-byte items, not N loops of three floats
+_ROW_TRANSLATION = np.dtype({"names": ["t"], "formats": [_TRIPLE], "offsets": [(ROW.offsets["model"] + 12) * 4],
+                             "itemsize": ROW.stride * 4})  # fmt: skip
+
+
+def set_translations(rows: np.ndarray, world: np.ndarray) -> None:
+    """``rows[:, _TRANSLATION] = world`` for (N, 3) C-contiguous float32 ``world``."""
+    if rows.flags.c_contiguous and rows.dtype == np.float32:
+        rows.view(_ROW_TRANSLATION)[:, 0]["t"] = world.view(_TRIPLE)[:, 0]
+    else:
+        rows[:, _ROW_TRANSLATION_COLUMNS] = world
+
+
 class Batch:
     """Opaque items sharing geometry and state, drawn with one instanced call.
 
@@ -282,6 +315,9 @@ class Batch:
         "sparse",
         "log",
         "inverse",
+        "offsets",
+        "moved_offsets",
+        "offset_order",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -322,6 +358,14 @@ class Batch:
         self.log: list[tuple[int, int, int]] = []
         #: a filtered batch: (picks, source row -> index here or -1), made when first needed
         self.inverse: tuple[Any, np.ndarray] | None = None
+        #: an instance set's batch: the GPU buffer of its (N, 3) float32 world translations in row order (the
+        #: shader's ``i_offset``, replacing ``i_model``'s), so moving the instances uploads only them; else None
+        self.offsets: Any = None
+        #: (version, (N, 3) float32 contiguous world translations) written with :meth:`moved` by an instance
+        #: set's positions-only change: the drawer uploads it as it is while ``moved_range`` is that version's
+        self.moved_offsets: tuple[int, np.ndarray] | None = None
+        #: an instance set's batch: the row drawn at each place of its buffers (visible ones first), None: row order
+        self.offset_order: np.ndarray | None = None
 
     def hold(self, rows: np.ndarray) -> None:
         """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""
@@ -467,7 +511,7 @@ class Batch:
         source = self.source
         if source is None or self.source_version == source.version:
             return
-        if self._follow_rows(source):
+        if self._follow_moved(source) or self._follow_rows(source):
             self.source_version = source.version
             return
         self.rows = source.rows.copy() if self.picks is None else source.rows[self.picks]
@@ -476,6 +520,21 @@ class Batch:
         if self.position is not None and len(self.position) != len(self.rows):
             self.position = None
         self.source_version = source.version
+
+    def _follow_moved(self, source: Batch) -> bool:
+        """An instance set's batch whose only change since the last follow moved its positions: take the
+        translations (as ``moved_offsets`` too, so the upload writes only them); False otherwise."""
+        moved = source.moved_offsets
+        mr = source.moved_range
+        if moved is None or mr is None or not moved[0] == mr[0] == source.version == self.source_version + 1:
+            return False
+        world = moved[1] if self.picks is None else moved[1][self.picks]
+        if len(world) != len(self.rows) or (self._dirty is not None or self.sparse) and self.moved_range is None:
+            return False
+        set_translations(self.rows, world)
+        self.moved(0, len(self.rows))
+        self.moved_offsets = (self.version, world)
+        return True
 
     def _follow_rows(self, source: Batch) -> bool:
         """Copy only the source rows its log says changed since the last follow; False when it cannot say."""
@@ -524,6 +583,9 @@ class Batch:
         if self.buffer is not None:
             self.buffer.release()
             self.buffer = None
+        if self.offsets is not None:
+            self.offsets.release()
+            self.offsets = None
         self.capacity = 0
         self.layout = None
         self.packed = None

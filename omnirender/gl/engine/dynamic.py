@@ -23,6 +23,7 @@ import numpy as np
 from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .bulk import BulkMap
+from .drawlist import set_translations
 from .instancing import InstanceRows, instance_rows, set_arrays
 from .layout import ROW
 
@@ -30,6 +31,7 @@ __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
@@ -472,7 +474,9 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     source = shape.transforms
     array = getattr(source, "array", None)
     t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
-    t = np.asarray(t, dtype=np.float64)
+    t = np.asarray(t)
+    if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
+        t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
         return None
     colors = shape.colors
@@ -493,18 +497,25 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
     local = item.template.local
     offset = positions if local is None else positions + local[:3, 3]
     model = _chain_matrix(item.chain)
-    if (model[:3, :3] == _EYE3).all():
+    if (model == _EYE4).all():
+        world = offset  # the common case: the application's array is the world translations
+    elif (model[:3, :3] == _EYE3).all():
         world = offset + model[:3, 3]
     else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
         world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
         world += model[:3, 3]
-    item.instance_models[:, :3, 3] = offset
-    item.instances[:, _TRANSLATION] = world
+    # one float32 array (none made when the application's already is a contiguous one): the rows' translations
+    # and, as it is, what the next draw writes to the instance set's offsets buffer (drawer.py)
+    world = np.ascontiguousarray(world, dtype=np.float32)
+    # the matrices take them when next read (a transform above the set moves), from a copy of the caller's array
+    item.moved_translations = offset if offset is not positions else np.array(offset)
+    set_translations(item.instances, world)
     if item.slot is not None:
         batch, _ = item.slot
         if batch.rows is not item.instances:
-            batch.rows[:, _TRANSLATION] = world
+            set_translations(batch.rows, world)
         batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
+        batch.moved_offsets = (batch.version, world)
 
 
 def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:

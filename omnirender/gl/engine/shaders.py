@@ -101,6 +101,14 @@ uniform vec4 i_color;
 #else
 in mat4 i_model;
 in vec4 i_color;
+#ifdef INSTANCE_OFFSET
+in vec3 i_offset;  // an instance set's world translations in a buffer of their own (replace i_model's)
+#endif
+#endif
+#ifdef INSTANCE_OFFSET
+#define I_MODEL mat4(i_model[0], i_model[1], i_model[2], vec4(i_offset, 1.0))
+#else
+#define I_MODEL i_model
 #endif
 #ifdef INSTANCE_MATERIAL
 in vec4 i_emis;
@@ -151,7 +159,7 @@ flat out vec3 v_sprite;          // the point's centre in window pixels and its 
 flat out float v_mirror;  // -1 under a mirroring model matrix (its triangles' winding is reversed), else 1
 PASS_VERTEX_CODE
 void main() {
-    vec4 world = i_model * vec4(in_position, 1.0);
+    vec4 world = I_MODEL * vec4(in_position, 1.0);
 #ifdef POINTS
     vec3 normal = vec3(0.0, 0.0, 1.0);
     v_mirror = 1.0;
@@ -557,6 +565,12 @@ in vec4 in_color;
 #endif
 in mat4 i_model;
 in vec4 i_color;
+#ifdef INSTANCE_OFFSET
+in vec3 i_offset;  // an instance set's world translations in a buffer of their own (replace i_model's)
+#define I_MODEL mat4(i_model[0], i_model[1], i_model[2], vec4(i_offset, 1.0))
+#else
+#define I_MODEL i_model
+#endif
 #ifdef HIGHLIGHT
 in vec4 i_hl;
 #endif
@@ -566,7 +580,7 @@ out vec3 g_pos;
 out vec4 g_color;
 out vec4 g_world;
 void main() {
-    vec4 world = i_model * vec4(in_position, 1.0);
+    vec4 world = I_MODEL * vec4(in_position, 1.0);
     vec4 eye = u_view * world;
     g_pos = eye.xyz;
     g_world = world;
