@@ -174,6 +174,11 @@ class Node:
         _observe()
         return self._structure
 
+    @property
+    def list_version(self) -> int:
+        """Counter bumped when this node's own list (or its groups) changes; a descendant's list does not bump it."""
+        return self._own
+
     def touch(self) -> None:
         """Mark the node changed: bump its version and every ancestor's.
 
@@ -251,24 +256,49 @@ class Node:
 
     def remove(self, item: Any) -> Any:
         """Remove the first occurrence of ``item``; returns it."""
-        for i, existing in enumerate(self._items):
+        i = self._index_of(item)
+        if i < 0:
+            raise ValueError(f"Node {self.path}: {item!r} is not in this node")
+        patch = _declaration_patch(self, item)
+        del self._items[i]
+        if isinstance(item, Node):
+            for j, p in enumerate(item._parents):
+                if p is self:
+                    del item._parents[j]
+                    break
+        else:
+            item._detach(self)
+        self._restructure()
+        self.touch()
+        if patch:
+            _patch_declarations(patch, i, -1)
+        note_edit(self, "remove", item, i)
+        return item
+
+    def _index_of(self, item: Any) -> int:
+        """The index of the first item that is ``item``, or -1.
+
+        ``list.index`` scans in C and tests identity before equality, so a hit
+        that is ``item`` is its first occurrence; an equal item found first (a
+        component comparing by value), a comparison that raises or no hit
+        fall back to the scan by identity.
+        """
+        items = self._items
+        if isinstance(item, Node) and item._parents.count(self) == 1:
+            n = len(items)  # held once: a hit is its first occurrence; children added last are removed first
+            for i in range(n - 1, max(n - 33, -1), -1):
+                if items[i] is item:
+                    return i
+        try:
+            at = items.index(item)
+        except Exception:  # noqa: BLE001  (not there, or a component's __eq__ that does not answer a bool)
+            at = -1
+        if at >= 0 and items[at] is item:
+            return at
+        for i, existing in enumerate(items):
             if existing is item:
-                patch = _declaration_patch(self, item)
-                del self._items[i]
-                if isinstance(item, Node):
-                    for j, p in enumerate(item._parents):
-                        if p is self:
-                            del item._parents[j]
-                            break
-                else:
-                    item._detach(self)
-                self._restructure()
-                self.touch()
-                if patch:
-                    _patch_declarations(patch, i, -1)
-                note_edit(self, "remove", item, i)
-                return item
-        raise ValueError(f"Node {self.path}: {item!r} is not in this node")
+                return i
+        return -1
 
     def clear(self) -> None:
         """Remove every item."""

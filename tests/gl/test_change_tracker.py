@@ -250,3 +250,40 @@ def test_instance_positions_alone_are_written_in_place_and_colours_converted_onc
             balls.touch()
             image = e.render(scene)
             assert made and np.array_equal(image.array, fresh(scene, True))
+
+
+def test_moves_between_splices_of_nested_transforms_match_a_fresh_engine():
+    """The move plan follows splices in place (new transforms, longer chains, removed items): moving a group's or
+    a leaf's transform afterwards rewrites exactly the rows below it."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=0.6)
+    groups = [scene.add(om.Node(f"g{g}", [om.Translation(2.0 * g - 3.0, 0.0, 0.0)])) for g in range(4)]
+    leaves = [
+        group.add(om.Node(f"l{i}", [om.Translation(0.0, i - 2.5, 0.0), om.Material(diffuse=(0.2 * i, 0.5, 0.8)), box]))
+        for group in groups
+        for i in range(6)
+    ]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        for frame in range(3):
+            groups[frame].items[0].offset = (2.0 * frame - 3.0, 0.3, 0.0)  # six rows below one transform
+            assert np.array_equal(e.render(scene).array, fresh(scene, False))
+            assert e.stats["incremental"] == 6
+            leaf = leaves[frame * 7]
+            m = np.eye(4)
+            m[:3, 3] = leaf.items[0].offset + np.array([0.0, 0.0, 0.5])
+            leaf.remove(leaf.items[0])  # a new transform in the plan
+            leaf.insert(0, om.Matrix(m))
+            deeper = om.Node(f"d{frame}", [om.Translation(0.0, 0.0, 1.0), om.Material(diffuse=(1, 0, 0)), box])
+            leaves[frame * 7 + 1].add(om.Node(f"w{frame}", [om.Translation(0.0, 3.5, 0.0), deeper]))
+            groups[3].remove(leaves[18 + frame])  # a removed item: its transforms move nothing any more
+            e.render(scene)
+            assert e.stats["compiled"] == "subtrees"
+            assert np.array_equal(e.render(scene).array, fresh(scene, False))
+            # a group's transform (above the new Matrix), a new leaf's, a removed item's (nothing to draw)
+            for moved in (groups[frame].items[0], deeper.items[0], leaves[18 + frame].items[0]):
+                moved.offset = tuple(np.asarray(moved.offset) + (0.0, 0.0, 0.25))
+                assert np.array_equal(e.render(scene).array, fresh(scene, False))

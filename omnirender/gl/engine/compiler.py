@@ -500,9 +500,11 @@ class DrawListCompiler:
         leaves: dict[int, Any] = {}
         groups: dict[int, list[Any]] = {}
         loose: list[Any] = []
-        for container, op, item, _ in edits:
+        places: dict[int, list[int]] = {}  # id(node) -> where its child nodes came or went
+        for container, op, item, at in edits:
             if op not in ("insert", "remove") or not isinstance(container, Node):
                 return None
+            places.setdefault(id(container), []).append(at if isinstance(item, Node) else -1)
             key = self._key_of(container)
             if key is None:
                 loose.append(container)
@@ -520,7 +522,22 @@ class DrawListCompiler:
                     gone[id(item)] = item
         if set(leaves) & set(groups):
             return None
+        for node, _, _, _ in groups.values():
+            self._carry_leading(node, places[id(node)])
         return leaves, groups, loose
+
+    def _carry_leading(self, node: Any, places: list[int]) -> None:
+        """``node``'s list changed only by child nodes coming or going at ``places``: its cached leading components
+        stay what they were (no scan of a scene's thousands of children), as long as every child came after them.
+
+        Each edit bumped ``node.list_version`` by one; a cache entry of the version before them is carried on.
+        """
+        found = self._leading_cache.get(id(node))
+        version = node.list_version
+        if found is None or found[0]() is not node or found[2] is None or found[1] != version - len(places):
+            return
+        if all(at >= len(found[2]) for at in places):
+            self._leading_cache[id(node)] = (found[0], version, found[2])
 
     def _key_of(self, node: Any) -> int | None:
         """The occurrence key of ``node`` in the compiled graph, or None (not compiled, or compiled several times)."""
@@ -553,8 +570,9 @@ class DrawListCompiler:
         return tuple(path)
 
     def _leading(self, node: Any) -> tuple[Any, ...] | None:
-        """``node``'s components when they all come before its child nodes (else None); cached per list."""
-        version = node.structure_version
+        """``node``'s components when they all come before its child nodes (else None); cached per own list (a
+        descendant's edit leaves it: replacing one node's attribute does not scan its parent's children again)."""
+        version = node.list_version
         found = self._leading_cache.get(id(node))
         if found is not None and found[0]() is node and found[1] == version:
             return found[2]

@@ -19,7 +19,7 @@ import numpy as np
 
 from .layout import ROW
 
-__all__ = ["DrawItem", "DrawState", "Batch", "Scope", "Segment", "plan_batches", "uniform_material"]
+__all__ = ["DrawItem", "DrawState", "Batch", "Scope", "Segment", "plan_batches", "uniform_material", "position_of"]
 
 _MODEL = ROW.slice("model")
 _MATERIAL = np.concatenate(
@@ -95,6 +95,31 @@ class DrawState:
 
     def __repr__(self) -> str:
         return f"DrawState({self.kind}, {dict(self.features)})"
+
+
+#: how many places before a hint, and from the end, :func:`position_of` tries before it scans the whole list
+_NEAR = 64
+
+
+def position_of(entries: list[Any], entry: Any, hint: int = -1) -> int:
+    """The index of ``entry`` (held once) in ``entries``: near ``hint`` first, then the last places, then a scan
+    in C.
+
+    A splice knows where an item probably is: where it was in another list
+    kept in the same order, or its batch row (a list only ever loses entries
+    before it, so it lies at or a little before the hint); what a splice added
+    lies near the end.  Those are a few identity tests instead of a scan over
+    the scene.  Draw items and scopes compare by identity.
+    """
+    n = len(entries)
+    if 0 <= hint:
+        for i in range(min(hint, n - 1), max(hint - _NEAR, -1), -1):
+            if entries[i] is entry:
+                return i
+    for i in range(n - 1, max(n - 1 - _NEAR, -1), -1):
+        if entries[i] is entry:
+            return i
+    return entries.index(entry)
 
 
 class DrawItem:

@@ -37,13 +37,16 @@ _EYE3 = np.eye(3)
 _MANY = 64
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
+#: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
+_IDENTITY = object()
 
 
 class MovePlan:
     """The installed items' transform chains as arrays, so moved transforms recompose many rows at once.
 
     ``chain[i, k]`` indexes ``matrices`` (the last entry is the identity,
-    padding shorter chains); ``local`` holds the shape-local matrices (the
+    padding shorter chains; after splices that brought new transforms, the
+    identity's earlier places stay identities and pad older chains); ``local`` holds the shape-local matrices (the
     identity where an item has none).  Instance sets keep their per-item
     path: each is one item whose rows all move together.
     """
@@ -89,6 +92,8 @@ class MovePlan:
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
         self.many_moves = 0
+        #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
+        self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
         self.batch_of = np.full(len(self.items), -1, np.intp)
         self.row_of = np.zeros(len(self.items), np.intp)
@@ -120,15 +125,17 @@ class MovePlan:
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
             fresh = list({id(t): t for t in fresh}.values())
+            # the identity's place stays an identity (the padding of every chain and the removed items' chains
+            # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
+            self.transforms.append(_IDENTITY)
             for t in fresh:
                 self.index[id(t)] = len(self.transforms)
                 self.transforms.append(t)
-            stacked = np.empty((len(fresh), 4, 4))
+            matrices = self._extend("matrices", len(fresh) + 1)
             for cls, members in _by_class(range(len(fresh)), fresh).items():
-                stacked[members] = cls.stack_matrices([fresh[k] for k in members])
-            self.matrices = np.concatenate([self.matrices[:identity], stacked, self.matrices[identity:]])
-            self.chain[self.chain == identity] = len(self.transforms)
+                matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
             identity = len(self.transforms)
+            matrices[identity] = np.eye(4)
         if new:
             length = max(self.chain.shape[1], max(len(it.chain) for it in new))
             if length > self.chain.shape[1]:
@@ -137,18 +144,17 @@ class MovePlan:
             rows = np.full((len(new), length), identity, np.intp)
             for r, item in enumerate(new):
                 rows[r, : len(item.chain)] = [self.index[id(t)] for t in item.chain]
-            self.chain = np.concatenate([self.chain, rows])
+            self._extend("chain", len(new))[-len(new) :] = rows
             if self.local is not None or any(it.local is not None for it in new):
-                local = np.broadcast_to(np.eye(4), (len(new), 4, 4)).copy()
+                if self.local is None:
+                    self.local = np.broadcast_to(np.eye(4), (len(self.items), 4, 4)).copy()
+                local = self._extend("local", len(new))
+                local[-len(new) :] = np.eye(4)
                 for r, item in enumerate(new):
                     if item.local is not None:
-                        local[r] = item.local
-                old = self.local
-                if old is None:
-                    old = np.broadcast_to(np.eye(4), (len(self.items), 4, 4))
-                self.local = np.concatenate([old, local])
-            self.batch_of = np.concatenate([self.batch_of, np.full(len(new), -1, np.intp)])
-            self.row_of = np.concatenate([self.row_of, np.zeros(len(new), np.intp)])
+                        local[len(local) - len(new) + r] = item.local
+            self._extend("batch_of", len(new))[-len(new) :] = -1
+            self._extend("row_of", len(new))[-len(new) :] = 0
             for item in new:
                 where[id(item)] = len(self.items)
                 self.items.append(item)
@@ -163,6 +169,22 @@ class MovePlan:
                 self.batches.append(batch)
             self.batch_of[i] = b
             self.row_of[i] = row
+
+    def _extend(self, name: str, extra: int) -> np.ndarray:
+        """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
+        rows so that a splice appends in place (amortised: a copy only when the storage is full)."""
+        view = getattr(self, name)
+        n = len(view)
+        held = self._stores.get(name)
+        if held is not None and held[1] is view and n + extra <= len(held[0]):
+            store = held[0]
+        else:
+            store = np.empty((max(n + extra, n + n // 4, 16), *view.shape[1:]), view.dtype)
+            store[:n] = view
+        out = store[: n + extra]
+        self._stores[name] = (store, out)
+        setattr(self, name, out)
+        return out
 
     def apply_arrays(self, arrays: list[Any]) -> tuple[int, list[Any]]:
         """Write the snapshots of touched ``om.TranslationArray`` objects into the rows below them.

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from .drawlist import DrawItem, Scope, Segment
+from .drawlist import DrawItem, Scope, Segment, position_of
 from .layout import ROW
 from .state import casts_shadows, not_mirror
 
@@ -215,15 +215,19 @@ class RenderIndex:
                             out.append((batch, *self._batch_boxes(batch)))
         return out
 
-    def spliced(self, removed: list[DrawItem], added: list[DrawItem]) -> None:
+    def spliced(self, removed: list[DrawItem], added: list[DrawItem], places: list[int] | None = None) -> None:
         """Items left and came without a new plan: the item list follows, mirrors only when one is among them.
 
-        The batches' row edits reach the boxes through :meth:`batch_edits`.
+        ``places``: where each removed item was in the root scope's entries,
+        removed in this order (without nested scopes the item list is in the
+        same order: no search).  The batches' row edits reach the boxes
+        through :meth:`batch_edits`.
         """
         self.version += 1
         if self._items is not None:
-            for item in removed:
-                self._items.remove(item)  # identity first: a scan in C
+            hints = places if places is not None and len(places) == len(removed) else [-1] * len(removed)
+            for item, hint in zip(removed, hints, strict=True):
+                del self._items[position_of(self._items, item, hint)]
             self._items.extend(added)
         if any(not not_mirror(it) for it in (*removed, *added)):
             self._mirrors = None

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ...core.mask import compile_mask
-from .drawlist import Batch, DrawItem, Scope, Segment, plan_batches, uniform_material
+from .drawlist import Batch, DrawItem, Scope, Segment, plan_batches, position_of, uniform_material
 from .geometry import Geometry
 from .layout import ROW
 from .passes import Composed
@@ -193,26 +193,29 @@ class BatchInstaller:
                 return False
         ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
         moved_items: list[DrawItem] = []
+        places: list[int] = []  # where each removed item was in the root's entries (the index's list follows)
         for item in removed:
             if item.slot is not None:
                 batch, index = item.slot
                 segment = owner[id(batch)]
-                at = segment.items.index(item)
+                at = position_of(segment.items, item, index)  # a batch's rows keep roughly the segment's order
                 del segment.items[at]
                 del segment.slots[at]
                 moved = batch.remove_row(index)
                 ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
                 if moved is not None:
                     shifted = batch.items[index]
-                    segment.slots[segment.items.index(shifted)] = shifted.slot
+                    segment.slots[position_of(segment.items, shifted)] = shifted.slot
                     moved_items.append(shifted)
             else:
                 segment = next(seg for seg in segments if any(x is item for x in seg.others))
-                at = segment.items.index(item)
+                at = position_of(segment.items, item)
                 del segment.items[at]
                 del segment.slots[at]
                 segment.others.remove(item)
-            root.entries.remove(item)
+            place = position_of(root.entries, item, at)  # one segment: the same place
+            del root.entries[place]
+            places.append(place)
         by_key = {(id(b.geometry), id(b.state)): b for b in last.batches}
         new_batch = False
         for item in added:
@@ -237,7 +240,7 @@ class BatchInstaller:
             _release_filtered(root)
         else:
             self._follow_splice(root, ops)
-        self.index.spliced(removed, added)
+        self.index.spliced(removed, added, places)
         self._placements_changed()
         kept = {id(it.geometry) for it in added}
         if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
