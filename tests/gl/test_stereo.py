@@ -218,6 +218,7 @@ def _edges(image: np.ndarray) -> np.ndarray:
     return step
 
 
+@pytest.mark.gl_needs(samples=4)
 @pytest.mark.parametrize("mode", ["side-by-side", "top-bottom", "anaglyph"])
 def test_deferred_stereo_eyes_are_multisampled_as_the_engine_is(mode):
     """Each deferred eye is drawn into a multisampled eye target (the engine's samples) and resolved by its copy:
