@@ -239,10 +239,13 @@ class BatchDrawer:
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
 
-        Culled to the frame's view like big batches but not sorted: the
-        buffers hold the visible instances in row order, then the rest, so
-        while all are in view a move uploads the application's positions as
-        they are, to the translations' own buffer (:func:`_upload_instance_set`).
+        Culled to the frame's view and sorted front to back like big batches
+        (the buffers hold the visible instances nearest first, then the rest);
+        the order is kept while the view holds and all are in view, so a move
+        uploads the application's positions taken in that order (one gather)
+        to the translations' own buffer (:func:`_upload_instance_set`).  In row
+        order instead, llvmpipe shaded the hidden fragments too: a 10,000-box
+        set's frame took 1.5x.
         """
         own_view = self.state.view_key == self.state.frame_view_key
         view_key = self.state.view_key
@@ -251,8 +254,16 @@ class BatchDrawer:
             or len(batch.position) != n
             or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n)))
         ):
-            visible = self._cull(batch) if own_view and n >= SORT_MIN and not batch.state.special else None
-            order = None if visible is None else np.concatenate([np.nonzero(visible)[0], np.nonzero(~visible)[0]])
+            big = n >= SORT_MIN and not batch.state.special
+            visible = self._cull(batch) if own_view and big else None
+            order = None
+            if big:  # front to back, as other big batches: early depth tests skip hidden fragments
+                z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
+                if visible is None:
+                    order = np.argsort(-z, kind="stable")
+                else:
+                    seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
+                    order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
             batch.drawn = n if visible is None else int(visible.sum())
             batch.position = np.arange(n)
             if order is not None:
