@@ -16,7 +16,15 @@ from typing import Any
 
 import numpy as np
 
-from .component import MonoAttribute, RenderingComponent
+from .component import (  # _PENDING: the list note_later appends to (Translation's setter appends inline)
+    _PENDING,
+    PENDING_LIMIT,
+    MonoAttribute,
+    RenderingComponent,
+    flush_changes,
+    note_change,
+    note_later,
+)
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = [
@@ -104,6 +112,13 @@ _MAX = MAX_MAGNITUDE
 _DIAGONAL = np.arange(4)
 
 
+def _named(transform: RenderingComponent) -> str:
+    """``Translation``, or ``Translation (in node /scene/b3)`` once a node holds it: how errors name a transform."""
+    owners = transform._owners
+    path = getattr(owners[0], "path", None) if owners else None
+    return type(transform).__name__ + (f" (in node {path})" if path else "")
+
+
 class Transform(MonoAttribute):
     """Base of all modelling transforms; subclasses share its category.
 
@@ -140,6 +155,20 @@ class Transform(MonoAttribute):
         caching one matrix object per transform.
         """
         return np.stack([t.matrix for t in transforms]) if transforms else np.empty((0, 4, 4))
+
+    def touch(self) -> None:
+        """Mark the transform changed: its version moves now; its nodes and the journals hear of it when next observed.
+
+        Transforms are what simulations change thousands of per frame: the
+        owners' ``touch()`` and the journals' stores are done once for all of
+        them, at the next observation (:func:`~omnirender.core.component.note_later`).
+        Every reader of a node's version or of a journal sees the change.
+        """
+        _set_version(self, self._version + 1)
+        if self._owners:
+            note_later(self)
+        else:
+            note_change(self)  # in no node: only the journals have to hear of it
 
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
@@ -238,10 +267,16 @@ class Translation(Transform):
                 offset = (x, y, z)
             else:
                 offset = plain_triple(value)
-            if offset is not None:
+            if offset is not None:  # Transform.touch, inline: a version bump and one list append
                 _set_offset(self, offset)
                 _set_matrix(self, None)
-                self.touch()
+                _set_version(self, self._version + 1)
+                if self._owners:
+                    _append(self)
+                    if len(_PENDING) > PENDING_LIMIT:
+                        flush_changes()
+                else:
+                    note_change(self)
                 return
         RenderingComponent.__setattr__(self, name, value)
 
@@ -253,7 +288,7 @@ class Translation(Transform):
     def offset(self, value: Sequence[float]) -> None:
         offset = plain_triple(value)  # a simulation loop's case: three numbers, a numpy row
         if offset is None:
-            offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
+            offset = tuple(float(c) for c in finite_vector(_named(self), "offset", value, 3))
         _set_offset(self, offset)
         _set_matrix(self, None)  # made again when somebody asks (assigning the public parameter touches)
 
@@ -282,6 +317,8 @@ class Translation(Transform):
 
 
 _OFFSET = attrgetter("_offset")
+_append = _PENDING.append
+_set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 _set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
 _set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]
 
@@ -424,12 +461,13 @@ class Scaling(Transform):
                 object.__setattr__(self, "_factors", plain)
                 _set_matrix(self, None)
                 return
-        v = finite_vector("Scaling", "factors", value, 3)
+        who = _named(self)
+        v = finite_vector(who, "factors", value, 3)
         if np.any(v == 0.0):
-            raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
+            raise ValueError(f"{who}: factors must be non-zero, got {tuple(float(c) for c in v)}")
         if np.any(np.abs(v) < MIN_MAGNITUDE):
             raise ValueError(
-                f"Scaling: factors must be at least {MIN_MAGNITUDE:.0e} in magnitude (their inverse must stay "
+                f"{who}: factors must be at least {MIN_MAGNITUDE:.0e} in magnitude (their inverse must stay "
                 f"below {MAX_MAGNITUDE:.0e}), got {tuple(float(c) for c in v)}"
             )
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
