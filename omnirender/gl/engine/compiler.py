@@ -329,10 +329,12 @@ class DrawListCompiler:
                 count = self.updater.apply(changed)
                 if count is not None:
                     self.engine.stats["incremental"] = count
-                    # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation again
-                    engine = self.engine
-                    engine.declared = engine.preevaluate(scene)
-                    engine.camera = engine.declared.camera
+                    # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation
+                    # again (instance sets' arrays place neither: their declarations are kept)
+                    if self.updater.placed:
+                        engine = self.engine
+                        engine.declared = engine.preevaluate(scene)
+                        engine.camera = engine.declared.camera
                     self._compiled = (c[0], scene.version, mask_key, c[3])
                     self.engine.stats["compiled"] = False
                     return self.installer.root

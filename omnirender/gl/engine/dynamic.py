@@ -309,7 +309,7 @@ class MovePlan:
             for k in chain[1:]:
                 m = m @ self.matrices[k]
             world = m @ item.instance_models
-            item.instances[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)
+            item.rows()[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)  # (pending ones written first)
             if item.slot is not None:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
@@ -350,6 +350,9 @@ class TransformUpdater:
         self._placements_changed = placements_changed
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
+        #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
+        #: place no light or camera: the compiler then keeps the scene's declarations)
+        self.placed = True
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -398,7 +401,8 @@ class TransformUpdater:
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
-        count = self._apply_moves(moved, arrays) if moved or arrays else 0
+        self.placed = bool(moved or arrays)
+        count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
         if updates:
@@ -493,29 +497,42 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
 
 
 def _write_positions(item: Any, positions: np.ndarray) -> None:
-    """Write the translations of an instance set's rows (the chain, then the position, then the shape's local)."""
+    """Move an instance set's rows to ``positions`` (the chain, then the position, then the shape's local).
+
+    The world translations are made once, as a new (N, 3) float32 array: the
+    batch keeps it as its rows' pending translations and as what the next draw
+    uploads to the set's offsets buffer (:meth:`Batch.move_to`); the rows
+    themselves are written only when something reads them.
+    """
     local = item.template.local
-    offset = positions if local is None else positions + local[:3, 3]
-    model = _chain_matrix(item.chain)
-    if (model == _EYE4).all():
-        world = offset  # the common case: the application's array is the world translations
-    elif (model[:3, :3] == _EYE3).all():
-        world = offset + model[:3, 3]
-    else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
-        world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
-        world += model[:3, 3]
-    # one float32 array (none made when the application's already is a contiguous one): the rows' translations
-    # and, as it is, what the next draw writes to the instance set's offsets buffer (drawer.py)
-    world = np.ascontiguousarray(world, dtype=np.float32)
-    # the matrices take them when next read (a transform above the set moves), from a copy of the caller's array
-    item.moved_translations = offset if offset is not positions else np.array(offset)
+    shift = None if local is None or not local[:3, 3].any() else local[:3, 3]
+    model = _chain_matrix(item.chain) if item.chain else None
+    if model is not None and (model == _EYE4).all():
+        model = None
+    if model is None:
+        # the common case: the application's array (shifted by the shape's local) is the world translations
+        world = np.array(positions, dtype=np.float32) if shift is None else np.add(positions, shift, dtype=np.float32)
+        # the matrices take them when next read (a transform above the set moved: only items with a chain);
+        # without a chain nothing reads them but a fresh compile, so float32 (what the rows hold) is kept
+        if not item.chain and shift is None:
+            item.moved_translations = world
+        else:
+            item.moved_translations = np.array(positions, dtype=np.float64) if shift is None else positions + shift
+    else:
+        offset = positions if shift is None else positions + shift
+        if (model[:3, :3] == _EYE3).all():
+            world = offset + model[:3, 3]
+        else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
+            world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
+            world += model[:3, 3]
+        world = np.ascontiguousarray(world, dtype=np.float32)
+        item.moved_translations = offset if offset is not positions else np.array(offset)
+    if item.slot is not None and item.slot[0].holds(item.instances):
+        item.slot[0].move_to(world)  # the rows are the item's: written when next read
+        return
     set_translations(item.instances, world)
     if item.slot is not None:
-        batch, _ = item.slot
-        if batch.rows is not item.instances:
-            set_translations(batch.rows, world)
-        batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
-        batch.moved_offsets = (batch.version, world)
+        item.slot[0].move_to(world)
 
 
 def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
