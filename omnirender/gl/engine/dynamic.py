@@ -410,7 +410,7 @@ class TransformUpdater:
             self._placements_changed()
         return count + len(updates)
 
-    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
+    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
         plan = self.plan()
         out = []
@@ -420,8 +420,11 @@ class TransformUpdater:
                 return None
             positions = _positions_only(shape, items)
             if positions is not None:
-                out.extend((item, positions) for item in items)
-                continue
+                moves = [_moved_world(item, positions) for item in items]
+                # not finite (or beyond float32): the full path, which names the instance
+                if all(np.isfinite(world).all() for world, _ in moves):
+                    out.extend(zip(items, moves, strict=True))
+                    continue
             matrices, colors, may_mirror = set_arrays(shape)
             for item in items:
                 template = item.template
@@ -470,8 +473,8 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Positions that
-    are not finite take the full path, which names the instance.
+    their conversion to linear is done once, not every frame).  Whether they
+    are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
         return None
@@ -481,7 +484,7 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     t = np.asarray(t)
     if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
         t = t.astype(np.float64)
-    if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
+    if t.ndim != 2 or t.shape[1] != 3:
         return None
     colors = shape.colors
     if colors is not None:
@@ -496,13 +499,12 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     return t
 
 
-def _write_positions(item: Any, positions: np.ndarray) -> None:
-    """Move an instance set's rows to ``positions`` (the chain, then the position, then the shape's local).
+def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An instance set item's world translations for ``positions`` (the chain, the position, the shape's local).
 
-    The world translations are made once, as a new (N, 3) float32 array: the
-    batch keeps it as its rows' pending translations and as what the next draw
-    uploads to the set's offsets buffer (:meth:`Batch.move_to`); the rows
-    themselves are written only when something reads them.
+    Returns a new (N, 3) float32 array of them (the rows' translations, and
+    what the next draw uploads as it is) and the translations its
+    ``instance_models`` take (float64 where a chain multiplies them later).
     """
     local = item.template.local
     shift = None if local is None or not local[:3, 3].any() else local[:3, 3]
@@ -515,18 +517,25 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
         # the matrices take them when next read (a transform above the set moved: only items with a chain);
         # without a chain nothing reads them but a fresh compile, so float32 (what the rows hold) is kept
         if not item.chain and shift is None:
-            item.moved_translations = world
-        else:
-            item.moved_translations = np.array(positions, dtype=np.float64) if shift is None else positions + shift
-    else:
-        offset = positions if shift is None else positions + shift
-        if (model[:3, :3] == _EYE3).all():
-            world = offset + model[:3, 3]
-        else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
-            world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
-            world += model[:3, 3]
-        world = np.ascontiguousarray(world, dtype=np.float32)
-        item.moved_translations = offset if offset is not positions else np.array(offset)
+            return world, world
+        return world, np.array(positions, dtype=np.float64) if shift is None else positions + shift
+    offset = positions if shift is None else positions + shift
+    if (model[:3, :3] == _EYE3).all():
+        world = offset + model[:3, 3]
+    else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
+        world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
+        world += model[:3, 3]
+    return np.ascontiguousarray(world, dtype=np.float32), offset if offset is not positions else np.array(offset)
+
+
+def _write_positions(item: Any, world: np.ndarray, translations: np.ndarray) -> None:
+    """Move an instance set's rows to ``world`` (from :func:`_moved_world`).
+
+    The batch keeps ``world`` as its rows' pending translations and as what the
+    next draw uploads to the set's offsets buffer (:meth:`Batch.move_to`); the
+    rows themselves are written only when something reads them.
+    """
+    item.moved_translations = translations
     if item.slot is not None and item.slot[0].holds(item.instances):
         item.slot[0].move_to(world)  # the rows are the item's: written when next read
         return
@@ -535,13 +544,13 @@ def _write_positions(item: Any, positions: np.ndarray) -> None:
         item.slot[0].move_to(world)
 
 
-def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
+def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray]) -> None:
     """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
 
-    An array instead: only the instance positions changed (:func:`_positions_only`).
+    A pair of arrays instead: only the instance positions changed (:func:`_moved_world`).
     """
-    if isinstance(made, np.ndarray):
-        _write_positions(item, made)
+    if isinstance(made, tuple):
+        _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
     item.instances = made.rows
