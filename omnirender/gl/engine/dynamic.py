@@ -128,10 +128,7 @@ class MovePlan:
                 self.chain[i] = identity  # never recomposed again
                 self.batch_of[i] = -1
                 if users is not None:
-                    for t in item.chain:
-                        found = users.get(id(t))
-                        if found is not None and i in found:
-                            found.remove(i)
+                    _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
@@ -170,8 +167,7 @@ class MovePlan:
                 i = where[id(item)] = len(self.items)
                 self.items.append(item)
                 if users is not None:
-                    for t in dict.fromkeys(item.chain):
-                        users.setdefault(id(t), []).append(i)
+                    _add_user(users, item, i)
         for item in (*new, *moved):
             i = where.get(id(item))
             if i is None or item.slot is None:
@@ -283,8 +279,7 @@ class MovePlan:
         if users is None:
             users = self._users = {}
             for i, item in enumerate(self.items):
-                for t in dict.fromkeys(item.chain):
-                    users.setdefault(id(t), []).append(i)
+                _add_user(users, item, i)
         index = self.index
         positions: list[int] = []
         affected: dict[int, None] = {}
@@ -383,6 +378,20 @@ class MovePlan:
                 self.moved_rows.append((batch, None))
             count += 1
         return count
+
+
+def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` lies below each transform of its chain."""
+    for t in dict.fromkeys(item.chain):
+        users.setdefault(id(t), []).append(i)
+
+
+def _drop_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` left the plan: its transforms no longer move it."""
+    for t in item.chain:
+        found = users.get(id(t))
+        if found is not None and i in found:
+            found.remove(i)
 
 
 def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
