@@ -36,6 +36,8 @@ _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
+#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
+_FEW = 8
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
@@ -87,6 +89,9 @@ class MovePlan:
         batches: dict[int, int] = {}
         self._batch_index = batches
         self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
+        #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
+        #: followed through splices): a frame moving a few transforms finds their items without a pass over all
+        self._users: dict[int, list[int]] | None = None
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
@@ -121,11 +126,14 @@ class MovePlan:
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
         identity = len(self.transforms)
+        users = self._users
         for item in removed:
             i = where.pop(id(item), None)
             if i is not None:
                 self.chain[i] = identity  # never recomposed again
                 self.batch_of[i] = -1
+                if users is not None:
+                    _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
@@ -161,8 +169,10 @@ class MovePlan:
             self._extend("batch_of", len(new))[-len(new) :] = -1
             self._extend("row_of", len(new))[-len(new) :] = 0
             for item in new:
-                where[id(item)] = len(self.items)
+                i = where[id(item)] = len(self.items)
                 self.items.append(item)
+                if users is not None:
+                    _add_user(users, item, i)
         for item in (*new, *moved):
             i = where.get(id(item))
             if i is None or item.slot is None:
@@ -224,6 +234,8 @@ class MovePlan:
         """
         if not changed:
             return 0
+        if len(changed) <= _FEW:
+            return self._apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations = last
@@ -283,6 +295,55 @@ class MovePlan:
         bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
         return bulk.count + self._apply_instances(set(positions.tolist()))
 
+    def _apply_few(self, changed: list[Any]) -> int:
+        """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
+        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item."""
+        users = self._users
+        if users is None:
+            users = self._users = {}
+            for i, item in enumerate(self.items):
+                _add_user(users, item, i)
+        index = self.index
+        positions: list[int] = []
+        affected: dict[int, None] = {}
+        for t in changed:
+            k = index.get(id(t))
+            if k is None:
+                continue
+            self.matrices[k] = t.matrix
+            positions.append(k)
+            for i in users.get(id(t), ()):
+                affected[i] = None
+        if not positions:
+            return 0
+        if self.bulk:
+            for key, (_, bulk) in list(self.bulk.items()):
+                if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
+                    del self.bulk[key]
+        matrices, local = self.matrices, self.local
+        identity = len(self.transforms)
+        rows_of: dict[int, list[int]] = {}
+        for i in affected:
+            links = [k for k in self.chain[i].tolist() if k != identity]
+            model = matrices[links[0]]
+            for k in links[1:]:
+                model = model @ matrices[k]
+            if local is not None:
+                model = model @ local[i]
+            row = model.T.reshape(16)  # rows hold M transposed
+            b = int(self.batch_of[i])
+            if b < 0:  # an item without a batch (transparent, overlay): its own row
+                self.items[i].row[_MODEL] = row
+                continue
+            batch = self.batches[b]
+            r = int(self.row_of[i])
+            batch.rows[r, _MODEL] = row
+            batch.row_changed(r)
+            rows_of.setdefault(b, []).append(r)
+        for b, where in rows_of.items():
+            self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
+        return len(affected) + (self._apply_instances(set(positions)) if self.instance_items else 0)
+
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
             return 0
@@ -332,7 +393,7 @@ class MovePlan:
             for k in chain[1:]:
                 m = m @ self.matrices[k]
             world = m @ item.instance_models
-            item.instances[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)
+            item.rows()[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)  # (pending ones written first)
             if item.slot is not None:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
@@ -340,6 +401,20 @@ class MovePlan:
                 self.moved_rows.append((batch, None))
             count += 1
         return count
+
+
+def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` lies below each transform of its chain."""
+    for t in dict.fromkeys(item.chain):
+        users.setdefault(id(t), []).append(i)
+
+
+def _drop_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` left the plan: its transforms no longer move it."""
+    for t in item.chain:
+        found = users.get(id(t))
+        if found is not None and i in found:
+            found.remove(i)
 
 
 def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:
@@ -373,6 +448,9 @@ class TransformUpdater:
         self._placements_changed = placements_changed
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
+        #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
+        #: place no light or camera: the compiler then keeps the scene's declarations)
+        self.placed = True
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -402,6 +480,7 @@ class TransformUpdater:
             return None
         plan = self._plan
         if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+            self.placed = True
             return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
@@ -424,7 +503,8 @@ class TransformUpdater:
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
-        count = self._apply_moves(moved, arrays) if moved or arrays else 0
+        self.placed = bool(moved or arrays)
+        count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
         if updates:
@@ -432,7 +512,7 @@ class TransformUpdater:
             self._placements_changed()
         return count + len(updates)
 
-    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
+    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
         plan = self.plan()
         out = []
@@ -442,8 +522,11 @@ class TransformUpdater:
                 return None
             positions = _positions_only(shape, items)
             if positions is not None:
-                out.extend((item, positions) for item in items)
-                continue
+                moves = [_moved_world(item, positions) for item in items]
+                # not finite (or beyond float32): the full path, which names the instance
+                if all(np.isfinite(world).all() for world, _ in moves):
+                    out.extend(zip(items, moves, strict=True))
+                    continue
             matrices, colors, may_mirror = set_arrays(shape)
             for item in items:
                 template = item.template
@@ -492,8 +575,8 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Positions that
-    are not finite take the full path, which names the instance.
+    their conversion to linear is done once, not every frame).  Whether they
+    are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
         return None
@@ -503,7 +586,7 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     t = np.asarray(t)
     if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
         t = t.astype(np.float64)
-    if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
+    if t.ndim != 2 or t.shape[1] != 3:
         return None
     colors = shape.colors
     if colors is not None:
@@ -518,39 +601,58 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     return t
 
 
-def _write_positions(item: Any, positions: np.ndarray) -> None:
-    """Write the translations of an instance set's rows (the chain, then the position, then the shape's local)."""
+def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An instance set item's world translations for ``positions`` (the chain, the position, the shape's local).
+
+    Returns a new (N, 3) float32 array of them (the rows' translations, and
+    what the next draw uploads as it is) and the translations its
+    ``instance_models`` take (float64 where a chain multiplies them later).
+    """
     local = item.template.local
-    offset = positions if local is None else positions + local[:3, 3]
-    model = _chain_matrix(item.chain)
-    if (model == _EYE4).all():
-        world = offset  # the common case: the application's array is the world translations
-    elif (model[:3, :3] == _EYE3).all():
+    shift = None if local is None or not local[:3, 3].any() else local[:3, 3]
+    model = _chain_matrix(item.chain) if item.chain else None
+    if model is not None and (model == _EYE4).all():
+        model = None
+    if model is None:
+        # the common case: the application's array (shifted by the shape's local) is the world translations
+        world = np.array(positions, dtype=np.float32) if shift is None else np.add(positions, shift, dtype=np.float32)
+        # the matrices take them when next read (a transform above the set moved: only items with a chain);
+        # without a chain nothing reads them but a fresh compile, so float32 (what the rows hold) is kept
+        if not item.chain and shift is None:
+            return world, world
+        return world, np.array(positions, dtype=np.float64) if shift is None else positions + shift
+    offset = positions if shift is None else positions + shift
+    if (model[:3, :3] == _EYE3).all():
         world = offset + model[:3, 3]
     else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
         world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
         world += model[:3, 3]
-    # one float32 array (none made when the application's already is a contiguous one): the rows' translations
-    # and, as it is, what the next draw writes to the instance set's offsets buffer (drawer.py)
-    world = np.ascontiguousarray(world, dtype=np.float32)
-    # the matrices take them when next read (a transform above the set moves), from a copy of the caller's array
-    item.moved_translations = offset if offset is not positions else np.array(offset)
+    return np.ascontiguousarray(world, dtype=np.float32), offset if offset is not positions else np.array(offset)
+
+
+def _write_positions(item: Any, world: np.ndarray, translations: np.ndarray) -> None:
+    """Move an instance set's rows to ``world`` (from :func:`_moved_world`).
+
+    The batch keeps ``world`` as its rows' pending translations and as what the
+    next draw uploads to the set's offsets buffer (:meth:`Batch.move_to`); the
+    rows themselves are written only when something reads them.
+    """
+    item.moved_translations = translations
+    if item.slot is not None and item.slot[0].holds(item.instances):
+        item.slot[0].move_to(world)  # the rows are the item's: written when next read
+        return
     set_translations(item.instances, world)
     if item.slot is not None:
-        batch, _ = item.slot
-        if batch.rows is not item.instances:
-            set_translations(batch.rows, world)
-        batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
-        batch.moved_offsets = (batch.version, world)
+        item.slot[0].move_to(world)
 
 
-def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
+def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray]) -> None:
     """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
 
-    An array instead: only the instance positions changed (:func:`_positions_only`).
+    A pair of arrays instead: only the instance positions changed (:func:`_moved_world`).
     """
-    if isinstance(made, np.ndarray):
-        _write_positions(item, made)
+    if isinstance(made, tuple):
+        _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
     item.instances = made.rows
