@@ -225,3 +225,51 @@ def test_a_bad_value_after_many_fast_ones_is_refused_naming_the_node():
     assert plain[1].offset == (3.0, 4.0, 5.0)
     with pytest.raises(ValueError, match=r"Scaling \(in node /scene/s\): factors must be non-zero"):
         scene.add(om.Node("s", [om.Scaling(2.0)])).items[0].factors = (1.0, 0.0, 1.0)
+
+
+def test_an_array_translation_reads_its_row_lazily_and_an_assignment_holds_until_the_next_touch():
+    import copy
+    import pickle
+
+    scene, moves, positions = translation_array_scene()
+    positions[:, 2] = 5.0
+    moves.touch()
+    positions[:, 2] = 7.0  # written after the touch: not seen until the next one
+    assert moves[1].offset == (1.0, 0.0, 5.0) and np.array_equal(moves[1].matrix[:3, 3], [1.0, 0.0, 5.0])
+    moves[1].offset = (9.0, 9.0, 9.0)  # its own value, until the array is touched again
+    assert moves[1].offset == (9.0, 9.0, 9.0) and np.array_equal(moves[1].matrix[:3, 3], [9.0, 9.0, 9.0])
+    assert np.allclose(om.Translation.stack_offsets(list(moves))[:, 2], [5.0, 9.0, 5.0, 5.0, 5.0])
+    node = scene.child("b1")
+    before = node.version
+    moves.touch()
+    assert node.version > before
+    assert [t.offset for t in moves] == [(float(i), 0.0, 7.0) for i in range(5)]
+    assert np.allclose(om.Translation.stack_matrices(list(moves))[:, 2, 3], 7.0)
+    # copies and pickles are ordinary translations with the current offsets; a pickled array binds its own
+    copied = copy.deepcopy(node)
+    assert copied.items[0].offset == (1.0, 0.0, 7.0)
+    positions[:, 2] = 8.0
+    moves.touch()
+    assert copied.items[0].offset == (1.0, 0.0, 7.0) and moves[1].offset == (1.0, 0.0, 8.0)
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.child("b3").items[0].offset == (3.0, 0.0, 8.0)
+    moves2 = pickle.loads(pickle.dumps(moves))
+    moves2.array[:, 0] = -1.0
+    moves2.touch()
+    assert [t.offset for t in moves2] == [(-1.0, 0.0, 8.0)] * 5 and moves[0].offset == (0.0, 0.0, 8.0)
+
+
+def test_an_array_touch_writes_no_translation_and_its_nodes_hear_of_it_once():
+    scene, moves, positions = translation_array_scene(200)
+    journal = ChangeJournal()
+    positions[:, 1] = 1.0
+    moves.touch()
+    assert all(t._offset[1] == 0.0 for t in moves)  # nothing written yet: each reads its row when asked
+    assert moves.owners == tuple(scene.children)
+    versions = [n.version for n in scene.children]  # an observation: the nodes heard of it
+    assert journal.drain() == [moves]
+    extra = om.Node("extra", [moves[0]])  # a translation held by another node: the owners follow
+    assert len(moves.owners) == 201 and extra in moves.owners
+    moves.touch()
+    assert [n.version for n in scene.children] == [v + 1 for v in versions]
+    assert moves[199].offset == (199.0, 1.0, 0.0)
