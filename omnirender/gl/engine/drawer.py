@@ -48,6 +48,8 @@ SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
 _MODEL = ROW.slice("model")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
+#: light uniform sets kept between passes and frames (by light switch and view) before they are all dropped
+_LIGHTS_KEPT = 16
 _OVER = ("src_alpha", "one_minus_src_alpha", "add")
 _MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
                       ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
@@ -73,8 +75,9 @@ class BatchDrawer:
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
         self._layouts: dict[tuple[str, ...], Any] = {}
-        #: id(light switch) -> (switch, stamp, any scene light, LightUniforms) of the last frame (_lights_for)
-        self._lights_kept: dict[int, tuple[Any, Any, bool, LightUniforms]] = {}
+        #: (id(light switch), view) -> (switch, stamp, any scene light, LightUniforms) of earlier passes
+        #: (_lights_for): a frame that draws shadow maps alternates the light's view and its own, both kept
+        self._lights_kept: dict[tuple[int, bytes], tuple[Any, Any, bool, LightUniforms]] = {}
 
     def draw_items(self, scope: Scope, composed: Composed, nested: Any) -> int:
         """Draw the items of ``scope`` that ``composed`` selects; ``nested(scope)`` runs a nested technique scope.
@@ -178,37 +181,9 @@ class BatchDrawer:
                 if not n:
                     return 0
             elif n >= SORT_MIN and not state.special:
-                # big batches: opaque instances front to back (early depth tests skip hidden fragments) and
-                # culled to the frame's view: the buffer holds the visible ones first, then the rest, so
-                # passes from other cameras (shadow maps, mirrors) draw them all from the same buffer; changed
-                # rows are rewritten where they lie unless culling has to be done again
-                own_view = self.state.view_key == self.state.frame_view_key
-                stale = batch.position is None or len(batch.position) != n
-                view_key = self.state.view_key
-                if stale or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n))):
-                    visible = self._cull(batch) if own_view else None
-                    z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
-                    if visible is None:
-                        order = np.argsort(-z, kind="stable")
-                        batch.drawn = n
-                    else:
-                        seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
-                        order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
-                        batch.drawn = len(seen)
-                    packed = _pack(batch.rows, order, columns)
-                    batch.buffer.write(packed)
-                    batch.packed = packed  # the buffer's content: moved rows rewrite only their translations
-                    batch.position = np.empty(n, np.int64)
-                    batch.position[order] = np.arange(n)
-                    batch.sorted_for = self.state.view_key if own_view else None
-                    batch.dirty = None
-                    batch.sparse = None
-                elif batch.sparse or batch.dirty is not None:
-                    _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
-                if own_view:
-                    n = batch.drawn
-                    if not n:
-                        return 0
+                n = self._prepare_sorted(batch, columns, n)
+                if not n:
+                    return 0
             elif batch.sparse or batch.dirty is not None:
                 _upload_rows(batch, columns, None)
         else:
@@ -258,6 +233,42 @@ class BatchDrawer:
             batch.dirty = (0, n)
             batch.sparse = None
 
+    def _prepare_sorted(self, batch: Batch, columns: np.ndarray, n: int) -> int:
+        """Upload what changed of a big batch; returns how many rows to draw.
+
+        Big batches: opaque instances front to back (early depth tests skip
+        hidden fragments) and culled to the frame's view: the buffer holds the
+        visible ones first, then the rest, so passes from other cameras
+        (shadow maps, mirrors) draw them all from the same buffer; changed rows
+        are rewritten where they lie unless culling has to be done again.
+        """
+        own_view = self.state.view_key == self.state.frame_view_key
+        stale = batch.position is None or len(batch.position) != n
+        view_key = self.state.view_key
+        if stale or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n))):
+            visible = self._cull(batch) if own_view else None
+            z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
+            if visible is None:
+                order = np.argsort(-z, kind="stable")
+                batch.drawn = n
+            else:
+                seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
+                order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
+                batch.drawn = len(seen)
+            packed = _pack(batch.rows, order, columns)
+            batch.buffer.write(packed)
+            batch.packed = packed  # the buffer's content: moved rows rewrite only their translations
+            batch.position = np.empty(n, np.int64)
+            batch.position[order] = np.arange(n)
+            batch.sorted_for = self.state.view_key if own_view else None
+            batch.dirty = None
+            batch.sparse = None
+        elif batch.sparse or batch.dirty is not None:
+            if not own_view and _may_enter_view(batch, n):
+                batch.sorted_for = None  # another camera's pass uploads first: culled again in the frame's
+            _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
+        return batch.drawn if own_view else n
+
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
 
@@ -274,7 +285,7 @@ class BatchDrawer:
         if (
             batch.position is None
             or len(batch.position) != n
-            or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n)))
+            or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n)))
         ):
             big = n >= SORT_MIN and not batch.state.special
             visible = self._cull(batch) if own_view and big else None
@@ -296,6 +307,8 @@ class BatchDrawer:
             batch.dirty = None
             _upload_instance_set(batch, columns, order, everything=True)
         elif batch.sparse or batch.dirty is not None:
+            if not own_view and _may_enter_view(batch, n):
+                batch.sorted_for = None  # another camera's pass uploads first: culled again in the frame's
             _upload_instance_set(batch, columns, batch.offset_order)
         return batch.drawn if own_view else n
 
@@ -385,14 +398,18 @@ class BatchDrawer:
             if switch is not None:
                 lights = [(light, m) for light, m in lights if switch.allows(light)]
             view = self.state.view
-            # the lights' arrays of an earlier frame while the lights, their placements and the view are the same
-            stamp = (tuple([(id(light), light.version, m.tobytes()) for light, m in lights]), view.tobytes())
-            kept = self._lights_kept.get(key)
+            # the lights' arrays of an earlier pass with this view while the lights and their placements are the
+            # same (kept per view: a shadow map's depth pass does not push out the frame's own)
+            kept_key = (key, view.tobytes())
+            stamp = tuple([(id(light), light.version, m.tobytes()) for light, m in lights])
+            kept = self._lights_kept.get(kept_key)
             if kept is not None and kept[0] is switch and kept[1] == stamp and bool(everything) == kept[2]:
                 lu = kept[3]
             else:
                 lu = LightUniforms(lights, view, headlight=not everything)
-                self._lights_kept[key] = (switch, stamp, bool(everything), lu)
+                if len(self._lights_kept) >= _LIGHTS_KEPT:  # views of a moving camera: the old ones go
+                    self._lights_kept.clear()
+                self._lights_kept[kept_key] = (switch, stamp, bool(everything), lu)
             self.state.lights[key] = lu
         return lu
 
@@ -633,6 +650,19 @@ class BatchDrawer:
 def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
     return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
+
+
+def _may_enter_view(batch: Batch, n: int) -> bool:
+    """Whether changed rows of a batch culled to the frame's view may have entered it: some rows are culled and a
+    range of rows changed, or one of the few changed rows (``sparse``) was among the culled ones."""
+    if batch.drawn >= n:
+        return False
+    if batch.dirty:
+        return True
+    if batch.sparse:
+        position, drawn = batch.position, batch.drawn
+        return any(i >= len(position) or position[i] >= drawn for i in batch.sparse)
+    return False
 
 
 def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None) -> None:

@@ -35,6 +35,8 @@ _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
+#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
+_FEW = 8
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
@@ -86,6 +88,9 @@ class MovePlan:
         batches: dict[int, int] = {}
         self._batch_index = batches
         self._where: dict[int, int] | None = None  # id(item) -> its index in items (made on the first splice)
+        #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
+        #: followed through splices): a frame moving a few transforms finds their items without a pass over all
+        self._users: dict[int, list[int]] | None = None
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
@@ -116,11 +121,14 @@ class MovePlan:
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
         identity = len(self.transforms)
+        users = self._users
         for item in removed:
             i = where.pop(id(item), None)
             if i is not None:
                 self.chain[i] = identity  # never recomposed again
                 self.batch_of[i] = -1
+                if users is not None:
+                    _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
@@ -156,8 +164,10 @@ class MovePlan:
             self._extend("batch_of", len(new))[-len(new) :] = -1
             self._extend("row_of", len(new))[-len(new) :] = 0
             for item in new:
-                where[id(item)] = len(self.items)
+                i = where[id(item)] = len(self.items)
                 self.items.append(item)
+                if users is not None:
+                    _add_user(users, item, i)
         for item in (*new, *moved):
             i = where.get(id(item))
             if i is None or item.slot is None:
@@ -219,6 +229,8 @@ class MovePlan:
         """
         if not changed:
             return 0
+        if len(changed) <= _FEW:
+            return self._apply_few(changed)
         # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
         found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
         keep = found >= 0
@@ -259,6 +271,55 @@ class MovePlan:
         self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
         bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
         return bulk.count + self._apply_instances(set(positions.tolist()))
+
+    def _apply_few(self, changed: list[Any]) -> int:
+        """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
+        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item."""
+        users = self._users
+        if users is None:
+            users = self._users = {}
+            for i, item in enumerate(self.items):
+                _add_user(users, item, i)
+        index = self.index
+        positions: list[int] = []
+        affected: dict[int, None] = {}
+        for t in changed:
+            k = index.get(id(t))
+            if k is None:
+                continue
+            self.matrices[k] = t.matrix
+            positions.append(k)
+            for i in users.get(id(t), ()):
+                affected[i] = None
+        if not positions:
+            return 0
+        if self.bulk:
+            for key, (_, bulk) in list(self.bulk.items()):
+                if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
+                    del self.bulk[key]
+        matrices, local = self.matrices, self.local
+        identity = len(self.transforms)
+        rows_of: dict[int, list[int]] = {}
+        for i in affected:
+            links = [k for k in self.chain[i].tolist() if k != identity]
+            model = matrices[links[0]]
+            for k in links[1:]:
+                model = model @ matrices[k]
+            if local is not None:
+                model = model @ local[i]
+            row = model.T.reshape(16)  # rows hold M transposed
+            b = int(self.batch_of[i])
+            if b < 0:  # an item without a batch (transparent, overlay): its own row
+                self.items[i].row[_MODEL] = row
+                continue
+            batch = self.batches[b]
+            r = int(self.row_of[i])
+            batch.rows[r, _MODEL] = row
+            batch.row_changed(r)
+            rows_of.setdefault(b, []).append(r)
+        for b, where in rows_of.items():
+            self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
+        return len(affected) + (self._apply_instances(set(positions)) if self.instance_items else 0)
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -317,6 +378,20 @@ class MovePlan:
                 self.moved_rows.append((batch, None))
             count += 1
         return count
+
+
+def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` lies below each transform of its chain."""
+    for t in dict.fromkeys(item.chain):
+        users.setdefault(id(t), []).append(i)
+
+
+def _drop_user(users: dict[int, list[int]], item: Any, i: int) -> None:
+    """Item ``i`` left the plan: its transforms no longer move it."""
+    for t in item.chain:
+        found = users.get(id(t))
+        if found is not None and i in found:
+            found.remove(i)
 
 
 def _by_class(positions: Any, transforms: list[Any]) -> dict[type, list[int]]:

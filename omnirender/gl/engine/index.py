@@ -215,20 +215,33 @@ class RenderIndex:
                             out.append((batch, *self._batch_boxes(batch)))
         return out
 
-    def spliced(self, removed: list[DrawItem], added: list[DrawItem], places: list[int] | None = None) -> None:
+    def spliced(
+        self, removed: list[DrawItem], added: list[DrawItem], places: list[int] | None = None, swapped: bool = False
+    ) -> None:
         """Items left and came without a new plan: the item list follows, mirrors only when one is among them.
 
         ``places``: where each removed item was in the root scope's entries,
         removed in this order (without nested scopes the item list is in the
-        same order: no search).  The batches' row edits reach the boxes
-        through :meth:`batch_edits`.
+        same order: no search).  ``swapped``: the root's last entry took each
+        removed item's place (a root of one segment), else the later entries
+        moved up.  The batches' row edits reach the boxes through
+        :meth:`batch_edits`.
         """
         self.version += 1
-        if self._items is not None:
+        items = self._items
+        if items is not None:
             hints = places if places is not None and len(places) == len(removed) else [-1] * len(removed)
             for item, hint in zip(removed, hints, strict=True):
-                del self._items[position_of(self._items, item, hint)]
-            self._items.extend(added)
+                if not swapped:
+                    del items[position_of(items, item, hint)]
+                elif 0 <= hint < len(items) and items[hint] is item:
+                    items[hint] = items[-1]
+                    items.pop()
+                else:  # not in the root's order: made again when next asked
+                    items = self._items = None
+                    break
+            if items is not None:
+                items.extend(added)
         if any(not not_mirror(it) for it in (*removed, *added)):
             self._mirrors = None
         # the casters' bounds follow the batches' row edits (batch_edits); every caster is in a batch

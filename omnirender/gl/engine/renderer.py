@@ -59,6 +59,8 @@ class BatchInstaller:
         #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
         self.version = 0
         self._batch_pool: dict[tuple, Batch] = {}
+        #: (segment, root, id(item) -> place) of a one-segment root, for splices (_places_of)
+        self._places: tuple[Segment, Scope, dict[int, int]] | None = None
         self._uploaded_set: weakref.WeakSet[Geometry] = weakref.WeakSet()
 
     # -- installing a compiled root scope ------------------------------------------------
@@ -194,7 +196,11 @@ class BatchInstaller:
         ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
         moved_items: list[DrawItem] = []
         places: list[int] = []  # where each removed item was in the root's entries (the index's list follows)
+        where = self._places_of(root)
         for item in removed:
+            if where is not None:
+                places.append(self._take_out(root, last, where, item, ops, moved_items))
+                continue
             if item.slot is not None:
                 batch, index = item.slot
                 segment = owner[id(batch)]
@@ -232,6 +238,8 @@ class BatchInstaller:
                     new_batch = True
                 index = batch.append_row(item)
                 ops.setdefault(id(batch), (batch, []))[1].append(("append", index, item))
+            if where is not None:
+                where[id(item)] = len(root.entries)
             last.items.append(item)
             last.slots.append(item.slot)
             root.entries.append(item)
@@ -240,7 +248,7 @@ class BatchInstaller:
             _release_filtered(root)
         else:
             self._follow_splice(root, ops)
-        self.index.spliced(removed, added, places)
+        self.index.spliced(removed, added, places, swapped=where is not None)
         self._placements_changed()
         kept = {id(it.geometry) for it in added}
         if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
@@ -255,6 +263,57 @@ class BatchInstaller:
         self._spliced(version, added)
         self.updater.splice(removed, added, moved_items)
         return True
+
+    def _places_of(self, root: Scope) -> dict[int, int] | None:
+        """id(item) -> its place in ``root.entries`` when the root is one segment (no nested scope): its items
+        and slots are then the entries in the same order, and a splice removes an entry by moving the last one
+        into its place (no search, no shift).  Made on the first splice after an install, then kept."""
+        parts = root.parts
+        if parts is None or len(parts) != 1 or not isinstance(parts[0], Segment):
+            self._places = None
+            return None
+        held = self._places
+        if held is not None and held[0] is parts[0] and held[1] is root:
+            return held[2]
+        segment = parts[0]
+        if len(segment.items) != len(root.entries):
+            return None
+        where = {id(it): i for i, it in enumerate(root.entries)}
+        self._places = (segment, root, where)
+        return where
+
+    def _take_out(
+        self,
+        root: Scope,
+        segment: Segment,
+        where: dict[int, int],
+        item: DrawItem,
+        ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]],
+        moved_items: list[DrawItem],
+    ) -> int:
+        """Remove ``item`` from a one-segment root (see :meth:`_places_of`) and from its batch; returns its
+        place, which the root's last entry now takes."""
+        at = where.pop(id(item))
+        end = len(root.entries) - 1
+        if at != end:
+            tail = root.entries[end]
+            root.entries[at] = segment.items[at] = tail
+            segment.slots[at] = segment.slots[end]
+            where[id(tail)] = at
+        root.entries.pop()
+        segment.items.pop()
+        segment.slots.pop()
+        if item.slot is None:
+            segment.others.remove(item)
+            return at
+        batch, index = item.slot
+        moved = batch.remove_row(index)
+        ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
+        if moved is not None:
+            shifted = batch.items[index]
+            segment.slots[where[id(shifted)]] = shifted.slot
+            moved_items.append(shifted)
+        return at
 
     def _follow_splice(self, scope: Scope, ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]]) -> None:
         """Patch the rows the scope's filtered batches select after rows of their sources were removed or added.
@@ -297,6 +356,7 @@ class BatchInstaller:
 
     def _update_in_place(self, old: Scope, new: Scope) -> int:
         """Copy the rows of ``new``'s items into ``old``'s structure (checked to be the same); returns the count."""
+        self._places = None  # entries are replaced: the splices' map is made again
         changed = 0
         stack = [(old, new)]
         while stack:

@@ -235,8 +235,9 @@ class ShadowPlan:
         """The program features of a receiver in this frame (a ShadowMaps pass may override the filter)."""
         return (("SHADOW_MAPS", len(self.faces)), ("SHADOW_PCF", pcf_mode(self.settings.softness)))
 
-    def technique(self) -> _MapPasses | None:
-        """The depth passes, or None when no face needs drawing."""
+    def technique(self, select: Any = casts_shadows) -> _MapPasses | None:
+        """The depth passes, or None when no face needs drawing (``select``: the items they draw; None: every
+        opaque item, for a draw list whose opaque items all cast shadows)."""
         r = self.resolution
         passes = []
         for k, face in enumerate(self.faces):
@@ -247,7 +248,7 @@ class ShadowPlan:
                 Pass(
                     f"shadow-map[{k}]",
                     items="opaque",
-                    select=casts_shadows,
+                    select=select,
                     scopes="items",
                     source="scene",
                     target=self.target,
@@ -346,7 +347,7 @@ class ShadowMapStage(FrameStage):
     name = "shadow maps"
 
     def __init__(self) -> None:
-        self._cache: Any = None  # (key, plan, its technique)
+        self._cache: Any = None  # (key, plan, its technique, the select it was made with)
         #: what the atlas holds: its description and, per tile, the signature of the face drawn into it
         self._atlas: Target | None = None
         self._held: dict[tuple[int, int], bytes] = {}
@@ -354,6 +355,8 @@ class ShadowMapStage(FrameStage):
         self._scratch: dict[int, tuple[Any, Batch]] = {}
         #: (face signature, id(batch)) -> _Rects: the casters' rectangles in a face, following the journal
         self._rects: dict[tuple[bytes, int], _Rects] = {}
+        #: (root, index version, the full passes' select) of the last structure looked at (:meth:`_select`)
+        self._selected: tuple[Any, int, Any] | None = None
 
     def changed(self) -> None:
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
@@ -367,6 +370,26 @@ class ShadowMapStage(FrameStage):
         for _, batch in self._scratch.values():
             batch.release()
         self._scratch.clear()
+
+    def _select(self, engine: Any, root: Scope) -> Any:
+        """The full passes' item predicate: ``casts_shadows``, or None when every opaque batch of the draw list
+        casts shadows (then they draw the scene's own batches, not copies that the predicate filters: nothing
+        to keep up to date when rows move, leave or come)."""
+        index = engine.index
+        found = self._selected
+        if found is not None and found[0] is root and found[1] == index.version:
+            return found[2]
+        select = None
+        for scope in root.walk():
+            if scope.parts is None:
+                select = casts_shadows
+                break
+            batches = (b for part in scope.parts if isinstance(part, Segment) for b in part.batches)
+            if not all(casts_shadows(b) for b in batches if len(b.rows) or b.items):
+                select = casts_shadows
+                break
+        self._selected = (root, index.version, select)
+        return select
 
     def _forget(self) -> int:
         self._atlas = None
@@ -409,9 +432,10 @@ class ShadowMapStage(FrameStage):
         key = (id(settings), settings.version, lo.tobytes(), hi.tobytes(),
                tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
-        if plan is None:
-            plan = ShadowPlan(settings, lights, (lo, hi), tuple(engine.size))
-            self._cache = (key, plan, plan.technique())
+        select = self._select(engine, root) if installed else casts_shadows
+        if plan is None or self._cache[3] is not select:
+            plan = ShadowPlan(settings, lights, (lo, hi), tuple(engine.size)) if plan is None else plan
+            self._cache = (key, plan, plan.technique(select), select)
         technique = self._cache[2]
         if technique is None:
             return self._forget()
@@ -439,13 +463,13 @@ class ShadowMapStage(FrameStage):
                 partial.append((k, face, region))
         calls = 0
         if full:
-            calls += frame.run(_MapPasses([_face_pass(plan, k, face, None) for k, face in full]), root)
+            calls += frame.run(_MapPasses([_face_pass(plan, k, face, None, select) for k, face in full]), root)
             report["full"] = len(full)
         if partial:
             casters = engine.index.caster_boxes() if installed else None
             for k, face, region in partial:
                 if casters is None:  # some caster is not in a batch: the face is drawn in full
-                    calls += frame.run(_MapPasses([_face_pass(plan, k, face, None)]), root)
+                    calls += frame.run(_MapPasses([_face_pass(plan, k, face, None, select)]), root)
                     report["full"] += 1
                     continue
                 scope = self._casters_in(casters, face, self._held[face.tile], plan.resolution, region)
@@ -564,10 +588,13 @@ def _signature(face: _Face, resolution: int) -> bytes:
     return face.view.tobytes() + face.proj.tobytes() + bytes(repr((face.tile, resolution)), "ascii")
 
 
-def _face_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int] | None) -> Pass:
-    """The depth pass of face ``k``: the whole tile cleared and every caster drawn (``region`` None), or the
-    ``region`` (x, y, width, height texels of the tile from its bottom-left corner) cleared and drawn under a
-    scissor (the pass then draws the scope it is run on: the casters that meet the region)."""
+def _face_pass(
+    plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int] | None, select: Any = casts_shadows
+) -> Pass:
+    """The depth pass of face ``k``: the whole tile cleared and every caster drawn (``region`` None; ``select``
+    picks the casters, None: every opaque item), or the ``region`` (x, y, width, height texels of the tile from
+    its bottom-left corner) cleared and drawn under a scissor (the pass then draws the scope it is run on: the
+    casters that meet the region)."""
     r = plan.resolution
     col, row = face.tile
     height = plan.target.size[1]
@@ -579,7 +606,7 @@ def _face_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, in
     return Pass(
         f"shadow-map[{k}]" if region is None else f"shadow-map[{k}] partial",
         items="opaque",
-        select=casts_shadows if region is None else None,
+        select=select if region is None else None,
         scopes="items",
         source="scene" if region is None else "scope",
         target=plan.target,

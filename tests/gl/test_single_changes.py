@@ -1,0 +1,161 @@
+"""One change in a big scene costs what the change touches (issue 22, the single-change path).
+
+A few moved transforms find their rows through the move plan's transform -> items map (no pass over every
+chain); a moved transform whose nodes declare nothing keeps the scene's declarations; a splice in a root of
+one segment moves the last entry into the removed one's place.  Each rule is checked against a fresh engine's
+picture of the same scene, and the render index's lists against the installed root.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.gl
+
+SIZE = (80, 64)
+
+
+def fresh(scene: om.Node, shadows: bool = False) -> np.ndarray:
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=SIZE, samples=0, shadows=shadows) as e:
+        return e.render(scene).array
+
+
+def nested_scene() -> tuple[om.Node, list[om.Node], list[om.Node]]:
+    """Groups with a Rotation, leaves with a Translation, a Material and a shape placed by a shape-local matrix."""
+    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    groups = [
+        scene.add(om.Node(f"g{g}", [om.Translation(2.5 * g - 3.5, 0.0, 0.0), om.Rotation(10.0 * g, (0, 1, 0))]))
+        for g in range(4)
+    ]
+    leaves = []
+    for g, group in enumerate(groups):
+        for i in range(5):
+            shape = om.Box(size=(0.6, 0.4, 0.5)) if (g + i) % 2 else om.Sphere(radius=0.35)
+            leaves.append(
+                group.add(
+                    om.Node(
+                        f"l{g}_{i}",
+                        [om.Translation(0.0, i - 2.0, 0.0), om.Material(diffuse=(0.2 * i, 0.5, 0.3 * g)), shape],
+                    )
+                )
+            )
+    return scene, groups, leaves
+
+
+def test_a_few_moved_transforms_rewrite_their_rows_like_a_fresh_compile():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        declared = e.declared
+        steps = [
+            [leaves[3].items[0]],  # one leaf
+            [groups[1].items[1]],  # a group's rotation: five rows below it
+            [leaves[0].items[0], leaves[7].items[0], groups[2].items[0]],  # several, chains overlap
+            [leaf.items[0] for leaf in leaves[:8]],  # the most the few-moved path takes
+            [leaf.items[0] for leaf in leaves[:9]],  # the array path
+        ]
+        for frame, moved in enumerate(steps):
+            for t in moved:
+                if isinstance(t, om.Rotation):
+                    t.angle = t.angle + 15.0
+                else:
+                    t.offset = tuple(np.asarray(t.offset) + (0.1, 0.2 * (frame % 2), 0.15))
+            image = e.render(scene)
+            assert e.stats["compiled"] is False and e.stats["incremental"] >= len(moved)
+            assert np.array_equal(image.array, fresh(scene)), frame
+            if len(moved) <= 8:  # nothing moved declares anything: the declarations were kept
+                assert e.declared is declared
+
+
+def test_a_moved_transform_above_a_light_evaluates_the_declarations_again():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    lamp = om.Translation(0.0, 3.0, 4.0)
+    scene.add(om.Node("lamp", [lamp, om.PointLight(intensity=2.0)]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        lamp.offset = (-4.0, -2.0, 4.0)
+        image = e.render(scene)
+        assert e.stats["compiled"] is False
+        assert not np.array_equal(image.array, before)
+        assert np.array_equal(image.array, fresh(scene))
+        leaves[2].items[0].offset = (0.0, 0.5, 1.0)  # a quiet node again: declarations kept, the lamp's place too
+        image = e.render(scene)
+        assert np.array_equal(image.array, fresh(scene))
+
+
+def test_moves_after_splices_find_the_new_items_and_skip_the_removed():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    box = om.Box(size=0.5)
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        leaves[0].items[0].offset = (0.0, -2.0, 0.5)  # the transform -> items map is made here
+        e.render(scene)
+        for frame in range(3):
+            added = scene.add(om.Node(f"x{frame}", [om.Translation(frame - 1.0, 4.0, 0.0), om.Material(), box]))
+            gone = leaves[5 + frame]
+            groups[1].remove(gone)
+            e.render(scene)
+            assert e.stats["compiled"] == "subtrees"
+            added.items[0].offset = (frame - 1.0, 4.5, 0.5)
+            gone.items[0].offset = (9.0, 9.0, 9.0)  # not drawn any more: nothing to rewrite
+            groups[0].items[0].offset = (-3.5, 0.2 * frame, 0.0)
+            image = e.render(scene)
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), frame
+
+
+def test_splices_in_a_root_of_one_segment_keep_the_entries_items_and_index_in_one_order():
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=0.7)
+    nodes = [
+        scene.add(om.Node(f"b{i}", [om.Translation(i % 8 - 3.5, i // 8 - 2.0, 0.0), om.Material(), box]))
+        for i in range(40)
+    ]
+    glass = scene.add(om.Node("glass", [om.Translation(0, 3, 1), om.Color(0.5, 0.5, 1, 0.4), om.Sphere(radius=0.5)]))
+    with GLEngine(size=SIZE, samples=0, shadows=True) as e:
+        e.render(scene)
+        e.index.items()  # the index's list exists and must follow the splices
+        for frame in range(6):
+            j = (frame * 7 + 3) % len(nodes)
+            if frame % 3 == 0:
+                node = nodes[j]
+                node.remove(node.items[1])
+                node.insert(1, om.Material(diffuse=(1.0, 0.2 * frame, 0.1)))
+            elif frame % 3 == 1:
+                scene.remove(nodes.pop(j))
+                nodes.append(
+                    scene.add(om.Node(f"n{frame}", [om.Translation(frame - 3.0, 3.5, 0.0), om.Material(), box]))
+                )
+            else:
+                scene.remove(glass)
+                glass = scene.add(
+                    om.Node(
+                        f"glass{frame}", [om.Translation(frame - 3.0, 3, 1), om.Color(1, 0.5, 0.5, 0.4), om.Sphere()]
+                    )
+                )
+            image = e.render(scene)
+            assert e.stats["compiled"] == "subtrees"
+            root = e.root_scope
+            (segment,) = root.parts
+            assert segment.items == root.entries
+            assert [s for s in segment.slots] == [it.slot for it in segment.items]
+            assert e.index.items() == root.all_items()
+            assert sorted(map(id, segment.others)) == sorted(id(it) for it in segment.items if it.transparent)
+            for batch in segment.batches:
+                assert all(it.slot == (batch, r) for r, it in enumerate(batch.items))
+            assert np.array_equal(image.array, fresh(scene, True)), frame
