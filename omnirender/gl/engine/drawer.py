@@ -154,10 +154,10 @@ class BatchDrawer:
             calls = drawer(self.engine, batch.items, state)
             self.report.count(calls, len(batch.items))
             return calls
-        n = len(batch.rows)
+        n = batch.size
         if not n:
             return 0  # an instance set with no visible instance
-        highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        highlight = _highlighted(batch)
         single = n == 1 and batch.uniform and state.kind == "mesh"
         features = self._features(state, batch.uniform, highlight, composed, single)
         offset = not single and _takes_offsets(batch, state, features)
@@ -196,7 +196,7 @@ class BatchDrawer:
         self._apply_raster(raster, state)
         self._set_uniforms(target, state, composed)
         if batch.uniform:
-            self._set_material(target, batch.rows[0])
+            self._set_material(target, batch.first_row())
         mode = GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind)
         vao.render(mode, instances=n)
         if recorder is not None:
@@ -731,6 +731,23 @@ def _takes_offsets(batch: Batch, state: DrawState, features: tuple) -> bool:
     )
 
 
+def _highlighted(batch: Batch) -> bool:
+    """Whether some row of ``batch`` is highlighted; an instance set's answer is kept while its version holds.
+
+    (Its rows change only through changes that count a version, and a move
+    keeps the answer: :meth:`Batch.moved`.  Reading the rows would also write
+    the translations a move left pending, a strided pass over every row.)
+    """
+    if batch.items and batch.items[0].instances is not None:
+        seen = batch.highlight_seen
+        if seen is not None and seen[0] == batch.version:
+            return seen[1]
+        flag = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        batch.highlight_seen = (batch.version, flag)
+        return flag
+    return bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+
+
 def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | None, everything: bool = False) -> None:
     """Upload an instance set's batch: rows in buffer ``order`` (None: row order), translations in ``offsets``.
 
@@ -748,7 +765,7 @@ def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | 
         and mr is not None
         and mr[0] == batch.version == moved[0]
         and not batch.sparse
-        and len(moved[1]) == len(batch.rows)
+        and len(moved[1]) == batch.size
     ):
         batch.offsets.write(moved[1] if order is None else np.take(moved[1], order, axis=0))
         batch.dirty = None
