@@ -210,3 +210,29 @@ def test_a_user_stage_is_not_replayed_unless_it_says_so(engine):
     assert len(drawn) == 3 and not engine.stats["replayed"]
     engine.remove_stage("counting")
     steady(engine, root)
+
+
+def test_instance_sets_and_translation_arrays_moved_between_replayed_frames(engine):
+    positions = np.array([[-1.5, 0.0, 0.0], [0.0, 0.5, 0.0], [1.5, -0.5, 0.0]])
+    instances = om.InstanceSet(
+        om.Box(size=0.6), positions, colors=np.array([[1, 0, 0, 1], [0, 1, 0, 1], [0, 0, 1, 1.0]])
+    )
+    bound = np.array([[-1.0, 1.2, 0.0], [1.0, 1.2, 0.0]])
+    offsets = om.TranslationArray(bound)
+    root = om.Node("scene", [om.Camera.look_at(eye=(0, 0, 7)), om.DirectionalLight(direction=(-0.3, -0.5, -1.0)),
+                             instances])  # fmt: skip
+    for i in range(2):
+        root.add(om.Node(f"t{i}", [offsets[i], om.Color(1, 1, 0), om.Sphere(radius=0.3)]))
+    before = steady(engine, root)
+    positions[1] = (0.3, -1.0, 0.5)  # the application's array, written in place
+    instances.touch()
+    moved = engine.render(root, read_depth=False)
+    assert not moved.info["replayed"] and not np.array_equal(moved.array, before)
+    assert np.array_equal(moved.array, fresh(root))
+    steady(engine, root)
+    bound[0] = (-2.0, -1.2, 0.0)  # the bound array, written in place
+    offsets.touch()
+    image = engine.render(root, read_depth=False)
+    assert not image.info["replayed"]
+    assert np.array_equal(image.array, fresh(root))
+    assert np.array_equal(steady(engine, root), image.array)
