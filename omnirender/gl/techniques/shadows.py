@@ -282,6 +282,8 @@ class ShadowPlan:
                 r = self.resolution
                 self.tiles[k] = (col * r, row * r, r, r)
         self.style = np.asarray(self.settings.style(), np.float32)
+        #: (uniform, array length, ids of the light order for u_lshadow) -> the bytes written (:meth:`apply`)
+        self._bytes: dict[tuple[str, int, tuple[int, ...]], bytes] = {}
 
     def light_array(self, order: list[Any], size: int) -> np.ndarray:
         """``u_lshadow``: (first face, count, 0, 0) for the lights of a light-uniform set, in its order."""
@@ -296,14 +298,23 @@ class ShadowPlan:
         """Bind the atlas and write the shadow uniforms a program reads."""
         atlas.use(SHADOW_UNIT)
         program["u_shadow_atlas"].value = SHADOW_UNIT
-        for name, data in (("u_shadow_mat", self.matrices), ("u_shadow_tile", self.tiles),
-                           ("u_shadow_texel", self.texels), ("u_shadow_style", self.style)):  # fmt: skip
+        made = self._bytes
+        for name in ("u_shadow_mat", "u_shadow_tile", "u_shadow_texel", "u_shadow_style", "u_lshadow"):
             u = program.get(name, None)
-            if u is not None:  # the compiler may trim arrays to the elements a variant reads
-                u.write(data[: u.array_length].tobytes() if data.ndim > 1 else data.tobytes())
-        u = program.get("u_lshadow", None)
-        if u is not None:
-            u.write(self.light_array(order, u.array_length).tobytes())
+            if u is None:
+                continue
+            # the compiler may trim arrays to the elements a variant reads; the bytes are made once per length
+            key = (name, u.array_length, tuple(map(id, order)) if name == "u_lshadow" else ())
+            data = made.get(key)
+            if data is None:
+                if name == "u_lshadow":
+                    data = self.light_array(order, u.array_length).tobytes()
+                else:
+                    array = {"u_shadow_mat": self.matrices, "u_shadow_tile": self.tiles,
+                             "u_shadow_texel": self.texels, "u_shadow_style": self.style}[name]  # fmt: skip
+                    data = array[: u.array_length].tobytes() if array.ndim > 1 else array.tobytes()
+                made[key] = data
+            u.write(data)
 
 
 def frame_settings(root: Scope | None, enabled: bool) -> ShadowMaps | None:
@@ -649,6 +660,12 @@ def _changed_boxes(changes: list[Any]) -> tuple[list[list[float]], list[list[flo
         return [], []
     if len(changes) == 1 or all(c.new for c in changes) or not any(c.new for c in changes):
         return [a for c in changes for a in c.lo.tolist()], [b for c in changes for b in c.hi.tolist()]
+    if len(changes) == 2 and changes[0].batch is changes[1].batch and len(changes[0].lo) == len(changes[1].lo) == 1:
+        a, b = changes  # one row left and one came (a replaced Material): the same box cancels
+        lows, highs = a.lo.tolist() + b.lo.tolist(), a.hi.tolist() + b.hi.tolist()
+        if lows[0] == lows[1] and highs[0] == highs[1] and _depth_only_state(a.batch):
+            return [], []
+        return lows, highs
     left: dict[tuple[int, tuple[float, ...]], list[int]] = {}
     lows: list[list[float]] = []
     highs: list[list[float]] = []
