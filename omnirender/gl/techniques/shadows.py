@@ -383,6 +383,11 @@ class ShadowMapStage(FrameStage):
     def changed(self) -> None:
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
 
+    def replayable(self, engine: Any) -> bool:
+        """What it draws follows the draw list, lights and settings; a frame that draws anything here is
+        not recorded (its technique, target and shadow uniforms taint the frame plan)."""
+        return True
+
     def release(self) -> None:
         for _, batch in self._scratch.values():
             batch.release()
