@@ -196,7 +196,7 @@ class FrameRunner:
         draws (:mod:`.plan`) instead of running the stages again.
         """
         engine, ctx, state = self.engine, self.ctx, self.state
-        stages = tuple(self.stages)
+        stages = self.stages.frozen()  # the same tuple while no stage is added or removed (a plan's key holds it)
         for stage in stages:
             stage.prepare(engine)  # e.g. render textures first: their engines use the context
         fbo = engine.framebuffer if framebuffer is None else framebuffer
@@ -287,7 +287,7 @@ class FrameRunner:
             or engine.pushed_targets
         ):
             return None
-        objects = (fbo, engine.declared, engine.technique, engine.frame_technique, engine.stereo, installed, *stages)
+        objects = (fbo, engine.declared, engine.technique, engine.frame_technique, engine.stereo, installed, stages)
         values = (
             self.generation,
             engine.draw_list_version,

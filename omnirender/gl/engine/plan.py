@@ -51,21 +51,18 @@ __all__ = ["FramePlan", "FrameRecorder", "PlanKey", "RecordingProgram", "DrawOp"
 
 
 class PlanKey:
-    """What a frame's plan depends on: objects compared by identity, values by equality."""
+    """What a frame's plan depends on: objects by identity, values by equality, compared as one tuple.
+
+    The objects are held (``objects``) while the key lives, so their ids in ``values`` name them alone.
+    """
 
     __slots__ = ("objects", "values")
 
     def __init__(self, objects: tuple[Any, ...], values: tuple[Any, ...]) -> None:
         self.objects = objects
-        self.values = values
+        self.values = (*map(id, objects), *values)
 
     def matches(self, other: PlanKey) -> bool:
-        a, b = self.objects, other.objects
-        if len(a) != len(b):
-            return False
-        for x, y in zip(a, b, strict=True):
-            if x is not y:
-                return False
         return self.values == other.values
 
 
