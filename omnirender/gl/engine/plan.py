@@ -26,8 +26,10 @@ plan: a technique or stage that does not declare itself replayable (an
 application's technique may change its passes every frame), a pass with its
 own target, viewport, camera, clear, front face, full-screen or custom
 function, draw-item kinds with drawers of their own (text, volumes),
-transparent items (sorted by the view every frame), shadow maps, area lights'
-tables, render textures, pass inputs, tessellated patches, GL state set from
+transparent items (sorted by the view every frame), shadow maps drawn (a
+frame whose shadow stage kept every face of the atlas is recorded: the atlas
+bind and the shadow uniforms are draws' textures and writes like others),
+area lights' tables, render textures, pass inputs, tessellated patches, GL state set from
 outside the drawer (``apply_gl_state`` and the other public state calls),
 timer queries.
 
