@@ -394,7 +394,7 @@ class Batch:
             self.uniform = False
         if self.position is not None:
             if self.drawn == n:  # everything in view: the new row is drawn from the end of the buffer
-                self.position = np.append(self.position, n)
+                self.position = _appended_place(self.position, n)
                 self.drawn = n + 1
             else:
                 self.position = None  # culled: sorted and culled again
@@ -434,7 +434,7 @@ class Batch:
                     position[index] = position[last]
                     if tail == last:
                         tail = index
-                position = position[:last].copy()
+                position = position[:last]  # a view: an appended row takes the spare place after it
                 if freed != last:
                     position[tail] = freed  # the row drawn last fills the freed place
                     self.row_changed(tail)
@@ -589,6 +589,25 @@ class Batch:
         self.capacity = 0
         self.layout = None
         self.packed = None
+
+
+def _appended_place(position: np.ndarray, value: int) -> np.ndarray:
+    """``np.append(position, value)``, written into the spare place after ``position`` when its storage has one."""
+    n = len(position)
+    base = position.base
+    if (
+        isinstance(base, np.ndarray)
+        and base.ndim == 1
+        and base.dtype == position.dtype
+        and len(base) > n
+        and base.__array_interface__["data"][0] == position.__array_interface__["data"][0]
+    ):
+        out = base[: n + 1]
+    else:
+        out = np.empty(n + n // 8 + 16, position.dtype)[: n + 1]
+        out[:n] = position
+    out[n] = value
+    return out
 
 
 def uniform_material(rows: np.ndarray) -> bool:
