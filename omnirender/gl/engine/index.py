@@ -372,17 +372,20 @@ def _few_row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def _appended(a: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """``np.concatenate([a, new])`` written into spare rows after ``a`` when its storage has them (a view of it),
-    else into new storage with spare rows: a splice appending one row per frame copies no list of boxes."""
+    """``np.concatenate([a, new])`` written into spare rows after ``a`` when its storage has them, else into new
+    storage with spare rows: a splice appending one row per frame copies no list of boxes.
+
+    ``a`` is an array of its own or a prefix ``store[:n]`` of the storage this made (the only views of it the
+    index keeps: a removed row shortens the boxes the same way).
+    """
     n, k = len(a), len(new)
     base = a.base
     if (
         isinstance(base, np.ndarray)
+        and base.ndim == 2
         and base.dtype == a.dtype
-        and base.shape[1:] == a.shape[1:]
+        and base.shape[1] == a.shape[1]
         and len(base) >= n + k
-        and a.flags.c_contiguous
-        and (n == 0 or base.__array_interface__["data"][0] == a.__array_interface__["data"][0])
     ):
         out = base[: n + k]
     else:
