@@ -105,6 +105,7 @@ def test_shadow_casters_selected_once_follow_moves_and_replaced_items():
     from omnirender.gl import GLEngine
 
     scene, moves = moving_scene(24)
+    scene["/scene/floor"].insert(0, om.Shadowing(cast=False))  # not every item casts: the passes select
     with GLEngine(size=SIZE, samples=0) as e:
         e.render(scene, background=(0, 0, 0))
         planned = _filtered_batches(e)
@@ -118,3 +119,43 @@ def test_shadow_casters_selected_once_follow_moves_and_replaced_items():
         image = e.render(scene, background=(0, 0, 0))
         assert e.stats["incremental"] and np.array_equal(image.array, fresh(scene))
         assert _filtered_batches(e) == planned
+
+
+def test_when_every_item_casts_the_shadow_passes_draw_the_scenes_own_batches():
+    """No selection is planned when every opaque item casts shadows: the maps draw the batches the frame draws,
+    and rows that a full map redraw uploads first are still culled again for the frame's view."""
+    from omnirender.gl import GLEngine
+
+    scene, moves = moving_scene(80)  # big enough for the batch to be culled to the view (drawer.SORT_MIN)
+    far = moves[5]
+    far.offset = (40.0, 0.5, 0.0)  # out of the frame's view, still a caster
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene, background=(0, 0, 0))
+        assert not _filtered_batches(e)
+        far.offset = (0.5, 0.8, 1.0)  # into the view; the casters' bounds shrink: the maps are redrawn in full
+        image = e.render(scene, background=(0, 0, 0))
+        maps = e.stats["shadow_maps"]
+        assert e.stats["compiled"] is False and maps["full"] >= 1 and not maps["partial"]
+        assert np.array_equal(image.array, fresh(scene))
+        for frame in range(3):  # moves of some, partial map updates
+            for t in moves[frame::7]:
+                x, y, z = t.offset
+                t.offset = (x + 0.1, y, z - 0.1)
+            image = e.render(scene, background=(0, 0, 0))
+            assert np.array_equal(image.array, fresh(scene))
+        assert not _filtered_batches(e)
+
+
+def test_a_culled_node_moved_into_the_view_is_drawn():
+    """A big batch is culled to the frame's view; one row moved from outside it into it is culled again (the row
+    alone changed: a sparse upload would have left it among the culled rows)."""
+    from omnirender.gl import GLEngine
+
+    scene, moves = moving_scene(80)
+    moves[5].offset = (40.0, 0.5, 0.0)
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e, GLEngine(size=SIZE, samples=0, shadows=False) as f:
+        e.render(scene, background=(0, 0, 0))
+        moves[5].offset = (0.5, 0.8, 1.0)
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, f.render(scene, background=(0, 0, 0)).array)

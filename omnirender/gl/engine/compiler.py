@@ -338,9 +338,10 @@ class DrawListCompiler:
                 count = self.updater.apply(changed)
                 if count is not None:
                     self.engine.stats["incremental"] = count
-                    # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation again
+                    # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation
+                    # again (instance sets' arrays place neither: their declarations are kept)
                     engine = self.engine
-                    if not self._declares_nothing(changed):
+                    if self.updater.placed and not self._declares_nothing(changed):
                         engine.declared = engine.preevaluate(scene)
                         engine.camera = engine.declared.camera
                     self._compiled = (c[0], scene.version, mask_key, c[3])
@@ -401,7 +402,7 @@ class DrawListCompiler:
         quiet = self._quiet
         for c in changed:
             owners = c.owners
-            if not owners:
+            if not owners or len(owners) > 8:  # (a TranslationArray: the nodes of all its translations)
                 return False
             for node in owners:
                 if not isinstance(node, Node):

@@ -48,6 +48,8 @@ SORT_MIN = 64
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
 _MODEL = ROW.slice("model")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
+#: light uniform sets kept between passes and frames (by light switch and view) before they are all dropped
+_LIGHTS_KEPT = 16
 _OVER = ("src_alpha", "one_minus_src_alpha", "add")
 _MATERIAL_UNIFORMS = (("u_spec", "specular"), ("u_emis", "emission"), ("u_amb", "ambient"), ("u_pbr", "pbr"),
                       ("u_hl", "highlight"), ("u_point", "point"))  # fmt: skip
@@ -72,8 +74,10 @@ class BatchDrawer:
         self._transient: dict[Any, tuple[Any, ...]] = {}
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
-        #: id(light switch) -> (switch, stamp, any scene light, LightUniforms) of the last frame (_lights_for)
-        self._lights_kept: dict[int, tuple[Any, Any, bool, LightUniforms]] = {}
+        self._layouts: dict[tuple[str, ...], Any] = {}
+        #: (id(light switch), view) -> (switch, stamp, any scene light, LightUniforms) of earlier passes
+        #: (_lights_for): a frame that draws shadow maps alternates the light's view and its own, both kept
+        self._lights_kept: dict[tuple[int, bytes], tuple[Any, Any, bool, LightUniforms]] = {}
 
     def draw_items(self, scope: Scope, composed: Composed, nested: Any) -> int:
         """Draw the items of ``scope`` that ``composed`` selects; ``nested(scope)`` runs a nested technique scope.
@@ -101,6 +105,8 @@ class BatchDrawer:
             if filtered is not None:
                 keep = item_filter(composed)
                 others = [it for it in others if keep(it)]
+        if others and self.state.recorder is not None:
+            self.state.recorder.taint("transparent or overlay items (sorted and drawn by the view every frame)")
         if "transparent" in classes and others:
             calls += self._draw_transparent([it for it in others if it.transparent and not it.state.overlay], composed)
         if "overlay" in classes and others:
@@ -141,14 +147,17 @@ class BatchDrawer:
     def _draw_batch(self, batch: Batch, composed: Composed) -> int:
         state = batch.state
         drawer = self.drawers.get(state.kind)
+        recorder = self.state.recorder
         if drawer is not None:
+            if recorder is not None:
+                recorder.taint(f"draw items of kind {state.kind!r} (a drawer of their own)")
             calls = drawer(self.engine, batch.items, state)
             self.report.count(calls, len(batch.items))
             return calls
-        n = len(batch.rows)
+        n = batch.size
         if not n:
             return 0  # an instance set with no visible instance
-        highlight = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        highlight = _highlighted(batch)
         single = n == 1 and batch.uniform and state.kind == "mesh"
         features = self._features(state, batch.uniform, highlight, composed, single)
         offset = not single and _takes_offsets(batch, state, features)
@@ -156,16 +165,63 @@ class BatchDrawer:
             features = features + (("INSTANCE_OFFSET", True),)
         prog = self.programs.get(state.kind, features, state.code)
         fields = instance_fields(state.kind, dict(features))
-        if fields and batch.buffer is not None and batch.layout is not None and batch.layout.names() != fields:
+        if fields:
+            self._ensure_buffers(batch, self._layout(fields), n, offset)
+        volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
+        vao = batch.vaos.get(id(prog))
+        if vao is None:
+            vao = batch.vaos[id(prog)] = self._vao(
+                batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume, batch.offsets if offset else None
+            )
+        target = prog if recorder is None else recorder.begin_draw(prog)  # uniforms are written through it
+        if fields:
+            columns = self._columns(batch.layout)
+            if offset:
+                n = self._prepare_instance_set(batch, columns, n)
+                if not n:
+                    return 0
+            elif n >= SORT_MIN and not state.special:
+                n = self._prepare_sorted(batch, columns, n)
+                if not n:
+                    return 0
+            elif batch.sparse or batch.dirty is not None:
+                _upload_rows(batch, columns, None)
+        else:
+            row = batch.rows[0]
+            target["i_model"].write(row[_MODEL].tobytes())
+            u = target.get("i_color", None)
+            if u is not None:
+                u.write(row[ROW.slice("color")].tobytes())
+        raster = composed.raster(state.raster, defaults())
+        self._apply_raster(raster, state)
+        self._set_uniforms(target, state, composed)
+        if batch.uniform:
+            self._set_material(target, batch.first_row())
+        mode = GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind)
+        vao.render(mode, instances=n)
+        if recorder is not None:
+            recorder.end_draw(raster, len(state.clip), vao, mode, n)
+        self.report.count(1, n)
+        return 1
+
+    def _ensure_buffers(self, batch: Batch, layout: Any, n: int, offset: bool) -> None:
+        """Give ``batch`` GPU buffers of ``layout`` for its ``n`` rows (and its translations' own buffer when
+        ``offset``): made again (every row uploaded) when missing, too small or of another layout."""
+        recorder = self.state.recorder
+        if batch.buffer is not None and batch.layout is not None and batch.layout.names() != layout.names():
+            if recorder is not None:  # vertex arrays recorded earlier in the frame would be released
+                recorder.taint("a batch packed again for another program variant")
             batch.release()  # a variant reads other fields: re-pack
-        if fields and (
+        if (
             batch.buffer is None
             or batch.capacity < n
             or batch.geometry.buffers is None
             or (offset and batch.offsets is None)
         ):
+            if recorder is not None and batch.vaos:
+                recorder.taint("a batch's buffers made again")
             batch.release()
-            batch.layout = ROW.subset(fields)
+            batch.layout = layout
             # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
             capacity = max(n, 1) + (n // 8 + 16 if batch.storage is not None else 0)
             batch.buffer = gpu_call(
@@ -176,65 +232,42 @@ class BatchDrawer:
             batch.capacity = capacity
             batch.dirty = (0, n)
             batch.sparse = None
-        volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
-        vao = batch.vaos.get(id(prog))
-        if vao is None:
-            vao = batch.vaos[id(prog)] = self._vao(
-                batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume, batch.offsets if offset else None
-            )
-        if fields:
-            columns = self._columns(batch.layout)
-            if offset:
-                n = self._prepare_instance_set(batch, columns, n)
-                if not n:
-                    return 0
-            elif n >= SORT_MIN and not state.special:
-                # big batches: opaque instances front to back (early depth tests skip hidden fragments) and
-                # culled to the frame's view: the buffer holds the visible ones first, then the rest, so
-                # passes from other cameras (shadow maps, mirrors) draw them all from the same buffer; changed
-                # rows are rewritten where they lie unless culling has to be done again
-                own_view = self.state.view_key == self.state.frame_view_key
-                stale = batch.position is None or len(batch.position) != n
-                view_key = self.state.view_key
-                if stale or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n))):
-                    visible = self._cull(batch) if own_view else None
-                    z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
-                    if visible is None:
-                        order = np.argsort(-z, kind="stable")
-                        batch.drawn = n
-                    else:
-                        seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
-                        order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
-                        batch.drawn = len(seen)
-                    packed = _pack(batch.rows, order, columns)
-                    batch.buffer.write(packed)
-                    batch.packed = packed  # the buffer's content: moved rows rewrite only their translations
-                    batch.position = np.empty(n, np.int64)
-                    batch.position[order] = np.arange(n)
-                    batch.sorted_for = self.state.view_key if own_view else None
-                    batch.dirty = None
-                    batch.sparse = None
-                elif batch.sparse or batch.dirty is not None:
-                    _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
-                if own_view:
-                    n = batch.drawn
-                    if not n:
-                        return 0
-            elif batch.sparse or batch.dirty is not None:
-                _upload_rows(batch, columns, None)
-        else:
-            row = batch.rows[0]
-            prog["i_model"].write(row[_MODEL].tobytes())
-            u = prog.get("i_color", None)
-            if u is not None:
-                u.write(row[ROW.slice("color")].tobytes())
-        self._apply_raster(composed.raster(state.raster, defaults()), state)
-        self._set_uniforms(prog, state, composed)
-        if batch.uniform:
-            self._set_material(prog, batch.rows[0])
-        vao.render(GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
-        self.report.count(1, n)
-        return 1
+
+    def _prepare_sorted(self, batch: Batch, columns: np.ndarray, n: int) -> int:
+        """Upload what changed of a big batch; returns how many rows to draw.
+
+        Big batches: opaque instances front to back (early depth tests skip
+        hidden fragments) and culled to the frame's view: the buffer holds the
+        visible ones first, then the rest, so passes from other cameras
+        (shadow maps, mirrors) draw them all from the same buffer; changed rows
+        are rewritten where they lie unless culling has to be done again.
+        """
+        own_view = self.state.view_key == self.state.frame_view_key
+        stale = batch.position is None or len(batch.position) != n
+        view_key = self.state.view_key
+        if stale or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n))):
+            visible = self._cull(batch) if own_view else None
+            z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
+            if visible is None:
+                order = np.argsort(-z, kind="stable")
+                batch.drawn = n
+            else:
+                seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
+                order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
+                batch.drawn = len(seen)
+            packed = _pack(batch.rows, order, columns)
+            batch.buffer.write(packed)
+            batch.packed = packed  # the buffer's content: moved rows rewrite only their translations
+            batch.position = np.empty(n, np.int64)
+            batch.position[order] = np.arange(n)
+            batch.sorted_for = self.state.view_key if own_view else None
+            batch.dirty = None
+            batch.sparse = None
+        elif batch.sparse or batch.dirty is not None:
+            if not own_view and _may_enter_view(batch, n):
+                batch.sorted_for = None  # another camera's pass uploads first: culled again in the frame's
+            _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
+        return batch.drawn if own_view else n
 
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
@@ -252,7 +285,7 @@ class BatchDrawer:
         if (
             batch.position is None
             or len(batch.position) != n
-            or (own_view and (batch.sorted_for != view_key or (batch.dirty and batch.drawn < n)))
+            or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n)))
         ):
             big = n >= SORT_MIN and not batch.state.special
             visible = self._cull(batch) if own_view and big else None
@@ -274,6 +307,8 @@ class BatchDrawer:
             batch.dirty = None
             _upload_instance_set(batch, columns, order, everything=True)
         elif batch.sparse or batch.dirty is not None:
+            if not own_view and _may_enter_view(batch, n):
+                batch.sorted_for = None  # another camera's pass uploads first: culled again in the frame's
             _upload_instance_set(batch, columns, batch.offset_order)
         return batch.drawn if own_view else n
 
@@ -293,6 +328,14 @@ class BatchDrawer:
         distance = centers @ planes.T  # (n, 6) signed distances of the centres
         visible = (distance > -(radius * scale)[:, None]).all(axis=1)
         return None if visible.all() else visible
+
+    def _layout(self, fields: tuple[str, ...]) -> Any:
+        """The instance layout of ``fields`` (in the row's order: compared with a batch's to know whether the
+        batch must be packed again)."""
+        layout = self._layouts.get(fields)
+        if layout is None:
+            layout = self._layouts[fields] = ROW.subset(fields)
+        return layout
 
     def _columns(self, layout: Any) -> np.ndarray:
         key = layout.names()
@@ -326,6 +369,8 @@ class BatchDrawer:
     def _mode(self, geometry: Geometry, kind: str) -> int:
         ctx = self.ctx
         if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            if self.state.recorder is not None:
+                self.state.recorder.taint("tessellated patches (patch size set outside the recorder)")
             ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
             return ctx.PATCHES
         if kind == "points" or geometry.mode == "points":
@@ -353,14 +398,18 @@ class BatchDrawer:
             if switch is not None:
                 lights = [(light, m) for light, m in lights if switch.allows(light)]
             view = self.state.view
-            # the lights' arrays of an earlier frame while the lights, their placements and the view are the same
-            stamp = (tuple([(id(light), light.version, m.tobytes()) for light, m in lights]), view.tobytes())
-            kept = self._lights_kept.get(key)
+            # the lights' arrays of an earlier pass with this view while the lights and their placements are the
+            # same (kept per view: a shadow map's depth pass does not push out the frame's own)
+            kept_key = (key, view.tobytes())
+            stamp = tuple([(id(light), light.version, m.tobytes()) for light, m in lights])
+            kept = self._lights_kept.get(kept_key)
             if kept is not None and kept[0] is switch and kept[1] == stamp and bool(everything) == kept[2]:
                 lu = kept[3]
             else:
                 lu = LightUniforms(lights, view, headlight=not everything)
-                self._lights_kept[key] = (switch, stamp, bool(everything), lu)
+                if len(self._lights_kept) >= _LIGHTS_KEPT:  # views of a moving camera: the old ones go
+                    self._lights_kept.clear()
+                self._lights_kept[kept_key] = (switch, stamp, bool(everything), lu)
             self.state.lights[key] = lu
         return lu
 
@@ -369,11 +418,8 @@ class BatchDrawer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(data)
-        lights = self._lights_for(state.switch)
-        lights.apply(prog)
-        if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
-            plan = self.state.shadow_plan
-            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
+        recorder = self.state.recorder
+        self._set_lights(prog, state, recorder)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -390,11 +436,8 @@ class BatchDrawer:
                 u.value = tuple(float(v) for v in self.ctx.viewport[:2])
         if state.kind == "lines":
             prog["u_line_width"].value = float(state.value(LineWidth))
-        for unit, (sampler, texture, srgb) in enumerate(state.textures):
-            u = prog.get(sampler, None)
-            if u is not None:
-                self.texture(texture, srgb).use(unit)
-                u.value = unit
+        if state.textures:
+            self._bind_textures(prog, state, recorder)
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
@@ -411,7 +454,34 @@ class BatchDrawer:
                     u.value = value
         inputs = composed.inputs()
         if inputs:
+            if recorder is not None:
+                recorder.taint("a pass's shader inputs")
             self._bind_inputs(prog, inputs)
+
+    def _set_lights(self, prog: Any, state: DrawState, recorder: Any) -> None:
+        """The lights of the draw's light switch, and the shadow maps' uniforms and atlas."""
+        lights = self._lights_for(state.switch)
+        if recorder is not None and lights.has_area:
+            recorder.taint("area lights (their tables are bound outside the recorder)")
+        lights.apply(prog)
+        if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
+            if recorder is not None:
+                recorder.taint("shadow maps")
+            plan = self.state.shadow_plan
+            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
+
+    def _bind_textures(self, prog: Any, state: DrawState, recorder: Any) -> None:
+        """The draw's textures on units 0, 1, ... (those its program samples)."""
+        for unit, (sampler, texture, srgb) in enumerate(state.textures):
+            u = prog.get(sampler, None)
+            if u is not None:
+                gl_texture = self.texture(texture, srgb)
+                gl_texture.use(unit)
+                if recorder is not None:
+                    if getattr(texture, "rendered", False):
+                        recorder.taint("a render texture (its pipeline draws it every frame)")
+                    recorder.texture(gl_texture, unit)
+                u.value = unit
 
     def _bind_inputs(self, prog: Any, inputs: dict[str, Any]) -> None:
         """Bind a pass's Shader inputs (targets of the frame by name, or textures) from :data:`PASS_INPUT_UNIT`."""
@@ -582,6 +652,19 @@ def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
 
 
+def _may_enter_view(batch: Batch, n: int) -> bool:
+    """Whether changed rows of a batch culled to the frame's view may have entered it: some rows are culled and a
+    range of rows changed, or one of the few changed rows (``sparse``) was among the culled ones."""
+    if batch.drawn >= n:
+        return False
+    if batch.dirty:
+        return True
+    if batch.sparse:
+        position, drawn = batch.position, batch.drawn
+        return any(i >= len(position) or position[i] >= drawn for i in batch.sparse)
+    return False
+
+
 def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None) -> None:
     """Upload the batch's few changed rows (``sparse``) where they lie in its buffer; then the dirty range.
 
@@ -648,6 +731,23 @@ def _takes_offsets(batch: Batch, state: DrawState, features: tuple) -> bool:
     )
 
 
+def _highlighted(batch: Batch) -> bool:
+    """Whether some row of ``batch`` is highlighted; an instance set's answer is kept while its version holds.
+
+    (Its rows change only through changes that count a version, and a move
+    keeps the answer: :meth:`Batch.moved`.  Reading the rows would also write
+    the translations a move left pending, a strided pass over every row.)
+    """
+    if batch.items and batch.items[0].instances is not None:
+        seen = batch.highlight_seen
+        if seen is not None and seen[0] == batch.version:
+            return seen[1]
+        flag = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+        batch.highlight_seen = (batch.version, flag)
+        return flag
+    return bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+
+
 def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | None, everything: bool = False) -> None:
     """Upload an instance set's batch: rows in buffer ``order`` (None: row order), translations in ``offsets``.
 
@@ -665,7 +765,7 @@ def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | 
         and mr is not None
         and mr[0] == batch.version == moved[0]
         and not batch.sparse
-        and len(moved[1]) == len(batch.rows)
+        and len(moved[1]) == batch.size
     ):
         batch.offsets.write(moved[1] if order is None else np.take(moved[1], order, axis=0))
         batch.dirty = None

@@ -199,8 +199,17 @@ class DrawItem:
         self.moved_translations = None
 
     def rows(self) -> np.ndarray:
-        """The rows this item draws: its instances', or its own as a (1, stride) array."""
-        return self.instances if self.instances is not None else self.row[None, :]
+        """The rows this item draws: its instances', or its own as a (1, stride) array.
+
+        An instance set's rows are its batch's rows: translations a move left
+        pending there (:meth:`Batch.move_to`) are written first.
+        """
+        instances = self.instances
+        if instances is None:
+            return self.row[None, :]
+        if self.slot is not None:
+            self.slot[0].settle()
+        return instances
 
     def world_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World-space (min, max) of what the item draws (every instance), or None when it draws nothing."""
@@ -295,7 +304,9 @@ class Batch:
         "geometry",
         "state",
         "items",
-        "rows",
+        "_rows",
+        "_pending",
+        "highlight_seen",
         "buffer",
         "layout",
         "vaos",
@@ -325,7 +336,11 @@ class Batch:
         self.geometry = geometry
         self.state = state
         self.items: list[DrawItem] = []
-        self.rows = np.empty((0, ROW.stride), np.float32)
+        self._rows = np.empty((0, ROW.stride), np.float32)
+        #: (N, 3) float32 world translations of every row not yet written into them (:meth:`move_to`), or None
+        self._pending: np.ndarray | None = None
+        #: (version, whether some row is highlighted) as last seen; kept by moves (translations only)
+        self.highlight_seen: tuple[int, bool] | None = None
         self.buffer: Any = None
         self.layout: Any = None
         #: vertex arrays per program
@@ -370,6 +385,51 @@ class Batch:
         self.moved_offsets: tuple[int, np.ndarray] | None = None
         #: an instance set's batch: the row drawn at each place of its buffers (visible ones first), None: row order
         self.offset_order: np.ndarray | None = None
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The items' full rows, (N, ROW.stride) float32 (translations a move left pending are written first)."""
+        if self._pending is not None:
+            self.settle()
+        return self._rows
+
+    @rows.setter
+    def rows(self, value: np.ndarray) -> None:
+        self._rows = value
+        self._pending = None  # new rows: translations pending for the old ones do not apply
+        self.highlight_seen = None
+
+    @property
+    def size(self) -> int:
+        """How many rows (read without writing pending translations)."""
+        return len(self._rows)
+
+    def holds(self, rows: np.ndarray) -> bool:
+        """Whether ``rows`` is this batch's rows array itself (an instance set's batch holds its item's)."""
+        return self._rows is rows
+
+    def first_row(self) -> np.ndarray:
+        """Row 0 for its material fields (a pending move is not written: translations are not read here)."""
+        return self._rows[0]
+
+    def settle(self) -> None:
+        """Write the translations :meth:`move_to` left pending into the rows."""
+        pending = self._pending
+        if pending is not None:
+            self._pending = None
+            set_translations(self._rows, pending)
+
+    def move_to(self, world: np.ndarray) -> None:
+        """Every row's translation becomes ``world`` ((N, 3) C-contiguous float32, not written to afterwards).
+
+        An instance set's positions-only move: the translations are written into
+        the rows only when the rows are next read (:attr:`rows`), so a frame that
+        just draws the set uploads ``world`` (``moved_offsets``) and never touches
+        the rows (a strided write over all of them: 0.25-1 ms per 100,000).
+        """
+        self._pending = world
+        self.moved(0, len(world))
+        self.moved_offsets = (self.version, world)
 
     def hold(self, rows: np.ndarray) -> None:
         """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""
@@ -511,6 +571,9 @@ class Batch:
         """Rows ``lo:hi`` changed in their translation columns only (positions moved): :meth:`changed`, and the
         upload rewrites only those columns when nothing else changed since the last one."""
         only = self.moved_range is not None or (self._dirty is None and not self.sparse)
+        seen = self.highlight_seen
+        if seen is not None and seen[0] == self.version:
+            self.highlight_seen = (self.version + 1, seen[1])  # translations change no highlight
         self.changed(lo, hi)
         if only:
             lo, hi = self._dirty  # type: ignore[misc]
@@ -555,11 +618,9 @@ class Batch:
         if moved is None or mr is None or not moved[0] == mr[0] == source.version == self.source_version + 1:
             return False
         world = moved[1] if self.picks is None else moved[1][self.picks]
-        if len(world) != len(self.rows) or (self._dirty is not None or self.sparse) and self.moved_range is None:
+        if len(world) != len(self._rows) or (self._dirty is not None or self.sparse) and self.moved_range is None:
             return False
-        set_translations(self.rows, world)
-        self.moved(0, len(self.rows))
-        self.moved_offsets = (self.version, world)
+        self.move_to(world)
         return True
 
     def _follow_rows(self, source: Batch) -> bool:

@@ -16,6 +16,7 @@ changed rows as one range (or all of them when most changed).  Anything else
 from __future__ import annotations
 
 from itertools import compress, repeat
+from operator import is_
 from typing import Any
 
 import numpy as np
@@ -97,6 +98,9 @@ class MovePlan:
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
         self.many_moves = 0
+        #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
+        #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -117,6 +121,7 @@ class MovePlan:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         self.many_moves = 0
+        self._last = None
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -231,14 +236,20 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self._apply_few(changed)
-        # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
-        found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
-        keep = found >= 0
-        if not keep.any():
+        last = self._last
+        if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
+            _, positions, moved, translations = last
+        else:
+            # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
+            found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
+            keep = found >= 0
+            positions = found[keep]
+            moved = changed if keep.all() else list(compress(changed, keep.tolist()))
+            translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
+            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
+        if not len(positions):
             return 0
-        positions = found[keep]
-        moved = changed if keep.all() else list(compress(changed, keep.tolist()))
-        if len(moved) >= _MANY and set(map(type, moved)) == {Translation}:
+        if translations:
             count = self._apply_translations(positions, moved)
             if count is not None:
                 return count
@@ -246,6 +257,18 @@ class MovePlan:
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
         count = self._apply_items(positions)
         return count + self._apply_instances(set(positions.tolist()))
+
+    def same_as_last(self, changed: list[Any]) -> bool:
+        """Whether ``changed`` holds the same transforms, in the same order, as the last :meth:`apply` of many.
+
+        A C-level pass of identity tests; when True, the next :meth:`apply` of
+        ``changed`` reuses the last look-ups (where the plan holds them, their classes).
+        """
+        last = self._last
+        if last is None or len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
+            return False
+        self._last = (changed, *last[1:])
+        return True
 
     def _apply_translations(self, positions: np.ndarray, moved: list[Any]) -> int | None:
         """Many plain ``Translation`` objects moved (a simulation's setter loop): written like an array's rows.
@@ -370,7 +393,7 @@ class MovePlan:
             for k in chain[1:]:
                 m = m @ self.matrices[k]
             world = m @ item.instance_models
-            item.instances[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)
+            item.rows()[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)  # (pending ones written first)
             if item.slot is not None:
                 batch, _ = item.slot
                 batch.rows[:, _MODEL] = item.instances[:, _MODEL]
@@ -425,6 +448,9 @@ class TransformUpdater:
         self._placements_changed = placements_changed
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
+        #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
+        #: place no light or camera: the compiler then keeps the scene's declarations)
+        self.placed = True
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -452,6 +478,10 @@ class TransformUpdater:
         """
         if not changed:
             return None
+        plan = self._plan
+        if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+            self.placed = True
+            return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
         if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
@@ -473,7 +503,8 @@ class TransformUpdater:
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
-        count = self._apply_moves(moved, arrays) if moved or arrays else 0
+        self.placed = bool(moved or arrays)
+        count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
         if updates:
@@ -481,7 +512,7 @@ class TransformUpdater:
             self._placements_changed()
         return count + len(updates)
 
-    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, InstanceRows]] | None:
+    def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
         plan = self.plan()
         out = []
@@ -491,8 +522,11 @@ class TransformUpdater:
                 return None
             positions = _positions_only(shape, items)
             if positions is not None:
-                out.extend((item, positions) for item in items)
-                continue
+                moves = [_moved_world(item, positions) for item in items]
+                # not finite (or beyond float32): the full path, which names the instance
+                if all(np.isfinite(world).all() for world, _ in moves):
+                    out.extend(zip(items, moves, strict=True))
+                    continue
             matrices, colors, may_mirror = set_arrays(shape)
             for item in items:
                 template = item.template
@@ -541,8 +575,8 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Positions that
-    are not finite take the full path, which names the instance.
+    their conversion to linear is done once, not every frame).  Whether they
+    are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
         return None
@@ -552,7 +586,7 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     t = np.asarray(t)
     if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
         t = t.astype(np.float64)
-    if t.ndim != 2 or t.shape[1] != 3 or not np.isfinite(t).all():
+    if t.ndim != 2 or t.shape[1] != 3:
         return None
     colors = shape.colors
     if colors is not None:
@@ -567,39 +601,58 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     return t
 
 
-def _write_positions(item: Any, positions: np.ndarray) -> None:
-    """Write the translations of an instance set's rows (the chain, then the position, then the shape's local)."""
+def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An instance set item's world translations for ``positions`` (the chain, the position, the shape's local).
+
+    Returns a new (N, 3) float32 array of them (the rows' translations, and
+    what the next draw uploads as it is) and the translations its
+    ``instance_models`` take (float64 where a chain multiplies them later).
+    """
     local = item.template.local
-    offset = positions if local is None else positions + local[:3, 3]
-    model = _chain_matrix(item.chain)
-    if (model == _EYE4).all():
-        world = offset  # the common case: the application's array is the world translations
-    elif (model[:3, :3] == _EYE3).all():
+    shift = None if local is None or not local[:3, 3].any() else local[:3, 3]
+    model = _chain_matrix(item.chain) if item.chain else None
+    if model is not None and (model == _EYE4).all():
+        model = None
+    if model is None:
+        # the common case: the application's array (shifted by the shape's local) is the world translations
+        world = np.array(positions, dtype=np.float32) if shift is None else np.add(positions, shift, dtype=np.float32)
+        # the matrices take them when next read (a transform above the set moved: only items with a chain);
+        # without a chain nothing reads them but a fresh compile, so float32 (what the rows hold) is kept
+        if not item.chain and shift is None:
+            return world, world
+        return world, np.array(positions, dtype=np.float64) if shift is None else positions + shift
+    offset = positions if shift is None else positions + shift
+    if (model[:3, :3] == _EYE3).all():
         world = offset + model[:3, 3]
     else:  # three scaled columns rather than a (N, 3) @ (3, 3) product (BLAS threads cost more than they save)
         world = offset[:, 0:1] * model[:3, 0] + offset[:, 1:2] * model[:3, 1] + offset[:, 2:3] * model[:3, 2]
         world += model[:3, 3]
-    # one float32 array (none made when the application's already is a contiguous one): the rows' translations
-    # and, as it is, what the next draw writes to the instance set's offsets buffer (drawer.py)
-    world = np.ascontiguousarray(world, dtype=np.float32)
-    # the matrices take them when next read (a transform above the set moves), from a copy of the caller's array
-    item.moved_translations = offset if offset is not positions else np.array(offset)
+    return np.ascontiguousarray(world, dtype=np.float32), offset if offset is not positions else np.array(offset)
+
+
+def _write_positions(item: Any, world: np.ndarray, translations: np.ndarray) -> None:
+    """Move an instance set's rows to ``world`` (from :func:`_moved_world`).
+
+    The batch keeps ``world`` as its rows' pending translations and as what the
+    next draw uploads to the set's offsets buffer (:meth:`Batch.move_to`); the
+    rows themselves are written only when something reads them.
+    """
+    item.moved_translations = translations
+    if item.slot is not None and item.slot[0].holds(item.instances):
+        item.slot[0].move_to(world)  # the rows are the item's: written when next read
+        return
     set_translations(item.instances, world)
     if item.slot is not None:
-        batch, _ = item.slot
-        if batch.rows is not item.instances:
-            set_translations(batch.rows, world)
-        batch.moved(0, len(batch.rows))  # translation columns only: the upload rewrites just those
-        batch.moved_offsets = (batch.version, world)
+        item.slot[0].move_to(world)
 
 
-def _install_rows(item: Any, made: InstanceRows | np.ndarray) -> None:
+def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray]) -> None:
     """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
 
-    An array instead: only the instance positions changed (:func:`_positions_only`).
+    A pair of arrays instead: only the instance positions changed (:func:`_moved_world`).
     """
-    if isinstance(made, np.ndarray):
-        _write_positions(item, made)
+    if isinstance(made, tuple):
+        _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
     item.instances = made.rows

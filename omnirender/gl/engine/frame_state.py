@@ -15,6 +15,9 @@ import numpy as np
 
 __all__ = ["FrameState", "ProjectionInfo"]
 
+#: cameras whose uniforms are kept (the frame's, shadow maps', mirrors') before they are all dropped
+_CAMERAS_KEPT = 8
+
 
 class ProjectionInfo:
     """Near, far and kind of a projection given as a matrix (what depth read-back needs of a camera)."""
@@ -38,6 +41,7 @@ class FrameState:
 
     __slots__ = (
         "camera",
+        "_cameras",
         "view",
         "proj",
         "ortho",
@@ -53,6 +57,7 @@ class FrameState:
         "shadow_plan",
         "background",
         "drawing",
+        "recorder",
     )
 
     def __init__(self, size: tuple[int, int]) -> None:
@@ -65,6 +70,8 @@ class FrameState:
         self.view_key = b""
         #: u_view, u_proj, u_eye_to_world of the pass as float32 bytes (transposed for GL)
         self.uniforms: dict[str, bytes] = {}
+        #: (view, projection) bytes -> those uniforms, for the last few cameras
+        self._cameras: dict[bytes, dict[str, bytes]] = {}
         #: LightUniforms of the pass by light switch (made again whenever the camera changes)
         self.lights: dict[int, Any] = {}
         #: the frame's own view (the same in every pass: shadow maps and mirrors draw with other views)
@@ -84,16 +91,24 @@ class FrameState:
         self.background: Any = None
         #: whether a frame is being drawn
         self.drawing = False
+        #: the FrameRecorder of the frame being drawn (:mod:`.plan`), or None when the frame is not recorded
+        self.recorder: Any = None
 
     def set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         """Make (``view``, ``proj``) the camera of the pass being drawn."""
         key = view.tobytes() + proj.tobytes()
         if key != getattr(self, "view_key", None):  # the same camera as the last pass's: its uniforms kept
-            self.uniforms = {
-                "u_view": view.T.astype(np.float32).tobytes(),
-                "u_proj": proj.T.astype(np.float32).tobytes(),
-                "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
-            }
+            uniforms = self._cameras.get(key)
+            if uniforms is None:  # a camera not among the last few (a shadow map's and the frame's alternate)
+                uniforms = {
+                    "u_view": view.T.astype(np.float32).tobytes(),
+                    "u_proj": proj.T.astype(np.float32).tobytes(),
+                    "u_eye_to_world": np.linalg.inv(view).T.astype(np.float32).tobytes(),
+                }
+                if len(self._cameras) >= _CAMERAS_KEPT:
+                    self._cameras.clear()
+                self._cameras[key] = uniforms
+            self.uniforms = uniforms
         self.view = view
         self.proj = proj
         self.ortho = ortho

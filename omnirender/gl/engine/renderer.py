@@ -141,8 +141,13 @@ class BatchInstaller:
             if batch is None:
                 batch = Batch(key[0], key[1])
             batch.items = group
-            if group[0].instances is None and not (where and where[0] == "filtered"):
+            filtered = bool(where) and where[0] == "filtered"
+            if group[0].instances is None and not filtered:
                 batch.hold(np.stack([it.row for it in group]))  # spare rows: items added later keep the views
+            elif not filtered:
+                # an instance set's batch: its item's rows themselves, so a move writes them once (dynamic.py)
+                batch.rows = group[0].rows()  # (translations a move left pending in its old batch written)
+                batch.storage = None
             else:
                 batch.rows = group[0].rows().copy() if len(group) == 1 else np.stack([it.row for it in group])
                 batch.storage = None
@@ -386,7 +391,8 @@ class BatchInstaller:
                     if y.instances is not None:  # an instance set's array: the whole batch, maybe another length
                         if len(batch.rows) != len(y.instances):
                             batch.position = None  # sorted and culled again
-                        batch.rows = y.instances.copy()
+                        batch.settle()  # the replaced item's rows take what a move left pending
+                        batch.rows = y.rows()  # the item's rows themselves (written once by a move)
                         batch.dirty = None
                         batch.changed(0, len(batch.rows))
                         batch.uniform = uniform_material(batch.rows)
