@@ -169,7 +169,7 @@ class RenderIndex:
                     if self._room(1):
                         self._note(CasterChange(batch, a, b, True, np.array([index]), True))
                 if lo is not None:
-                    lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+                    lo, hi = _appended(lo, a), _appended(hi, b)
         if lo is not None and len(lo) == len(batch.rows):
             self._boxes[id(batch)] = (batch, lo, hi)
         else:
@@ -333,8 +333,11 @@ def _column_max(a: np.ndarray) -> np.ndarray:
 def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre).
 
-    Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows.
+    Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows;
+    a few rows (a splice's, a moved item's) in plain floats, the same operations in the same order.
     """
+    if len(rows) <= _FEW_ROWS:
+        return _few_row_boxes(geometry, rows)
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
     c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
     m = rows[:, _MODEL].astype(np.float64)  # each row holds M transposed: M[k, j] is m[:, 4 j + k]
@@ -346,6 +349,50 @@ def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         lo[:, k] = center - half
         hi[:, k] = center + half
     return lo, hi
+
+
+#: rows up to which :func:`row_boxes` computes in Python floats (numpy's per-call cost is more for so few)
+_FEW_ROWS = 4
+
+
+def _few_row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`row_boxes` of a few rows: the same sums of float64 products, each row's 16 numbers as floats."""
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(b, dtype=np.float64).tolist() for b in geometry.bounds)
+    c0, c1, c2 = (x0 + x1) / 2.0, (y0 + y1) / 2.0, (z0 + z1) / 2.0
+    e0, e1, e2 = (x1 - x0) / 2.0, (y1 - y0) / 2.0, (z1 - z0) / 2.0
+    lo: list[float] = []
+    hi: list[float] = []
+    for m in rows[:, _MODEL].tolist():  # each row holds M transposed: M[k, j] is m[4 j + k]
+        for k in range(3):
+            center = m[k] * c0 + m[4 + k] * c1 + m[8 + k] * c2 + m[12 + k]
+            half = abs(m[k]) * e0 + abs(m[4 + k]) * e1 + abs(m[8 + k]) * e2
+            lo.append(center - half)
+            hi.append(center + half)
+    return np.array(lo).reshape(-1, 3), np.array(hi).reshape(-1, 3)
+
+
+def _appended(a: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """``np.concatenate([a, new])`` written into spare rows after ``a`` when its storage has them, else into new
+    storage with spare rows: a splice appending one row per frame copies no list of boxes.
+
+    ``a`` is an array of its own or a prefix ``store[:n]`` of the storage this made (the only views of it the
+    index keeps: a removed row shortens the boxes the same way).
+    """
+    n, k = len(a), len(new)
+    base = a.base
+    if (
+        isinstance(base, np.ndarray)
+        and base.ndim == 2
+        and base.dtype == a.dtype
+        and base.shape[1] == a.shape[1]
+        and len(base) >= n + k
+    ):
+        out = base[: n + k]
+    else:
+        out = np.empty((n + max(k, n // 8 + 16), *a.shape[1:]), a.dtype)[: n + k]
+        out[:n] = a
+    out[n:] = new
+    return out
 
 
 def rows_bounds(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
