@@ -101,18 +101,20 @@ class RenderIndex:
         for batch, where in rows:
             found = boxes.get(id(batch))
             caster = casts_shadows(batch)  # a batch's items share geometry and state: the batch decides
-            if isinstance(where, slice):  # a run of rows (a bound array's): its indices
-                where = np.arange(len(batch.rows))[where]
-            if caster and where is not None and len(where) > JOURNAL_ROWS:  # many moved: the maps in full
-                self._journal = self._casters = None
+            count = len(range(*where.indices(len(batch.rows)))) if isinstance(where, slice) else None
+            if caster and where is not None and (len(where) if count is None else count) > JOURNAL_ROWS:
+                self._journal = self._casters = None  # many moved: the maps in full
             if found is None or where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
                 if found is not None:
                     del boxes[id(batch)]
                 if caster:
                     self._journal = self._casters = None  # the old places are not known
                 continue
+            # a run of rows (a bound array's) stays a slice: views and block copies, not gathers of every row
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
             if caster and (self._casters is not None or self._journal is not None):
+                if count is not None:
+                    where = np.arange(len(batch.rows))[where]  # the journal's row indices
                 old = (found[1][where], found[2][where])  # copies (fancy index)
                 self._follow_casters(old, (lo, hi))
                 if self._room(len(lo)):
@@ -337,7 +339,9 @@ def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
     c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
-    m = rows[:, _MODEL].astype(np.float64)  # each row holds M transposed: M[k, j] is m[:, 4 j + k]
+    # each row holds M transposed: M[k, j] is column 4 j + k of the model; float32 columns times float64
+    # scalars give float64 (no float64 copy of every row's model first)
+    m = rows[:, _MODEL]
     lo = np.empty((len(rows), 3))
     hi = np.empty((len(rows), 3))
     for k in range(3):
