@@ -384,8 +384,9 @@ class ShadowMapStage(FrameStage):
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
 
     def replayable(self, engine: Any) -> bool:
-        """What it draws follows the draw list, lights and settings; a frame that draws anything here is
-        not recorded (its technique, target and shadow uniforms taint the frame plan)."""
+        """What it draws follows the draw list, lights and settings: a frame whose atlas faces were all kept
+        may be replayed (the atlas stays; its bind and uniforms are recorded with the draws); a frame that
+        draws a face is not recorded (the map passes' technique is not replayable)."""
         return True
 
     def release(self) -> None:
