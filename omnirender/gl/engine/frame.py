@@ -90,6 +90,8 @@ class FrameRunner:
         self.generation = 0
         #: the last frame, recorded (:mod:`.plan`): replayed while its key holds, or None
         self.plan: FramePlan | None = None
+        #: record steady frames and replay them (False: every frame is drawn in full, e.g. to compare)
+        self.replay = True
         #: why the last frame drawn in full was not kept as a plan (None: it was, or it was not recorded)
         self.not_recorded: str | None = None
 
@@ -278,7 +280,8 @@ class FrameRunner:
         installed)."""
         engine, state = self.engine, self.state
         if (
-            override is not None
+            not self.replay
+            or override is not None
             or framebuffer is not None
             or not clear
             or installed is None
