@@ -672,6 +672,9 @@ class FrameRunner:
         applier.bind(self.engine.framebuffer if fbo is None else fbo, self.engine.size if size is None else size)
 
     def release(self) -> None:
+        if self.plan is not None and self.engine.programs.owner is self.plan:
+            self.engine.programs.owner = None  # (a cache given by the caller outlives the engine)
+        self.plan = None
         self.fullscreen_programs.release()
         for stage in self.stages:
             stage.release()
