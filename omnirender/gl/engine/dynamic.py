@@ -443,9 +443,7 @@ class TransformUpdater:
     ``instance_state`` (the draw state of an instance set's template).
     """
 
-    def __init__(
-        self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None
-    ) -> None:
+    def __init__(self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None) -> None:
         self.index = index
         self._placements_changed = placements_changed
         #: tells the frame that only these batches' rows moved in place (it may keep its recorded plan), or None
