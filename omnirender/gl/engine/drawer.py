@@ -269,6 +269,39 @@ class BatchDrawer:
             _upload_rows(batch, columns, batch.position)  # the changed rows where they lie
         return batch.drawn if own_view else n
 
+    def upload_moved(self, batch: Batch) -> bool:
+        """Upload ``batch``'s changed rows where they lie, as its draw in the frame's own view would, for a
+        replayed frame plan (rows moved in place since it was recorded); False, with nothing uploaded, when
+        its draw would do more than that: sort or cull it again, pack it again, write a uniform from its row
+        (one row), or an instance set's buffers."""
+        n = batch.size
+        if (
+            n <= 1
+            or batch.buffer is None
+            or batch.layout is None
+            or batch.offsets is not None
+            or batch.capacity < n
+            or batch.geometry.buffers is None
+            or (batch.items and batch.items[0].instances is not None)
+        ):
+            return False
+        if not (batch.sparse or batch.dirty is not None):
+            return True
+        state = self.state
+        position = None
+        if n >= SORT_MIN and not batch.state.special:
+            position = batch.position
+            if (
+                position is None
+                or len(position) != n
+                or state.view_key != state.frame_view_key
+                or batch.sorted_for != state.view_key
+                or _may_enter_view(batch, n)
+            ):
+                return False
+        _upload_rows(batch, self._columns(batch.layout), position)
+        return True
+
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
 
