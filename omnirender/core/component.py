@@ -15,6 +15,7 @@ empty and are recomputed on first use.
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections import deque
 from collections.abc import Callable
@@ -25,6 +26,8 @@ from typing import Any
 __all__ = [
     "ChangeJournal",
     "note_change",
+    "note_later",
+    "flush_changes",
     "note_edit",
     "RenderingComponent",
     "Shape",
@@ -59,7 +62,11 @@ class ChangeJournal:
         weakref.finalize(self, _forget_journal, changed, edits)
 
     def drain(self) -> list[RenderingComponent]:
-        """The components changed since the last drain, in the order they first changed; empties the journal."""
+        """The components changed since the last drain, in the order they were told of; empties the journal.
+
+        Changes noted for later (:func:`note_later`) are told first.
+        """
+        flush_changes()
         changed = list(self._changed.values())
         self._changed.clear()
         return changed
@@ -76,6 +83,7 @@ class ChangeJournal:
         return None if None in edits else edits  # type: ignore[return-value]
 
     def __len__(self) -> int:
+        flush_changes()
         return len(self._changed)
 
 
@@ -106,6 +114,60 @@ def note_change(what: Any) -> None:
     """
     for changed in _JOURNALS:
         changed[id(what)] = what
+
+
+#: Components changed whose owners and journals are told at the next observation (see :func:`note_later`).
+_PENDING: list[RenderingComponent] = []
+_FLUSH_LOCK = threading.Lock()
+#: Changes :data:`_PENDING` holds before the next one tells them at once (a loop that never observes).
+PENDING_LIMIT = 1 << 16
+
+
+def note_later(component: RenderingComponent) -> None:
+    """Record that ``component`` changed; its owners (nodes) and the journals hear of it at the next observation.
+
+    A transform's setter calls this instead of :meth:`RenderingComponent.touch`
+    (after bumping its own version): a simulation loop of thousands of
+    ``t.offset = row`` then pays one list append per call, and the owners'
+    versions and the journals are told once, in one pass, by
+    :func:`flush_changes`, which every reader of versions or journals calls
+    first (``Node.version`` and every other observation of the graph,
+    :meth:`ChangeJournal.drain`, list edits of nodes).
+    """
+    _PENDING.append(component)
+    if len(_PENDING) > PENDING_LIMIT:
+        flush_changes()
+
+
+def flush_changes() -> None:
+    """Tell the owners and the live journals of every component noted for later (:func:`note_later`).
+
+    The journals store each once; the owners are touched (once per time
+    their component was noted: a node's version moves at least once).  Cheap
+    when nothing is pending (one truth test).  Safe against a thread noting
+    changes meanwhile: what is noted after the batch is taken stays pending.
+    """
+    pending = _PENDING
+    if not pending:
+        return
+    with _FLUSH_LOCK:
+        n = len(pending)
+        batch = pending[:n]
+        del pending[:n]
+    for changed in _JOURNALS:
+        changed.update(zip(map(id, batch), batch, strict=True))
+    owners = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+    touch_many = OWNER_TOUCH[0]
+    if touch_many is not None:
+        touch_many(owners)
+    else:
+        for owner in owners:
+            owner.touch()
+
+
+#: How :func:`flush_changes` touches the owners it collected: ``[None]`` calls each one's ``touch()``; the scene
+#: package installs a function that touches many nodes in C-level loops (and others one by one).
+OWNER_TOUCH: list[Callable[[list[Any]], None] | None] = [None]
 
 
 def note_edit(container: Any, op: str, item: Any, index: int) -> None:

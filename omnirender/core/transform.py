@@ -10,13 +10,21 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Sequence
-from itertools import chain, repeat
+from itertools import chain, compress
 from operator import attrgetter
 from typing import Any
 
 import numpy as np
 
-from .component import MonoAttribute, RenderingComponent
+from .component import (  # _PENDING: the list note_later appends to (Translation's setter appends inline)
+    _PENDING,
+    PENDING_LIMIT,
+    MonoAttribute,
+    RenderingComponent,
+    flush_changes,
+    note_change,
+    note_later,
+)
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = [
@@ -104,6 +112,13 @@ _MAX = MAX_MAGNITUDE
 _DIAGONAL = np.arange(4)
 
 
+def _named(transform: RenderingComponent) -> str:
+    """``Translation``, or ``Translation (in node /scene/b3)`` once a node holds it: how errors name a transform."""
+    owners = transform._owners
+    path = getattr(owners[0], "path", None) if owners else None
+    return type(transform).__name__ + (f" (in node {path})" if path else "")
+
+
 class Transform(MonoAttribute):
     """Base of all modelling transforms; subclasses share its category.
 
@@ -140,6 +155,20 @@ class Transform(MonoAttribute):
         caching one matrix object per transform.
         """
         return np.stack([t.matrix for t in transforms]) if transforms else np.empty((0, 4, 4))
+
+    def touch(self) -> None:
+        """Mark the transform changed: its version moves now; its nodes and the journals hear of it when next observed.
+
+        Transforms are what simulations change thousands of per frame: the
+        owners' ``touch()`` and the journals' stores are done once for all of
+        them, at the next observation (:func:`~omnirender.core.component.note_later`).
+        Every reader of a node's version or of a journal sees the change.
+        """
+        _set_version(self, self._version + 1)
+        if self._owners:
+            note_later(self)
+        else:
+            note_change(self)  # in no node: only the journals have to hear of it
 
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
@@ -196,9 +225,17 @@ class Matrix(Transform):
 
 
 class Translation(Transform):
-    """Move by (x, y, z)."""
+    """Move by (x, y, z).
 
-    __slots__ = ("_offset",)
+    A translation of an :class:`TranslationArray` views its row: after the
+    array's ``touch()`` it reads its offset from the array's snapshot when
+    next asked (``offset``, ``matrix``); assigning ``offset`` sets its own
+    value until the array's next ``touch()``.
+    """
+
+    __slots__ = ("_offset", "_bound", "_row", "_synced")
+    #: the array binding is not copied or pickled: a copy is an ordinary translation with the current offset
+    _transient = {"_bound": lambda: None, "_row": lambda: 0, "_synced": lambda: 0}
 
     def __init__(
         self,
@@ -209,6 +246,9 @@ class Translation(Transform):
         offset: Sequence[float] | None = None,
     ) -> None:
         super().__init__()
+        object.__setattr__(self, "_bound", None)  # the TranslationArray whose row it views (see there)
+        object.__setattr__(self, "_row", 0)
+        object.__setattr__(self, "_synced", 0)  # the array's version its own offset is current for
         if offset is not None:
             self.offset = offset
         else:
@@ -238,24 +278,73 @@ class Translation(Transform):
                 offset = (x, y, z)
             else:
                 offset = plain_triple(value)
-            if offset is not None:
+            if offset is not None:  # Transform.touch, inline: a version bump and one list append
                 _set_offset(self, offset)
                 _set_matrix(self, None)
-                self.touch()
+                _set_version(self, self._version + 1)
+                bound = self._bound
+                if bound is not None:  # its own value holds until the array's next touch
+                    _set_synced(self, bound._version)
+                if self._owners:
+                    _append(self)
+                    if len(_PENDING) > PENDING_LIMIT:
+                        flush_changes()
+                else:
+                    note_change(self)
                 return
         RenderingComponent.__setattr__(self, name, value)
 
     @property
     def offset(self) -> tuple[float, float, float]:
+        if self._bound is not None:
+            self._sync()
         return self._offset
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
         offset = plain_triple(value)  # a simulation loop's case: three numbers, a numpy row
         if offset is None:
-            offset = tuple(float(c) for c in finite_vector("Translation", "offset", value, 3))
+            offset = tuple(float(c) for c in finite_vector(_named(self), "offset", value, 3))
         _set_offset(self, offset)
         _set_matrix(self, None)  # made again when somebody asks (assigning the public parameter touches)
+        bound = self._bound
+        if bound is not None:
+            _set_synced(self, bound._version)
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 4x4 float64 matrix (an array's translation takes its row first)."""
+        if self._bound is not None:
+            self._sync()
+        return Transform.matrix.fget(self)  # type: ignore[attr-defined]
+
+    def _sync(self) -> None:
+        """A translation of an array touched since its offset was last current takes its row of the snapshot."""
+        bound = self._bound
+        if self._synced != bound._version:
+            _set_offset(self, tuple(bound._offsets[self._row].tolist()))
+            _set_matrix(self, None)
+            _set_synced(self, bound._version)
+
+    def _bind(self, array: TranslationArray, row: int) -> None:
+        object.__setattr__(self, "_bound", array)
+        object.__setattr__(self, "_row", row)
+        object.__setattr__(self, "_synced", array._version)
+
+    def _attach(self, owner: Any) -> None:
+        super()._attach(owner)
+        if self._bound is not None:
+            self._bound._owners_changed()
+
+    def _detach(self, owner: Any) -> None:
+        super()._detach(owner)
+        if self._bound is not None:
+            self._bound._owners_changed()
+
+    def __getstate__(self) -> dict[str, Any]:
+        if self._bound is not None:
+            self._sync()
+        return super().__getstate__()
 
     def _build_matrix(self) -> np.ndarray:
         m = np.eye(4)
@@ -274,6 +363,8 @@ class Translation(Transform):
     def stack_offsets(translations: Sequence[Translation]) -> np.ndarray:
         """The ``(N, 3)`` float64 offsets of ``translations``, read with no Python step per translation."""
         n = len(translations)
+        if any(map(_BOUND, translations)):  # an array's translations take their rows first
+            deque(map(Translation._sync, compress(translations, map(_BOUND, translations))), 0)
         flat = chain.from_iterable(map(_OFFSET, translations))  # C-level loops
         return np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
 
@@ -282,6 +373,10 @@ class Translation(Transform):
 
 
 _OFFSET = attrgetter("_offset")
+_BOUND = attrgetter("_bound")
+_set_synced = Translation._synced.__set__  # type: ignore[attr-defined]
+_append = _PENDING.append
+_set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 _set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
 _set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]
 
@@ -424,12 +519,13 @@ class Scaling(Transform):
                 object.__setattr__(self, "_factors", plain)
                 _set_matrix(self, None)
                 return
-        v = finite_vector("Scaling", "factors", value, 3)
+        who = _named(self)
+        v = finite_vector(who, "factors", value, 3)
         if np.any(v == 0.0):
-            raise ValueError(f"Scaling: factors must be non-zero, got {tuple(float(c) for c in v)}")
+            raise ValueError(f"{who}: factors must be non-zero, got {tuple(float(c) for c in v)}")
         if np.any(np.abs(v) < MIN_MAGNITUDE):
             raise ValueError(
-                f"Scaling: factors must be at least {MIN_MAGNITUDE:.0e} in magnitude (their inverse must stay "
+                f"{who}: factors must be at least {MIN_MAGNITUDE:.0e} in magnitude (their inverse must stay "
                 f"below {MAX_MAGNITUDE:.0e}), got {tuple(float(c) for c in v)}"
             )
         object.__setattr__(self, "_factors", tuple(float(c) for c in v))
@@ -456,15 +552,22 @@ class TranslationArray(Sequence[Translation]):
     The bulk way to move thousands of nodes: the array is held *without
     copying* (as :class:`~omnirender.shapes.InstanceSet` holds its arrays);
     ``moves[i]`` is an ordinary ``om.Translation`` that you add to node ``i``.
-    Write the array in place and call :meth:`touch`: every translation takes
-    its row, validated for the whole array at once (finite, within the
-    magnitude limit), and changes exactly as if its ``offset`` had been
-    assigned, so every engine (GL, POV-Ray, Mitsuba, Radiance, picking,
-    bounds) sees the same scene.  Between two :meth:`touch` calls the
-    translations keep the offsets of the last one.
+    Write the array in place and call :meth:`touch`: the whole array is
+    validated at once (finite, within the magnitude limit) and kept as a
+    snapshot, and every translation changes exactly as if its ``offset`` had
+    been assigned its row, so every engine (GL, POV-Ray, Mitsuba, Radiance,
+    picking, bounds) sees the same scene.  Between two :meth:`touch` calls
+    the translations keep the offsets of the last one; assigning one's
+    ``offset`` sets it until the next :meth:`touch`.
+
+    A touch writes no translation: each views its row of the snapshot and
+    takes it when next read (``offset``, ``matrix``); the versions of the
+    translations move at once (one C-level pass) and their nodes hear of the
+    change at the next observation, with the change journals, which record
+    the array once (an engine that knows it applies the rows at once).
     """
 
-    __slots__ = ("_array", "_translations", "_offsets", "_version")
+    __slots__ = ("_array", "_translations", "_offsets", "_version", "_owner_list")
 
     def __init__(self, offsets: np.ndarray | Sequence[Sequence[float]]) -> None:
         a = self._checked(offsets if isinstance(offsets, np.ndarray) else np.asarray(offsets, dtype=np.float64))
@@ -473,6 +576,9 @@ class TranslationArray(Sequence[Translation]):
         self._offsets = a.copy()
         self._offsets.setflags(write=False)
         self._version = 0
+        self._owner_list: list[Any] | None = None
+        for i, t in enumerate(self._translations):
+            t._bind(self, i)
 
     @property
     def array(self) -> np.ndarray:
@@ -487,7 +593,19 @@ class TranslationArray(Sequence[Translation]):
     @property
     def owners(self) -> tuple[Any, ...]:
         """The nodes that hold its translations (what a change journal's reader asks of what changed)."""
-        return tuple(chain.from_iterable(t.owners for t in self._translations))
+        return tuple(self._owners)
+
+    @property
+    def _owners(self) -> list[Any]:
+        # what the changes noted for later touch (core.component.flush_changes): kept until a translation is
+        # added to a node or removed from one
+        found = self._owner_list
+        if found is None:
+            found = self._owner_list = list(chain.from_iterable(filter(None, map(_OWNERS_OF, self._translations))))
+        return found
+
+    def _owners_changed(self) -> None:
+        self._owner_list = None
 
     def __len__(self) -> int:
         return len(self._translations)
@@ -508,22 +626,35 @@ class TranslationArray(Sequence[Translation]):
         return self._offsets
 
     def touch(self) -> None:
-        """Every translation takes its row of the array (written in place since), in loops with no Python step per row.
+        """Every translation takes its row of the array (written in place since): one validation and one copy.
 
-        Each translation's version and its nodes' versions move as if its
-        ``offset`` had been assigned; the engines' change journals record the
-        array once (:func:`~omnirender.core.component.note_change`), so an
+        Each translation's version moves at once and its nodes' versions at
+        the next observation, as if its ``offset`` had been assigned; it reads
+        its row when next asked.  The engines' change journals record the
+        array once (:func:`~omnirender.core.component.note_later`), so an
         engine that knows it applies the rows at once.
         """
         a = self._checked(self._array)
         translations = self._translations
         offsets = a.copy()
         offsets.setflags(write=False)
-        deque(map(_set_offset, translations, zip(*offsets.T.tolist(), strict=True)), 0)  # tuples of 3 floats
-        deque(map(_set_matrix, translations, repeat(None)), 0)
         self._offsets = offsets
-        self._version += 1
-        Translation.touch_all(translations, journal_entry=self)
+        self._version += 1  # every translation's own offset is stale now (Translation._sync)
+        deque(map(_set_version, translations, map(_PLUS_ONE, map(_VERSION_OF, translations))), 0)
+        note_later(self)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"array": self._array, "translations": self._translations, "offsets": self._offsets,
+                "version": self._version}  # fmt: skip
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self._array = state["array"]
+        self._translations = state["translations"]
+        self._offsets = state["offsets"]
+        self._version = state["version"]
+        self._owner_list = None
+        for i, t in enumerate(self._translations):  # pickled with their current offsets: current for this version
+            t._bind(self, i)
 
     def _checked(self, offsets: np.ndarray) -> np.ndarray:
         a = np.asarray(offsets, dtype=np.float64) if offsets.dtype != np.float64 else offsets
@@ -547,3 +678,8 @@ class TranslationArray(Sequence[Translation]):
                 f"finite and at most {MAX_MAGNITUDE:.0e} in magnitude"
             )
         return a
+
+
+_VERSION_OF = attrgetter("_version")
+_OWNERS_OF = attrgetter("_owners")
+_PLUS_ONE = (1).__add__

@@ -390,8 +390,8 @@ class GLEngine(Engine):
                     self.camera = None
                     self.declared = None
             self._preevaluated = False
-            self.draw(background=background)
-            return self.read(read_depth=read_depth)
+            self.frame_runner.draw(background, True)  # draw() without a camera or framebuffer of its own
+            return self._read(read_depth)
 
     # -- the compile (the compiler and the installer do it) -----------------------------------------
     def compile(self, scene: Any, mask: Any = None) -> Scope:

@@ -18,13 +18,16 @@ from __future__ import annotations
 
 import threading
 import weakref
+from collections import deque
 from collections.abc import Iterable, Iterator
+from itertools import chain, repeat
+from operator import attrgetter
 from typing import Any
 
 import numpy as np
 
 from ..core.camera import Camera
-from ..core.component import RenderingComponent, note_edit
+from ..core.component import OWNER_TOUCH, RenderingComponent, flush_changes, note_edit
 from ..core.declarations import FIRST, Declarations
 from ..core.engine import Engine
 from ..core.light import Light
@@ -230,6 +233,7 @@ class Node:
 
     def insert(self, index: int, item: Any) -> Any:
         """Insert a component or child node at ``index``; returns it."""
+        flush_changes()  # versions noted for later reach the nodes before the declarations' patch reads them
         if isinstance(item, Node):
             if item is self or item._is_ancestor_of(self):
                 raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
@@ -256,6 +260,7 @@ class Node:
 
     def remove(self, item: Any) -> Any:
         """Remove the first occurrence of ``item``; returns it."""
+        flush_changes()
         i = self._index_of(item)
         if i < 0:
             raise ValueError(f"Node {self.path}: {item!r} is not in this node")
@@ -525,6 +530,7 @@ class Node:
 
     # -- pickling and copying (see the module docs) ---------------------------
     def __getstate__(self) -> dict[str, Any]:
+        flush_changes()
         return {
             "name": self._name,
             "items": list(self._items),
@@ -610,9 +616,39 @@ _EPOCH_LOCK = threading.Lock()
 
 def _observe() -> None:
     """Start a new observation epoch.  Locked: render threads read versions while the application changes
-    the graph, and a lost increment would let a later change stop below an ancestor an observer already read."""
+    the graph, and a lost increment would let a later change stop below an ancestor an observer already read.
+
+    Changes noted for later (transform setters, :func:`~omnirender.core.component.note_later`) reach their
+    nodes first, in the epoch that is ending."""
+    flush_changes()
     with _EPOCH_LOCK:
         _EPOCH[0] += 1
+
+
+def touch_nodes(owners: list[Any]) -> None:
+    """``touch()`` every one of ``owners``: nodes in C-level loops, anything else one by one.
+
+    What :func:`~omnirender.core.component.flush_changes` calls with the
+    owners of the transforms a simulation loop moved: every node's version
+    moves and is stamped in the current epoch, then each distinct parent is
+    touched once (its ancestors follow as :meth:`Node.touch` does).
+    """
+    if len(owners) < 16:  # a few: their own touch() is cheaper than the passes below
+        for owner in owners:
+            owner.touch()
+        return
+    classes = set(map(type, owners))
+    if not all(issubclass(c, Node) for c in classes):
+        for owner in owners:
+            owner.touch()
+        return
+    epoch = _EPOCH[0]
+    deque(map(_SET_VERSION, owners, map(_PLUS_ONE, map(_VERSION_OF, owners))), 0)
+    deque(map(_SET_STAMP, owners, repeat(epoch)), 0)
+    parents = list(chain.from_iterable(map(_PARENTS_OF, owners)))
+    for parent in dict(zip(map(id, parents), parents, strict=True)).values():
+        if parent._stamp != epoch:
+            parent.touch()
 
 
 def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> None:
@@ -833,3 +869,11 @@ def _check_group(group: str) -> str:
             f"Node: group names must be non-empty and free of spaces, control characters and !&|(), got {group!r}"
         )
     return group
+
+
+_SET_VERSION = Node._version.__set__  # type: ignore[attr-defined]
+_SET_STAMP = Node._stamp.__set__  # type: ignore[attr-defined]
+_VERSION_OF = attrgetter("_version")
+_PARENTS_OF = attrgetter("_parents")
+_PLUS_ONE = (1).__add__
+OWNER_TOUCH[0] = touch_nodes

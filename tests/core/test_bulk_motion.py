@@ -168,3 +168,108 @@ def test_translations_of_an_array_mean_the_same_to_bounds_and_picking():
     b = om.pick(om.Node("b", [cam, plain]), pixel=(80, 60), size=(160, 120))
     assert [h.path for h in a] and [h.path.replace("/a/", "/") for h in a] == [h.path.replace("/b/", "/") for h in b]
     assert [h.distance for h in a] == pytest.approx([h.distance for h in b])
+
+
+def test_setters_tell_nodes_and_journals_at_the_next_observation():
+    from omnirender.core import component
+
+    t = om.Translation()
+    node = om.Node("b", [t, om.Sphere(radius=0.2)])
+    scene = om.Node("scene", [node])
+    journal = ChangeJournal()
+    root, own = scene.version, node.version
+    for x in range(5):
+        t.offset = np.array([float(x), 0.0, 0.0])
+    assert t.version >= 5 and t.offset == (4.0, 0.0, 0.0)  # the component itself changes at once
+    assert node.version > own and scene.version > root  # an observation: the nodes hear of it first
+    assert journal.drain() == [t]  # once, however often it was set
+    assert not component._PENDING
+    assert np.allclose(om.bounds(scene), [[3.8, -0.2, -0.2], [4.2, 0.2, 0.2]])
+
+
+def test_a_list_edit_sees_the_setters_before_it():
+    # a light after a moved translation, then a child added to the same node: the declarations' patch of the
+    # edit must not keep the light where it was (the setter's node version reaches the node before the edit)
+    t = om.Translation(0.0, 0.0, 0.0)
+    holder = om.Node("holder", [t, om.PointLight(position=(0, 0, 0))])
+    scene = om.Node("scene", [holder])
+    ((light, world),) = scene.declarations().lights
+    assert np.allclose(world[:3, 3], 0.0)
+    t.offset = (1.0, 2.0, 3.0)
+    holder.add(om.Node("child", [om.Sphere(radius=0.1)]))
+    ((light, world),) = scene.declarations().lights
+    assert np.allclose(world[:3, 3], (1.0, 2.0, 3.0))
+
+
+def test_changes_left_unobserved_stay_bounded():
+    from omnirender.core import component
+
+    t = om.Translation()
+    node = om.Node("b", [t])
+    before = node.version
+    for i in range(component.PENDING_LIMIT + 10):
+        t.offset = (float(i), 0.0, 0.0)
+    assert len(component._PENDING) <= component.PENDING_LIMIT
+    assert node.version > before and not component._PENDING
+
+
+def test_a_bad_value_after_many_fast_ones_is_refused_naming_the_node():
+    scene, moves, positions = translation_array_scene()
+    plain = [om.Translation() for _ in range(3)]
+    for i, t in enumerate(plain):
+        scene.add(om.Node(f"p{i}", [t]))
+    for t, row in zip(plain, np.arange(9.0).reshape(3, 3), strict=True):
+        t.offset = row
+    with pytest.raises(ValueError, match=r"Translation \(in node /scene/p1\): offset must be finite"):
+        plain[1].offset = np.array([0.0, np.inf, 0.0])
+    assert plain[1].offset == (3.0, 4.0, 5.0)
+    with pytest.raises(ValueError, match=r"Scaling \(in node /scene/s\): factors must be non-zero"):
+        scene.add(om.Node("s", [om.Scaling(2.0)])).items[0].factors = (1.0, 0.0, 1.0)
+
+
+def test_an_array_translation_reads_its_row_lazily_and_an_assignment_holds_until_the_next_touch():
+    import copy
+    import pickle
+
+    scene, moves, positions = translation_array_scene()
+    positions[:, 2] = 5.0
+    moves.touch()
+    positions[:, 2] = 7.0  # written after the touch: not seen until the next one
+    assert moves[1].offset == (1.0, 0.0, 5.0) and np.array_equal(moves[1].matrix[:3, 3], [1.0, 0.0, 5.0])
+    moves[1].offset = (9.0, 9.0, 9.0)  # its own value, until the array is touched again
+    assert moves[1].offset == (9.0, 9.0, 9.0) and np.array_equal(moves[1].matrix[:3, 3], [9.0, 9.0, 9.0])
+    assert np.allclose(om.Translation.stack_offsets(list(moves))[:, 2], [5.0, 9.0, 5.0, 5.0, 5.0])
+    node = scene.child("b1")
+    before = node.version
+    moves.touch()
+    assert node.version > before
+    assert [t.offset for t in moves] == [(float(i), 0.0, 7.0) for i in range(5)]
+    assert np.allclose(om.Translation.stack_matrices(list(moves))[:, 2, 3], 7.0)
+    # copies and pickles are ordinary translations with the current offsets; a pickled array binds its own
+    copied = copy.deepcopy(node)
+    assert copied.items[0].offset == (1.0, 0.0, 7.0)
+    positions[:, 2] = 8.0
+    moves.touch()
+    assert copied.items[0].offset == (1.0, 0.0, 7.0) and moves[1].offset == (1.0, 0.0, 8.0)
+    again = pickle.loads(pickle.dumps(scene))
+    assert again.child("b3").items[0].offset == (3.0, 0.0, 8.0)
+    moves2 = pickle.loads(pickle.dumps(moves))
+    moves2.array[:, 0] = -1.0
+    moves2.touch()
+    assert [t.offset for t in moves2] == [(-1.0, 0.0, 8.0)] * 5 and moves[0].offset == (0.0, 0.0, 8.0)
+
+
+def test_an_array_touch_writes_no_translation_and_its_nodes_hear_of_it_once():
+    scene, moves, positions = translation_array_scene(200)
+    journal = ChangeJournal()
+    positions[:, 1] = 1.0
+    moves.touch()
+    assert all(t._offset[1] == 0.0 for t in moves)  # nothing written yet: each reads its row when asked
+    assert moves.owners == tuple(scene.children)
+    versions = [n.version for n in scene.children]  # an observation: the nodes heard of it
+    assert journal.drain() == [moves]
+    extra = om.Node("extra", [moves[0]])  # a translation held by another node: the owners follow
+    assert len(moves.owners) == 201 and extra in moves.owners
+    moves.touch()
+    assert [n.version for n in scene.children] == [v + 1 for v in versions]
+    assert moves[199].offset == (199.0, 1.0, 0.0)

@@ -210,11 +210,12 @@ def test_a_clear_box_is_validated():
     assert om.gl.Clear(box=(1.0, 2, 3, 4)).box == (1, 2, 3, 4)
 
 
-@pytest.mark.parametrize("light", ["directional", "point"])
+@pytest.mark.parametrize("light", ["directional", "point", "spot"])
 def test_a_sequence_of_edits_keeps_matching_a_fresh_engine(light):
     """Moves, replaced materials and matrices, nodes added and removed, frame after frame: the partial updates
     (and the casters' rectangles they keep between frames) give the maps and the picture a fresh engine gives."""
-    lights = {"directional": None, "point": om.PointLight(position=(0.2, 3.5, 0.3))}
+    lights = {"directional": None, "point": om.PointLight(position=(0.2, 3.5, 0.3)),
+              "spot": om.SpotLight(position=(0.5, 6.0, 1.0), direction=(-0.05, -1.0, -0.15), cutoff=40.0)}  # fmt: skip
     scene, nodes, box = grid_scene(lights[light])
     rng = np.random.default_rng(7)
     partial = 0
@@ -242,3 +243,50 @@ def test_a_sequence_of_edits_keeps_matching_a_fresh_engine(light):
             partial += e.stats["shadow_maps"]["partial"]
             same_as_fresh(e, image, scene)
     assert partial >= 4
+
+
+@pytest.mark.parametrize("light", ["directional", "spot"])
+def test_a_few_boxes_project_as_many_do(light):
+    """The rectangles of a few changed boxes, projected in Python floats, are those numpy's path gives for many
+    (an orthographic face and a perspective one, boxes ahead of, across and behind the light camera), and so are
+    the texel regions made of them."""
+    from omnirender.gl.techniques import shadows
+
+    lo = np.array([-2.0, -1.0, -2.0])
+    hi = np.array([2.0, 1.0, 2.0])
+    lamp = om.DirectionalLight(direction=(-0.3, -1.0, -0.5)) if light == "directional" else om.SpotLight(
+        position=(0.0, 3.0, 0.0), direction=(0.1, -1.0, 0.05), cutoff=50.0)  # fmt: skip
+    (face,) = shadows._light_faces(lamp, np.eye(4), lo, hi, 256)
+    rng = np.random.default_rng(3)
+    centers = rng.uniform(-2.5, 2.5, (12, 3))
+    centers[:3, 1] = (1.0, 2.9, 3.5)  # near the light, across its plane, behind it
+    lows, highs = centers - rng.uniform(0.05, 0.4, (12, 3)), centers + rng.uniform(0.05, 0.4, (12, 3))
+    many, behind, away = shadows._ndc_rects(face, lows, highs)  # more than _FEW: numpy's path
+    for k in range(0, 12, 4):
+        few, few_behind, few_away = shadows._ndc_rects(face, lows[k : k + 4], highs[k : k + 4])
+        if behind is None:
+            assert few_behind is None and few_away is None
+        else:
+            assert np.array_equal(few_behind, behind[k : k + 4]) and np.array_equal(few_away, away[k : k + 4])
+        ahead = slice(None) if behind is None else ~behind[k : k + 4]
+        for a, b in zip(few, many, strict=True):
+            np.testing.assert_allclose(a[ahead], b[k : k + 4][ahead], rtol=1e-12, atol=1e-12)
+    assert behind is None or behind.any()  # the spot's camera has boxes behind it
+    region = shadows._face_region(face, 256, lows, highs)  # as lists of a few boxes, and as arrays of many
+    assert region == shadows._face_region(face, 256, np.repeat(lows, 4, axis=0), np.repeat(highs, 4, axis=0))
+
+
+def test_a_scissored_pass_keeps_the_rest_of_its_description():
+    from omnirender.gl.engine.attributes import DepthMask, ScissorTest
+
+    view = np.eye(4)
+    base = om.gl.Pass("p", items="opaque", clear=om.gl.Clear(color=None, depth=1.0), camera=(view, view),
+                      state=(DepthMask(True), (ScissorTest, (0, 0, 8, 8))))  # fmt: skip
+    part = base.scissored((2, 3, 4, 5), "p partial")
+    assert part.name == "p partial" and part.clear.box == (2, 3, 4, 5) and part.clear.depth == 1.0
+    assert part.state[-1] == (ScissorTest, (2, 3, 4, 5)) and len(part.state) == 2
+    assert part.key()[1:] == base.scissored((2, 3, 4, 5)).key()[1:]
+    assert base.clear.box is None and base.state[-1] == (ScissorTest, (0, 0, 8, 8))  # unchanged
+    assert part.camera is base.camera and part.items == base.items
+    with pytest.raises(ValueError, match="box"):
+        base.scissored((0, 0, 0, 4))

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from ...core.component import MonoAttribute
+from .context import set_masks
 from .glenum import GL_DEPTH_CLAMP
 from .state import GLCalls, StateKind, register_kind
 
@@ -161,8 +162,6 @@ class DepthMask(_Switch, GLState):
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
-        from .context import set_masks
-
         set_masks(gl.ctx, gl.raw, gl.framebuffer, depth=bool(value))
 
     @classmethod
@@ -273,8 +272,6 @@ class ColorMask(GLState):
 
     @classmethod
     def apply(cls, gl: GLCalls, value: Any) -> None:
-        from .context import set_masks
-
         set_masks(gl.ctx, gl.raw, gl.framebuffer, color=value)
 
     @classmethod

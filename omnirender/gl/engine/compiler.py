@@ -396,7 +396,7 @@ class DrawListCompiler:
         quiet = self._quiet
         for c in changed:
             owners = c.owners
-            if not owners:
+            if not owners or len(owners) > 8:  # (a TranslationArray: the nodes of all its translations)
                 return False
             for node in owners:
                 if not isinstance(node, Node):

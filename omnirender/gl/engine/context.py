@@ -369,9 +369,9 @@ def set_masks(ctx: Any, raw: RawGL, fbo: Any, color: tuple | None = None, depth:
     """Set colour and depth write masks (raw GL when available: moderngl ignores them on detected framebuffers)."""
     if raw.available:
         if color is not None:
-            raw.glColorMask(*(1 if c else 0 for c in color))
+            raw.glColorMask(bool(color[0]), bool(color[1]), bool(color[2]), bool(color[3]))
         if depth is not None:
-            raw.glDepthMask(1 if depth else 0)
+            raw.glDepthMask(bool(depth))
         return
     if color is not None:
         fbo.color_mask = tuple(bool(c) for c in color)

@@ -77,6 +77,7 @@ class BatchDrawer:
         self._transient: dict[Any, tuple[Any, ...]] = {}
         self._textures: dict[tuple[int, bool], tuple[Any, int, Any]] = {}
         self._column_cache: dict[tuple[str, ...], np.ndarray] = {}
+        self._layouts: dict[tuple[str, ...], Any] = {}
         #: (id(light switch), view) -> (switch, stamp, any scene light, LightUniforms) of earlier passes
         #: (_lights_for): a frame that draws shadow maps alternates the light's view and its own, both kept
         self._lights_kept: dict[tuple[int, bytes], tuple[Any, Any, bool, LightUniforms]] = {}
@@ -107,6 +108,8 @@ class BatchDrawer:
             if filtered is not None:
                 keep = item_filter(composed)
                 others = [it for it in others if keep(it)]
+        if others and self.state.recorder is not None:
+            self.state.recorder.taint("transparent or overlay items (sorted and drawn by the view every frame)")
         if "transparent" in classes and others:
             calls += self._draw_transparent([it for it in others if it.transparent and not it.state.overlay], composed)
         if "overlay" in classes and others:
@@ -147,7 +150,10 @@ class BatchDrawer:
     def _draw_batch(self, batch: Batch, composed: Composed) -> int:
         state = batch.state
         drawer = self.drawers.get(state.kind)
+        recorder = self.state.recorder
         if drawer is not None:
+            if recorder is not None:
+                recorder.taint(f"draw items of kind {state.kind!r} (a drawer of their own)")
             calls = drawer(self.engine, batch.items, state)
             self.report.count(calls, len(batch.items))
             return calls
@@ -162,32 +168,15 @@ class BatchDrawer:
             features = features + (("INSTANCE_OFFSET", True),)
         prog = self.programs.get(state.kind, features, state.code)
         fields = instance_fields(state.kind, dict(features))
-        if fields and batch.buffer is not None and batch.layout is not None and batch.layout.names() != fields:
-            batch.release()  # a variant reads other fields: re-pack
-        if fields and (
-            batch.buffer is None
-            or batch.capacity < n
-            or batch.geometry.buffers is None
-            or (offset and batch.offsets is None)
-        ):
-            batch.release()
-            batch.layout = ROW.subset(fields)
-            # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
-            capacity = max(n, 1) + (n // 8 + 16 if batch.storage is not None else 0)
-            batch.buffer = gpu_call(
-                self.ctx.buffer, reserve=capacity * batch.layout.stride * 4, dynamic=True, what="instance data"
-            )
-            if offset:
-                batch.offsets = gpu_call(self.ctx.buffer, reserve=capacity * 12, dynamic=True, what="instance data")
-            batch.capacity = capacity
-            batch.dirty = (0, n)
-            batch.sparse = None
+        if fields:
+            self._ensure_buffers(batch, self._layout(fields), n, offset)
         volume = state.kind == "mesh" and "SHADOW_VOLUME" in dict(features)  # triangles with their neighbours
         vao = batch.vaos.get(id(prog))
         if vao is None:
             vao = batch.vaos[id(prog)] = self._vao(
                 batch.geometry, prog, batch.buffer, state.kind, batch.layout, volume, batch.offsets if offset else None
             )
+        target = prog if recorder is None else recorder.begin_draw(prog)  # uniforms are written through it
         if fields:
             columns = self._columns(batch.layout)
             if offset:
@@ -202,17 +191,50 @@ class BatchDrawer:
                 _upload_rows(batch, columns, None)
         else:
             row = batch.rows[0]
-            prog["i_model"].write(row[_MODEL].tobytes())
-            u = prog.get("i_color", None)
+            target["i_model"].write(row[_MODEL].tobytes())
+            u = target.get("i_color", None)
             if u is not None:
                 u.write(row[ROW.slice("color")].tobytes())
-        self._apply_raster(composed.raster(state.raster, defaults()), state)
-        self._set_uniforms(prog, state, composed)
+        raster = composed.raster(state.raster, defaults())
+        self._apply_raster(raster, state)
+        self._set_uniforms(target, state, composed)
         if batch.uniform:
-            self._set_material(prog, batch.first_row())
-        vao.render(GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind), instances=n)
+            self._set_material(target, batch.first_row())
+        mode = GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind)
+        vao.render(mode, instances=n)
+        if recorder is not None:
+            recorder.end_draw(raster, len(state.clip), vao, mode, n)
         self.report.count(1, n)
         return 1
+
+    def _ensure_buffers(self, batch: Batch, layout: Any, n: int, offset: bool) -> None:
+        """Give ``batch`` GPU buffers of ``layout`` for its ``n`` rows (and its translations' own buffer when
+        ``offset``): made again (every row uploaded) when missing, too small or of another layout."""
+        recorder = self.state.recorder
+        if batch.buffer is not None and batch.layout is not None and batch.layout.names() != layout.names():
+            if recorder is not None:  # vertex arrays recorded earlier in the frame would be released
+                recorder.taint("a batch packed again for another program variant")
+            batch.release()  # a variant reads other fields: re-pack
+        if (
+            batch.buffer is None
+            or batch.capacity < n
+            or batch.geometry.buffers is None
+            or (offset and batch.offsets is None)
+        ):
+            if recorder is not None and batch.vaos:
+                recorder.taint("a batch's buffers made again")
+            batch.release()
+            batch.layout = layout
+            # a batch that rows may be added to (it holds spare rows) gets room in its buffer too
+            capacity = max(n, 1) + (n // 8 + 16 if batch.storage is not None else 0)
+            batch.buffer = gpu_call(
+                self.ctx.buffer, reserve=capacity * batch.layout.stride * 4, dynamic=True, what="instance data"
+            )
+            if offset:
+                batch.offsets = gpu_call(self.ctx.buffer, reserve=capacity * 12, dynamic=True, what="instance data")
+            batch.capacity = capacity
+            batch.dirty = (0, n)
+            batch.sparse = None
 
     def _prepare_sorted(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of a big batch; returns how many rows to draw.
@@ -313,6 +335,14 @@ class BatchDrawer:
         visible = (distance > -(radius * scale)[:, None]).all(axis=1)
         return None if visible.all() else visible
 
+    def _layout(self, fields: tuple[str, ...]) -> Any:
+        """The instance layout of ``fields`` (in the row's order: compared with a batch's to know whether the
+        batch must be packed again)."""
+        layout = self._layouts.get(fields)
+        if layout is None:
+            layout = self._layouts[fields] = ROW.subset(fields)
+        return layout
+
     def _columns(self, layout: Any) -> np.ndarray:
         key = layout.names()
         cols = self._column_cache.get(key)
@@ -345,6 +375,8 @@ class BatchDrawer:
     def _mode(self, geometry: Geometry, kind: str) -> int:
         ctx = self.ctx
         if geometry.mode == "patches":  # tessellated on the GPU (gl/nurbs.py)
+            if self.state.recorder is not None:
+                self.state.recorder.taint("tessellated patches (patch size set outside the recorder)")
             ctx.patch_vertices = geometry.patch_size  # type: ignore[attr-defined]
             return ctx.PATCHES
         if kind == "points" or geometry.mode == "points":
@@ -392,11 +424,8 @@ class BatchDrawer:
             u = prog.get(name, None)
             if u is not None:
                 u.write(data)
-        lights = self._lights_for(state.switch)
-        lights.apply(prog)
-        if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
-            plan = self.state.shadow_plan
-            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
+        recorder = self.state.recorder
+        self._set_lights(prog, state, recorder)
         if state.clip:
             prog["u_clip"].write(np.asarray(state.clip, np.float32).tobytes())
         if state.fog is not None:
@@ -413,11 +442,8 @@ class BatchDrawer:
                 u.value = tuple(float(v) for v in self.ctx.viewport[:2])
         if state.kind == "lines":
             prog["u_line_width"].value = float(state.value(LineWidth))
-        for unit, (sampler, texture, srgb) in enumerate(state.textures):
-            u = prog.get(sampler, None)
-            if u is not None:
-                self.texture(texture, srgb).use(unit)
-                u.value = unit
+        if state.textures:
+            self._bind_textures(prog, state, recorder)
         for name, value in state.uniforms:
             u = prog.get(name, None)
             if u is not None:
@@ -434,7 +460,34 @@ class BatchDrawer:
                     u.value = value
         inputs = composed.inputs()
         if inputs:
+            if recorder is not None:
+                recorder.taint("a pass's shader inputs")
             self._bind_inputs(prog, inputs)
+
+    def _set_lights(self, prog: Any, state: DrawState, recorder: Any) -> None:
+        """The lights of the draw's light switch, and the shadow maps' uniforms and atlas."""
+        lights = self._lights_for(state.switch)
+        if recorder is not None and lights.has_area:
+            recorder.taint("area lights (their tables are bound outside the recorder)")
+        lights.apply(prog)
+        if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
+            if recorder is not None:
+                recorder.taint("shadow maps")
+            plan = self.state.shadow_plan
+            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
+
+    def _bind_textures(self, prog: Any, state: DrawState, recorder: Any) -> None:
+        """The draw's textures on units 0, 1, ... (those its program samples)."""
+        for unit, (sampler, texture, srgb) in enumerate(state.textures):
+            u = prog.get(sampler, None)
+            if u is not None:
+                gl_texture = self.texture(texture, srgb)
+                gl_texture.use(unit)
+                if recorder is not None:
+                    if getattr(texture, "rendered", False):
+                        recorder.taint("a render texture (its pipeline draws it every frame)")
+                    recorder.texture(gl_texture, unit)
+                u.value = unit
 
     def _bind_inputs(self, prog: Any, inputs: dict[str, Any]) -> None:
         """Bind a pass's Shader inputs (targets of the frame by name, or textures) from :data:`PASS_INPUT_UNIT`."""

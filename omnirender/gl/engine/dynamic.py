@@ -16,6 +16,7 @@ changed rows as one range (or all of them when most changed).  Anything else
 from __future__ import annotations
 
 from itertools import compress, repeat
+from operator import is_
 from typing import Any
 
 import numpy as np
@@ -97,6 +98,9 @@ class MovePlan:
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
         self.many_moves = 0
+        #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
+        #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -117,6 +121,7 @@ class MovePlan:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         self.many_moves = 0
+        self._last = None
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -231,14 +236,20 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self._apply_few(changed)
-        # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
-        found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
-        keep = found >= 0
-        if not keep.any():
+        last = self._last
+        if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
+            _, positions, moved, translations = last
+        else:
+            # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
+            found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
+            keep = found >= 0
+            positions = found[keep]
+            moved = changed if keep.all() else list(compress(changed, keep.tolist()))
+            translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
+            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
+        if not len(positions):
             return 0
-        positions = found[keep]
-        moved = changed if keep.all() else list(compress(changed, keep.tolist()))
-        if len(moved) >= _MANY and set(map(type, moved)) == {Translation}:
+        if translations:
             count = self._apply_translations(positions, moved)
             if count is not None:
                 return count
@@ -246,6 +257,18 @@ class MovePlan:
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
         count = self._apply_items(positions)
         return count + self._apply_instances(set(positions.tolist()))
+
+    def same_as_last(self, changed: list[Any]) -> bool:
+        """Whether ``changed`` holds the same transforms, in the same order, as the last :meth:`apply` of many.
+
+        A C-level pass of identity tests; when True, the next :meth:`apply` of
+        ``changed`` reuses the last look-ups (where the plan holds them, their classes).
+        """
+        last = self._last
+        if last is None or len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
+            return False
+        self._last = (changed, *last[1:])
+        return True
 
     def _apply_translations(self, positions: np.ndarray, moved: list[Any]) -> int | None:
         """Many plain ``Translation`` objects moved (a simulation's setter loop): written like an array's rows.
@@ -455,6 +478,10 @@ class TransformUpdater:
         """
         if not changed:
             return None
+        plan = self._plan
+        if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+            self.placed = True
+            return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
         if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)

@@ -10,8 +10,9 @@ finally ``stop``.  Each pass of a nested technique draws its items through the
 engine's technique again, so a nested technique's passes see opaque,
 transparent and overlay items drawn the usual way.  Pass state is kept in the
 engine's technique frames, so shared technique instances nest correctly, and
-all of this happens on replayed frames too: the compiled scopes are cached,
-the passes are not.
+all of this happens on every frame drawn in full: the compiled scopes are
+cached, the passes are not.  A frame in which nothing changed replays the
+draws the frame before it recorded instead (the frame plan, :mod:`.plan`).
 
 Every executed pass is recorded in ``engine.stats["passes"]``: its path of
 names, technique, nesting depth, draw calls, instances and (with
@@ -45,6 +46,7 @@ from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import Composed, FullScreen, Pass, Target
+from .plan import FramePlan, FrameRecorder, PlanKey
 from .report import PassRecord, PassReport
 from .stages import StageList
 from .state import FillMode, GLCalls, RasterApplier, defaults
@@ -83,12 +85,27 @@ class FrameRunner:
         #: how many technique frames enclose the technique running over a whole frame (0: the frame's own;
         #: a stereo eye drawn whole runs it inside the stereo technique)
         self.frame_base = 0
+        #: bumped by every :meth:`placements_changed` (the change tracker's word that the draw list or a
+        #: placement changed): a recorded frame plan is replayed only while it holds
+        self.generation = 0
+        #: the last frame, recorded (:mod:`.plan`): replayed while its key holds, or None
+        self.plan: FramePlan | None = None
+        #: why the last frame drawn in full was not kept as a plan (None: it was, or it was not recorded)
+        self.not_recorded: str | None = None
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
-        (shadow casters' bounds, mirror planes)."""
+        (shadow casters' bounds, mirror planes); the recorded frame plan is stale."""
+        self.generation += 1
+        self.plan = None
         for stage in self.stages:
             stage.changed()
+
+    def _taint(self, why: str) -> None:
+        """The frame being drawn does something a replay would not repeat: it keeps no plan."""
+        recorder = self.state.recorder
+        if recorder is not None:
+            recorder.taint(why)
 
     # -- what techniques call (through the engine) -----------------------------------
     def set_pass(self, description: Pass) -> None:
@@ -104,11 +121,13 @@ class FrameRunner:
 
     def forget_gl_state(self) -> None:
         """A drawer changed GL state itself: the next draw applies its state in full."""
+        self._taint("GL state changed outside the applier (forget_gl_state)")
         self.state.applier.forget()
 
     def apply_gl_state(self, *states: Any) -> None:
         """Make the GL state attributes ``states`` (``om.gl.DepthTest(False)``, ``om.gl.Blend()``, ...) current,
         through the applier (the other states stay as they are)."""
+        self._taint("GL state set by apply_gl_state")
         values = {}
         for state in states:
             if not hasattr(state, "capture") or getattr(type(state), "index", -1) < 0:
@@ -120,18 +139,22 @@ class FrameRunner:
 
     def default_gl_state(self) -> None:
         """Every GL state kind at its default, through the applier."""
+        self._taint("GL state set by default_gl_state")
         self.state.applier.apply(defaults())
 
     def sample_mask(self, sample: int | None) -> None:
         """Draws write only sample ``sample`` of a multisampled target (None: every sample)."""
+        self._taint("a sample mask")
         self.state.applier.sample_mask(sample)
 
     def bind_framebuffer(self, framebuffer: Any, size: tuple[int, int]) -> None:
         """Draw into ``framebuffer`` (of ``size``) until the pass binds another, through the applier."""
+        self._taint("a framebuffer bound by bind_framebuffer")
         self.state.applier.bind(framebuffer, size)
 
     def reset_gl_state(self) -> None:
         """Every GL state kind at its default; the next draw applies its state in full."""
+        self._taint("GL state reset by reset_gl_state")
         applier = self.state.applier
         applier.forget()
         applier.apply(defaults())
@@ -145,6 +168,7 @@ class FrameRunner:
         Inside a frame (a custom pass) it is the frame's own applier."""
         state = self.state
         if state.drawing:
+            self._taint("GL state changed in between_frames")
             yield state.applier
             return
         engine = self.engine
@@ -166,7 +190,11 @@ class FrameRunner:
 
     # -- the frame ---------------------------------------------------------------------
     def draw(self, background: Any, clear: bool, override: Any = None, framebuffer: Any = None) -> None:
-        """Draw the installed scopes into ``framebuffer`` (else the engine's): every stage and technique pass."""
+        """Draw the installed scopes into ``framebuffer`` (else the engine's): every stage and technique pass.
+
+        A frame that changed nothing since the last one (:class:`~.plan.PlanKey`) replays its recorded
+        draws (:mod:`.plan`) instead of running the stages again.
+        """
         engine, ctx, state = self.engine, self.ctx, self.state
         stages = tuple(self.stages)
         for stage in stages:
@@ -179,8 +207,9 @@ class FrameRunner:
         state.applier = applier = RasterApplier(GLCalls(ctx, self.raw, fbo, size))
         applier.begin(fbo, size)
         state.background = background
+        color = engine.clear_color(background) if clear else None
         if clear:
-            fbo.clear(*engine.clear_color(background), depth=1.0)
+            fbo.clear(*color, depth=1.0)
             applier.reassert()  # moderngl's clear set the framebuffer's own masks
             if engine.has_stencil and not engine.pushed_targets and framebuffer is None:
                 clear_stencil(self.raw, 0)  # the default stencil write mask (every bit) is set
@@ -189,18 +218,30 @@ class FrameRunner:
         state.set_camera(view, proj, camera.is_orthographic)
         state.frame_view_key = state.view_key  # the frame's own view: the one batches are culled for
         state.frame_view = state.view
+        installed = engine.root_scope
+        key = self._plan_key(stages, fbo, size, color, override, framebuffer, clear, installed)
+        plan = self.plan
+        if key is not None and plan is not None and plan.key.matches(key):
+            self._replay(plan, fbo, size)
+            return
+        self.plan = None
+        self.not_recorded = None
+        engine.programs.owner = None  # this frame writes the programs' uniforms in its own order
         self.report.begin_frame(engine.timing)
         self.targets.begin_frame(tuple(engine.size))
-        installed = engine.root_scope
         root = installed if installed is not None else Scope()
         state.shadow_plan = None
         state.drawing = True
+        state.recorder = recorder = FrameRecorder() if key is not None else None
         calls = 0
         try:
             for stage in stages:
+                if recorder is not None and not stage.replayable(engine):
+                    recorder.taint(f"stage {stage.name!r} is not replayable")
                 calls += stage.draw(self, root)
         finally:
             state.drawing = False
+            state.recorder = None
             self.report.close()
             self._restore_defaults(fbo, size)
         self.targets.release_unused()
@@ -210,7 +251,88 @@ class FrameRunner:
         stats["batches"] = sum(len(p.batches) for s in (installed.walk() if installed else [])
                                for p in (s.parts or []) if not isinstance(p, Scope))  # fmt: skip
         stats["items"] = engine.item_count if installed is not None else 0
-        err = ctx.error
+        stats["replayed"] = False
+        self._check_errors()
+        if recorder is not None and key is not None:
+            kept = {name: stats[name] for name in ("draw_calls", "batches", "items")}
+            kept["passes"] = [PassRecord(record) for record in stats["passes"]]
+            self.plan = recorder.plan(key, kept)
+            self.not_recorded = recorder.tainted
+            if self.plan is not None:
+                engine.programs.owner = self.plan
+
+    def _plan_key(
+        self,
+        stages: tuple[Any, ...],
+        fbo: Any,
+        size: tuple[int, int],
+        color: tuple[float, ...] | None,
+        override: Any,
+        framebuffer: Any,
+        clear: bool,
+        installed: Scope | None,
+    ) -> PlanKey | None:
+        """What a recorded plan of this frame depends on (:mod:`.plan`); None when the frame is not recorded
+        (another camera or framebuffer given, no clear, timer queries, nested in another frame, nothing
+        installed)."""
+        engine, state = self.engine, self.state
+        if (
+            override is not None
+            or framebuffer is not None
+            or not clear
+            or installed is None
+            or engine.timing
+            or self.technique_depth()
+            or state.drawing
+            or engine.pushed_targets
+        ):
+            return None
+        objects = (fbo, engine.declared, engine.technique, engine.frame_technique, engine.stereo, installed, *stages)
+        values = (
+            self.generation,
+            engine.draw_list_version,
+            size,
+            tuple(engine.size),
+            color,
+            state.view_key,
+            state.ortho,
+            engine.shadows,
+            engine.has_stencil,
+        )
+        return PlanKey(objects, values)
+
+    def technique_depth(self) -> int:
+        """How many techniques are running now (0 between frames)."""
+        return len(self.engine.technique_frames)
+
+    def _replay(self, plan: FramePlan, fbo: Any, size: tuple[int, int]) -> None:
+        """Issue ``plan``'s recorded draws into the bound target (cleared, camera set) and report its stats."""
+        engine, state = self.engine, self.state
+        programs = engine.programs
+        state.shadow_plan = None
+        state.drawing = True
+        applier = state.applier
+        try:
+            # the target stays bound and the front face, sample mask and viewport at their defaults: nothing
+            # in a recorded frame changes them (passes that do are not recorded)
+            plan.replay(applier, full=programs.owner is not plan)
+        except BaseException:
+            self._restore_defaults(fbo, size)
+            raise
+        finally:
+            state.drawing = False
+        programs.owner = plan
+        stats = engine.stats
+        kept = plan.stats
+        stats["draw_calls"] = kept["draw_calls"]
+        stats["passes"] = [PassRecord(record) for record in kept["passes"]]
+        stats["batches"] = kept["batches"]
+        stats["items"] = kept["items"]
+        stats["replayed"] = True
+        self._check_errors()
+
+    def _check_errors(self) -> None:
+        err = self.ctx.error
         if err != "GL_NO_ERROR":
             if "OUT_OF_MEMORY" in err:
                 raise GLError("GLEngine: the GPU ran out of memory while drawing; reduce the scene or image size")
@@ -239,6 +361,9 @@ class FrameRunner:
         if outer is None:
             outer = Composed()
         engine = self.engine
+        if self.state.recorder is not None and not type(technique).__dict__.get("replayable", False):
+            # a technique's pass control is the application's code: it may draw other passes next frame
+            self.state.recorder.taint(f"technique {type(technique).__name__} is not replayable")
         engine.enter_technique(technique)
         calls = 0
         try:
@@ -266,6 +391,16 @@ class FrameRunner:
     def _execute(self, technique: Any, description: Pass, scope: Scope, outer: Composed, item_level: bool) -> int:
         composed = outer.then(description)
         state = self.state
+        if state.recorder is not None and (
+            description.target is not None
+            or description.viewport is not None
+            or description.front_face != "ccw"
+            or description.camera is not None
+            or description.clear is not None
+            or description.fullscreen is not None
+            or description.custom is not None
+        ):
+            state.recorder.taint(f"pass {description.name!r} sets a target, viewport, camera, clear or its own draw")
         record = PassRecord(
             name="/".join(composed.names),
             technique=type(technique).__name__,
@@ -396,6 +531,7 @@ class FrameRunner:
             )
         if not self.state.drawing:
             raise RuntimeError("GLEngine.copy_framebuffer: no frame is being drawn; call it from a custom pass")
+        self._taint("copy_framebuffer")
         source = self.current_framebuffer
         size = tuple(source.size)
         target = self.targets.get(description, self.state.target_size, size)
@@ -407,6 +543,7 @@ class FrameRunner:
     def keep_target(self, description: Target) -> bool:
         """Keep the offscreen target of ``description`` from the last frame in this one, unchanged (False when
         it is gone: draw it again)."""
+        self._taint("an offscreen target kept")
         return self.targets.keep(description, self.state.target_size)
 
     def _bind_target(self, description: Target) -> tuple:

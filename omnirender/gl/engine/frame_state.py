@@ -57,6 +57,7 @@ class FrameState:
         "shadow_plan",
         "background",
         "drawing",
+        "recorder",
     )
 
     def __init__(self, size: tuple[int, int]) -> None:
@@ -90,6 +91,8 @@ class FrameState:
         self.background: Any = None
         #: whether a frame is being drawn
         self.drawing = False
+        #: the FrameRecorder of the frame being drawn (:mod:`.plan`), or None when the frame is not recorded
+        self.recorder: Any = None
 
     def set_camera(self, view: np.ndarray, proj: np.ndarray, ortho: bool) -> None:
         """Make (``view``, ``proj``) the camera of the pass being drawn."""

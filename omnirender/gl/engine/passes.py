@@ -509,6 +509,35 @@ class Pass:
         object.__setattr__(self, name, tuple(values))
         return tuple(out)
 
+    def scissored(self, box: tuple[int, int, int, int], name: str | None = None) -> Pass:
+        """This pass limited to the pixel rectangle ``box`` (x, y, width, height from the target's top-left
+        corner): its ``ScissorTest`` is ``box`` and its clear, if any, clears only ``box``; ``name`` renames it.
+
+        A copy made without checking the rest of the description again: what a
+        technique that redraws a changed rectangle every frame (shadow maps'
+        partial updates) derives from a pass it made once.
+        """
+        from .attributes import ScissorTest
+
+        clear = self.clear
+        if clear is not None:
+            clear = Clear(color=clear.color, depth=clear.depth, stencil=clear.stencil, box=box)  # box checked
+        elif not (len(box) == 4 and all(isinstance(v, int) for v in box) and min(box) >= 0 < min(box[2:])):
+            raise ValueError(f"Pass {self.name!r}: a scissor box is (x, y, width, height) pixels, got {box!r}")
+        index = ScissorTest.index
+        fields = dict(self.__dict__)  # frozen: the copy's fields are set here, before it is made
+        if self._state and any(v[0] == index for v in self._state):
+            kept = [(k, v) for k, v in zip(self.state, self._state, strict=True) if v[0] != index]
+            fields["state"], fields["_state"] = tuple(k for k, _ in kept), tuple(v for _, v in kept)
+        fields["state"] = fields["state"] + ((ScissorTest, tuple(box)),)
+        fields["_state"] = fields["_state"] + ((index, tuple(box)),)
+        fields["clear"] = clear
+        if name is not None:
+            fields["name"] = name
+        out = object.__new__(Pass)
+        out.__dict__.update(fields)
+        return out
+
     def key(self) -> tuple:
         """The description as a comparable value (what the engine compares frame by frame)."""
         camera = None if self.camera is None else (self.camera[0].tobytes(), self.camera[1].tobytes())

@@ -844,6 +844,9 @@ class ProgramCache:
         self.ctx = ctx
         self._programs: dict[tuple, Any] = {}
         self._custom: dict[str, tuple[str, str | None, str]] = {}
+        #: the FramePlan (:mod:`.plan`) that wrote the programs' uniforms last, or None when other code may have
+        #: written them since (cleared by every frame that is not a replay and by every :meth:`get`)
+        self.owner: Any = None
 
     def register(self, kind: str, vertex: str, fragment: str, geometry: str | None = None) -> None:
         """Add a program kind (text, volume and full-screen passes use it)."""
@@ -857,6 +860,7 @@ class ProgramCache:
         return len(self._programs)
 
     def get(self, kind: str, features: tuple[tuple[str, Any], ...] = (), code: tuple[Any, ...] = ()) -> Any:
+        self.owner = None  # the caller may write the program's uniforms
         key = (kind, features, code)
         prog = self._programs.get(key)
         if prog is not None:

@@ -55,6 +55,16 @@ class FrameStage:
         """The installed draw list changed or items moved (stages caching what depends on placement
         forget it here)."""
 
+    def replayable(self, engine: Any) -> bool:
+        """Whether a frame that changed nothing may replay what this stage drew in the frame before instead
+        of calling :meth:`draw` (the frame plan, :mod:`.plan`).
+
+        True only when what the stage draws depends on nothing but what the engine's change tracker follows
+        (the draw list, placements, camera, lights, the engine's settings) and it draws only through
+        ``frame.run``.  False by default: a stage of the application may draw something else every frame.
+        """
+        return False
+
     def release(self) -> None:
         """The engine is released: free what the stage holds on the GPU."""
 
@@ -70,6 +80,9 @@ class PipelinesStage(FrameStage):
     def prepare(self, engine: Any) -> None:
         engine.prepare_pipelines()  # their engines use the context: before the frame binds its target
 
+    def replayable(self, engine: Any) -> bool:
+        return True  # it draws in prepare (called in replayed frames too); a render texture read taints
+
 
 class TechniqueStage(FrameStage):
     """The frame technique over the scene (in a frame-level post-processing chain when the scene has one);
@@ -81,6 +94,9 @@ class TechniqueStage(FrameStage):
         if frame.engine.stereo is not None:
             return 0
         return frame.run_frame_level(root, Composed())  # e.g. a post-processing chain around the pipeline
+
+    def replayable(self, engine: Any) -> bool:
+        return True  # the techniques it runs say whether they are
 
 
 class StageList:

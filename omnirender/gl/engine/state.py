@@ -214,8 +214,10 @@ class RasterApplier:
         all_kinds = _KINDS
         if current is None:
             self.current = list(raster)
-            for kind, value in zip(all_kinds, raster, strict=False):  # kinds defined after a compile: left as they are
-                kind.apply(self.gl, value)
+            gl = self.gl
+            for i, apply in _issuing():  # kinds that issue GL calls (the others live in shaders or passes)
+                if i < len(raster):  # kinds defined after a compile: left as they are
+                    apply(gl, raster[i])
             return
         for i, value in enumerate(raster):
             if current[i] != value:
@@ -340,3 +342,18 @@ def defaults() -> tuple[Any, ...]:
 
 
 _DEFAULTS: tuple[Any, ...] = ()
+
+
+def _issuing() -> tuple[tuple[int, Any], ...]:
+    """(raster index, apply) of the kinds whose ``apply`` issues GL calls (not the base class's no-op)."""
+    global _ISSUING
+    if _ISSUING[0] != len(_KINDS):
+        noop = StateKind.__dict__["apply"].__func__
+        _ISSUING = (
+            len(_KINDS),
+            tuple((k.index, k.apply) for k in _KINDS if getattr(k.apply, "__func__", None) is not noop),
+        )
+    return _ISSUING[1]
+
+
+_ISSUING: tuple[int, tuple[tuple[int, Any], ...]] = (-1, ())

@@ -33,6 +33,9 @@ class Forward(GLTechnique):
     """
 
     __slots__ = ()
+    #: its passes are the same every frame (data): a steady frame may replay them (``gl/engine/plan.py``);
+    #: a subclass is replayable only when it says so itself
+    replayable = True
     PASSES = (
         Pass("opaque", items="opaque"),
         Pass("transparent", items="transparent", scopes=False),

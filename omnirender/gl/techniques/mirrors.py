@@ -165,6 +165,11 @@ class MirrorStage(FrameStage):
         """Nothing to forget: the engine's render index finds the mirrors once per draw list, and the planes
         are read from the rows every frame."""
 
+    def replayable(self, engine: Any) -> bool:
+        """What it draws follows the draw list, lights and settings; a frame that draws anything here is
+        not recorded (its technique, target and shadow uniforms taint the frame plan)."""
+        return True
+
     def draw(self, frame: Any, root: Any) -> int:
         engine = frame.engine
         if engine.stereo is not None:

@@ -165,11 +165,19 @@ class ShadowMaps(GLTechnique):
 class _Face:
     """One map of the atlas: a light camera (view, projection), its tile, texel size, whether it is drawn."""
 
-    __slots__ = ("view", "proj", "texel", "drawn", "tile")
+    __slots__ = ("view", "proj", "texel", "drawn", "tile", "matrix", "rows", "ortho", "signature", "template")
 
     def __init__(self, view: np.ndarray, proj: np.ndarray, texel: tuple[float, float], drawn: bool = True) -> None:
         self.view, self.proj, self.texel, self.drawn = view, proj, texel, drawn
         self.tile: tuple[int, int] | None = None  # (column, row) in the atlas
+        #: the light camera's projection @ view, and as rows of Python floats (a few boxes are projected with them)
+        self.matrix = proj @ view
+        self.rows: list[list[float]] = self.matrix.tolist()
+        m = self.matrix
+        self.ortho = bool(m[3, 0] == 0.0 and m[3, 1] == 0.0 and m[3, 2] == 0.0)
+        #: what its texels depend on (:func:`_signature`, set with its tile) and its partial passes' pattern
+        self.signature = b""
+        self.template: Pass | None = None
 
 
 class _MapPasses(GLTechnique):
@@ -225,6 +233,7 @@ class ShadowPlan:
         self.target = Target(ATLAS, colors=(), depth=True, size=(cols * r, rows * r))
         for k, face in enumerate(drawn):
             face.tile = (k % cols, k // cols)
+            face.signature = _signature(face, r)
         self.cols, self.rows = cols, rows
         self._arrays()
 
@@ -266,13 +275,15 @@ class ShadowPlan:
         self.tiles = np.zeros((n, 4), np.float32)
         self.texels = np.zeros((n, 2), np.float32)
         for k, face in enumerate(self.faces):
-            self.matrices[k] = (face.proj @ face.view).T
+            self.matrices[k] = face.matrix.T
             self.texels[k] = face.texel
             if face.tile is not None:
                 col, row = face.tile
                 r = self.resolution
                 self.tiles[k] = (col * r, row * r, r, r)
         self.style = np.asarray(self.settings.style(), np.float32)
+        #: (uniform, array length, ids of the light order for u_lshadow) -> the bytes written (:meth:`apply`)
+        self._bytes: dict[tuple[str, int, tuple[int, ...]], bytes] = {}
 
     def light_array(self, order: list[Any], size: int) -> np.ndarray:
         """``u_lshadow``: (first face, count, 0, 0) for the lights of a light-uniform set, in its order."""
@@ -287,14 +298,23 @@ class ShadowPlan:
         """Bind the atlas and write the shadow uniforms a program reads."""
         atlas.use(SHADOW_UNIT)
         program["u_shadow_atlas"].value = SHADOW_UNIT
-        for name, data in (("u_shadow_mat", self.matrices), ("u_shadow_tile", self.tiles),
-                           ("u_shadow_texel", self.texels), ("u_shadow_style", self.style)):  # fmt: skip
+        made = self._bytes
+        for name in ("u_shadow_mat", "u_shadow_tile", "u_shadow_texel", "u_shadow_style", "u_lshadow"):
             u = program.get(name, None)
-            if u is not None:  # the compiler may trim arrays to the elements a variant reads
-                u.write(data[: u.array_length].tobytes() if data.ndim > 1 else data.tobytes())
-        u = program.get("u_lshadow", None)
-        if u is not None:
-            u.write(self.light_array(order, u.array_length).tobytes())
+            if u is None:
+                continue
+            # the compiler may trim arrays to the elements a variant reads; the bytes are made once per length
+            key = (name, u.array_length, tuple(map(id, order)) if name == "u_lshadow" else ())
+            data = made.get(key)
+            if data is None:
+                if name == "u_lshadow":
+                    data = self.light_array(order, u.array_length).tobytes()
+                else:
+                    array = {"u_shadow_mat": self.matrices, "u_shadow_tile": self.tiles,
+                             "u_shadow_texel": self.texels, "u_shadow_style": self.style}[name]  # fmt: skip
+                    data = array[: u.array_length].tobytes() if array.ndim > 1 else array.tobytes()
+                made[key] = data
+            u.write(data)
 
 
 def frame_settings(root: Scope | None, enabled: bool) -> ShadowMaps | None:
@@ -357,9 +377,16 @@ class ShadowMapStage(FrameStage):
         self._rects: dict[tuple[bytes, int], _Rects] = {}
         #: (root, index version, the full passes' select) of the last structure looked at (:meth:`_select`)
         self._selected: tuple[Any, int, Any] | None = None
+        #: (the casters' bounds, the bounds fitted to them) of the last frame
+        self._fitted: tuple[Any, np.ndarray, np.ndarray] | None = None
 
     def changed(self) -> None:
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
+
+    def replayable(self, engine: Any) -> bool:
+        """What it draws follows the draw list, lights and settings; a frame that draws anything here is
+        not recorded (its technique, target and shadow uniforms taint the frame plan)."""
+        return True
 
     def release(self) -> None:
         for _, batch in self._scratch.values():
@@ -423,7 +450,9 @@ class ShadowMapStage(FrameStage):
         bounds = engine.index.caster_bounds()[0] if installed else caster_bounds(root)
         if bounds is None:
             return self._forget()
-        lo, hi = fit_bounds(*bounds)
+        if self._fitted is None or self._fitted[0] is not bounds:  # the index keeps the bounds while they hold
+            self._fitted = (bounds, *fit_bounds(*bounds))
+        lo, hi = self._fitted[1], self._fitted[2]
         key = (id(settings), settings.version, lo.tobytes(), hi.tobytes(),
                tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
@@ -437,7 +466,7 @@ class ShadowMapStage(FrameStage):
         frame.state.shadow_plan = plan
         faces = [(k, face) for k, face in enumerate(plan.faces) if face.tile is not None]
         held = self._held if self._atlas == plan.target and frame.keep_target(plan.target) else {}
-        self._atlas, self._held = plan.target, {face.tile: _signature(face, plan.resolution) for _, face in faces}
+        self._atlas, self._held = plan.target, {face.tile: face.signature for _, face in faces}
         self._follow(changes, set(self._held.values()))
         if not held:  # a new atlas: every face, under one clear
             report["full"] = len(faces)
@@ -458,17 +487,17 @@ class ShadowMapStage(FrameStage):
                 partial.append((k, face, region))
         calls = 0
         if full:
-            calls += frame.run(_MapPasses([_face_pass(plan, k, face, None, select) for k, face in full]), root)
+            calls += frame.run(_MapPasses([_face_pass(plan, k, face, select) for k, face in full]), root)
             report["full"] = len(full)
         if partial:
             casters = engine.index.caster_boxes() if installed else None
             for k, face, region in partial:
                 if casters is None:  # some caster is not in a batch: the face is drawn in full
-                    calls += frame.run(_MapPasses([_face_pass(plan, k, face, None, select)]), root)
+                    calls += frame.run(_MapPasses([_face_pass(plan, k, face, select)]), root)
                     report["full"] += 1
                     continue
-                scope = self._casters_in(casters, face, self._held[face.tile], plan.resolution, region)
-                calls += frame.run(_MapPasses([_face_pass(plan, k, face, region)]), scope)
+                scope = self._casters_in(casters, face, face.signature, plan.resolution, region)
+                calls += frame.run(_MapPasses([_partial_pass(plan, k, face, region)]), scope)
                 col, row = face.tile
                 r = plan.resolution
                 report["partial"] += 1
@@ -583,27 +612,18 @@ def _signature(face: _Face, resolution: int) -> bytes:
     return face.view.tobytes() + face.proj.tobytes() + bytes(repr((face.tile, resolution)), "ascii")
 
 
-def _face_pass(
-    plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int] | None, select: Any = casts_shadows
-) -> Pass:
-    """The depth pass of face ``k``: the whole tile cleared and every caster drawn (``region`` None; ``select``
-    picks the casters, None: every opaque item), or the ``region`` (x, y, width, height texels of the tile from
-    its bottom-left corner) cleared and drawn under a scissor (the pass then draws the scope it is run on: the
-    casters that meet the region)."""
+def _face_pass(plan: ShadowPlan, k: int, face: _Face, select: Any = casts_shadows) -> Pass:
+    """The depth pass of face ``k`` drawn in full: its tile cleared and every caster that ``select`` picks
+    (None: every opaque item) drawn under a scissor."""
     r = plan.resolution
     col, row = face.tile
-    height = plan.target.size[1]
-    if region is None:
-        box = (col * r, height - (row + 1) * r, r, r)  # the tile, from the atlas's top-left corner
-    else:
-        x, y, w, h = region
-        box = (col * r + x, height - (row * r + y) - h, w, h)
+    box = (col * r, plan.target.size[1] - (row + 1) * r, r, r)  # the tile, from the atlas's top-left corner
     return Pass(
-        f"shadow-map[{k}]" if region is None else f"shadow-map[{k}] partial",
+        f"shadow-map[{k}]",
         items="opaque",
-        select=select if region is None else None,
+        select=select,
         scopes="items",
-        source="scene" if region is None else "scope",
+        source="scene",
         target=plan.target,
         viewport=(col * r, row * r, r, r),
         clear=Clear(color=None, depth=1.0, box=box),
@@ -613,43 +633,72 @@ def _face_pass(
     )
 
 
+def _partial_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int]) -> Pass:
+    """The depth pass that redraws ``region`` (x, y, width, height texels of the tile from its bottom-left corner)
+    of face ``k``: cleared and drawn under a scissor; it draws the scope it is run on (the casters that meet the
+    region).  Derived from a pattern made once per face (:meth:`Pass.scissored`: no pass is checked per frame)."""
+    template = face.template
+    if template is None:
+        full = _face_pass(plan, k, face, None)
+        template = face.template = Pass(
+            f"shadow-map[{k}] partial", items="opaque", scopes="items", source="scope", target=plan.target,
+            viewport=full.viewport, clear=full.clear, camera=full.camera, shader=_DEPTH_ONLY,
+        )  # fmt: skip
+    r = plan.resolution
+    col, row = face.tile
+    x, y, w, h = region
+    return template.scissored((col * r + x, plan.target.size[1] - (row * r + y) - h, w, h))
+
+
 _DEPTH_ONLY = Shader(depth_only=True)
 
 
-def _changed_boxes(changes: list[Any]) -> tuple[np.ndarray, np.ndarray] | None:
-    """The boxes of the journal's changes, old and new, less the rows that left and came back to the same place
-    in the same batch (a replaced ``Material``); None when too many to say."""
-    olds = [c for c in changes if not c.new]
-    news = [c for c in changes if c.new]
-    rows = sum(len(c.lo) for c in changes)
-    if olds and news and rows <= 64:  # few: cancel what left and came back (same batch, same box)
-        count: dict[tuple[int, bytes], int] = {}
-        for c in olds:
-            for a, b in zip(c.lo, c.hi, strict=True):
-                key = (id(c.batch), a.tobytes() + b.tobytes())
-                count[key] = count.get(key, 0) + 1
-        lo, hi = [], []
-        for c in news:
-            for a, b in zip(c.lo, c.hi, strict=True):
-                key = (id(c.batch), a.tobytes() + b.tobytes())
-                if count.get(key, 0) > 0 and _depth_only_state(c.batch):
-                    count[key] -= 1
-                else:
-                    lo.append(a)
-                    hi.append(b)
-        for c in olds:
-            for a, b in zip(c.lo, c.hi, strict=True):
-                key = (id(c.batch), a.tobytes() + b.tobytes())
-                if count.get(key, 0) > 0:
-                    count[key] -= 1
-                    lo.append(a)
-                    hi.append(b)
-        if not lo:
-            return np.zeros((0, 3)), np.zeros((0, 3))
-        return np.array(lo), np.array(hi)
+def _changed_boxes(changes: list[Any]) -> tuple[list[list[float]], list[list[float]]] | None:
+    """The boxes of the journal's changes, old and new (lists of [x, y, z] corners), less the rows that left and
+    came back to the same place in the same batch (a replaced ``Material``).
+
+    One pass of Python floats over the journal's rows (a few per frame: what
+    moved; the journal holds at most ``JOURNAL_ROWS``): a left place and a
+    taken one cancel when their batch and corners are equal.
+    """
     if not changes:
-        return np.zeros((0, 3)), np.zeros((0, 3))
-    return np.concatenate([c.lo for c in changes]), np.concatenate([c.hi for c in changes])
+        return [], []
+    if len(changes) == 1 or all(c.new for c in changes) or not any(c.new for c in changes):
+        return [a for c in changes for a in c.lo.tolist()], [b for c in changes for b in c.hi.tolist()]
+    if len(changes) == 2 and changes[0].batch is changes[1].batch and len(changes[0].lo) == len(changes[1].lo) == 1:
+        a, b = changes  # one row left and one came (a replaced Material): the same box cancels
+        lows, highs = a.lo.tolist() + b.lo.tolist(), a.hi.tolist() + b.hi.tolist()
+        if lows[0] == lows[1] and highs[0] == highs[1] and _depth_only_state(a.batch):
+            return [], []
+        return lows, highs
+    left: dict[tuple[int, tuple[float, ...]], list[int]] = {}
+    lows: list[list[float]] = []
+    highs: list[list[float]] = []
+    olds: list[int] = []  # where the left places are in lows/highs
+    for c in changes:
+        if c.new:
+            continue
+        for a, b in zip(c.lo.tolist(), c.hi.tolist(), strict=True):
+            left.setdefault((id(c.batch), (*a, *b)), []).append(len(lows))
+            olds.append(len(lows))
+            lows.append(a)
+            highs.append(b)
+    cancelled: set[int] = set()
+    for c in changes:
+        if not c.new:
+            continue
+        same = _depth_only_state(c.batch)
+        for a, b in zip(c.lo.tolist(), c.hi.tolist(), strict=True):
+            found = left.get((id(c.batch), (*a, *b))) if same else None
+            if found:
+                cancelled.add(found.pop())
+            else:
+                lows.append(a)
+                highs.append(b)
+    if cancelled:
+        keep = [i for i in range(len(lows)) if i not in cancelled]
+        lows, highs = [lows[i] for i in keep], [highs[i] for i in keep]
+    return lows, highs
 
 
 def _depth_only_state(batch: Any) -> bool:
@@ -660,12 +709,22 @@ def _depth_only_state(batch: Any) -> bool:
     return batch.state.value(AlphaTest) is None
 
 
+#: boxes up to this many are projected in Python floats (numpy's per-call cost is more for a few)
+_FEW = 8
+
+
 def _ndc_rects(face: _Face, lo: np.ndarray, hi: np.ndarray) -> tuple[list[np.ndarray], Any, Any]:
     """The rectangles [x0, y0, x1, y1] (four arrays, the face's normalised coordinates) that the boxes [lo, hi]
     may cover in ``face``, with which reach behind its light camera (then they may cover all of it) and which
     lie wholly behind it (none of it); both None for an orthographic face."""
-    m = face.proj @ face.view
-    if m[3, 0] == 0.0 and m[3, 1] == 0.0 and m[3, 2] == 0.0:  # orthographic: centre and half extent
+    if len(lo) <= _FEW:
+        rects = _few_rects(face, lo.tolist(), hi.tolist())
+        columns = [np.array([r[j] for r in rects], np.float64) for j in range(4)]
+        if face.ortho:
+            return columns, None, None
+        return columns, np.array([r[4] for r in rects], bool), np.array([r[5] for r in rects], bool)
+    m = face.matrix
+    if face.ortho:  # orthographic: centre and half extent
         # column by column, in arrays of N: numpy's (N, 3) @ (3, 2) products and axis-0 reductions are many
         # times slower, and (N, 4) arrays are big enough for allocations that map fresh pages
         total = [lo[:, k] + hi[:, k] for k in range(3)]
@@ -687,12 +746,53 @@ def _ndc_rects(face: _Face, lo: np.ndarray, hi: np.ndarray) -> tuple[list[np.nda
     return [x.min(axis=1), y.min(axis=1), x.max(axis=1), y.max(axis=1)], ~ahead.all(axis=1), ~ahead.any(axis=1)
 
 
-def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -> tuple[int, int, int, int] | None:
+def _few_rects(
+    face: _Face, lows: list[list[float]], highs: list[list[float]]
+) -> list[tuple[float, float, float, float, bool, bool]]:
+    """:func:`_ndc_rects` of a few boxes in Python floats: per box x0, y0, x1, y1, whether it reaches behind the
+    light camera (its rectangle is then all of the face) and whether it lies wholly behind it."""
+    m = face.rows
+    out = []
+    if face.ortho:  # centre and half extent: an affine map
+        s = 1.0 / m[3][3]
+        (a0, a1, a2, a3), (b0, b1, b2, b3) = ([v * s for v in m[0]], [v * s for v in m[1]])
+        for lo, hi in zip(lows, highs, strict=True):
+            cx, cy, cz = (lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5, (lo[2] + hi[2]) * 0.5
+            ex, ey, ez = (hi[0] - lo[0]) * 0.5, (hi[1] - lo[1]) * 0.5, (hi[2] - lo[2]) * 0.5
+            x = a0 * cx + a1 * cy + a2 * cz + a3
+            y = b0 * cx + b1 * cy + b2 * cz + b3
+            dx = abs(a0) * ex + abs(a1) * ey + abs(a2) * ez
+            dy = abs(b0) * ex + abs(b1) * ey + abs(b2) * ez
+            out.append((x - dx, y - dy, x + dx, y + dy, False, False))
+        return out
+    for lo, hi in zip(lows, highs, strict=True):
+        xs, ys, ahead = [], [], 0
+        for x in (lo[0], hi[0]):
+            for y in (lo[1], hi[1]):
+                for z in (lo[2], hi[2]):
+                    w = m[3][0] * x + m[3][1] * y + m[3][2] * z + m[3][3]
+                    if w <= 1e-9:
+                        continue
+                    ahead += 1
+                    xs.append((m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]) / w)
+                    ys.append((m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]) / w)
+        if ahead == 8:
+            out.append((min(xs), min(ys), max(xs), max(ys), False, False))
+        else:  # behind the light camera in part (all of the face) or wholly (none of it)
+            out.append((-1.0, -1.0, 1.0, 1.0, True, ahead == 0))
+    return out
+
+
+def _face_region(
+    face: _Face, resolution: int, lo: np.ndarray | list[list[float]], hi: np.ndarray | list[list[float]]
+) -> tuple[int, int, int, int] | None:
     """The texel rectangle (x, y, width, height from the tile's bottom-left corner, one texel of margin) the boxes
-    [lo, hi] may cover in ``face``; None when they cover none of it."""
-    if len(lo) <= 16:  # a few boxes (what moved in a frame): plain floats, not dozens of tiny numpy calls
-        return _few_region(face, resolution, lo.tolist(), hi.tolist())
-    (x0, y0, x1, y1), behind, away = _ndc_rects(face, lo, hi)
+    [lo, hi] ((N, 3) arrays or lists of corners) may cover in ``face``; None when they cover none of it."""
+    if len(lo) <= 4 * _FEW:  # a few boxes (what moved in a frame): plain floats, not dozens of tiny numpy calls
+        lows = lo.tolist() if isinstance(lo, np.ndarray) else lo
+        highs = hi.tolist() if isinstance(hi, np.ndarray) else hi
+        return _few_region(_few_rects(face, lows, highs), resolution)
+    (x0, y0, x1, y1), behind, away = _ndc_rects(face, np.asarray(lo, np.float64), np.asarray(hi, np.float64))
     if behind is not None:
         x0, y0, x1, y1 = (np.where(behind, edge, v) for v, edge in zip((x0, y0, x1, y1), (-1, -1, 1, 1), strict=True))
     half = resolution / 2.0
@@ -710,30 +810,18 @@ def _face_region(face: _Face, resolution: int, lo: np.ndarray, hi: np.ndarray) -
 
 
 def _few_region(
-    face: _Face, resolution: int, lows: list[list[float]], highs: list[list[float]]
+    rects: list[tuple[float, float, float, float, bool, bool]], resolution: int
 ) -> tuple[int, int, int, int] | None:
-    """:func:`_face_region` of a few boxes, corner by corner in Python floats."""
-    m = (face.proj @ face.view).tolist()
+    """:func:`_face_region` of a few boxes' rectangles (:func:`_few_rects`)."""
     half = resolution / 2.0
     box: list[float] | None = None
-    for lo, hi in zip(lows, highs, strict=True):
-        xs, ys, ahead = [], [], 0
-        for x in (lo[0], hi[0]):
-            for y in (lo[1], hi[1]):
-                for z in (lo[2], hi[2]):
-                    w = m[3][0] * x + m[3][1] * y + m[3][2] * z + m[3][3]
-                    if w <= 1e-9:
-                        continue
-                    ahead += 1
-                    xs.append((m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3]) / w)
-                    ys.append((m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3]) / w)
-        if not ahead:
+    for x0, y0, x1, y1, _, away in rects:
+        if away:
             continue  # wholly behind the light camera
-        rect = (-1.0, -1.0, 1.0, 1.0) if ahead < 8 else (min(xs), min(ys), max(xs), max(ys))
-        x0 = min(max(math.floor((rect[0] + 1.0) * half) - 1, 0), resolution)
-        y0 = min(max(math.floor((rect[1] + 1.0) * half) - 1, 0), resolution)
-        x1 = min(max(math.ceil((rect[2] + 1.0) * half) + 1, 0), resolution)
-        y1 = min(max(math.ceil((rect[3] + 1.0) * half) + 1, 0), resolution)
+        x0 = min(max(math.floor((x0 + 1.0) * half) - 1, 0), resolution)
+        y0 = min(max(math.floor((y0 + 1.0) * half) - 1, 0), resolution)
+        x1 = min(max(math.ceil((x1 + 1.0) * half) + 1, 0), resolution)
+        y1 = min(max(math.ceil((y1 + 1.0) * half) + 1, 0), resolution)
         if x1 <= x0 or y1 <= y0:
             continue
         box = [x0, y0, x1, y1] if box is None else [min(box[0], x0), min(box[1], y0), max(box[2], x1), max(box[3], y1)]

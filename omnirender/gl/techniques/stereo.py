@@ -287,6 +287,10 @@ class StereoStage(FrameStage):
 
     name = "stereo"
 
+    def replayable(self, engine: Any) -> bool:
+        """A stereo frame is not recorded (the stereo technique taints the frame plan); none draws nothing."""
+        return True
+
     def draw(self, frame: Any, root: Any) -> int:
         stereo = frame.engine.stereo
         return 0 if stereo is None else frame.run(stereo, root, item_level=False)
