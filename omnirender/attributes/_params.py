@@ -115,8 +115,35 @@ def _numbers(owner: str, name: str, value: Any) -> np.ndarray:
     return check_array_magnitude(owner, name, arr)
 
 
+def _plain_unit_values(value: Any) -> tuple[float, ...] | None:
+    """``value`` as 3 or 4 floats when it is a flat tuple or list of Python (or numpy float64) numbers, or a
+    flat float array, each in [0, 1]; None otherwise (NaN included): the general check decides and words the
+    error.  What a new colour costs: no numpy call for a tuple of numbers (a Material checks four colours)."""
+    kind = type(value)
+    if kind is np.ndarray:
+        if value.ndim != 1 or value.dtype.kind != "f":
+            return None
+        value = value.tolist()
+    elif kind is not tuple and kind is not list:
+        return None
+    if len(value) != 3 and len(value) != 4:
+        return None
+    out = []
+    for c in value:
+        if type(c) is not int and not isinstance(c, float):  # bool, strings, nested lists: the general check
+            return None
+        x = float(c)
+        if not 0.0 <= x <= 1.0:
+            return None
+        out.append(x)
+    return tuple(out)
+
+
 def check_color(owner: str, name: str, value: Any) -> tuple[float, ...]:
     """3 or 4 finite values in [0, 1], returned as given (length kept)."""
+    plain = _plain_unit_values(value)
+    if plain is not None:
+        return plain
     arr = _numbers(owner, name, value)
     if arr.size not in (3, 4):
         raise ValueError(f"{owner}: {name} must be 3 (RGB) or 4 (RGBA) values, got {arr.size}")

@@ -208,7 +208,7 @@ class Matrix(Transform):
         if not np.all(np.isfinite(m)):
             raise ValueError("Matrix: matrix must be finite")
         check_array_magnitude("Matrix", "matrix", m)
-        if np.linalg.matrix_rank(m[:3, :3]) < 3:
+        if not _invertible(m[:3, :3]):
             raise ValueError(
                 "Matrix: the upper-left 3x3 part is singular (it flattens space, e.g. all zeros); give an "
                 "invertible matrix (hide a subgraph with a group mask instead of scaling it to nothing)"
@@ -222,6 +222,24 @@ class Matrix(Transform):
 
     def parameters(self) -> dict:
         return {"matrix": self._matrix.tolist()}
+
+
+def _invertible(m3: np.ndarray) -> bool:
+    """``np.linalg.matrix_rank(m3) == 3``, without its SVD when the determinant already decides.
+
+    The smallest singular value is at least ``|det| / |m3|_F**2`` and the rank's
+    tolerance is ``3 eps`` times the largest, at most ``|m3|_F``: a determinant
+    above ``64 eps |m3|_F**3`` (the margin covers its rounding) means rank 3.
+    """
+    (a, b, c), (d, e, f), (g, h, i) = m3.tolist()
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    norm = math.sqrt(a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i)
+    if abs(det) > 64.0 * _EPS * norm**3:
+        return True
+    return bool(np.linalg.matrix_rank(m3) == 3)
+
+
+_EPS = float(np.finfo(np.float64).eps)
 
 
 class Translation(Transform):

@@ -237,6 +237,11 @@ class GLEngine(Engine):
         context therefore only makes it current.  A wrapped context (a window's)
         is assumed to be current already.
         """
+        self._make_current()
+        yield self.ctx
+
+    def _make_current(self) -> None:
+        """What :meth:`current` does on entry (nothing is undone on exit): callable without a ``with``."""
         if getattr(self, "_released", False):
             raise RuntimeError(
                 "GLEngine: this engine was released (engine.release()) and its GPU resources are gone; "
@@ -244,7 +249,6 @@ class GLEngine(Engine):
             )
         if self._own_context:
             self.ctx.mglo.__enter__()
-        yield self.ctx
 
     @property
     def size(self) -> tuple[int, int]:
@@ -379,19 +383,19 @@ class GLEngine(Engine):
         such a frame uses the camera and lights of the last ``engine.run(root)``
         (the viewer's way), else the auto-fit camera and a headlight.
         """
-        with self.current():
-            if scene is not None:
-                self.compile(scene, mask=mask)
-            else:
-                # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
-                self.compiler.install_immediate()
-                if not self._preevaluated:
-                    # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
-                    self.camera = None
-                    self.declared = None
-            self._preevaluated = False
-            self.frame_runner.draw(background, True)  # draw() without a camera or framebuffer of its own
-            return self._read(read_depth)
+        self._make_current()  # (what `with self.current():` does, without a generator per frame)
+        if scene is not None:
+            self.compile(scene, mask=mask)
+        else:
+            # immediate mode: what was evaluated directly, seen by the auto-fit camera under a headlight
+            self.compiler.install_immediate()
+            if not self._preevaluated:
+                # no engine.run(root) since the last frame: nothing pre-evaluated a camera or lights
+                self.camera = None
+                self.declared = None
+        self._preevaluated = False
+        self.frame_runner.draw(background, True)  # draw() without a camera or framebuffer of its own
+        return self._read(read_depth)
 
     # -- the compile (the compiler and the installer do it) -----------------------------------------
     def compile(self, scene: Any, mask: Any = None) -> Scope:

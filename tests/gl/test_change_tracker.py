@@ -287,3 +287,55 @@ def test_moves_between_splices_of_nested_transforms_match_a_fresh_engine():
             for moved in (groups[frame].items[0], deeper.items[0], leaves[18 + frame].items[0]):
                 moved.offset = tuple(np.asarray(moved.offset) + (0.0, 0.0, 0.25))
                 assert np.array_equal(e.render(scene).array, fresh(scene, False))
+
+
+def test_the_casters_bounds_follow_moves_on_and_off_them_without_a_pass_over_every_caster():
+    """Rows on the casters' bounds are counted: moving one of many rows that lie on a bound keeps the bounds
+    without computing them again; moving the last one off a bound, or a row past it, gives the bounds computed
+    from scratch (checked after every move)."""
+    from omnirender.gl import GLEngine
+    from omnirender.gl.engine import index as index_module
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 8, 14), (0, 0, 0), fov=50)])
+    scene.add(om.DirectionalLight(direction=(-0.3, -1.0, -0.4)))
+    box = om.Box(size=0.5)
+    moves = []
+    for i in range(48):  # a 4 x 3 x 4 grid: many rows on each side of the bounds
+        t = om.Translation(float(i % 4) - 1.5, float(i // 16), float((i // 4) % 4) - 1.5)
+        moves.append(t)
+        scene.add(om.Node(f"b{i}", [t, om.Material(diffuse=(0.6, 0.5, 0.4)), box]))
+    computed = []
+    original = index_module.RenderIndex._compute
+
+    def counting(self, keep):
+        computed.append(keep)
+        return original(self, keep)
+
+    def check() -> None:
+        *_, casters = derived_from_scratch(e)
+        got = e.index.caster_bounds()[0]
+        assert np.array_equal(got[0], casters[0]) and np.array_equal(got[1], casters[1])
+
+    corner = moves[0]  # one of the 12 rows on the lower x bound
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene)
+        index_module.RenderIndex._compute = counting
+        try:
+            for offset in ((-1.3, 0.0, -1.5), (-3.0, 0.0, -1.5)):  # off the bound (11 stay), then past it
+                corner.offset = offset
+                e.render(scene)
+                check()
+            assert not computed  # followed: the bounds kept, then grown
+            corner.offset = (-1.3, 0.0, -1.5)  # the last row on the new bound left it
+            e.render(scene)
+            check()
+            assert computed  # computed again: they shrank
+            rng = np.random.default_rng(5)
+            for _ in range(12):
+                t = moves[int(rng.integers(len(moves)))]
+                x, y, z = t.offset
+                t.offset = (x + float(rng.uniform(-0.4, 0.4)), y + float(rng.uniform(-0.4, 0.4)), z)
+                e.render(scene)
+                check()
+        finally:
+            index_module.RenderIndex._compute = original

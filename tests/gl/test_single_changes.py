@@ -159,3 +159,49 @@ def test_splices_in_a_root_of_one_segment_keep_the_entries_items_and_index_in_on
             for batch in segment.batches:
                 assert all(it.slot == (batch, r) for r, it in enumerate(batch.items))
             assert np.array_equal(image.array, fresh(scene, True)), frame
+
+
+def test_rows_removed_and_appended_keep_the_buffer_places_a_permutation():
+    """``Batch.position`` stays a permutation of the buffer places through row edits and its kept inverse
+    answers it, also after the drawer sorted the rows again without it."""
+    from omnirender.gl.engine.drawlist import Batch, DrawItem
+    from omnirender.gl.engine.layout import ROW
+
+    rng = np.random.default_rng(7)
+    n = 50
+    batch = Batch(None, None)
+    items = [DrawItem(None, None, np.full(ROW.stride, float(i), np.float32), False, None, ()) for i in range(n)]
+    batch.items = list(items)
+    batch.hold(np.stack([it.row for it in items]))
+    for r, it in enumerate(items):
+        it.slot = (batch, r)  # what the installer sets
+    batch.position = rng.permutation(n)  # as the drawer leaves it: sorted front to back
+    batch.drawn = n
+    batch.uniform = False
+    for step in range(200):
+        if step % 3 == 2 or len(batch.rows) < 5:
+            batch.append_row(DrawItem(None, None, np.full(ROW.stride, 100.0 + step, np.float32), False, None, ()))
+        else:
+            batch.remove_row(int(rng.integers(len(batch.rows))))
+        m = len(batch.rows)
+        assert sorted(batch.position.tolist()) == list(range(m))
+        for place in (0, m - 1, int(rng.integers(m))):  # the inverse answers (made again when it does not)
+            assert batch.position[batch._row_at(place)[0]] == place
+        assert all(it.slot == (batch, r) and it.row[0] == batch.rows[r, 0] for r, it in enumerate(batch.items))
+        if step == 100:
+            batch.position = rng.permutation(m)  # sorted again by the drawer: the inverse is made again
+
+
+def test_shading_model_values_of_plain_numbers_pack_as_the_general_check():
+    from omnirender.gl.deferred.models import ShadingModelError, _value
+
+    for kind, value in [("color", (0.2, 0.4, 1)), ("float", 3), ("float", 2.5), ("vec2", [1, -2.0])]:
+        got = _value("m", "p", kind, value)
+        assert got == tuple(float(v) for v in np.asarray(value, np.float64).ravel())
+        assert all(type(v) is float for v in got)
+    for kind, value in [("color", (0.2, 1.5, 0.0)), ("float", float("nan")), ("color", (1, 0)), ("float", True)]:
+        if kind == "float" and value is True:
+            assert _value("m", "p", kind, value) == (1.0,)  # the general check's answer for a bool
+            continue
+        with pytest.raises(ShadingModelError, match="'p'"):
+            _value("m", "p", kind, value)

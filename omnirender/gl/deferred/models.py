@@ -33,6 +33,7 @@ them, so their numbers are the forward shader's ``MODEL`` values.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Mapping
 from typing import Any
@@ -234,8 +235,28 @@ class ShadingModel:
         return f"ShadingModel({self.name!r}, stages={sorted(self.stages)})"
 
 
+def _plain_value(value: Any, size: int, unit: bool) -> tuple[float, ...] | None:
+    """``value`` as ``size`` floats when it is a Python number or a flat tuple or list of them, finite (and in
+    [0, 1] when ``unit``); None otherwise: :func:`_value`'s general check decides and words the error."""
+    items = (value,) if type(value) is float or type(value) is int else value
+    if (type(items) is not tuple and type(items) is not list) or len(items) != size:
+        return None
+    out = []
+    for v in items:
+        if type(v) is not int and not isinstance(v, float):
+            return None
+        x = float(v)
+        if not math.isfinite(x) or (unit and not 0.0 <= x <= 1.0):
+            return None
+        out.append(x)
+    return tuple(out)
+
+
 def _value(owner: str, name: str, kind: str, value: Any) -> tuple[float, ...]:
     size = PARAM_TYPES[kind][1]
+    plain = _plain_value(value, size, kind == "color")
+    if plain is not None:
+        return plain
     try:
         arr = np.asarray(value, dtype=np.float64).ravel()
     except (TypeError, ValueError):

@@ -37,7 +37,7 @@ from .resources import gpu_call
 from .shaders import instance_fields
 from .state import LineWidth, ShadowingState, defaults
 from .targets import FrameTargets
-from .units import PASS_INPUTS
+from .units import PASS_INPUTS, SHADOW_ATLAS
 
 __all__ = ["BatchDrawer", "SORT_MIN", "PASS_INPUT_UNIT"]
 
@@ -471,10 +471,11 @@ class BatchDrawer:
             recorder.taint("area lights (their tables are bound outside the recorder)")
         lights.apply(prog)
         if self.state.shadow_plan is not None and prog.get("u_shadow_atlas", None) is not None:
-            if recorder is not None:
-                recorder.taint("shadow maps")
             plan = self.state.shadow_plan
-            plan.apply(prog, self.targets.named(plan.target.name).depth, lights.order)
+            atlas = self.targets.named(plan.target.name).depth
+            plan.apply(prog, atlas, lights.order)  # binds the atlas to its unit, writes the shadow uniforms
+            if recorder is not None:
+                recorder.texture(atlas, SHADOW_ATLAS)
 
     def _bind_textures(self, prog: Any, state: DrawState, recorder: Any) -> None:
         """The draw's textures on units 0, 1, ... (those its program samples)."""

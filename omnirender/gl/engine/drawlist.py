@@ -317,6 +317,7 @@ class Batch:
         "uniform",
         "sorted_for",
         "position",
+        "places",
         "drawn",
         "version",
         "source",
@@ -358,6 +359,9 @@ class Batch:
         self.sorted_for: bytes | None = None
         #: when sorted: the GPU buffer position of each row (so changed rows are rewritten where they lie)
         self.position: np.ndarray | None = None
+        #: the row at each GPU buffer place (``position``'s inverse) when known, kept by row edits; checked
+        #: against ``position`` before use (the drawer may sort again without it)
+        self.places: np.ndarray | None = None
         #: how many instances (from the start of the buffer) the frame's own view sees (the rest are culled)
         self.drawn = 0
         #: counts changes of ``rows`` (batches filtered from this one follow it)
@@ -455,11 +459,13 @@ class Batch:
             self.items.append(item)
             item.row = storage[n]
         item.slot = (self, n)
-        if self.uniform and not uniform_material(self.rows[[0, n]]):
+        if self.uniform and n and not (self.rows[0, _MATERIAL] == self.rows[n, _MATERIAL]).all():
             self.uniform = False
         if self.position is not None:
             if self.drawn == n:  # everything in view: the new row is drawn from the end of the buffer
-                self.position = np.append(self.position, n)
+                self.position = _appended_place(self.position, n)
+                if self.places is not None and len(self.places) == n:
+                    self.places = _appended_place(self.places, n)
                 self.drawn = n + 1
             else:
                 self.position = None  # culled: sorted and culled again
@@ -494,16 +500,21 @@ class Batch:
                 self.position = None
             else:
                 freed = int(position[index])
-                tail = int(np.flatnonzero(position == last)[0])  # the row in the buffer's last place
+                tail, places = self._row_at(last)  # the row in the buffer's last place
                 if moved is not None:
                     position[index] = position[last]
+                    if places is not None:
+                        places[position[index]] = index
                     if tail == last:
                         tail = index
-                position = position[:last].copy()
+                position = position[:last]  # a view: an appended row takes the spare place after it
                 if freed != last:
                     position[tail] = freed  # the row drawn last fills the freed place
+                    if places is not None:
+                        places[freed] = tail
                     self.row_changed(tail)
                 self.position = position
+                self.places = None if places is None else places[:last]
                 self.drawn = last
         if moved is not None and self.position is None:
             self.row_changed(index)
@@ -511,6 +522,21 @@ class Batch:
             self.sparse = [i for i in self.sparse if i < last]
         self.version += 1
         return moved
+
+    def _row_at(self, place: int) -> tuple[int, np.ndarray | None]:
+        """The row drawn at buffer ``place`` and the inverse of ``position`` (made here once, then kept by the row
+        edits; made again when it does not answer ``position``: the drawer sorted the rows again)."""
+        position = self.position
+        assert position is not None
+        places = self.places
+        if places is not None and len(places) == len(position):
+            row = int(places[place])
+            if position[row] == place:
+                return row, places
+        places = np.empty(len(position), position.dtype)
+        places[position] = np.arange(len(position))
+        self.places = places
+        return int(places[place]), places
 
     def row_changed(self, index: int) -> None:
         """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
@@ -655,6 +681,23 @@ class Batch:
         self.capacity = 0
         self.layout = None
         self.packed = None
+
+
+def _appended_place(position: np.ndarray, value: int) -> np.ndarray:
+    """``np.append(position, value)``, written into the spare place after ``position`` when its storage has one.
+
+    ``position`` is an array of its own or a prefix ``store[:n]`` of the storage this made (the only views of
+    it a batch keeps: :meth:`Batch.remove_row` shortens it the same way).
+    """
+    n = len(position)
+    base = position.base
+    if isinstance(base, np.ndarray) and base.ndim == 1 and base.dtype == position.dtype and len(base) > n:
+        out = base[: n + 1]
+    else:
+        out = np.empty(n + n // 8 + 16, position.dtype)[: n + 1]
+        out[:n] = position
+    out[n] = value
+    return out
 
 
 def uniform_material(rows: np.ndarray) -> bool:

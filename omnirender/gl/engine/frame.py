@@ -196,7 +196,7 @@ class FrameRunner:
         draws (:mod:`.plan`) instead of running the stages again.
         """
         engine, ctx, state = self.engine, self.ctx, self.state
-        stages = tuple(self.stages)
+        stages = self.stages.frozen()  # the same tuple while no stage is added or removed (a plan's key holds it)
         for stage in stages:
             stage.prepare(engine)  # e.g. render textures first: their engines use the context
         fbo = engine.framebuffer if framebuffer is None else framebuffer
@@ -256,6 +256,7 @@ class FrameRunner:
         if recorder is not None and key is not None:
             kept = {name: stats[name] for name in ("draw_calls", "batches", "items")}
             kept["passes"] = [PassRecord(record) for record in stats["passes"]]
+            kept["shadow_plan"] = state.shadow_plan
             self.plan = recorder.plan(key, kept)
             self.not_recorded = recorder.tainted
             if self.plan is not None:
@@ -287,7 +288,7 @@ class FrameRunner:
             or engine.pushed_targets
         ):
             return None
-        objects = (fbo, engine.declared, engine.technique, engine.frame_technique, engine.stereo, installed, *stages)
+        objects = (fbo, engine.declared, engine.technique, engine.frame_technique, engine.stereo, installed, stages)
         values = (
             self.generation,
             engine.draw_list_version,
@@ -309,7 +310,7 @@ class FrameRunner:
         """Issue ``plan``'s recorded draws into the bound target (cleared, camera set) and report its stats."""
         engine, state = self.engine, self.state
         programs = engine.programs
-        state.shadow_plan = None
+        state.shadow_plan = plan.stats["shadow_plan"]  # what the recorded frame's shadow stage planned
         state.drawing = True
         applier = state.applier
         try:
@@ -542,8 +543,7 @@ class FrameRunner:
     # -- targets ------------------------------------------------------------------------
     def keep_target(self, description: Target) -> bool:
         """Keep the offscreen target of ``description`` from the last frame in this one, unchanged (False when
-        it is gone: draw it again)."""
-        self._taint("an offscreen target kept")
+        it is gone: draw it again).  (A replayed frame releases no target: those a recorded frame kept stay.)"""
         return self.targets.keep(description, self.state.target_size)
 
     def _bind_target(self, description: Target) -> tuple:

@@ -58,7 +58,7 @@ class RenderIndex:
     """The installed root scope with its derived lists; ``install`` on a new structure, ``moved`` on moves."""
 
     __slots__ = ("root", "version", "_items", "_mirrors", "_bounds", "_casters", "_boxes", "_find_mirrors",
-                 "_journal", "_journal_rows")  # fmt: skip
+                 "_journal", "_journal_rows", "_extremes")  # fmt: skip
 
     def __init__(self, find_mirrors: Callable[[list[DrawItem]], list[tuple[Any, Any]]]) -> None:
         #: the mirror technique's rule: (item, pass predicate) pairs of the mirrors among the items
@@ -70,6 +70,9 @@ class RenderIndex:
         self._mirrors: list[tuple[Any, Any]] | None = None
         self._bounds: tuple[tuple[np.ndarray, np.ndarray] | None] | None = None
         self._casters: tuple[tuple[np.ndarray, np.ndarray] | None] | None = None
+        #: with the casters' bounds: per axis, how many batch rows' boxes lie on the lower and on the upper bound
+        #: (a row leaving the bounds shrinks them only when it was the last there); None: not counted
+        self._extremes: tuple[list[int], list[int]] | None = None
         #: id(batch) -> (batch, lo, hi): each row's world box, kept up to date row by row
         self._boxes: dict[int, tuple[Any, np.ndarray, np.ndarray]] = {}
         #: the casters' changed boxes since the shadow stage last read them; None: everything changed
@@ -101,18 +104,20 @@ class RenderIndex:
         for batch, where in rows:
             found = boxes.get(id(batch))
             caster = casts_shadows(batch)  # a batch's items share geometry and state: the batch decides
-            if isinstance(where, slice):  # a run of rows (a bound array's): its indices
-                where = np.arange(len(batch.rows))[where]
-            if caster and where is not None and len(where) > JOURNAL_ROWS:  # many moved: the maps in full
-                self._journal = self._casters = None
+            count = len(range(*where.indices(len(batch.rows)))) if isinstance(where, slice) else None
+            if caster and where is not None and (len(where) if count is None else count) > JOURNAL_ROWS:
+                self._journal = self._casters = None  # many moved: the maps in full
             if found is None or where is None or found[0] is not batch or len(found[1]) != len(batch.rows):
                 if found is not None:
                     del boxes[id(batch)]
                 if caster:
                     self._journal = self._casters = None  # the old places are not known
                 continue
+            # a run of rows (a bound array's) stays a slice: views and block copies, not gathers of every row
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
             if caster and (self._casters is not None or self._journal is not None):
+                if count is not None:
+                    where = np.arange(len(batch.rows))[where]  # the journal's row indices
                 old = (found[1][where], found[2][where])  # copies (fancy index)
                 self._follow_casters(old, (lo, hi))
                 if self._room(len(lo)):
@@ -125,18 +130,50 @@ class RenderIndex:
         self, old: tuple[np.ndarray, np.ndarray] | None, new: tuple[np.ndarray, np.ndarray] | None
     ) -> None:
         """Caster rows left the boxes ``old`` and took ``new`` ((lo, hi) (N, 3) arrays or None): the casters'
-        bounds follow without a pass over every caster while the old boxes lay strictly inside them."""
+        bounds follow without a pass over every caster while some row stays on each side of them.
+
+        The rows on each bound are counted (:meth:`caster_bounds`): a box that
+        left a bound takes one off its count, a box on it (or beyond: a new
+        bound) adds one; the bounds are computed again only when a count falls
+        to none (the last row on that side left).
+        """
         cached = self._casters
         if cached is None or cached[0] is None:
             self._casters = None
             return
         lo, hi = cached[0]
-        if old is not None and len(old[0]) and not ((old[0] > lo).all() and (old[1] < hi).all()):
-            self._casters = None  # a row on the bounds left: they may shrink
-            return
+        counts = self._extremes
+        if counts is None:
+            if old is not None and len(old[0]) and not ((old[0] > lo).all() and (old[1] < hi).all()):
+                self._casters = None  # a row on the bounds left: they may shrink
+                return
+        else:
+            low, high = list(counts[0]), list(counts[1])
+            for k in range(3):
+                if old is not None and len(old[0]):
+                    low[k] -= int(np.count_nonzero(old[0][:, k] == lo[k]))
+                    high[k] -= int(np.count_nonzero(old[1][:, k] == hi[k]))
+            counts = (low, high)
         if new is not None and len(new[0]):
-            lo, hi = np.minimum(lo, _column_min(new[0])), np.maximum(hi, _column_max(new[1]))
-        self._casters = ((lo, hi),)
+            a, b = _column_min(new[0]), _column_max(new[1])
+            if counts is not None:
+                low, high = counts
+                for k in range(3):
+                    if a[k] < lo[k]:
+                        low[k] = 0  # a new bound: the rows on it are counted below
+                    if b[k] > hi[k]:
+                        high[k] = 0
+                    low[k] += int(np.count_nonzero(new[0][:, k] == min(a[k], lo[k])))
+                    high[k] += int(np.count_nonzero(new[1][:, k] == max(b[k], hi[k])))
+            if (a < lo).any() or (b > hi).any():
+                lo, hi = np.minimum(lo, a), np.maximum(hi, b)
+                cached = ((lo, hi),)  # a new tuple: the bounds changed
+        if counts is not None:
+            self._extremes = counts
+            if min(counts[0]) <= 0 or min(counts[1]) <= 0:
+                self._casters = None  # the last row on a bound left: they may shrink
+                return
+        self._casters = cached
 
     def batch_edits(self, batch: Any, edits: list[tuple[Any, ...]]) -> None:
         """Rows of ``batch`` were removed (the last row moved into the hole) or appended: the boxes follow; for a
@@ -169,7 +206,7 @@ class RenderIndex:
                     if self._room(1):
                         self._note(CasterChange(batch, a, b, True, np.array([index]), True))
                 if lo is not None:
-                    lo, hi = np.concatenate([lo, a]), np.concatenate([hi, b])
+                    lo, hi = _appended(lo, a), _appended(hi, b)
         if lo is not None and len(lo) == len(batch.rows):
             self._boxes[id(batch)] = (batch, lo, hi)
         else:
@@ -269,7 +306,27 @@ class RenderIndex:
         """``(bounds,)`` of the opaque shadow casters (a new tuple when casters moved, left or came)."""
         if self._casters is None:
             self._casters = (self._compute(lambda item: not item.transparent and casts_shadows(item)),)
+            self._extremes = self._count_extremes(self._casters[0])
         return self._casters
+
+    def _count_extremes(self, bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[list[int], list[int]] | None:
+        """Per axis, how many caster batch rows' boxes lie on the lower and the upper bound (casters outside
+        batches are not counted: a bound only they hold is computed again whenever a batch row leaves it)."""
+        if bounds is None or self.root is None:
+            return None
+        lo, hi = bounds
+        low, high = [0, 0, 0], [0, 0, 0]
+        for scope in self.root.walk():
+            for part in scope.parts or ():
+                if not isinstance(part, Segment):
+                    continue
+                for batch in part.batches:
+                    if batch.items and len(batch.rows) and not batch.items[0].transparent and casts_shadows(batch):
+                        a, b = self._batch_boxes(batch)
+                        for k in range(3):
+                            low[k] += int(np.count_nonzero(a[:, k] == lo[k]))
+                            high[k] += int(np.count_nonzero(b[:, k] == hi[k]))
+        return low, high
 
     def _compute(self, keep: Any) -> tuple[np.ndarray, np.ndarray] | None:
         parts: dict[int, tuple[Any, list[np.ndarray]]] = {}
@@ -333,11 +390,16 @@ def _column_max(a: np.ndarray) -> np.ndarray:
 def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre).
 
-    Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows.
+    Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows;
+    a few rows (a splice's, a moved item's) in plain floats, the same operations in the same order.
     """
+    if len(rows) <= _FEW_ROWS:
+        return _few_row_boxes(geometry, rows)
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
     c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
-    m = rows[:, _MODEL].astype(np.float64)  # each row holds M transposed: M[k, j] is m[:, 4 j + k]
+    # each row holds M transposed: M[k, j] is column 4 j + k of the model; float32 columns times float64
+    # scalars give float64 (no float64 copy of every row's model first)
+    m = rows[:, _MODEL]
     lo = np.empty((len(rows), 3))
     hi = np.empty((len(rows), 3))
     for k in range(3):
@@ -346,6 +408,50 @@ def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         lo[:, k] = center - half
         hi[:, k] = center + half
     return lo, hi
+
+
+#: rows up to which :func:`row_boxes` computes in Python floats (numpy's per-call cost is more for so few)
+_FEW_ROWS = 4
+
+
+def _few_row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`row_boxes` of a few rows: the same sums of float64 products, each row's 16 numbers as floats."""
+    (x0, y0, z0), (x1, y1, z1) = (np.asarray(b, dtype=np.float64).tolist() for b in geometry.bounds)
+    c0, c1, c2 = (x0 + x1) / 2.0, (y0 + y1) / 2.0, (z0 + z1) / 2.0
+    e0, e1, e2 = (x1 - x0) / 2.0, (y1 - y0) / 2.0, (z1 - z0) / 2.0
+    lo: list[float] = []
+    hi: list[float] = []
+    for m in rows[:, _MODEL].tolist():  # each row holds M transposed: M[k, j] is m[4 j + k]
+        for k in range(3):
+            center = m[k] * c0 + m[4 + k] * c1 + m[8 + k] * c2 + m[12 + k]
+            half = abs(m[k]) * e0 + abs(m[4 + k]) * e1 + abs(m[8 + k]) * e2
+            lo.append(center - half)
+            hi.append(center + half)
+    return np.array(lo).reshape(-1, 3), np.array(hi).reshape(-1, 3)
+
+
+def _appended(a: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """``np.concatenate([a, new])`` written into spare rows after ``a`` when its storage has them, else into new
+    storage with spare rows: a splice appending one row per frame copies no list of boxes.
+
+    ``a`` is an array of its own or a prefix ``store[:n]`` of the storage this made (the only views of it the
+    index keeps: a removed row shortens the boxes the same way).
+    """
+    n, k = len(a), len(new)
+    base = a.base
+    if (
+        isinstance(base, np.ndarray)
+        and base.ndim == 2
+        and base.dtype == a.dtype
+        and base.shape[1] == a.shape[1]
+        and len(base) >= n + k
+    ):
+        out = base[: n + k]
+    else:
+        out = np.empty((n + max(k, n // 8 + 16), *a.shape[1:]), a.dtype)[: n + k]
+        out[:n] = a
+    out[n:] = new
+    return out
 
 
 def rows_bounds(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -26,8 +26,10 @@ plan: a technique or stage that does not declare itself replayable (an
 application's technique may change its passes every frame), a pass with its
 own target, viewport, camera, clear, front face, full-screen or custom
 function, draw-item kinds with drawers of their own (text, volumes),
-transparent items (sorted by the view every frame), shadow maps, area lights'
-tables, render textures, pass inputs, tessellated patches, GL state set from
+transparent items (sorted by the view every frame), shadow maps drawn (a
+frame whose shadow stage kept every face of the atlas is recorded: the atlas
+bind and the shadow uniforms are draws' textures and writes like others),
+area lights' tables, render textures, pass inputs, tessellated patches, GL state set from
 outside the drawer (``apply_gl_state`` and the other public state calls),
 timer queries.
 
@@ -51,21 +53,18 @@ __all__ = ["FramePlan", "FrameRecorder", "PlanKey", "RecordingProgram", "DrawOp"
 
 
 class PlanKey:
-    """What a frame's plan depends on: objects compared by identity, values by equality."""
+    """What a frame's plan depends on: objects by identity, values by equality, compared as one tuple.
+
+    The objects are held (``objects``) while the key lives, so their ids in ``values`` name them alone.
+    """
 
     __slots__ = ("objects", "values")
 
     def __init__(self, objects: tuple[Any, ...], values: tuple[Any, ...]) -> None:
         self.objects = objects
-        self.values = values
+        self.values = (*map(id, objects), *values)
 
     def matches(self, other: PlanKey) -> bool:
-        a, b = self.objects, other.objects
-        if len(a) != len(b):
-            return False
-        for x, y in zip(a, b, strict=True):
-            if x is not y:
-                return False
         return self.values == other.values
 
 

@@ -104,9 +104,16 @@ class StageList:
 
     def __init__(self, stages: list[FrameStage]) -> None:
         self._stages = list(stages)
+        self._tuple: tuple[FrameStage, ...] | None = None
 
     def __iter__(self) -> Any:
-        return iter(tuple(self._stages))
+        return iter(self.frozen())
+
+    def frozen(self) -> tuple[FrameStage, ...]:
+        """The stages in order as a tuple: the same object until a stage is added or removed."""
+        if self._tuple is None:
+            self._tuple = tuple(self._stages)
+        return self._tuple
 
     def __len__(self) -> int:
         return len(self._stages)
@@ -127,6 +134,7 @@ class StageList:
         if stage in self._stages:
             raise ValueError(f"GLEngine.add_stage: {stage!r} is already a stage of this engine")
         anchor = before if before is not None else after
+        self._tuple = None
         if anchor is None:
             self._stages.append(stage)
             return
@@ -141,5 +149,6 @@ class StageList:
         for found in self._stages:
             if found is stage or found.name == stage:
                 self._stages.remove(found)
+                self._tuple = None
                 return found
         raise ValueError(f"GLEngine.remove_stage: no stage {stage!r} (stages: {self.names()})")

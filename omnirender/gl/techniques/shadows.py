@@ -384,8 +384,9 @@ class ShadowMapStage(FrameStage):
         """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
 
     def replayable(self, engine: Any) -> bool:
-        """What it draws follows the draw list, lights and settings; a frame that draws anything here is
-        not recorded (its technique, target and shadow uniforms taint the frame plan)."""
+        """What it draws follows the draw list, lights and settings: a frame whose atlas faces were all kept
+        may be replayed (the atlas stays; its bind and uniforms are recorded with the draws); a frame that
+        draws a face is not recorded (the map passes' technique is not replayable)."""
         return True
 
     def release(self) -> None:
@@ -513,7 +514,7 @@ class ShadowMapStage(FrameStage):
         batches = []
         for batch, lo, hi in casters:
             rects = self._rects.get((signature, id(batch)))
-            if rects is None or rects.batch is not batch or len(rects.x0) != len(lo):
+            if rects is None or rects.batch is not batch or rects.n != len(lo):
                 rects = self._rects[(signature, id(batch))] = _Rects(face, batch, lo, hi)
             picks = np.flatnonzero(rects.meets(resolution, region))
             if not len(picks):
@@ -546,46 +547,70 @@ class ShadowMapStage(FrameStage):
 
 class _Rects:
     """A caster batch's rectangles in a face (:func:`_ndc_rects`), row by row, kept up to date with the caster
-    journal so a partial update does not project every caster again."""
+    journal so a partial update does not project every caster again.
 
-    __slots__ = ("face", "batch", "x0", "y0", "x1", "y1", "behind", "away")
+    ``rect[:, :n]`` holds x0, y0, x1, y1 per row (``flags[:, :n]``: behind,
+    wholly behind the light camera; None for an orthographic face), with
+    spare columns after them so appended rows are written in place.
+    """
+
+    __slots__ = ("face", "batch", "rect", "flags", "n")
 
     def __init__(self, face: _Face, batch: Any, lo: np.ndarray, hi: np.ndarray) -> None:
         self.face, self.batch = face, batch
-        (self.x0, self.y0, self.x1, self.y1), self.behind, self.away = _ndc_rects(face, lo, hi)
+        self.n = n = len(lo)
+        rect, behind, away = _ndc_rects(face, lo, hi)
+        self.rect = np.empty((4, n + n // 8 + 16))
+        self.rect[:, :n] = rect
+        self.flags = None
+        if behind is not None:
+            self.flags = np.zeros((2, self.rect.shape[1]), bool)
+            self.flags[0, :n], self.flags[1, :n] = behind, away
 
-    def _arrays(self) -> list[str]:
-        return ["x0", "y0", "x1", "y1"] + (["behind", "away"] if self.behind is not None else [])
+    def _put(self, where: Any, lo: np.ndarray, hi: np.ndarray) -> None:
+        rect, behind, away = _ndc_rects(self.face, lo, hi)
+        for j in range(4):
+            self.rect[j, where] = rect[j]
+        if self.flags is not None:
+            self.flags[0, where], self.flags[1, where] = behind, away
 
     def follow(self, change: Any) -> None:
         """Take one journal entry of the batch: rows moved, a row removed (the last into its place) or appended."""
         if not change.edit:
             if change.new:  # moved rows: their new places
-                (x0, y0, x1, y1), behind, away = _ndc_rects(self.face, change.lo, change.hi)
-                new = {"x0": x0, "y0": y0, "x1": x1, "y1": y1, "behind": behind, "away": away}
-                for name in self._arrays():
-                    getattr(self, name)[change.rows] = new[name]
+                self._put(change.rows, change.lo, change.hi)
             return
         index = int(change.rows[0])
+        last = self.n - 1
         if not change.new:  # removed: the last row takes its place
-            for name in self._arrays():
-                a = getattr(self, name)
-                a[index] = a[len(a) - 1]
-                setattr(self, name, a[:-1])
+            self.rect[:, index] = self.rect[:, last]
+            if self.flags is not None:
+                self.flags[:, index] = self.flags[:, last]
+            self.n = last
             return
-        (x0, y0, x1, y1), behind, away = _ndc_rects(self.face, change.lo, change.hi)
-        new = {"x0": x0, "y0": y0, "x1": x1, "y1": y1, "behind": behind, "away": away}
-        for name in self._arrays():
-            setattr(self, name, np.concatenate([getattr(self, name), new[name]]))
+        if index != self.n:  # not appended after the last row: made again when next needed
+            self.n = -1
+            return
+        if self.n + len(change.lo) > self.rect.shape[1]:  # full: room for as many again
+            grown = np.empty((4, 2 * self.rect.shape[1] + len(change.lo)))
+            grown[:, : self.n] = self.rect[:, : self.n]
+            self.rect = grown
+            if self.flags is not None:
+                flags = np.zeros((2, grown.shape[1]), bool)
+                flags[:, : self.n] = self.flags[:, : self.n]
+                self.flags = flags
+        self._put(slice(self.n, self.n + len(change.lo)), change.lo, change.hi)
+        self.n += len(change.lo)
 
     def meets(self, resolution: int, region: tuple[int, int, int, int]) -> np.ndarray:
         """Which rows may cover texels of ``region`` (x, y, width, height of the tile)."""
         x, y, w, h = region
         to_ndc = 2.0 / resolution
-        hit = (self.x0 <= (x + w) * to_ndc - 1.0) & (self.x1 >= x * to_ndc - 1.0)
-        hit &= (self.y0 <= (y + h) * to_ndc - 1.0) & (self.y1 >= y * to_ndc - 1.0)
-        if self.behind is not None:
-            hit = (hit | self.behind) & ~self.away
+        n, r = self.n, self.rect
+        hit = (r[0, :n] <= (x + w) * to_ndc - 1.0) & (r[2, :n] >= x * to_ndc - 1.0)
+        hit &= (r[1, :n] <= (y + h) * to_ndc - 1.0) & (r[3, :n] >= y * to_ndc - 1.0)
+        if self.flags is not None:
+            hit = (hit | self.flags[0, :n]) & ~self.flags[1, :n]
         return hit
 
 

@@ -1,0 +1,62 @@
+"""The checks' fast paths (a new Material's colours, a new Matrix's invertibility) decide as the general ones."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+from omnirender.attributes._params import _numbers, check_color
+from omnirender.core.transform import _invertible
+
+
+def general_color(value):
+    arr = _numbers("Material", "diffuse", value)
+    if arr.size not in (3, 4) or np.any(arr < 0.0) or np.any(arr > 1.0):
+        return None
+    return tuple(float(c) for c in arr)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [
+        (1, 0, 0),
+        [0.25, 0.5, 1.0, 0.5],
+        (np.float64(0.3), 0.2, 1),
+        np.array([0.1, 0.2, 0.3]),
+        np.array([0.1, 0.2, 0.3], np.float32),
+        (np.float32(0.5), 0.5, 0.5),
+        (True, 0.0, 0.0),
+        [[0.1, 0.2, 0.3]],
+        (0.0, 1.0, 1.0000001),
+        (-0.0, 0.5, 0.5),
+    ],
+)
+def test_a_colour_is_taken_as_the_general_check_takes_it(value):
+    want = general_color(value)
+    if want is None:
+        with pytest.raises(ValueError, match="Material: diffuse"):
+            check_color("Material", "diffuse", value)
+    else:
+        got = check_color("Material", "diffuse", value)
+        assert got == want and all(type(c) is float for c in got)
+
+
+@pytest.mark.parametrize("value", [(float("nan"), 0, 0), (0, float("inf"), 0), (0.5, 0.5), "red"])
+def test_colours_the_fast_path_declines_get_the_general_message(value):
+    with pytest.raises(ValueError, match="Material: diffuse"):
+        om.Material(diffuse=value)
+
+
+def test_invertibility_agrees_with_the_matrix_rank():
+    rng = np.random.default_rng(3)
+    cases = [np.eye(3), np.zeros((3, 3)), np.diag([1.0, 1.0, 0.0]), np.diag([1e-12, 1.0, 1.0])]
+    cases += [np.diag([1e-16, 1.0, 1.0]), np.diag([1e-15, 1e3, 1e3]), np.diag([1e8, 1e8, 1e-8])]
+    for _ in range(200):
+        u, _, vt = np.linalg.svd(rng.normal(size=(3, 3)))
+        s = 10.0 ** rng.uniform(-17, 3, 3)
+        cases.append(u @ np.diag(s) @ vt)
+    for m in cases:
+        assert _invertible(m) == (np.linalg.matrix_rank(m) == 3), m
+    with pytest.raises(ValueError, match="singular"):
+        om.Matrix(np.diag([1.0, 1e-17, 1.0, 1.0]))
