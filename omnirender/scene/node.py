@@ -16,6 +16,7 @@ detached), and compiled programs and pre-evaluation caches are rebuilt on use.
 
 from __future__ import annotations
 
+import itertools
 import threading
 import weakref
 from collections import deque
@@ -238,7 +239,7 @@ class Node:
             if item is self or item._is_ancestor_of(self):
                 raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
             item._parents.append(self)
-            _LINKS[0] += 1
+            _LINKS[0] = next(_LINK_COUNT)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
         elif isinstance(item, type):
@@ -272,7 +273,7 @@ class Node:
                 if p is self:
                     del item._parents[j]
                     break
-            _LINKS[0] += 1
+            _LINKS[0] = next(_LINK_COUNT)
         else:
             item._detach(self)
         self._restructure()
@@ -547,7 +548,7 @@ class Node:
         Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
         self._items = list(state["items"])
         self._version = state["version"]
-        _LINKS[0] += 1  # its children gain this parent below
+        _LINKS[0] = next(_LINK_COUNT)  # its children gain this parent below
         if len(state["parent_keys"]) > 1:
             _PARENT_ORDER[self] = state["parent_keys"]
         key = state["key"]
@@ -656,6 +657,8 @@ def touch_nodes(owners: list[Any]) -> None:
 #: Bumped whenever a node gains or loses a parent: the distinct parents :func:`touch_nodes` found for the last
 #: owners (their ids, this counter, weak references to the parents) hold while it has not moved.
 _LINKS = [0]
+#: the values _LINKS takes: each change writes a new one (two threads changing links never write the same value)
+_LINK_COUNT = itertools.count(1)
 _LAST_PARENTS: list[Any] = [None]
 
 
