@@ -149,22 +149,22 @@ class RenderIndex:
                 return
         else:
             low, high = list(counts[0]), list(counts[1])
-            for k in range(3):
-                if old is not None and len(old[0]):
-                    low[k] -= int(np.count_nonzero(old[0][:, k] == lo[k]))
-                    high[k] -= int(np.count_nonzero(old[1][:, k] == hi[k]))
+            if old is not None and len(old[0]):
+                _uncount(low, old[0], lo.tolist())
+                _uncount(high, old[1], hi.tolist())
             counts = (low, high)
         if new is not None and len(new[0]):
             a, b = _column_min(new[0]), _column_max(new[1])
             if counts is not None:
                 low, high = counts
+                bound_lo, bound_hi = np.minimum(lo, a).tolist(), np.maximum(hi, b).tolist()
                 for k in range(3):
-                    if a[k] < lo[k]:
+                    if bound_lo[k] < lo[k]:
                         low[k] = 0  # a new bound: the rows on it are counted below
-                    if b[k] > hi[k]:
+                    if bound_hi[k] > hi[k]:
                         high[k] = 0
-                    low[k] += int(np.count_nonzero(new[0][:, k] == min(a[k], lo[k])))
-                    high[k] += int(np.count_nonzero(new[1][:, k] == max(b[k], hi[k])))
+                _uncount(low, new[0], bound_lo, -1)
+                _uncount(high, new[1], bound_hi, -1)
             if (a < lo).any() or (b > hi).any():
                 lo, hi = np.minimum(lo, a), np.maximum(hi, b)
                 cached = ((lo, hi),)  # a new tuple: the bounds changed
@@ -375,6 +375,19 @@ class RenderIndex:
             lo, hi = row_boxes(batch.geometry, batch.rows)
             found = self._boxes[id(batch)] = (batch, lo, hi)
         return found[1], found[2]
+
+
+def _uncount(counts: list[int], boxes: np.ndarray, bound: list[float], sign: int = 1) -> None:
+    """Take the rows of ``boxes`` (N, 3) that lie on ``bound`` (per axis) off ``counts`` (``sign`` -1: add them);
+    a few rows in Python floats, many column by column."""
+    if len(boxes) <= 8:
+        for row in boxes.tolist():
+            for k in range(3):
+                if row[k] == bound[k]:
+                    counts[k] -= sign
+        return
+    for k in range(3):
+        counts[k] -= sign * int(np.count_nonzero(boxes[:, k] == bound[k]))
 
 
 def _column_min(a: np.ndarray) -> np.ndarray:
