@@ -192,7 +192,9 @@ class GLEngine(Engine):
         # the compile side's collaborators: the updater moves installed rows, the installer installs compiled
         # scopes as batches, the compiler owns the compile state and hands its results to both
         placements_changed = self.frame_runner.placements_changed
-        self.updater = TransformUpdater(self.index, placements_changed, self.instance_state)
+        self.updater = TransformUpdater(
+            self.index, placements_changed, self.instance_state, self.frame_runner.rows_moved
+        )
         self.installer = BatchInstaller(
             self.ctx,
             self.index,

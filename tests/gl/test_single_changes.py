@@ -205,3 +205,68 @@ def test_shading_model_values_of_plain_numbers_pack_as_the_general_check():
             continue
         with pytest.raises(ShadingModelError, match="'p'"):
             _value("m", "p", kind, value)
+
+
+def grid(n: int) -> tuple[om.Node, list[om.Translation]]:
+    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=0.7)
+    moves = []
+    for i in range(n):
+        t = om.Translation(i % 10 - 4.5, (i // 10) % 10 - 4.5, i // 100 - 0.5)
+        moves.append(t)
+        scene.add(om.Node(f"b{i}", [t, om.Material(diffuse=(0.2 + 0.6 * (i % 4) / 3, 0.5, 0.4)), box]))
+    return scene, moves
+
+
+def test_a_frame_after_rows_moved_in_place_replays_its_plan_with_the_rows_uploaded():
+    """Rows moved in place (a few transforms, then many) keep the recorded frame plan: the moved rows are
+    uploaded and the plan replayed; the pictures equal a fresh engine's.  A row moved into the view from the
+    culled ones, default shadows and an application's stage draw the frame in full instead."""
+    from omnirender.gl import GLEngine
+
+    scene, moves = grid(200)  # big batches: sorted and culled (drawer.SORT_MIN)
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        e.render(scene)
+        before = e.render(scene).array
+        for frame, moved in enumerate([moves[107:108], moves[120:125], moves[::2]]):  # the front layer's first
+            for t in moved:
+                t.offset = tuple(np.asarray(t.offset) + (0.0, 0.4, 0.3 * (frame + 1)))
+            image = e.render(scene)
+            assert e.stats["compiled"] is False
+            assert not np.array_equal(image.array, before)
+            before = image.array
+            # a range of rows of a batch with culled rows may have entered the view: culled again in full
+            assert image.info["replayed"] == (len(moved) <= 5), frame
+            assert np.array_equal(image.array, fresh(scene)), frame
+    far = moves[42]
+    far.offset = (60.0, 0.0, 0.0)  # out of the view when the batch is first sorted: culled
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        assert e.render(scene).info["replayed"]
+        far.offset = (0.5, 0.4, 2.0)  # into the view: the batch is culled again, in a full frame
+        image = e.render(scene)
+        assert not image.info["replayed"]
+        assert np.array_equal(image.array, fresh(scene))
+
+    with GLEngine(size=SIZE, samples=0, shadows=True) as e:
+        e.render(scene)
+        e.render(scene)
+        moves[3].offset = (0.0, 0.0, 3.0)
+        image = e.render(scene)
+        assert not image.info["replayed"]  # the shadow maps follow the moved caster
+        assert np.array_equal(image.array, fresh(scene, True))
+
+    class Marker(om.gl.FrameStage):  # an application's stage: replayable, but not said to follow rows
+        name = "marker"
+
+        def replayable(self, engine):
+            return True
+
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.add_stage(Marker(), after="technique")
+        e.render(scene)
+        assert e.render(scene).info["replayed"]
+        moves[4].offset = (1.0, 1.0, 1.0)
+        assert not e.render(scene).info["replayed"]

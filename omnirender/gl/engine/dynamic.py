@@ -443,9 +443,11 @@ class TransformUpdater:
     ``instance_state`` (the draw state of an instance set's template).
     """
 
-    def __init__(self, index: Any, placements_changed: Any, instance_state: Any) -> None:
+    def __init__(self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None) -> None:
         self.index = index
         self._placements_changed = placements_changed
+        #: tells the frame that only these batches' rows moved in place (it may keep its recorded plan), or None
+        self._rows_moved = rows_moved
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
@@ -559,8 +561,25 @@ class TransformUpdater:
             # batches of pass masks and predicates follow their source batches' versions (Batch.follow); the
             # bounds follow the moved rows; mirror planes are read from the rows every frame
             self.index.moved(plan.moved_rows)
-            self._placements_changed()
+            batches = _moved_batches(plan.moved_rows, count)
+            if batches is None or self._rows_moved is None:
+                self._placements_changed()
+            else:
+                self._rows_moved(batches)
         return count
+
+
+def _moved_batches(moved_rows: list[tuple[Any, Any]], count: int) -> list[Any] | None:
+    """The batches of ``moved_rows`` when they hold every one of the ``count`` moved items' rows (no item
+    without a batch, no instance set's whole batch), else None."""
+    batches: dict[int, Any] = {}
+    rows = 0
+    for batch, where in moved_rows:
+        if where is None:
+            return None
+        rows += len(range(*where.indices(len(batch.rows)))) if isinstance(where, slice) else len(where)
+        batches[id(batch)] = batch
+    return list(batches.values()) if rows == count else None
 
 
 def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:

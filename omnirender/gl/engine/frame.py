@@ -92,14 +92,41 @@ class FrameRunner:
         self.plan: FramePlan | None = None
         #: why the last frame drawn in full was not kept as a plan (None: it was, or it was not recorded)
         self.not_recorded: str | None = None
+        #: id(batch) -> batch whose rows moved in place since the plan was recorded or last replayed: the next
+        #: replay uploads their changed rows first (:meth:`rows_moved`)
+        self._moved: dict[int, Any] = {}
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
         (shadow casters' bounds, mirror planes); the recorded frame plan is stale."""
         self.generation += 1
         self.plan = None
+        self._moved.clear()
         for stage in self.stages:
             stage.changed()
+
+    def rows_moved(self, batches: list[Any]) -> None:
+        """Only the rows of ``batches`` moved in place (model matrices; nothing added, removed or re-made):
+        every stage forgets what it derived from placements, and a recorded plan is kept when every stage
+        follows rows (:meth:`~.stages.FrameStage.follows_rows`), the recorded frame planned no shadow map and
+        no scope filters batches for its passes; the next frame then uploads those rows and replays it (the
+        drawer declines a batch whose draw would sort, cull or pack again: that frame is drawn in full)."""
+        plan = self.plan
+        engine = self.engine
+        root = engine.root_scope
+        if (
+            plan is None
+            or plan.stats.get("shadow_plan") is not None
+            or root is None
+            or any(scope.filtered for scope in root.walk())
+            or not all(stage.follows_rows(engine) for stage in self.stages)
+        ):
+            self.placements_changed()
+            return
+        for stage in self.stages:
+            stage.changed()
+        for batch in batches:
+            self._moved[id(batch)] = batch
 
     def _taint(self, why: str) -> None:
         """The frame being drawn does something a replay would not repeat: it keeps no plan."""
@@ -222,9 +249,13 @@ class FrameRunner:
         key = self._plan_key(stages, fbo, size, color, override, framebuffer, clear, installed)
         plan = self.plan
         if key is not None and plan is not None and plan.key.matches(key):
-            self._replay(plan, fbo, size)
-            return
+            moved = self._moved
+            if not moved or all(self.drawer.upload_moved(batch) for batch in moved.values()):
+                moved.clear()
+                self._replay(plan, fbo, size)
+                return
         self.plan = None
+        self._moved.clear()  # the frame drawn in full uploads what changed
         self.not_recorded = None
         engine.programs.owner = None  # this frame writes the programs' uniforms in its own order
         self.report.begin_frame(engine.timing)

@@ -65,6 +65,13 @@ class FrameStage:
         """
         return False
 
+    def follows_rows(self, engine: Any) -> bool:
+        """Whether what this stage drew in a recorded frame is still right after rows moved in place (items'
+        model matrices only; nothing added or removed) once the moved rows are uploaded: nothing it draws
+        or writes depends on where items are.  Then the next frame replays the plan after uploading them
+        instead of drawing in full.  False by default (the frame is drawn in full after any move)."""
+        return False
+
     def release(self) -> None:
         """The engine is released: free what the stage holds on the GPU."""
 
@@ -83,6 +90,9 @@ class PipelinesStage(FrameStage):
     def replayable(self, engine: Any) -> bool:
         return True  # it draws in prepare (called in replayed frames too); a render texture read taints
 
+    def follows_rows(self, engine: Any) -> bool:
+        return True  # render textures are drawn by their own engines
+
 
 class TechniqueStage(FrameStage):
     """The frame technique over the scene (in a frame-level post-processing chain when the scene has one);
@@ -97,6 +107,9 @@ class TechniqueStage(FrameStage):
 
     def replayable(self, engine: Any) -> bool:
         return True  # the techniques it runs say whether they are
+
+    def follows_rows(self, engine: Any) -> bool:
+        return True  # recorded passes draw batches, whose rows carry the model matrices
 
 
 class StageList:

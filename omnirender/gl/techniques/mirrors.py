@@ -170,6 +170,10 @@ class MirrorStage(FrameStage):
         not recorded (its technique, target and shadow uniforms taint the frame plan)."""
         return True
 
+    def follows_rows(self, engine: Any) -> bool:
+        """A recorded frame drew no mirror (mirror planes come from rows, but such frames are not recorded)."""
+        return True
+
     def draw(self, frame: Any, root: Any) -> int:
         engine = frame.engine
         if engine.stereo is not None:

@@ -389,6 +389,11 @@ class ShadowMapStage(FrameStage):
         draws a face is not recorded (the map passes' technique is not replayable)."""
         return True
 
+    def follows_rows(self, engine: Any) -> bool:
+        """The maps follow moved casters: a frame with shadow maps is drawn in full after a move (the frame
+        runner replays one after moves only when the recorded frame planned no map)."""
+        return True
+
     def release(self) -> None:
         for _, batch in self._scratch.values():
             batch.release()

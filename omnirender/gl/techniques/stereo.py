@@ -291,6 +291,10 @@ class StereoStage(FrameStage):
         """A stereo frame is not recorded (the stereo technique taints the frame plan); none draws nothing."""
         return True
 
+    def follows_rows(self, engine: Any) -> bool:
+        """A recorded frame is not stereo: this stage drew nothing."""
+        return True
+
     def draw(self, frame: Any, root: Any) -> int:
         stereo = frame.engine.stereo
         return 0 if stereo is None else frame.run(stereo, root, item_level=False)
