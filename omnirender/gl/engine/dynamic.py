@@ -511,7 +511,12 @@ class TransformUpdater:
             _install_rows(item, made)
         if updates:
             self.index.moved(None)  # instance rows replaced: every bound again
-            self._placements_changed()
+            # positions only, in opaque batches: a recorded frame plan may be replayed after their upload
+            batches = [item.slot[0] for item, made in updates if isinstance(made, tuple) and item.slot is not None]
+            if self._rows_moved is not None and len(batches) == len(updates):
+                self._rows_moved(batches)
+            else:
+                self._placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:
