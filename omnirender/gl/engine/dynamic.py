@@ -121,7 +121,8 @@ class MovePlan:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         self.many_moves = 0
-        self._last = None
+        # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
+        # held every transform of the list)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -246,7 +247,7 @@ class MovePlan:
             positions = found[keep]
             moved = changed if keep.all() else list(compress(changed, keep.tolist()))
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
-            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
+            self._last = (changed, positions, moved, translations) if moved is changed and len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
