@@ -45,6 +45,9 @@ __all__ = ["BatchDrawer", "SORT_MIN", "PASS_INPUT_UNIT"]
 PASS_INPUT_UNIT = PASS_INPUTS
 #: Batches with at least this many opaque instances are drawn front to back (re-sorted when the view changes).
 SORT_MIN = 64
+#: An instance set's front-to-back order is kept across moves; after this many changes since it was made it is
+#: made again (instances that travelled far would otherwise be drawn in an order that no longer saves depth work).
+RESORT_AFTER = 60
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)
 _MODEL = ROW.slice("model")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
@@ -306,8 +309,11 @@ class BatchDrawer:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
 
         Culled to the frame's view and sorted front to back like big batches
-        (the buffers hold the visible instances nearest first, then the rest);
-        the order is kept while the view holds and all are in view, so a move
+        (the buffers hold the visible instances nearest first, then the rest).
+        The order only speeds drawing up, so it is kept across moves while the
+        view holds: a partly culled set that moved is culled again and the
+        kept order partitioned, not sorted again (:func:`_depth_order`); while
+        all are in view nothing is redone, so a move
         uploads the application's positions taken in that order (one gather)
         to the translations' own buffer (:func:`_upload_instance_set`).  In row
         order instead, llvmpipe shaded the hidden fragments too: a 10,000-box
@@ -318,18 +324,18 @@ class BatchDrawer:
         if (
             batch.position is None
             or len(batch.position) != n
-            or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n)))
+            or (own_view and (batch.sorted_for != view_key or _may_enter_view(batch, n) or _order_aged(batch)))
         ):
             big = n >= SORT_MIN and not batch.state.special
             visible = self._cull(batch) if own_view and big else None
             order = None
             if big:  # front to back, as other big batches: early depth tests skip hidden fragments
-                z = batch.rows[:, _TRANSLATION] @ self.state.view[2, :3]
+                depth = _depth_order(batch, view_key, self.state.view, n)
                 if visible is None:
-                    order = np.argsort(-z, kind="stable")
-                else:
-                    seen, hidden = np.nonzero(visible)[0], np.nonzero(~visible)[0]
-                    order = np.concatenate([seen[np.argsort(-z[seen], kind="stable")], hidden])
+                    order = depth
+                else:  # the visible ones first, in the same order
+                    seen = visible[depth]
+                    order = np.concatenate([depth[seen], depth[~seen]])
             batch.drawn = n if visible is None else int(visible.sum())
             batch.position = np.arange(n)
             if order is not None:
@@ -684,6 +690,26 @@ class BatchDrawer:
 def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
     return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
+
+
+def _depth_order(batch: Batch, view_key: Any, view: np.ndarray, n: int) -> np.ndarray:
+    """An instance set's rows front to back for the view ``view_key``: the batch's kept order while it is that
+    view's, the count holds and it is not aged (moved instances keep their places: the order only speeds
+    drawing up), else sorted now by view depth."""
+    kept = batch.depth_order
+    if kept is not None and kept[0] == view_key and len(kept[1]) == n and not _order_aged(batch):
+        return kept[1]
+    z = batch.rows[:, _TRANSLATION] @ view[2, :3]
+    order = np.argsort(-z, kind="stable")
+    batch.depth_order = (view_key, order, batch.version)
+    return order
+
+
+def _order_aged(batch: Batch) -> bool:
+    """Whether an instance set's kept front-to-back order has seen :data:`RESORT_AFTER` changes (amortised:
+    one sort per so many moves)."""
+    kept = batch.depth_order
+    return kept is not None and batch.version - kept[2] >= RESORT_AFTER
 
 
 def _may_enter_view(batch: Batch, n: int) -> bool:

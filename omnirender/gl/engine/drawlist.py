@@ -330,6 +330,7 @@ class Batch:
         "offsets",
         "moved_offsets",
         "offset_order",
+        "depth_order",
     )
 
     def __init__(self, geometry: Any, state: DrawState) -> None:
@@ -385,6 +386,10 @@ class Batch:
         self.moved_offsets: tuple[int, np.ndarray] | None = None
         #: an instance set's batch: the row drawn at each place of its buffers (visible ones first), None: row order
         self.offset_order: np.ndarray | None = None
+        #: an instance set's batch: (view key, every row front to back for that view, ``version`` then) as last
+        #: sorted; kept across moves (culling again partitions it), made again when the view or the count
+        #: changes, and after ``drawer.RESORT_AFTER`` changes
+        self.depth_order: tuple[Any, np.ndarray, int] | None = None
 
     @property
     def rows(self) -> np.ndarray:

@@ -90,6 +90,8 @@ class FrameRunner:
         self.generation = 0
         #: the last frame, recorded (:mod:`.plan`): replayed while its key holds, or None
         self.plan: FramePlan | None = None
+        #: record steady frames and replay them (False: every frame is drawn in full, e.g. to compare)
+        self.replay = True
         #: why the last frame drawn in full was not kept as a plan (None: it was, or it was not recorded)
         self.not_recorded: str | None = None
         #: id(batch) -> batch whose rows moved in place since the plan was recorded or last replayed: the next
@@ -309,7 +311,8 @@ class FrameRunner:
         installed)."""
         engine, state = self.engine, self.state
         if (
-            override is not None
+            not self.replay
+            or override is not None
             or framebuffer is not None
             or not clear
             or installed is None
@@ -700,6 +703,9 @@ class FrameRunner:
         applier.bind(self.engine.framebuffer if fbo is None else fbo, self.engine.size if size is None else size)
 
     def release(self) -> None:
+        if self.plan is not None and self.engine.programs.owner is self.plan:
+            self.engine.programs.owner = None  # (a cache given by the caller outlives the engine)
+        self.plan = None
         self.fullscreen_programs.release()
         for stage in self.stages:
             stage.release()

@@ -1,0 +1,169 @@
+"""An instance set moved through its array: what a moved frame does and does not redo (issue 22).
+
+* A positions-only move leaves the rows' translations pending (``Batch.move_to``):
+  the frame uploads the new positions and writes no row; whatever reads the
+  rows later (a transform above the set moving, the camera turning, new
+  colours) sees the moved positions.
+* The front-to-back order of an opaque set only speeds drawing up: it is kept
+  across moves (a partly culled set is culled again and the kept order
+  partitioned), made again when the view changes, and amortised after
+  ``drawer.RESORT_AFTER`` changes.
+* Translucent instances are still drawn back to front by their moved positions.
+
+Every picture equals a fresh engine's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.gl
+
+SIZE = (96, 72)
+
+
+def fresh(scene: om.Node) -> np.ndarray:
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        return e.render(scene).array
+
+
+def swarm(n: int, seed: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    positions = rng.uniform(-3.0, 3.0, (n, 3))
+    colors = np.concatenate([rng.uniform(0.2, 1.0, (n, 3)), np.ones((n, 1))], axis=1)
+    return positions, colors
+
+
+@pytest.fixture
+def row_writes(monkeypatch):
+    """How many times translations are written into rows (``drawlist.set_translations``)."""
+    from omnirender.gl.engine import drawlist
+
+    calls = []
+    original = drawlist.set_translations
+
+    def counting(rows, world):
+        calls.append(len(world))
+        return original(rows, world)
+
+    monkeypatch.setattr(drawlist, "set_translations", counting)
+    return calls
+
+
+def test_moved_rows_are_written_only_when_read_and_every_reader_sees_the_moves(row_writes):
+    from omnirender.gl import GLEngine
+
+    positions, colors = swarm(200)
+    balls = om.InstanceSet(om.Box(size=0.3), positions, colors=colors)
+    lift = om.Translation((0.0, 0.0, 0.0))
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), om.Node("set", [lift, balls])])
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        for step in range(3):
+            positions[:, 1] += 0.2
+            positions[step, 0] += 1.0
+            balls.touch()
+            image = e.render(scene).array
+            assert e.stats["compiled"] is False  # no compile: the arrays were applied in place
+            assert np.array_equal(image, fresh(scene))
+        assert row_writes == [], "a moved frame that reads no row writes none"
+        lift.offset = (0.5, -0.2, 0.0)  # a transform above the set: its rows are read and rewritten
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        positions[:, 2] -= 0.3
+        balls.touch()
+        e.render(scene)
+        camera.eye = (4.0, 3.0, 10.0)  # another view: the set is sorted again from its rows
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        assert row_writes, "the rows were read after the move: its translations were written then"
+        positions[:, 0] += 0.25
+        balls.touch()
+        e.render(scene)
+        colors[:10, :3] = (0.9, 0.1, 0.1)  # new colours: the rows are made again from the arrays
+        balls.touch()
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+
+
+@pytest.fixture
+def sorts(monkeypatch):
+    """How many times the drawer sorts (``np.argsort`` called from ``gl/engine/drawer.py``)."""
+    from omnirender.gl.engine import drawer
+
+    calls = []
+    original = np.argsort
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    class Numpy:  # the drawer's numpy, with a counting argsort
+        def __getattr__(self, name):
+            return counting if name == "argsort" else getattr(np, name)
+
+    monkeypatch.setattr(drawer, "np", Numpy())
+    return calls
+
+
+def fresh_uncounted(scene: om.Node, sorts: list) -> np.ndarray:
+    """A fresh engine's picture; its own sorts are not counted."""
+    count = len(sorts)
+    image = fresh(scene)
+    del sorts[count:]
+    return image
+
+
+@pytest.mark.parametrize("eye", [(0.0, 5.0, 12.0), (0.0, 1.0, 2.5)], ids=["all in view", "partly culled"])
+def test_the_front_to_back_order_is_kept_across_moves_and_made_again_for_a_new_view(sorts, eye):
+    from omnirender.gl import GLEngine
+    from omnirender.gl.engine.drawer import RESORT_AFTER
+
+    positions, colors = swarm(300)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at(eye, (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        drawn = sum(p["items"] for p in e.stats["passes"] if p["name"] == "opaque")
+        assert (drawn == 300) == (eye[2] == 12.0)  # the close view culls some
+        assert sorts, "a set of 300 is drawn front to back"
+        sorts.clear()
+        for step in range(4):
+            positions[:, 2] += 0.3 if step % 2 else -0.3  # moves that change the depth order
+            positions[step * 11, :] = (step * 0.7 - 1.0, 0.1, 0.5)  # (apart: no coplanar faces)
+            balls.touch()
+            assert np.array_equal(e.render(scene).array, fresh_uncounted(scene, sorts))
+        assert sorts == [], "moves keep the order made for the view (a partly culled set is only culled again)"
+        camera.eye = (eye[0] + 1.0, eye[1], eye[2])
+        assert np.array_equal(e.render(scene).array, fresh_uncounted(scene, sorts))
+        assert sorts, "a new view: sorted again"
+        sorts.clear()
+        for _ in range(2 * RESORT_AFTER):
+            positions[:, 0] += 0.001
+            balls.touch()
+            e.render(scene)
+        assert 1 <= len(sorts) <= 3, "sorted again after RESORT_AFTER changes, not every frame"
+        assert np.array_equal(e.render(scene).array, fresh_uncounted(scene, sorts))
+
+
+def test_translucent_instances_are_drawn_back_to_front_after_they_move():
+    from omnirender.gl import GLEngine
+
+    # two overlapping translucent boxes on the view axis: which one is in front decides the blended colour
+    positions = np.array([(0.0, 0.0, 0.0), (0.3, 0.2, 1.5)])
+    colors = np.array([(1.0, 0.1, 0.1, 0.5), (0.1, 0.2, 1.0, 0.5)])
+    boxes = om.InstanceSet(om.Box(size=1.0), positions, colors=colors)
+    camera = om.Camera.look_at((0, 0, 8), (0, 0, 0), fov=30)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(0.0, 0.0, -1.0)), boxes])
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        positions[:, 2] = positions[::-1, 2]  # they swap depths: the other one is in front now
+        boxes.touch()
+        after = e.render(scene).array
+        assert e.stats["compiled"] is False  # the positions-only path, not a compile
+        assert np.array_equal(after, fresh(scene))
+        assert not np.array_equal(after, before), "the blend order changed with the depths"
