@@ -446,6 +446,7 @@ class DrawListCompiler:
             return None
         self._scope = self._immediate
         self._compile_frames = []
+        engine.declared, engine.camera = old_declared, old_declared.camera  # the same (compile_subtrees checked)
         for _, _, path in leaves:
             for above in path:  # their flattened entries hold the old items: compiled again when next missed
                 self._drop_entry(above)
