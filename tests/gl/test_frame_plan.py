@@ -258,3 +258,33 @@ def test_default_shadows_replay_a_kept_atlas_and_redraw_after_a_change():
         turned = engine.render(root, read_depth=False)
         assert not turned.info["replayed"] and not np.array_equal(turned.array, moved.array)
         assert np.array_equal(turned.array, fresh_shadowed())
+
+
+def test_textures_lines_points_clip_planes_and_fog_replay_and_follow_changes(engine):
+    """Draws that bind textures, write viewport, clip-plane and fog uniforms are replayed as recorded."""
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 255, (8, 8, 3), dtype=np.uint8)
+    texture = om.Texture(image, filter="nearest", mipmap=False)
+    root = om.Node("scene", [om.Camera.look_at(eye=(0.3, 0.8, 6.0)), om.DirectionalLight(direction=(-0.3, -0.5, -1))])
+    root.add(om.Node("textured", [om.Translation(-1.2, 0, 0), texture, om.Box(size=1.2)]))
+    clipped = root.add(om.Node("clipped", [om.Translation(1.2, 0, 0), om.ClipPlane(normal=(0, -1, 0), offset=0.2),
+                                           om.Color(0.2, 0.6, 1.0), om.Sphere(radius=0.7)]))  # fmt: skip
+    fog = om.Fog(color=(0.6, 0.6, 0.7), start=4.0, end=12.0)
+    root.add(om.Node("far", [fog, om.Translation(0, 0, -4), om.Color(1, 0.5, 0), om.Box(size=2.0)]))
+    root.add(om.Node("lines", [om.Color(0, 1, 0), om.LineSet(np.array([[-2.0, -1.3, 0], [2.0, -1.3, 0]]))]))
+    root.add(om.Node("points", [om.Color(1, 0, 1), om.PointSet(np.array([[-1.5, 1.4, 0], [0, 1.5, 0], [1.5, 1.4, 0]]),
+                                                                sizes=[6.0, 6.0, 6.0])]))  # fmt: skip
+    first = engine.render(root, read_depth=False)
+    replayed = steady(engine, root)
+    assert np.array_equal(replayed, first.array)
+    assert np.array_equal(replayed, fresh(root))
+    texture.image = 255 - image  # a new image
+    changed = engine.render(root, read_depth=False)
+    assert not changed.info["replayed"] and not np.array_equal(changed.array, replayed)
+    assert np.array_equal(changed.array, fresh(root))
+    clipped.items[1].offset = -0.3  # the clip plane moves
+    fog.end = 6.0
+    again = engine.render(root, read_depth=False)
+    assert not again.info["replayed"]
+    assert np.array_equal(again.array, fresh(root))
+    assert np.array_equal(steady(engine, root), again.array)
