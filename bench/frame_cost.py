@@ -179,10 +179,22 @@ def bench_nodes(n: int, frames: int, shadows: bool) -> dict[str, float]:
             out["all"].append(timed(move_all))
         # a simulation's loop: every node moved frame after frame, nothing added or removed in between (the
         # frames above splice nodes before each move; a splice makes the engine's row maps again)
-        run: dict[str, list[float]] = {"steady": [], "all": [], "setters": []}
+        run: dict[str, list[float]] = {"steady": [], "all": [], "setters": [], "floor": [], "floor_list": []}
+        plain = [_Plain() for _ in moves]  # the floor: the same loop writing a plain attribute
         for _ in range(frames):
             run["steady"].append(timed(render))
             moving[:, 1] += 0.01
+
+            def plain_loop() -> None:
+                for p, row in zip(plain, moving, strict=True):
+                    p.offset = row
+
+            def plain_list_loop() -> None:
+                for p, row in zip(plain, moving, strict=True):
+                    p.offset = row.tolist()  # and the row made Python numbers, as any copy of it must
+
+            run["floor"].append(timed(plain_loop))
+            run["floor_list"].append(timed(plain_list_loop))
 
             def move_all_again() -> None:
                 start = CLOCK[0]()
@@ -196,6 +208,12 @@ def bench_nodes(n: int, frames: int, shadows: bool) -> dict[str, float]:
     result["setters"] = STAT[0](setters)
     result.update({f"run_{k}": STAT[0](v) for k, v in run.items()})
     return result
+
+
+class _Plain:
+    """An object with one plain attribute: what the loop of setters costs without a setter."""
+
+    __slots__ = ("offset",)
 
 
 def bench_instances(n: int, frames: int, hand: bool) -> dict[str, float]:
@@ -312,6 +330,11 @@ def report_nodes(r: dict[str, float], label: str, targets: dict[str, str]) -> No
         f"{ms(r['run_all'])} = {r['run_all'] / r['run_steady']:.2f}x its steady frame ({ms(r['run_steady'])}); "
         f"setters {ms(r['run_setters'])}, the frame after them {ms(r['run_all'] - r['run_setters'])} = "
         f"{(r['run_all'] - r['run_setters']) / r['run_steady']:.2f}x steady",
+        flush=True,
+    )
+    print(
+        f"  the floor of such a loop: the same 10,000 iterations writing a plain attribute {ms(r['run_floor'])} "
+        f"(p.offset = row), {ms(r['run_floor_list'])} with the row made Python numbers (p.offset = row.tolist())",
         flush=True,
     )
 

@@ -238,6 +238,7 @@ class Node:
             if item is self or item._is_ancestor_of(self):
                 raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
             item._parents.append(self)
+            _LINKS[0] += 1
         elif isinstance(item, RenderingComponent):
             item._attach(self)
         elif isinstance(item, type):
@@ -271,6 +272,7 @@ class Node:
                 if p is self:
                     del item._parents[j]
                     break
+            _LINKS[0] += 1
         else:
             item._detach(self)
         self._restructure()
@@ -545,6 +547,7 @@ class Node:
         Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
         self._items = list(state["items"])
         self._version = state["version"]
+        _LINKS[0] += 1  # its children gain this parent below
         if len(state["parent_keys"]) > 1:
             _PARENT_ORDER[self] = state["parent_keys"]
         key = state["key"]
@@ -637,18 +640,38 @@ def touch_nodes(owners: list[Any]) -> None:
         for owner in owners:
             owner.touch()
         return
-    classes = set(map(type, owners))
-    if not all(issubclass(c, Node) for c in classes):
+    try:
+        deque(map(_SET_VERSION, owners, map(_PLUS_ONE, map(_VERSION_OF, owners))), 0)
+    except (TypeError, AttributeError):  # not all nodes: each its own way (a node bumped twice moved all the same)
         for owner in owners:
             owner.touch()
         return
     epoch = _EPOCH[0]
-    deque(map(_SET_VERSION, owners, map(_PLUS_ONE, map(_VERSION_OF, owners))), 0)
     deque(map(_SET_STAMP, owners, repeat(epoch)), 0)
-    parents = list(chain.from_iterable(map(_PARENTS_OF, owners)))
-    for parent in dict(zip(map(id, parents), parents, strict=True)).values():
+    for parent in _parents_of(owners):
         if parent._stamp != epoch:
             parent.touch()
+
+
+#: Bumped whenever a node gains or loses a parent: the distinct parents :func:`touch_nodes` found for the last
+#: owners (their ids, this counter, weak references to the parents) hold while it has not moved.
+_LINKS = [0]
+_LAST_PARENTS: list[Any] = [None]
+
+
+def _parents_of(owners: list[Node]) -> list[Node]:
+    """The distinct parents of ``owners``: those of the last call when the same nodes come again (a simulation
+    moves the same nodes every frame) and no node gained or lost a parent since."""
+    ids = list(map(id, owners))  # ids, not the nodes: the cache keeps no node alive
+    last = _LAST_PARENTS[0]
+    if last is not None and last[1] == _LINKS[0] and last[0] == ids:
+        parents = [ref() for ref in last[2]]
+        if None not in parents:
+            return parents  # type: ignore[return-value]
+    every = list(chain.from_iterable(map(_PARENTS_OF, owners)))
+    parents = list(dict(zip(map(id, every), every, strict=True)).values())
+    _LAST_PARENTS[0] = (ids, _LINKS[0], [weakref.ref(p) for p in parents])
+    return parents
 
 
 def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> None:

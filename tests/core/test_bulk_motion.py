@@ -273,3 +273,37 @@ def test_an_array_touch_writes_no_translation_and_its_nodes_hear_of_it_once():
     moves.touch()
     assert [n.version for n in scene.children] == [v + 1 for v in versions]
     assert moves[199].offset == (199.0, 1.0, 0.0)
+
+
+def test_many_owners_told_at_once_reach_ancestors_after_the_graph_changed_between_observations():
+    # the distinct parents of the moved nodes are kept while no node gains or loses a parent: moving nodes to
+    # another group between two frames must bump the new group, not the old one
+    t = [om.Translation() for _ in range(40)]
+    a, b = om.Node("a"), om.Node("b")
+    scene = om.Node("scene", [a, b])
+    nodes = [a.add(om.Node(f"n{i}", [t[i]])) for i in range(40)]
+    for frame in range(3):
+        versions = (a.version, b.version, scene.version)
+        for x in t:
+            x.offset = (float(frame), 0.0, 0.0)
+        assert (a.version > versions[0], b.version == versions[1], scene.version > versions[2]) == (True,) * 3
+    for node in nodes:
+        a.remove(node)
+        b.add(node)
+    versions = (a.version, b.version, scene.version)
+    for x in t:
+        x.offset = (9.0, 0.0, 0.0)
+    assert a.version == versions[0] and b.version > versions[1] and scene.version > versions[2]
+
+    class Watcher:  # an owner that is no node (attach_owner takes anything with touch())
+        touched = 0
+
+        def touch(self) -> None:
+            self.touched += 1
+
+    watcher = Watcher()
+    t[5].attach_owner(watcher)
+    before = [n.version for n in nodes]
+    for x in t:
+        x.offset = (1.0, 1.0, 1.0)
+    assert all(n.version > v for n, v in zip(nodes, before, strict=True)) and watcher.touched == 1
