@@ -70,7 +70,7 @@ class RenderingContext:
         while valid < limit:
             entry = matrices[valid]
             t = transforms[valid - 1]
-            if entry[0] is not t or entry[2] != t._version:
+            if entry[0] is not t or entry[2] != t.version:  # (a TranslationArray's translation: its array's too)
                 break
             valid += 1
         if valid == n + 1:
@@ -86,7 +86,7 @@ class RenderingContext:
                     "transforms deep), which overflows the engines' float32 arithmetic; rescale the scene"
                 )
             current.setflags(write=False)
-            matrices.append((t, current, t._version))
+            matrices.append((t, current, t.version))
         return current
 
     # -- poly sets ---------------------------------------------------------

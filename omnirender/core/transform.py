@@ -330,6 +330,12 @@ class Translation(Transform):
             _set_synced(self, bound._version)
 
     @property
+    def version(self) -> int:
+        """Counter bumped on every change: its own assignments, plus its array's touches (TranslationArray)."""
+        bound = self._bound
+        return self._version if bound is None else self._version + bound._version
+
+    @property
     def matrix(self) -> np.ndarray:
         """The 4x4 float64 matrix (an array's translation takes its row first)."""
         if self._bound is not None:
@@ -579,10 +585,10 @@ class TranslationArray(Sequence[Translation]):
     ``offset`` sets it until the next :meth:`touch`.
 
     A touch writes no translation: each views its row of the snapshot and
-    takes it when next read (``offset``, ``matrix``); the versions of the
-    translations move at once (one C-level pass) and their nodes hear of the
-    change at the next observation, with the change journals, which record
-    the array once (an engine that knows it applies the rows at once).
+    takes it when next read (``offset``, ``matrix``) and counts the array's
+    touches in its ``version``; their nodes hear of the change at the next
+    observation, with the change journals, which record the array once (an
+    engine that knows it applies the rows at once).
     """
 
     __slots__ = ("_array", "_translations", "_offsets", "_version", "_owner_list")
@@ -646,19 +652,17 @@ class TranslationArray(Sequence[Translation]):
     def touch(self) -> None:
         """Every translation takes its row of the array (written in place since): one validation and one copy.
 
-        Each translation's version moves at once and its nodes' versions at
-        the next observation, as if its ``offset`` had been assigned; it reads
-        its row when next asked.  The engines' change journals record the
+        Each translation's version moves at once (it counts its array's
+        touches) and its nodes' versions at the next observation, as if its
+        ``offset`` had been assigned; it reads its row when next asked.  The engines' change journals record the
         array once (:func:`~omnirender.core.component.note_later`), so an
         engine that knows it applies the rows at once.
         """
         a = self._checked(self._array)
-        translations = self._translations
         offsets = a.copy()
         offsets.setflags(write=False)
         self._offsets = offsets
-        self._version += 1  # every translation's own offset is stale now (Translation._sync)
-        deque(map(_set_version, translations, map(_PLUS_ONE, map(_VERSION_OF, translations))), 0)
+        self._version += 1  # every translation's offset is stale now (Translation._sync) and its version moved
         note_later(self)
 
     def __getstate__(self) -> dict[str, Any]:
@@ -698,6 +702,4 @@ class TranslationArray(Sequence[Translation]):
         return a
 
 
-_VERSION_OF = attrgetter("_version")
 _OWNERS_OF = attrgetter("_owners")
-_PLUS_ONE = (1).__add__

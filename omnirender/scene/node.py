@@ -16,6 +16,7 @@ detached), and compiled programs and pre-evaluation caches are rebuilt on use.
 
 from __future__ import annotations
 
+import itertools
 import threading
 import weakref
 from collections import deque
@@ -238,7 +239,7 @@ class Node:
             if item is self or item._is_ancestor_of(self):
                 raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
             item._parents.append(self)
-            _LINKS[0] += 1
+            _LINKS[0] = next(_LINK_COUNT)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
         elif isinstance(item, type):
@@ -272,7 +273,7 @@ class Node:
                 if p is self:
                     del item._parents[j]
                     break
-            _LINKS[0] += 1
+            _LINKS[0] = next(_LINK_COUNT)
         else:
             item._detach(self)
         self._restructure()
@@ -547,7 +548,7 @@ class Node:
         Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
         self._items = list(state["items"])
         self._version = state["version"]
-        _LINKS[0] += 1  # its children gain this parent below
+        _LINKS[0] = next(_LINK_COUNT)  # its children gain this parent below
         if len(state["parent_keys"]) > 1:
             _PARENT_ORDER[self] = state["parent_keys"]
         key = state["key"]
@@ -656,6 +657,8 @@ def touch_nodes(owners: list[Any]) -> None:
 #: Bumped whenever a node gains or loses a parent: the distinct parents :func:`touch_nodes` found for the last
 #: owners (their ids, this counter, weak references to the parents) hold while it has not moved.
 _LINKS = [0]
+#: the values _LINKS takes: each change writes a new one (two threads changing links never write the same value)
+_LINK_COUNT = itertools.count(1)
 _LAST_PARENTS: list[Any] = [None]
 
 
@@ -808,7 +811,7 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
     return root._declared.placements  # type: ignore[union-attr]
 
 
-def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local]] | None:
+def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]] | None:
     """Before ``item`` enters or leaves ``node``'s list: the valid declaration results that the edit keeps.
 
     An item that declares nothing (a shape, a material, a child subtree
@@ -831,14 +834,17 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local]] | Non
             return None
     elif getattr(item, "declared", None) is not None:
         return None
-    chain = [(node, entry)]
+    chain = [(node, entry, True)]
     up = node._parents
     while len(up) == 1:
         above = up[0]
         e = above._declared
-        if e is None or e.mask_fn is not mask_fn or not _holds(e, above):
+        # an ancestor whose parameters moved since its result (its version is stale) keeps its lists: its
+        # result stays a guide to which items to walk again (``relevant``), so it follows the edit too, only
+        # its version is left stale (see _patch_declarations); else a splice after a move walked every child
+        if e is None or e.mask_fn is not mask_fn or e.structure != above._structure:
             break
-        chain.append((above, e))
+        chain.append((above, e, _holds(e, above)))
         up = above._parents
     return chain
 
@@ -850,12 +856,13 @@ def _holds(entry: _Local, node: Node) -> bool:
     return entry.version == node._version or not entry.placements
 
 
-def _patch_declarations(chain: list[tuple[Node, _Local]], index: int, shift: int) -> None:
+def _patch_declarations(chain: list[tuple[Node, _Local, bool]], index: int, shift: int) -> None:
     """After the edit: the kept results are valid for the new versions; the edited node's indices shift."""
-    node, entry = chain[0]
+    node, entry, _ = chain[0]
     entry.relevant = [i + shift if i >= index else i for i in entry.relevant if not (shift < 0 and i == index)]
-    for n, e in chain:
-        e.version = n._version
+    for n, e, held in chain:
+        if held:  # valid before the edit: valid after it (a stale version stays stale)
+            e.version = n._version
         e.structure = n._structure
     _observe()  # recorded versions are observed: the next change must reach these nodes again
 

@@ -213,6 +213,32 @@ def test_adding_and_removing_plain_children_keeps_the_root_declarations_without_
     assert len(scene.declarations().lights) == len(before.lights)
 
 
+def test_a_splice_after_a_move_walks_only_what_declares(monkeypatch):
+    """A move leaves the root's result stale (a new version); a splice after it must not walk every child."""
+    from omnirender.scene import node as node_module
+
+    scene, nodes, box = grid_scene(50)
+    lamp = scene.add(om.Node("lamp", [om.Translation(0, 3, 0), om.PointLight(position=(0, 0, 0))]))
+    scene.declarations()
+    nodes[7].items[0].offset = (5.0, 5.0, 5.0)  # a plain node moved: the root's version moves
+    lamp.items[0].offset = (1.0, 4.0, 0.0)  # and the lamp: the root's result must follow it
+    walked: list[int] = []
+    original = node_module._relevant_items
+
+    def counting(node, mask_fn):
+        found = original(node, mask_fn)
+        walked.append(len(found[0]))
+        return found
+
+    monkeypatch.setattr(node_module, "_relevant_items", counting)
+    node = nodes[11]
+    node.remove(node.items[0])  # a transform replaced in a node that declares nothing
+    node.insert(0, om.Matrix(np.eye(4)))
+    (world,) = [m for light, m in scene.declarations().lights if light is lamp.items[1]]
+    assert np.allclose(world[:3, 3], (1.0, 4.0, 0.0))
+    assert all(n < 10 for n in walked), walked  # the root's relevant items only, never its 50 children
+
+
 @pytest.mark.parametrize("with_colors", [True, False])
 def test_instance_positions_alone_are_written_in_place_and_colours_converted_once(with_colors, monkeypatch):
     from omnirender.gl import GLEngine

@@ -9,6 +9,9 @@
   partitioned), made again when the view changes, and amortised after
   ``drawer.RESORT_AFTER`` changes.
 * Translucent instances are still drawn back to front by their moved positions.
+* A positions-only move of a set in view uploads the positions and replays the
+  recorded frame plan; a set that must be culled again, new colours and
+  translucent sets draw the frame in full.
 
 Every picture equals a fresh engine's.
 """
@@ -167,3 +170,63 @@ def test_translucent_instances_are_drawn_back_to_front_after_they_move():
         assert e.stats["compiled"] is False  # the positions-only path, not a compile
         assert np.array_equal(after, fresh(scene))
         assert not np.array_equal(after, before), "the blend order changed with the depths"
+
+
+def test_a_set_moved_in_view_replays_the_frame_plan_and_one_that_must_be_culled_again_does_not():
+    from omnirender.gl import GLEngine
+
+    positions, colors = swarm(300)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        e.render(scene)  # recorded
+        for _ in range(2):
+            positions[:, 1] += 0.1
+            balls.touch()
+            image = e.render(scene)
+            assert image.info["replayed"], e.frame_runner.not_recorded  # positions uploaded, plan replayed
+            assert np.array_equal(image.array, fresh(scene))
+        colors[:5, :3] = (0.1, 0.9, 0.1)  # rows made again: a frame in full
+        balls.touch()
+        image = e.render(scene)
+        assert not image.info["replayed"] and np.array_equal(image.array, fresh(scene))
+        camera.eye = (0.0, 1.0, 2.5)  # close up: some culled
+        e.render(scene)
+        e.render(scene)
+        positions[:, 2] += 0.2
+        balls.touch()
+        image = e.render(scene)
+        assert not image.info["replayed"], "a partly culled set is culled again: a frame in full"
+        assert np.array_equal(image.array, fresh(scene))
+        assert np.array_equal(e.render(scene).array, image.array)
+
+
+@pytest.mark.parametrize("options", [{"shadows": True}, {"pipeline": "deferred", "shadows": True}], ids=str)
+def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options):
+    """Pending translations meet every other path: shadow maps (bounds read every frame), the deferred
+    pipeline, a transform above the set moving, a node added (a splice) between moves."""
+    from omnirender.gl import GLEngine
+
+    positions, colors = swarm(200, seed=2)
+    balls = om.InstanceSet(om.Box(size=0.3), positions, colors=colors)
+    lift = om.Translation((0.0, 0.0, 0.0))
+    floor = om.Node("floor", [om.Box(size=(12, 0.1, 12), center=(0, -3.5, 0))])
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node(
+        "scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), floor, om.Node("s", [lift, balls])]
+    )
+    with GLEngine(size=SIZE, samples=0, **options) as e:
+        e.render(scene)
+        for step in range(5):
+            positions[:, 1] += 0.1
+            positions[step] += 0.5
+            balls.touch()
+            if step == 2:
+                lift.offset = (0.3, 0.0, 0.1)
+            if step == 3:
+                scene.add(om.Node("extra", [om.Translation((1.0, 1.0, 1.0)), om.Sphere(radius=0.4)]))
+            image = e.render(scene).array
+            with GLEngine(size=SIZE, samples=0, **options) as f:
+                assert np.array_equal(image, f.render(scene).array), step

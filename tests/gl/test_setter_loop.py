@@ -73,3 +73,28 @@ def test_other_engines_see_a_setter_loop_the_gl_engine_drew():
     cam = om.Camera.look_at((0, 0, 30), (0, 0, 0), fov=50)
     hits = om.pick(om.Node("p", [cam, *scene.children]), pixel=(48, 36), size=SIZE)
     assert not hits or hits[0].distance == pytest.approx(30.0 + 1.5, abs=0.6)
+
+
+def test_the_kept_look_ups_follow_splices_and_transforms_the_plan_did_not_hold():
+    from omnirender.gl import GLEngine
+
+    scene, a, b, positions = two_groups()
+    rows = {id(t): i for i, t in enumerate(a + b)}
+    late = om.Translation(0.0, -9.0, 0.0)  # in the loop's list before its node is in the scene
+    late_node = om.Node("late", [late, om.Color(1, 1, 1), om.Sphere(radius=0.5)])
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(8):
+            if frame == 2:
+                scene.add(late_node)  # the late translation is in the plan from now on
+            elif frame == 5:
+                scene.remove(scene.child("b75"))  # a node of group b leaves: a splice
+            else:
+                positions[:, 1] += 0.05
+                for t in a:
+                    t.offset = positions[rows[id(t)]]
+                late.offset = (float(frame) - 3.0, -9.0, 0.0)
+            image = e.render(scene, background=(0, 0, 0))
+            if frame == 5:
+                assert e.stats["compiled"] == "subtrees"
+            assert np.array_equal(image.array, fresh(scene)), frame

@@ -276,8 +276,10 @@ class BatchDrawer:
         """Upload ``batch``'s changed rows where they lie, as its draw in the frame's own view would, for a
         replayed frame plan (rows moved in place since it was recorded); False, with nothing uploaded, when
         its draw would do more than that: sort or cull it again, pack it again, write a uniform from its row
-        (one row), or an instance set's buffers."""
+        (one row).  An instance set's batch uploads its moved positions (:meth:`_upload_moved_instances`)."""
         n = batch.size
+        if batch.items and batch.items[0].instances is not None:
+            return self._upload_moved_instances(batch, n)
         if (
             n <= 1
             or batch.buffer is None
@@ -303,6 +305,30 @@ class BatchDrawer:
             ):
                 return False
         _upload_rows(batch, self._columns(batch.layout), position)
+        return True
+
+    def _upload_moved_instances(self, batch: Batch, n: int) -> bool:
+        """:meth:`upload_moved` for an instance set's batch: its moved positions uploaded as its draw in the
+        frame's own view would (:meth:`_prepare_instance_set`); False when that draw would do more (sort or
+        cull again, re-pack rows made again)."""
+        state = self.state
+        if (
+            batch.buffer is None
+            or batch.offsets is None
+            or batch.position is None
+            or len(batch.position) != n
+            or state.view_key != state.frame_view_key
+            or batch.sorted_for != state.view_key
+            or _may_enter_view(batch, n)
+            or _order_aged(batch)
+        ):
+            return False
+        if not (batch.sparse or batch.dirty is not None):
+            return True
+        moved, mr = batch.moved_offsets, batch.moved_range
+        if moved is None or mr is None or not mr[0] == batch.version == moved[0] or batch.sparse:
+            return False  # not positions only: drawn in full
+        _upload_instance_set(batch, self._columns(batch.layout), batch.offset_order)
         return True
 
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:

@@ -121,7 +121,8 @@ class MovePlan:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
         self.many_moves = 0
-        self._last = None
+        # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
+        # held every transform of the list)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -246,7 +247,7 @@ class MovePlan:
             positions = found[keep]
             moved = changed if keep.all() else list(compress(changed, keep.tolist()))
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
-            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
+            self._last = (changed, positions, moved, translations) if moved is changed and len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
@@ -511,7 +512,12 @@ class TransformUpdater:
             _install_rows(item, made)
         if updates:
             self.index.moved(None)  # instance rows replaced: every bound again
-            self._placements_changed()
+            # positions only, in opaque batches: a recorded frame plan may be replayed after their upload
+            batches = [item.slot[0] for item, made in updates if isinstance(made, tuple) and item.slot is not None]
+            if self._rows_moved is not None and len(batches) == len(updates):
+                self._rows_moved(batches)
+            else:
+                self._placements_changed()
         return count + len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:

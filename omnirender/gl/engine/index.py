@@ -113,9 +113,15 @@ class RenderIndex:
                 if caster:
                     self._journal = self._casters = None  # the old places are not known
                 continue
+            follow = caster and (self._casters is not None or self._journal is not None)
+            if not follow and 2 * (len(where) if count is None else count) > len(batch.rows):
+                # most rows moved and no old place is needed: every row's box, read from the rows as they lie
+                # (no gather of the moved rows and scatter of their boxes; the others' come out the same)
+                boxes[id(batch)] = (batch, *row_boxes(batch.geometry, batch.rows))
+                continue
             # a run of rows (a bound array's) stays a slice: views and block copies, not gathers of every row
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
-            if caster and (self._casters is not None or self._journal is not None):
+            if follow:
                 if count is not None:
                     where = np.arange(len(batch.rows))[where]  # the journal's row indices
                 old = (found[1][where], found[2][where])  # copies (fancy index)
@@ -149,22 +155,22 @@ class RenderIndex:
                 return
         else:
             low, high = list(counts[0]), list(counts[1])
-            for k in range(3):
-                if old is not None and len(old[0]):
-                    low[k] -= int(np.count_nonzero(old[0][:, k] == lo[k]))
-                    high[k] -= int(np.count_nonzero(old[1][:, k] == hi[k]))
+            if old is not None and len(old[0]):
+                _uncount(low, old[0], lo.tolist())
+                _uncount(high, old[1], hi.tolist())
             counts = (low, high)
         if new is not None and len(new[0]):
             a, b = _column_min(new[0]), _column_max(new[1])
             if counts is not None:
                 low, high = counts
+                bound_lo, bound_hi = np.minimum(lo, a).tolist(), np.maximum(hi, b).tolist()
                 for k in range(3):
-                    if a[k] < lo[k]:
+                    if bound_lo[k] < lo[k]:
                         low[k] = 0  # a new bound: the rows on it are counted below
-                    if b[k] > hi[k]:
+                    if bound_hi[k] > hi[k]:
                         high[k] = 0
-                    low[k] += int(np.count_nonzero(new[0][:, k] == min(a[k], lo[k])))
-                    high[k] += int(np.count_nonzero(new[1][:, k] == max(b[k], hi[k])))
+                _uncount(low, new[0], bound_lo, -1)
+                _uncount(high, new[1], bound_hi, -1)
             if (a < lo).any() or (b > hi).any():
                 lo, hi = np.minimum(lo, a), np.maximum(hi, b)
                 cached = ((lo, hi),)  # a new tuple: the bounds changed
@@ -377,6 +383,19 @@ class RenderIndex:
         return found[1], found[2]
 
 
+def _uncount(counts: list[int], boxes: np.ndarray, bound: list[float], sign: int = 1) -> None:
+    """Take the rows of ``boxes`` (N, 3) that lie on ``bound`` (per axis) off ``counts`` (``sign`` -1: add them);
+    a few rows in Python floats, many column by column."""
+    if len(boxes) <= 8:
+        for row in boxes.tolist():
+            for k in range(3):
+                if row[k] == bound[k]:
+                    counts[k] -= sign
+        return
+    for k in range(3):
+        counts[k] -= sign * int(np.count_nonzero(boxes[:, k] == bound[k]))
+
+
 def _column_min(a: np.ndarray) -> np.ndarray:
     """``a.min(axis=0)`` of an (N, 3) array, column by column (numpy's axis-0 reduction of narrow rows is slow)."""
     return np.array([a[:, 0].min(), a[:, 1].min(), a[:, 2].min()])
@@ -397,17 +416,18 @@ def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return _few_row_boxes(geometry, rows)
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
     c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
-    # each row holds M transposed: M[k, j] is column 4 j + k of the model; float32 columns times float64
-    # scalars give float64 (no float64 copy of every row's model first)
-    m = rows[:, _MODEL]
-    lo = np.empty((len(rows), 3))
-    hi = np.empty((len(rows), 3))
+    # each row holds M transposed: M[k, j] is column 4 j + k of the model; the model columns are copied once into
+    # contiguous float64 rows (the same values), read many times; the boxes come out as (N, 3) views of (3, N)
+    m = rows[:, _MODEL].T.astype(np.float64)
+    a = np.abs(m[:12])
+    lo = np.empty((3, len(rows)))
+    hi = np.empty((3, len(rows)))
     for k in range(3):
-        center = m[:, k] * c[0] + m[:, 4 + k] * c[1] + m[:, 8 + k] * c[2] + m[:, 12 + k]
-        half = np.abs(m[:, k]) * e[0] + np.abs(m[:, 4 + k]) * e[1] + np.abs(m[:, 8 + k]) * e[2]
-        lo[:, k] = center - half
-        hi[:, k] = center + half
-    return lo, hi
+        center = m[k] * c[0] + m[4 + k] * c[1] + m[8 + k] * c[2] + m[12 + k]
+        half = a[k] * e[0] + a[4 + k] * e[1] + a[8 + k] * e[2]
+        np.subtract(center, half, out=lo[k])
+        np.add(center, half, out=hi[k])
+    return lo.T, hi.T
 
 
 #: rows up to which :func:`row_boxes` computes in Python floats (numpy's per-call cost is more for so few)

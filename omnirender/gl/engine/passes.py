@@ -29,7 +29,10 @@ enclosing one (:class:`Composed`): item classes intersect, masks and
 predicates all apply, state/camera/shader settings of the inner pass win.
 Descriptions are plain values; the engine compares them frame by frame and
 rebuilds GPU objects (targets, programs) only when the description that needs
-them changed.
+them changed.  ``Pass.scissored(box)`` derives the same pass limited to a pixel
+rectangle (scissor and clear) without checking the description again: what a
+technique that redraws a changed rectangle every frame uses (shadow maps'
+partial updates).
 """
 
 from __future__ import annotations

@@ -573,6 +573,14 @@ class _Rects:
             self.flags[0, :n], self.flags[1, :n] = behind, away
 
     def _put(self, where: Any, lo: np.ndarray, hi: np.ndarray) -> None:
+        if len(lo) <= _FEW:  # a few rows (what moved): their floats written in place
+            rows = range(where.start, where.stop) if isinstance(where, slice) else np.asarray(where).tolist()
+            rect, flags = self.rect, self.flags
+            for i, r in zip(rows, _few_rects(self.face, lo.tolist(), hi.tolist()), strict=True):
+                rect[0, i], rect[1, i], rect[2, i], rect[3, i] = r[0], r[1], r[2], r[3]
+                if flags is not None:
+                    flags[0, i], flags[1, i] = r[4], r[5]
+            return
         rect, behind, away = _ndc_rects(self.face, lo, hi)
         for j in range(4):
             self.rect[j, where] = rect[j]
