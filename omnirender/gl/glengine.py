@@ -204,6 +204,7 @@ class GLEngine(Engine):
             self.stats,
             placements_changed,
             self._follow_splice,
+            self.frame_runner.rows_spliced,
         )
         self.compiler = DrawListCompiler(self, self.installer, self.updater, MaterialDescription)
 

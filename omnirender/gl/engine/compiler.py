@@ -169,7 +169,9 @@ def _same_declarations(a: Any, b: Any) -> bool:
     if a is b:
         return True
     pa, pb = a.placements, b.placements
-    return len(pa) == len(pb) and all(x is y and np.array_equal(m, n) for (x, m), (y, n) in zip(pa, pb, strict=True))
+    return len(pa) == len(pb) and all(
+        x is y and (m is n or bool((m == n).all())) for (x, m), (y, n) in zip(pa, pb, strict=True)
+    )
 
 
 class DrawListCompiler:
@@ -227,9 +229,6 @@ class DrawListCompiler:
         self._fill = "filled"
         self._kinds_seen = len(kinds())
         self._checked_textures: dict[int, tuple[Any, int]] = {}
-        #: id(node) -> (ref, structure version, mask function) of nodes found to declare nothing (no light,
-        #: camera or background below them): a transform moved there leaves the declarations as they are
-        self._quiet: dict[int, tuple[Any, int, Any]] = {}
 
     def install_immediate(self) -> None:
         """Install what painters submitted outside a compile (``render(None)``) and start a new immediate list."""
@@ -339,11 +338,15 @@ class DrawListCompiler:
                 if count is not None:
                     self.engine.stats["incremental"] = count
                     # lights and the camera may sit below a moved transform: the (incremental) pre-evaluation
-                    # again (instance sets' arrays place neither: their declarations are kept)
+                    # again (instance sets' arrays place neither: their declarations are kept); the graph walks
+                    # only the changed paths; the last frame's result is kept when it is the same (a recorded
+                    # frame plan keys on it: moves of plain objects keep it)
                     engine = self.engine
-                    if self.updater.placed and not self._declares_nothing(changed):
-                        engine.declared = engine.preevaluate(scene)
-                        engine.camera = engine.declared.camera
+                    if self.updater.placed:
+                        declared = engine.preevaluate(scene)
+                        if not _same_declarations(engine.declared, declared):
+                            engine.declared = declared
+                            engine.camera = declared.camera
                     self._compiled = (c[0], scene.version, mask_key, c[3])
                     self.engine.stats["compiled"] = False
                     return self.installer.root
@@ -391,35 +394,6 @@ class DrawListCompiler:
         self.installer.install(root)
         self.engine.stats["compiled"] = True
         return root
-
-    def _declares_nothing(self, changed: list[Any]) -> bool:
-        """Whether every node holding a ``changed`` component declares nothing below it (no light, camera,
-        background), so the scene's declarations are those of the last frame: what a subtree declares depends
-        on its lists, not on its parameters (a node is asked again only after its lists changed)."""
-        if len(changed) > 8:
-            return False  # many moved: the incremental pre-evaluation is cheaper than asking each owner
-        mask_fn = self.engine.mask_function
-        quiet = self._quiet
-        for c in changed:
-            owners = c.owners
-            if not owners or len(owners) > 8:  # (a TranslationArray: the nodes of all its translations)
-                return False
-            for node in owners:
-                if not isinstance(node, Node):
-                    return False
-                found = quiet.get(id(node))
-                version = node.structure_version
-                if found is None or found[0]() is not node or found[1] != version or found[2] is not mask_fn:
-                    items = node.items
-                    leaf = all(it.__class__ is not Node and not isinstance(it, Node) for it in items)
-                    if leaf and any(getattr(it, "declared", None) is not None for it in items):
-                        return False
-                    if not leaf and node.declarations(mask_fn).placements:
-                        return False
-                    if len(quiet) > 4096:
-                        quiet.clear()
-                    quiet[id(node)] = (weakref.ref(node), version, mask_fn)
-        return True
 
     # -- compiling only the subtrees that list edits touched --------------------------------
     def _splice(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
@@ -472,6 +446,7 @@ class DrawListCompiler:
             return None
         self._scope = self._immediate
         self._compile_frames = []
+        engine.declared, engine.camera = old_declared, old_declared.camera  # the same (compile_subtrees checked)
         for _, _, path in leaves:
             for above in path:  # their flattened entries hold the old items: compiled again when next missed
                 self._drop_entry(above)

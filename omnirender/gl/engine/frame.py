@@ -41,7 +41,7 @@ import numpy as np
 from ...core.technique import pass_accepted
 from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, ScissorTest, StencilOp
 from .context import GLError, blit, clear_depth, clear_stencil
-from .drawer import BatchDrawer
+from .drawer import SORT_MIN, BatchDrawer
 from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
@@ -97,6 +97,8 @@ class FrameRunner:
         #: id(batch) -> batch whose rows moved in place since the plan was recorded or last replayed: the next
         #: replay uploads their changed rows first (:meth:`rows_moved`)
         self._moved: dict[int, Any] = {}
+        #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
+        self._resized: dict[int, Any] = {}
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
@@ -104,8 +106,43 @@ class FrameRunner:
         self.generation += 1
         self.plan = None
         self._moved.clear()
+        self._resized.clear()
         for stage in self.stages:
             stage.changed()
+
+    def rows_spliced(self, batches: list[Any]) -> None:
+        """A splice only removed and appended rows of ``batches`` (existing batches drawn the same way: see
+        ``renderer._rows_only``): as :meth:`rows_moved`, and the plan's key takes the new draw-list version and
+        its draws of those batches their new instance counts when it is replayed."""
+        self.rows_moved(batches)
+        plan = self.plan
+        if plan is None:
+            return
+        engine = self.engine
+        plan.key = self._plan_key_with_list_version(plan.key, engine.draw_list_version)
+        plan.stats["items"] = engine.item_count
+        for batch in batches:
+            self._resized[id(batch)] = batch
+
+    def _plan_key_with_list_version(self, key: PlanKey, version: int) -> PlanKey:
+        """``key`` (made by :meth:`_plan_key`) with the draw-list version ``version``."""
+        values = list(key.values[len(key.objects) :])
+        values[1] = version  # (generation, draw-list version, ...): see _plan_key
+        return PlanKey(key.objects, tuple(values))
+
+    def _resize_ops(self, plan: FramePlan) -> bool:
+        """The plan's draws of batches whose row count a splice changed take their new counts; False when one
+        cannot (not sorted and all in view: its draw would cull or sort again)."""
+        for batch in self._resized.values():
+            n = batch.size
+            if n < SORT_MIN or batch.position is None or len(batch.position) != n or batch.drawn != n:
+                return False
+            vaos = {id(vao) for vao in batch.vaos.values()}
+            for op in plan.ops:
+                if id(op.vao) in vaos:
+                    op.n = n
+        self._resized.clear()
+        return True
 
     def rows_moved(self, batches: list[Any]) -> None:
         """Only the rows of ``batches`` moved in place (model matrices; nothing added, removed or re-made):
@@ -252,12 +289,15 @@ class FrameRunner:
         plan = self.plan
         if key is not None and plan is not None and plan.key.matches(key):
             moved = self._moved
-            if not moved or all(self.drawer.upload_moved(batch) for batch in moved.values()):
+            if (not self._resized or self._resize_ops(plan)) and (
+                not moved or all(self.drawer.upload_moved(batch) for batch in moved.values())
+            ):
                 moved.clear()
                 self._replay(plan, fbo, size)
                 return
         self.plan = None
         self._moved.clear()  # the frame drawn in full uploads what changed
+        self._resized.clear()
         self.not_recorded = None
         engine.programs.owner = None  # this frame writes the programs' uniforms in its own order
         self.report.begin_frame(engine.timing)

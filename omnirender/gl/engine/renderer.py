@@ -18,6 +18,9 @@ from .drawlist import Batch, DrawItem, Scope, Segment, plan_batches, position_of
 from .geometry import Geometry
 from .layout import ROW
 from .passes import Composed
+from .state import not_mirror
+
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
 
 __all__ = ["BatchInstaller", "item_filter"]
 
@@ -45,6 +48,7 @@ class BatchInstaller:
         stats: dict[str, Any],
         placements_changed: Any,
         spliced: Any,
+        rows_spliced: Any = None,
     ) -> None:
         self.ctx = ctx
         self.index = index
@@ -54,6 +58,8 @@ class BatchInstaller:
         self.stats = stats
         self._placements_changed = placements_changed
         self._spliced = spliced
+        #: tells the frame that a splice only edited rows of existing batches (it may keep its plan), or None
+        self._rows_spliced = rows_spliced
         #: the installed root scope (None before the first install)
         self.root: Scope | None = None
         #: bumped whenever a compiled draw list is installed (per-frame caches of techniques key on it)
@@ -198,6 +204,7 @@ class BatchInstaller:
                 return False
             if item.slot is None and not (item.transparent or item.state.overlay):
                 return False
+        uniform = {id(b): b.uniform for seg in segments for b in seg.batches}  # before the edits
         ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]] = {}  # id(batch) -> its row edits, in order
         moved_items: list[DrawItem] = []
         places: list[int] = []  # where each removed item was in the root's entries (the index's list follows)
@@ -205,28 +212,8 @@ class BatchInstaller:
         for item in removed:
             if where is not None:
                 places.append(self._take_out(root, last, where, item, ops, moved_items))
-                continue
-            if item.slot is not None:
-                batch, index = item.slot
-                segment = owner[id(batch)]
-                at = position_of(segment.items, item, index)  # a batch's rows keep roughly the segment's order
-                del segment.items[at]
-                del segment.slots[at]
-                moved = batch.remove_row(index)
-                ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
-                if moved is not None:
-                    shifted = batch.items[index]
-                    segment.slots[position_of(segment.items, shifted)] = shifted.slot
-                    moved_items.append(shifted)
             else:
-                segment = next(seg for seg in segments if any(x is item for x in seg.others))
-                at = position_of(segment.items, item)
-                del segment.items[at]
-                del segment.slots[at]
-                segment.others.remove(item)
-            place = position_of(root.entries, item, at)  # one segment: the same place
-            del root.entries[place]
-            places.append(place)
+                places.append(_take_out_searching(root, segments, owner, item, ops, moved_items))
         by_key = {(id(b.geometry), id(b.state)): b for b in last.batches}
         new_batch = False
         for item in added:
@@ -254,9 +241,17 @@ class BatchInstaller:
         else:
             self._follow_splice(root, ops)
         self.index.spliced(removed, added, places, swapped=where is not None)
-        self._placements_changed()
         kept = {id(it.geometry) for it in added}
-        if any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed):
+        # what only removed items used is released: nothing while their batches keep rows (the same geometry
+        # and state: textures) and none was drawn alone (transparent, overlay: transient buffers)
+        orphans = any(it.transparent or it.state.overlay for it in removed) or any(not b.size for b, _ in ops.values())
+        sweep = orphans and any(id(it.geometry) not in kept or it.state.textures or it.transparent for it in removed)
+        rows_only = _rows_only(
+            self._rows_spliced is not None and not (new_batch or sweep), removed, added, ops, uniform
+        )
+        if not rows_only:
+            self._placements_changed()
+        if sweep:
             # what only removed items used is released now (their geometry, textures, transient buffers)
             parts = [p for scope in root.walk() for p in (scope.parts or []) if isinstance(p, Segment)]
             self._sweep(root, [b.items[0] for p in parts for b in p.batches if b.items] + [
@@ -265,6 +260,8 @@ class BatchInstaller:
             self.index.batch_edits(batch, edits)
         version = self.version
         self.version += 1
+        if rows_only:  # after the version moved: a kept frame plan takes the new one
+            self._rows_spliced([batch for batch, _ in ops.values()])
         self._spliced(version, added)
         self.updater.splice(removed, added, moved_items)
         return True
@@ -480,6 +477,66 @@ def item_filter(composed: Composed) -> Any:
         return all(select(item) for select in selects)
 
     return keep
+
+
+def _take_out_searching(
+    root: Scope,
+    segments: list[Segment],
+    owner: dict[int, Segment],
+    item: DrawItem,
+    ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]],
+    moved_items: list[DrawItem],
+) -> int:
+    """Remove ``item`` from a root of several segments (its place looked for near where it probably is) and
+    from its batch; returns its place in the root's entries (the later entries move up)."""
+    if item.slot is not None:
+        batch, index = item.slot
+        segment = owner[id(batch)]
+        at = position_of(segment.items, item, index)  # a batch's rows keep roughly the segment's order
+        del segment.items[at]
+        del segment.slots[at]
+        moved = batch.remove_row(index)
+        ops.setdefault(id(batch), (batch, []))[1].append(("remove", index, moved))
+        if moved is not None:
+            shifted = batch.items[index]
+            segment.slots[position_of(segment.items, shifted)] = shifted.slot
+            moved_items.append(shifted)
+    else:
+        segment = next(seg for seg in segments if any(x is item for x in seg.others))
+        at = position_of(segment.items, item)
+        del segment.items[at]
+        del segment.slots[at]
+        segment.others.remove(item)
+    place = position_of(root.entries, item, at)  # one segment: the same place
+    del root.entries[place]
+    return place
+
+
+def _rows_only(
+    possible: bool,
+    removed: list[DrawItem],
+    added: list[DrawItem],
+    ops: dict[int, tuple[Batch, list[tuple[Any, ...]]]],
+    uniform: dict[int, bool],
+) -> bool:
+    """Whether a splice only edited rows of batches that are drawn the same way (``possible``: no batch made,
+    nothing released): opaque plain items (no mirror, no highlight), batches of two rows or more before and
+    after whose material sharing did not change (their program, vertex arrays and uniforms stay the ones a
+    recorded frame plan holds)."""
+    if not possible:
+        return False
+    for item in (*removed, *added):
+        if item.transparent or item.state.overlay:
+            return False
+        if not not_mirror(item) or item.row[_HIGHLIGHT_ON] > 0.0:
+            return False
+    for batch, edits in ops.values():
+        n = batch.size
+        if n < 2 or n + sum(1 if op == "remove" else -1 for op, _, _ in edits) < 2:
+            return False
+        if uniform.get(id(batch)) is not batch.uniform:
+            return False
+    return True
 
 
 def _same_shape(old: Scope, new: Scope) -> bool:
