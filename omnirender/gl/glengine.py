@@ -42,6 +42,8 @@ from .engine.context import (
     create_context,
     delete_renderbuffer,
     depth_stencil_framebuffer,
+    read_color_top_down,
+    reads_top_down,
 )
 from .engine.drawer import BatchDrawer
 from .engine.drawlist import Batch, DrawItem, DrawState, Scope
@@ -182,6 +184,8 @@ class GLEngine(Engine):
         #: (camera, key, view, projection) of the last scene camera (camera_matrices); the read-back's array
         self._camera_kept: tuple[Any, Any, np.ndarray, np.ndarray] | None = None
         self._read_scratch: np.ndarray | None = None
+        #: the driver reads colour rows top-down itself (Mesa's GL_MESA_pack_invert): no flipping copy per frame
+        self._reads_top_down = reads_top_down(self.ctx, self.raw)
         self.frame_targets = FrameTargets(self.ctx, self.raw, self.max_texture_size)
         self.pass_report = PassReport(self.ctx)
         self.drawer = BatchDrawer(self, self.frame_state, self.frame_targets, self.pass_report, self._default_drawers)
@@ -847,18 +851,23 @@ class GLEngine(Engine):
                 self.ctx.copy_framebuffer(t["fbo"], drawn)
             fbo = t["fbo"]
         w, h = self._size
-        scratch = self._read_scratch
-        if scratch is None or scratch.shape != (h, w, 4):
-            scratch = self._read_scratch = np.empty((h, w, 4), np.uint8)
-        fbo.read_into(scratch, components=4, alignment=1)  # into a kept array: no new buffer per frame
-        array = scratch[::-1]  # copied by the Image below (rows top-down)
+        if self._reads_top_down:
+            # the driver flips the rows in the read: straight into the image's own array, no copy
+            array = np.empty((h, w, 4), np.uint8)
+            read_color_top_down(self.raw, fbo, array)
+        else:
+            scratch = self._read_scratch
+            if scratch is None or scratch.shape != (h, w, 4):
+                scratch = self._read_scratch = np.empty((h, w, 4), np.uint8)
+            fbo.read_into(scratch, components=4, alignment=1)  # into a kept array: no new buffer per frame
+            array = np.ascontiguousarray(scratch[::-1])  # the image's own array, rows top-down
         depth = None
         if read_depth:
             raw = np.frombuffer(fbo.read(components=1, attachment=-1, dtype="f4", alignment=1), np.float32).reshape(
                 h, w
             )[::-1]
             depth = self.linear_depth(raw)
-        return Image(np.ascontiguousarray(array), depth, engine="gl", info=dict(self.stats))
+        return Image(array, depth, engine="gl", info=dict(self.stats))
 
     def linear_depth(self, raw: np.ndarray) -> np.ndarray:
         """Window depth in [0, 1] -> eye-space distance along the view axis (inf for the far plane)."""

@@ -289,3 +289,29 @@ def test_textures_lines_points_clip_planes_and_fog_replay_and_follow_changes(eng
     assert not again.info["replayed"]
     assert np.array_equal(again.array, fresh(root))
     assert np.array_equal(steady(engine, root), again.array)
+
+
+def test_colour_read_rows_top_down_in_the_driver_is_the_same_picture():
+    """Where the driver reads rows top-down itself (Mesa's GL_MESA_pack_invert) the image is the one the
+    flipping copy gives, oriented like the depth (read bottom-up and flipped), and GL's pack state is back at
+    its default afterwards (a plain moderngl read is bottom-up)."""
+    root = om.Node("scene")
+    root.add(om.Camera.look_at(eye=(0.0, 0.0, 6.0)))
+    root.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    corner = root.add(om.Node("corner"))
+    corner.add(om.Translation(-1.2, 0.9, 0.0))
+    corner.add(om.Box(size=0.8))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as engine:
+        image = engine.render(root)
+        covered = np.isfinite(image.depth)
+        assert covered[: SIZE[1] // 2, : SIZE[0] // 2].any() and not covered[SIZE[1] // 2 :].any()  # top-left
+        background = image.array[-1, -1]
+        assert np.array_equal((image.array != background).any(axis=2), covered)
+        with engine.current():
+            plain = np.frombuffer(engine.framebuffer.read(components=4, alignment=1), np.uint8)
+        assert np.array_equal(plain.reshape(SIZE[1], SIZE[0], 4)[::-1], image.array)
+        engine._reads_top_down = not engine._reads_top_down  # the other way
+        other = engine.render(root)
+        assert np.array_equal(other.array, image.array)
+        for array in (image.array, other.array):  # the image's own array, C order, as before
+            assert array.flags.c_contiguous and array.flags.owndata

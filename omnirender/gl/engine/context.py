@@ -42,6 +42,7 @@ from .glenum import (
     GL_NEAREST,
     GL_NEVER,
     GL_NOTEQUAL,
+    GL_PACK_INVERT_MESA,
     GL_READ_FRAMEBUFFER,
     GL_READ_FRAMEBUFFER_BINDING,
     GL_RENDERBUFFER,
@@ -189,6 +190,7 @@ SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "glCheckFramebufferStatus": ([_u], _u),
     "glBlitFramebuffer": ([_i, _i, _i, _i, _i, _i, _i, _i, _u, _u], None),
     "glClearStencil": ([_i], None),
+    "glClearColor": ([_f, _f, _f, _f], None),
     "glClear": ([_u], None),
     "glClearDepth": ([_d], None),
     "glFinish": ([], None),
@@ -395,6 +397,36 @@ def clear_stencil_value(raw: RawGL, value: int = 0) -> None:
     if raw.available:
         raw.glClearStencil(int(value))
         raw.glClear(GL_STENCIL_BUFFER_BIT)
+
+
+def reads_top_down(ctx: Any, raw: RawGL) -> bool:
+    """Whether :func:`read_color_top_down` reads rows top-down in the read itself (Mesa's ``GL_MESA_pack_invert``)."""
+    return raw.available and "GL_MESA_pack_invert" in ctx.extensions
+
+
+def read_color_top_down(raw: RawGL, fbo: Any, out: Any) -> None:
+    """Read ``fbo``'s colour as RGBA8 into ``out`` ((h, w, 4) uint8, C order) with its rows top-down, the way an
+    image is stored, in the read itself (no copy to flip the rows).  Only where :func:`reads_top_down` says so;
+    the pack state is back at GL's default (bottom-up) afterwards."""
+    raw.glPixelStorei(GL_PACK_INVERT_MESA, 1)
+    try:
+        fbo.read_into(out, components=4, alignment=1)
+    finally:
+        raw.glPixelStorei(GL_PACK_INVERT_MESA, 0)
+
+
+def clear_frame(raw: RawGL, color: tuple[float, ...], stencil: bool) -> None:
+    """Clear the bound framebuffer's colour to ``color`` (RGBA; alpha 0 when not given, as moderngl), depth to 1
+    and, with ``stencil``, stencil to 0, in one glClear.  Only while every kind is at its default (every
+    channel, depth and stencil bit written, no scissor: a frame's begin) and ``raw.available``."""
+    r, g, b, a = (*color, 0.0, 0.0, 0.0, 0.0)[:4]
+    raw.glClearColor(r, g, b, a)
+    raw.glClearDepth(1.0)
+    bits = GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT
+    if stencil:
+        raw.glClearStencil(0)
+        bits |= GL_STENCIL_BUFFER_BIT
+    raw.glClear(bits)
 
 
 def clear_depth(raw: RawGL, value: float = 1.0, scissored: bool = False) -> None:

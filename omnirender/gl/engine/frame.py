@@ -40,7 +40,7 @@ import numpy as np
 
 from ...core.technique import pass_accepted
 from .attributes import Blend, ColorMask, CullFace, DepthMask, DepthTest, PolygonOffset, ScissorTest, StencilOp
-from .context import GLError, blit, clear_depth, clear_stencil
+from .context import GLError, blit, clear_depth, clear_frame, clear_stencil
 from .drawer import SORT_MIN, BatchDrawer
 from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
@@ -275,10 +275,16 @@ class FrameRunner:
         state.background = background
         color = engine.clear_color(background) if clear else None
         if clear:
-            fbo.clear(*color, depth=1.0)
-            applier.reassert()  # moderngl's clear set the framebuffer's own masks
-            if engine.has_stencil and not engine.pushed_targets and framebuffer is None:
-                clear_stencil(self.raw, 0)  # the default stencil write mask (every bit) is set
+            stencil = engine.has_stencil and not engine.pushed_targets and framebuffer is None
+            if self.raw.available:
+                # one glClear: the frame began with every kind at its default (every channel, depth and
+                # stencil bit written, no scissor), what a clear of the whole target needs
+                clear_frame(self.raw, color, stencil)
+            else:
+                fbo.clear(*color, depth=1.0)
+                applier.reassert()  # moderngl's clear set the framebuffer's own masks
+                if stencil:
+                    clear_stencil(self.raw, 0)  # the default stencil write mask (every bit) is set
         camera, view, proj = self._frame_camera(override, size)
         state.camera = camera
         state.set_camera(view, proj, camera.is_orthographic)

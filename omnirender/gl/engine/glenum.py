@@ -95,6 +95,7 @@ GL_STENCIL = 0x1802
 GL_STENCIL_INDEX = 0x1901
 GL_UNSIGNED_BYTE = 0x1401
 GL_PACK_ALIGNMENT = 0x0D05
+GL_PACK_INVERT_MESA = 0x8758  # GL_MESA_pack_invert: glReadPixels returns rows top-down
 
 # primitives moderngl does not name
 GL_TRIANGLES_ADJACENCY = 0x000C

@@ -215,8 +215,9 @@ class RasterApplier:
         if current is None:
             self.current = list(raster)
             gl = self.gl
+            n = len(raster)
             for i, apply in _issuing():  # kinds that issue GL calls (the others live in shaders or passes)
-                if i < len(raster):  # kinds defined after a compile: left as they are
+                if i < n:  # kinds defined after a compile: left as they are
                     apply(gl, raster[i])
             return
         for i, value in enumerate(raster):
