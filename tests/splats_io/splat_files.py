@@ -50,13 +50,3 @@ def find_splats(node: om.Node) -> list[om.GaussianSplats]:
     for child in node.children:
         out += find_splats(child)
     return out
-
-
-def gl_draws_splats() -> bool:
-    """Whether the GL engine has its splat painter (issue 28's GL half)."""
-    one = om.GaussianSplats(np.zeros((1, 3)), [[1.0, 0, 0, 0]], np.full((1, 3), 0.1), [0.5], np.zeros((1, 1, 3)))
-    try:
-        om.render(om.Node("probe", [om.Camera.look_at((0, 0, 2), (0, 0, 0)), one]), engine="gl", size=(8, 8))
-    except om.NoHandlerError:
-        return False
-    return True
