@@ -53,8 +53,9 @@ class ChangeJournal:
     def __init__(self) -> None:
         changed: dict[int, RenderingComponent] = {}
         edits: list[tuple[Any, str, Any, int] | None] = []
-        #: [a batch of changes noted for later told as a whole (_Bulk, or None), the last such batch (kept)]
-        held: list[_Bulk | None] = [None, None]
+        #: [a batch of changes noted for later told as a whole (_Bulk, or None), the last such batch (kept), the
+        #: components told before that batch (taken out of the dict)]
+        held: list[Any] = [None, None, None]
         self._changed = changed
         self._edits = edits
         self._held = held
@@ -72,12 +73,8 @@ class ChangeJournal:
         """
         flush_changes()
         held = self._held
-        bulk = held[0]
-        if bulk is not None:  # a simulation loop's batch told as a whole (see flush_changes)
-            held[0] = None
-            if not self._changed:
-                return list(bulk.components)
-            _absorb(self._changed, bulk)
+        if held[0] is not None:  # a simulation loop's batch told as a whole (see flush_changes)
+            return _drain_held(self._changed, held)
         changed = list(self._changed.values())
         self._changed.clear()
         return changed
@@ -95,10 +92,8 @@ class ChangeJournal:
 
     def __len__(self) -> int:
         flush_changes()
-        bulk = self._held[0]
-        if bulk is not None:
-            self._held[0] = None
-            _absorb(self._changed, bulk)
+        if self._held[0] is not None:
+            _absorb(self._changed, self._held)
         return len(self._changed)
 
 
@@ -183,27 +178,22 @@ def flush_changes() -> None:
         batch = pending[:n]
         del pending[:n]
     bulk = _bulk_of(batch) if n >= BULK_MIN else None
-    if bulk is None:
+    if bulk is None or not bulk.whole:
         for changed in _JOURNALS:
             changed.update(zip(map(id, batch), batch, strict=True))
-        owners: list[Any] = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
     else:
         for changed in _JOURNALS:
             held = _HELD.get(id(changed))
             if held is None:  # (a journal being made or collected meanwhile)
                 changed.update(zip(map(id, batch), batch, strict=True))
                 continue
-            held[1] = bulk  # kept while the journal lives: the next batch of the same components finds it
-            if held[0] is bulk and not changed:
-                continue  # the same components told already
-            if held[0] is None and not changed:
-                held[0] = bulk
-                continue
-            if held[0] is not None:
-                _absorb(changed, held[0])
-                held[0] = None
-            changed.update(zip(map(id, batch), batch, strict=True))
+            _tell_whole(changed, held, bulk)
+    if bulk is None:
+        owners: list[Any] = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+    else:
         owners = bulk.owners
+        for held in list(_HELD.values()):
+            held[1] = bulk  # kept while the journals live: the next batch of the same components finds it
     touch_many = OWNER_TOUCH[0]
     if touch_many is not None:
         touch_many(owners)
@@ -223,28 +213,43 @@ class _Owners(list):  # type: ignore[type-arg]
 
 
 class _Bulk:
-    """A batch of distinct components noted for later (``ids``: theirs), with their owners."""
+    """A batch of components noted for later, with their owners.
 
-    __slots__ = ("components", "ids", "owners", "__weakref__")
+    ``whole``: it is told to journals as a whole (its components are
+    distinct, ``ids`` holds theirs, and it came at least twice: a batch seen
+    once is told component by component, as cheap as finding out).
+    """
 
-    def __init__(self, components: list[Any], ids: set[int]) -> None:
+    __slots__ = ("components", "owners", "ids", "whole", "__weakref__")
+
+    def __init__(self, components: list[Any]) -> None:
         self.components = components
-        self.ids = ids
         self.owners = _Owners(chain.from_iterable(filter(None, map(_OWNERS_OF, components))))
+        self.ids: set[int] | None = None
+        self.whole = False
+
+    def distinct(self) -> bool:
+        """Whether no component is in it twice (``ids`` made on the first call)."""
+        if self.ids is None:
+            self.ids = set(map(id, self.components))
+        return len(self.ids) == len(self.components)
 
 
-#: The last batch told as a whole (weakly: the journals told of it keep it), for :func:`_bulk_of`.
+#: The last batch seen (weakly: the journals told of it keep it), for :func:`_bulk_of`.
 _LAST_BULK: list[Any] = [None]
 #: ids of the components that gained or lost an owner since :func:`_bulk_of` last looked (None: too many)
 _RELINKED: list[list[int] | None] = [[]]
 #: components :data:`_RELINKED` lists before it only records that too many changed
 RELINKED_LIMIT = 1024
+#: components told to a journal before a batch told as a whole that it keeps aside (more: the batch is stored
+#: component by component)
+BEFORE_LIMIT = 64
 
 
 def _bulk_of(batch: list[Any]) -> _Bulk | None:
     """``batch`` as a :class:`_Bulk`: the last one when it holds the same components in the same order and
-    none of them gained or lost an owner since, else a new one; None when no journal would keep it or a
-    component is in it twice."""
+    none of them gained or lost an owner since (then ``whole`` when they are distinct), else a new one; None
+    when no journal would keep it."""
     if not _JOURNALS:
         return None
     ref = _LAST_BULK[0]
@@ -256,15 +261,29 @@ def _bulk_of(batch: list[Any]) -> _Bulk | None:
         and len(last.components) == len(batch)
         and all(map(is_, batch, last.components))
         and relinked is not None
-        and last.ids.isdisjoint(relinked)
+        and (not relinked or (last.distinct() and last.ids.isdisjoint(relinked)))  # type: ignore[union-attr]
     ):
+        last.whole = last.distinct()
         return last
-    ids = set(map(id, batch))
-    if len(ids) != len(batch):
-        return None
-    bulk = _Bulk(batch, ids)
+    bulk = _Bulk(batch)
     _LAST_BULK[0] = weakref.ref(bulk)
     return bulk
+
+
+def _tell_whole(changed: dict[int, Any], held: list[Any], bulk: _Bulk) -> None:
+    """Tell a journal (its dict and its ``held`` list) of the batch ``bulk`` as a whole where it can."""
+    ids = bulk.ids
+    assert ids is not None
+    if held[0] is bulk and not changed:
+        return  # the same components told already, nothing since
+    if held[0] is None and len(changed) <= BEFORE_LIMIT and ids.isdisjoint(changed):
+        held[0] = bulk
+        held[2] = list(changed.values()) if changed else None  # told before the batch: they come first
+        changed.clear()
+        return
+    if held[0] is not None:
+        _absorb(changed, held)
+    changed.update(zip(map(id, bulk.components), bulk.components, strict=True))
 
 
 def _relinked(component: Any) -> None:
@@ -277,13 +296,37 @@ def _relinked(component: Any) -> None:
             _RELINKED[0] = None
 
 
-def _absorb(changed: dict[int, Any], bulk: _Bulk) -> None:
-    """Make ``bulk``'s components entries of the journal dict ``changed``, before the entries it holds (they were
-    told after the batch), each once."""
+def _absorb(changed: dict[int, Any], held: list[Any]) -> None:
+    """Make the batch a journal holds as a whole (``held``), and what was told before it, entries of its dict
+    ``changed``, before the entries the dict holds (told after the batch), each once."""
+    bulk, before = held[0], held[2]
+    held[0] = held[2] = None
     later = list(changed.items())
     changed.clear()
+    if before:
+        changed.update(zip(map(id, before), before, strict=True))
     changed.update(zip(map(id, bulk.components), bulk.components, strict=True))
     changed.update(later)
+
+
+def _drain_held(changed: dict[int, Any], held: list[Any]) -> list[Any]:
+    """What a journal holding a batch as a whole drains: what came before it, the batch, what came after (each
+    once); empties the journal."""
+    bulk, before = held[0], held[2]
+    if len(changed) > BEFORE_LIMIT:
+        _absorb(changed, held)
+        out = list(changed.values())
+        changed.clear()
+        return out
+    held[0] = held[2] = None
+    out = list(before) if before else []
+    out.extend(bulk.components)
+    if changed:
+        ids = bulk.ids
+        first = set(map(id, before)) if before else ()
+        out.extend(v for k, v in changed.items() if k not in ids and k not in first)
+        changed.clear()
+    return out
 
 
 #: How :func:`flush_changes` touches the owners it collected: ``[None]`` calls each one's ``touch()``; the scene

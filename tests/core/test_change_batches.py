@@ -29,17 +29,21 @@ def move(translations: list[om.Translation], dy: float) -> None:
         t.offset = (x, y + dy, z)
 
 
-def test_a_batch_is_drained_in_order_once_each_with_changes_told_after_it() -> None:
+def test_a_batch_is_drained_in_order_once_each_with_changes_told_before_and_after_it() -> None:
     scene, nodes, moves = scene_of()
     color = om.Color(0.5, 0.5, 0.5)
+    loose = om.Translation()  # in no node: told at once, not noted for later
     journal = ChangeJournal()
-    for frame in range(3):
+    for frame in range(4):
+        loose.offset = (float(frame), 0.0, 0.0)  # told before the batch
         move(moves, 0.1)
-        flush_changes()  # the batch is told (as a whole) ...
+        flush_changes()  # the batch is told (as a whole from the second frame on) ...
         color.r = 0.1 * frame  # ... and then a component touched directly
         moves[3].offset = (0.0, 0.0, float(frame))  # and a component of the batch again, after the flush
-        assert len(journal) == N + 1
-        assert journal.drain() == [*moves, color]
+        loose.offset = (float(frame), 1.0, 0.0)  # and the one told before it
+        if frame == 3:
+            assert len(journal) == N + 2
+        assert journal.drain() == [loose, *moves, color]
         assert journal.drain() == []
 
 
