@@ -34,7 +34,7 @@ from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform
-from ...scene.node import Node
+from ...scene.node import Node, declarations_kept
 from .attributes import CullFace, GLState
 from .compile_state import CompileState
 from .drawlist import DrawItem, DrawState, Scope
@@ -342,7 +342,10 @@ class DrawListCompiler:
                     # only the changed paths; the last frame's result is kept when it is the same (a recorded
                     # frame plan keys on it: moves of plain objects keep it)
                     engine = self.engine
-                    if self.updater.placed:
+                    updater = self.updater
+                    # (not when every moved transform sits in a node whose subtree declares nothing: a plain
+                    # object moved places no light or camera, and the walk up to the root is skipped)
+                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared

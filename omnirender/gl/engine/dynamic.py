@@ -305,13 +305,17 @@ class MovePlan:
             for i, item in enumerate(self.items):
                 _add_user(users, item, i)
         index = self.index
+        matrices = self.matrices
         positions: list[int] = []
         affected: dict[int, None] = {}
         for t in changed:
             k = index.get(id(t))
             if k is None:
                 continue
-            self.matrices[k] = t.matrix
+            if t.__class__ is Translation:
+                matrices[k, :3, 3] = t.offset  # the rest of a translation's matrix is the identity already
+            else:
+                matrices[k] = t.matrix
             positions.append(k)
             for i in users.get(id(t), ()):
                 affected[i] = None
@@ -321,24 +325,31 @@ class MovePlan:
             for key, (_, bulk) in list(self.bulk.items()):
                 if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                     del self.bulk[key]
-        matrices, local = self.matrices, self.local
+        local, items = self.local, self.items
         identity = len(self.transforms)
         rows_of: dict[int, list[int]] = {}
         for i in affected:
-            links = [k for k in self.chain[i].tolist() if k != identity]
-            model = matrices[links[0]]
-            for k in links[1:]:
-                model = model @ matrices[k]
-            if local is not None:
-                model = model @ local[i]
-            row = model.T.reshape(16)  # rows hold M transposed
+            item = items[i]
+            chain = item.chain
+            if len(chain) == 1 and item.local is None and chain[0].__class__ is Translation:
+                # the model is the translation's matrix: the row's translation alone changes, and takes the
+                # offset (rows hold M transposed; the same numbers the product below gives)
+                where, values = _TRANSLATION, chain[0].offset
+            else:
+                links = [k for k in self.chain[i].tolist() if k != identity]
+                model = matrices[links[0]]
+                for k in links[1:]:
+                    model = model @ matrices[k]
+                if local is not None:
+                    model = model @ local[i]
+                where, values = _MODEL, model.T.reshape(16)
             b = int(self.batch_of[i])
             if b < 0:  # an item without a batch (transparent, overlay): its own row
-                self.items[i].row[_MODEL] = row
+                item.row[where] = values
                 continue
             batch = self.batches[b]
             r = int(self.row_of[i])
-            batch.rows[r, _MODEL] = row
+            batch.rows[r, where] = values
             batch.row_changed(r)
             rows_of.setdefault(b, []).append(r)
         for b, where in rows_of.items():
@@ -404,6 +415,14 @@ class MovePlan:
         return count
 
 
+#: class -> whether it is a static transform (its matrix depends on its parameters only): the lean path's test
+_STATIC: dict[type, bool] = {}
+
+
+def _static_transform(cls: type) -> bool:
+    return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
+
+
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
     """Item ``i`` lies below each transform of its chain."""
     for t in dict.fromkeys(item.chain):
@@ -454,6 +473,9 @@ class TransformUpdater:
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
+        #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
+        #: may have moved a declared component (``declarations_kept``)
+        self.moved: list[Any] = []
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -482,9 +504,26 @@ class TransformUpdater:
         if not changed:
             return None
         plan = self._plan
-        if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
-            self.placed = True
-            return self._apply_moves(changed)
+        if plan is not None:
+            if len(changed) <= _FEW:
+                # an editor's drag, one simulated body: a few static transforms (the lean path, no passes over
+                # the list), else the general one below
+                statics = _STATIC
+                for c in changed:
+                    cls = c.__class__
+                    static = statics.get(cls)
+                    if static is None:
+                        static = statics[cls] = _static_transform(cls)
+                    if not static:
+                        break
+                else:
+                    self.placed = True
+                    self.moved = changed
+                    return self._apply_moves(changed)
+            elif plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+                self.placed = True
+                self.moved = changed
+                return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
         if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
@@ -507,6 +546,7 @@ class TransformUpdater:
         if updates is None:
             return None
         self.placed = bool(moved or arrays)
+        self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
