@@ -48,7 +48,9 @@ def scene_of_kinds() -> tuple[om.Node, dict[str, om.Node]]:
             om.Node(f"c{i}", [om.Translation(1.2 * i - 1.2, 0.0, 0.0), om.Material(diffuse=(0.9, 0.3 * i, 0.2)), box])
         )
     nodes["local"] = scene.add(
-        om.Node("local", [om.Translation(2.5, 1.0, 1.0), om.Material(diffuse=(0.3, 0.3, 0.9)), om.Box(size=(1.2, 0.3, 0.5))])
+        om.Node(
+            "local", [om.Translation(2.5, 1.0, 1.0), om.Material(diffuse=(0.3, 0.3, 0.9)), om.Box(size=(1.2, 0.3, 0.5))]
+        )
     )
     nodes["glass"] = scene.add(
         om.Node("glass", [om.Translation(-2.5, 1.0, 1.0), om.Material(diffuse=(0.9, 0.9, 0.2), opacity=0.5), box])
@@ -121,7 +123,11 @@ def test_a_light_below_or_beside_a_moved_transform_is_placed_again():
     scene.add(om.Node("holder", [above, om.Node("bulb", [om.PointLight(intensity=3.0, color=(0.3, 0.4, 1.0))])]))
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         before = e.render(scene, read_depth=False).array
-        for t, offset in ((beside, (2.0, -1.0, 3.0)), (above, (2.5, 1.5, 2.0)), (nodes["p2"].items[0], (0.0, 0.0, 1.0))):
+        for t, offset in (
+            (beside, (2.0, -1.0, 3.0)),
+            (above, (2.5, 1.5, 2.0)),
+            (nodes["p2"].items[0], (0.0, 0.0, 1.0)),
+        ):
             t.offset = offset
             image = e.render(scene, read_depth=False)
             assert e.stats["compiled"] is False

@@ -34,6 +34,7 @@ _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
+_EYE4_LIST = _EYE4.tolist()
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
 #: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
@@ -92,6 +93,10 @@ class MovePlan:
         #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
+        #: index in items -> whether the item's model is its one Translation's matrix (a chain of that one
+        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame (an index
+        #: names one item for the plan's life: splices append new items and leave removed ones' places)
+        self._plain: dict[int, bool] = {}
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
@@ -325,16 +330,18 @@ class MovePlan:
             for key, (_, bulk) in list(self.bulk.items()):
                 if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                     del self.bulk[key]
-        local, items = self.local, self.items
+        local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
         rows_of: dict[int, list[int]] = {}
         for i in affected:
             item = items[i]
-            chain = item.chain
-            if len(chain) == 1 and item.local is None and chain[0].__class__ is Translation:
+            only = plain.get(i)
+            if only is None:
+                only = plain[i] = _translation_only(item)
+            if only:
                 # the model is the translation's matrix: the row's translation alone changes, and takes the
                 # offset (rows hold M transposed; the same numbers the product below gives)
-                where, values = _TRANSLATION, chain[0].offset
+                where, values = _TRANSLATION, item.chain[0].offset
             else:
                 links = [k for k in self.chain[i].tolist() if k != identity]
                 model = matrices[links[0]]
@@ -421,6 +428,17 @@ _STATIC: dict[type, bool] = {}
 
 def _static_transform(cls: type) -> bool:
     return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
+
+
+def _translation_only(item: Any) -> bool:
+    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
+    matrix, or the identity: a product with it changes no number)."""
+    chain, local = item.chain, item.local
+    return (
+        len(chain) == 1
+        and chain[0].__class__ is Translation
+        and (local is None or local.tolist() == _EYE4_LIST)
+    )
 
 
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
