@@ -179,6 +179,12 @@ class Node:
         return self._structure
 
     @property
+    def versions(self) -> tuple[int, int]:
+        """``(version, structure_version)``, read in one observation (what a renderer asks every frame)."""
+        _observe()
+        return self._version, self._structure
+
+    @property
     def list_version(self) -> int:
         """Counter bumped when this node's own list (or its groups) changes; a descendant's list does not bump it."""
         return self._own

@@ -329,10 +329,11 @@ class DrawListCompiler:
             self._new_state_kinds()
             c = None
         if c is not None and c[0]() is scene and c[2] == mask_key:
-            if c[1] == scene.version:
+            version, structure = scene.versions
+            if c[1] == version:
                 self.engine.stats["compiled"] = False
                 return self.installer.root
-            if c[3] == scene.structure_version:
+            if c[3] == structure:
                 # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
                 count = self.updater.apply(changed)
                 if count is not None:
@@ -350,7 +351,7 @@ class DrawListCompiler:
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
                             engine.camera = declared.camera
-                    self._compiled = (c[0], scene.version, mask_key, c[3])
+                    self._compiled = (c[0], version, mask_key, c[3])  # (applying moved nothing of the graph)
                     self.engine.stats["compiled"] = False
                     return self.installer.root
             elif edits and self.installer.root is not None and self._full_key is not None:

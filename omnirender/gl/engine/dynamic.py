@@ -37,7 +37,7 @@ _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
-#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
+#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
@@ -99,6 +99,8 @@ class MovePlan:
         self._plain: dict[int, bool] = {}
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
+        #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
+        self.rows_only = True
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
@@ -241,7 +243,7 @@ class MovePlan:
         if not changed:
             return 0
         if len(changed) <= _FEW:
-            return self._apply_few(changed)
+            return self.apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations = last
@@ -301,9 +303,13 @@ class MovePlan:
         bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
         return bulk.count + self._apply_instances(set(positions.tolist()))
 
-    def _apply_few(self, changed: list[Any]) -> int:
+    def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
-        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item."""
+        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item.
+
+        :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
+        item without a batch or an instance set moved)."""
+        self.rows_only = True
         users = self._users
         if users is None:
             users = self._users = {}
@@ -353,6 +359,7 @@ class MovePlan:
             b = int(self.batch_of[i])
             if b < 0:  # an item without a batch (transparent, overlay): its own row
                 item.row[where] = values
+                self.rows_only = False
                 continue
             batch = self.batches[b]
             r = int(self.row_of[i])
@@ -361,7 +368,12 @@ class MovePlan:
             rows_of.setdefault(b, []).append(r)
         for b, where in rows_of.items():
             self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
-        return len(affected) + (self._apply_instances(set(positions)) if self.instance_items else 0)
+        if not self.instance_items:
+            return len(affected)
+        moved = self._apply_instances(set(positions))
+        if moved:
+            self.rows_only = False
+        return len(affected) + moved
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -537,7 +549,7 @@ class TransformUpdater:
                 else:
                     self.placed = True
                     self.moved = changed
-                    return self._apply_moves(changed)
+                    return self._apply_few(plan, changed)
             elif plan.same_as_last(changed):  # a simulation's loop: the same transforms again
                 self.placed = True
                 self.moved = changed
@@ -607,6 +619,20 @@ class TransformUpdater:
                     return None
                 out.append((item, made))
         return out
+
+    def _apply_few(self, plan: MovePlan, changed: list[Any]) -> int:
+        """:meth:`_apply_moves` of a few static transforms (no arrays): their items' rows are rewritten, the
+        render index's bounds follow them, and the frame keeps its plan when every moved row lies in a batch."""
+        plan.moved_rows = []
+        count = plan.apply_few(changed)
+        if count:
+            moved_rows = plan.moved_rows
+            self.index.moved(moved_rows)
+            if plan.rows_only and self._rows_moved is not None:
+                self._rows_moved([batch for batch, _ in moved_rows])
+            else:
+                self._placements_changed()
+        return count
 
     def _apply_moves(self, changed: list[Any], arrays: list[Any] | None = None) -> int:
         """Recompose the model matrix of every item below a changed transform; returns how many rows changed.
