@@ -446,11 +446,7 @@ def _translation_only(item: Any) -> bool:
     """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
     matrix, or the identity: a product with it changes no number)."""
     chain, local = item.chain, item.local
-    return (
-        len(chain) == 1
-        and chain[0].__class__ is Translation
-        and (local is None or local.tolist() == _EYE4_LIST)
-    )
+    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
 
 
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
