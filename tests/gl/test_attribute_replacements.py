@@ -164,6 +164,10 @@ def test_a_material_made_transparent_or_textured_takes_the_subtree_compile():
         assert any(item.transparent and item.node is glass for item in e.index.items())
         replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2), opacity=0.6))
         before = render_checked(e, scene, "dirty", before).array  # transparent -> transparent: the row only
+        replace(glass, glass.items[1], om.PBRMaterial(base_color=(0.3, 1.0, 0.2), opacity=0.5, roughness=0.2))
+        before = render_checked(e, scene, "subtrees", before).array  # transparent too, another shading model
+        replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2), opacity=0.6))
+        before = render_checked(e, scene, "subtrees", before).array
         replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2)))
         before = render_checked(e, scene, "subtrees", before).array  # back to opaque
         box = leaves[4]  # (a box: texture coordinates)
