@@ -145,18 +145,7 @@ class MovePlan:
         new = [it for it in added if it.instances is None and it.chain]
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
-            fresh = list({id(t): t for t in fresh}.values())
-            # the identity's place stays an identity (the padding of every chain and the removed items' chains
-            # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
-            self.transforms.append(_IDENTITY)
-            for t in fresh:
-                self.index[id(t)] = len(self.transforms)
-                self.transforms.append(t)
-            matrices = self._extend("matrices", len(fresh) + 1)
-            for cls, members in _by_class(range(len(fresh)), fresh).items():
-                matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
-            identity = len(self.transforms)
-            matrices[identity] = np.eye(4)
+            identity = self._add_transforms(fresh)
         if new:
             length = max(self.chain.shape[1], max(len(it.chain) for it in new))
             if length > self.chain.shape[1]:
@@ -192,6 +181,74 @@ class MovePlan:
                 self.batches.append(batch)
             self.batch_of[i] = b
             self.row_of[i] = row
+
+    def _add_transforms(self, fresh: list[Any]) -> int:
+        """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
+        fresh = list({id(t): t for t in fresh}.values())
+        identity = len(self.transforms)
+        # the identity's place stays an identity (the padding of every chain and the removed items' chains
+        # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
+        self.transforms.append(_IDENTITY)
+        for t in fresh:
+            self.index[id(t)] = len(self.transforms)
+            self.transforms.append(t)
+        matrices = self._extend("matrices", len(fresh) + 1)
+        for cls, members in _by_class(range(len(fresh)), fresh).items():
+            matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
+        identity = len(self.transforms)
+        matrices[identity] = np.eye(4)
+        return identity
+
+    def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
+        """Transforms replaced by transforms (the dirty bits of :mod:`.dirty`): ``(item, old, new)`` where the
+        item's chain now holds ``new`` at ``old``'s place.  The item's chain indices and the transform -> items
+        map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
+        :meth:`apply` of the new transforms."""
+        self.bulk.clear()  # the arrays' maps name rows below the old transforms: made again
+        self.many_moves = 0
+        where = self._where
+        if where is None:
+            where = self._where = {id(it): i for i, it in enumerate(self.items)}
+        users = self._users
+        if users is None:
+            users = self._users = {}
+            for i, item in enumerate(self.items):
+                _add_user(users, item, i)
+        index = self.index
+        below: dict[int, tuple[Any, Any, set[int]]] = {}  # id(old) -> (old, new, the items swapped)
+        for item, old, new in swaps:
+            i = where.get(id(item))
+            if i is not None:
+                below.setdefault(id(old), (old, new, set()))[2].add(i)
+        general = []
+        for key, (old, new, swapped) in below.items():
+            k = index.get(key)
+            if k is None or id(new) in index or set(users.get(key, ())) != swapped:
+                general.append(old)
+                continue
+            # no other item lies below the old transform: the new one takes its place (no chain changes)
+            del index[key]
+            index[id(new)] = k
+            self.transforms[k] = new
+            self.matrices[k] = new.matrix
+            users[id(new)] = users.pop(key)
+        if not general:
+            return
+        swaps = [s for s in swaps if s[1] in general]
+        fresh = [new for _, _, new in swaps if id(new) not in self.index]
+        if fresh:
+            self._add_transforms(fresh)
+        for item, old, new in swaps:
+            i = where.get(id(item))
+            if i is None:
+                continue  # not in the plan (an instance set's item)
+            self.chain[i, : len(item.chain)] = [index[id(t)] for t in item.chain]
+            found = users.get(id(old))
+            if found is not None and i in found and old not in item.chain:
+                found.remove(i)
+            found = users.setdefault(id(new), [])
+            if i not in found:
+                found.append(i)
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
         """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
@@ -511,6 +568,23 @@ class TransformUpdater:
         """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
         if self._plan is not None:
             self._plan.splice(removed, added, moved)
+
+    def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
+        """Items' transforms replaced by transforms (``(item, old, new)``, :mod:`.dirty`): each chain takes
+        ``new`` at ``old``'s place, and the plan follows; :meth:`apply` of the new transforms then recomposes
+        their rows."""
+        for item, old, new in swaps:
+            item.chain = tuple([new if t is old else t for t in item.chain])
+        if self._plan is not None and swaps:
+            self._plan.replace(swaps)
+
+    def rows_rewritten(self, batches: list[Any], same: bool) -> None:
+        """Rows of ``batches`` were rewritten in place (not moved: the bounds hold); ``same``: they draw as
+        before, so a recorded frame plan may be replayed after their upload."""
+        if same and self._rows_moved is not None:
+            self._rows_moved(batches)
+        else:
+            self._placements_changed()
 
     def plan(self) -> MovePlan:
         """The installed items' :class:`MovePlan` (made now when there is none)."""
