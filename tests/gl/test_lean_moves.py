@@ -36,7 +36,7 @@ def scene_of_kinds() -> tuple[om.Node, dict[str, om.Node]]:
     shape placed by a local matrix (a Box of unequal sides), a translucent node and a sphere."""
     scene = om.Node("scene", [om.Camera.look_at((6, 5, 11), (0, 0, 0), fov=40)])
     scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
-    box = om.Box(size=0.8)
+    box = om.Box(size=1.0)  # (its shape-local matrix is the identity: the rows of one Translation)
     nodes: dict[str, om.Node] = {}
     for i in range(6):
         nodes[f"p{i}"] = scene.add(
@@ -194,3 +194,34 @@ def test_declarations_kept_answers_only_what_the_last_pre_evaluation_shows():
     assert declarations_kept([plain])
     scene.items[1].add(om.SpotLight())  # the node's list changed: its last result says nothing now
     assert not declarations_kept([plain])
+
+
+def test_a_moved_node_whose_translation_is_replaced_then_moves_by_its_new_transform():
+    """The lean path's answer for an item (its model is one Translation) follows a replaced transform: a
+    Rotation or a Scaling in the Translation's place, then moved, is composed, not written as an offset."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        for name, new in (("p2", om.Rotation(20.0, (0, 0, 1))), ("p3", om.Scaling(1.5, 0.6, 1.0))):
+            node = nodes[name]
+            node.items[0].offset = (node.items[0].offset[0], -1.0, 0.5)  # the lean path answers for its item
+            e.render(scene, read_depth=False)
+            node.remove(node.items[0])
+            node.insert(0, new)
+            image = e.render(scene, read_depth=False)
+            assert np.array_equal(image.array, fresh(scene)), name
+            if isinstance(new, om.Rotation):
+                new.angle = 55.0
+            else:
+                new.factors = (0.7, 1.8, 1.0)
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), name
+            node.remove(new)
+            node.insert(0, om.Translation(0.5, 0.5, 0.5))  # a Translation again
+            e.render(scene, read_depth=False)
+            node.items[0].offset = (-0.5, 0.8, 1.0)
+            image = e.render(scene, read_depth=False)
+            assert np.array_equal(image.array, fresh(scene)), name

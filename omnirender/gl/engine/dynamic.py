@@ -93,10 +93,11 @@ class MovePlan:
         #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
-        #: index in items -> whether the item's model is its one Translation's matrix (a chain of that one
-        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame (an index
-        #: names one item for the plan's life: splices append new items and leave removed ones' places)
-        self._plain: dict[int, bool] = {}
+        #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
+        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame and again when
+        #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
+        #: append new items and leave removed ones' places)
+        self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
@@ -398,13 +399,16 @@ class MovePlan:
         rows_of: dict[int, list[int]] = {}
         for i in affected:
             item = items[i]
+            chain = item.chain
             only = plain.get(i)
-            if only is None:
-                only = plain[i] = _translation_only(item)
-            if only:
-                # the model is the translation's matrix: the row's translation alone changes, and takes the
-                # offset (rows hold M transposed; the same numbers the product below gives)
-                where, values = _TRANSLATION, item.chain[0].offset
+            if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
+                only = plain[i] = (chain, _translation_only(item))
+            if only[1]:
+                # the model is the translation's matrix, written from its offset in plain floats (rows hold M
+                # transposed; the numbers the product below gives); the whole matrix, not only its translation:
+                # the row may hold another transform's (one replaced in the chain since it was written)
+                x, y, z = chain[0].offset
+                where, values = _MODEL, (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
             else:
                 links = [k for k in self.chain[i].tolist() if k != identity]
                 model = matrices[links[0]]
