@@ -142,6 +142,7 @@ class DrawItem:
         "source",
         "template",
         "source_colors",
+        "colors_at",
     )
 
     def __init__(
@@ -183,6 +184,9 @@ class DrawItem:
         #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
         #: only positions changed writes the translations and keeps the converted colours
         self.source_colors: np.ndarray | None = None
+        #: for an instance set: its ``written_at("colors")`` when ``source_colors`` was last found equal to its
+        #: colours (a touch naming only other arrays keeps it: the colours are not compared then)
+        self.colors_at = -1
 
     @property
     def instance_models(self) -> np.ndarray | None:
