@@ -793,9 +793,10 @@ def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None)
     stride = batch.layout.stride * 4
     rows = batch.rows
     packed = batch.packed
-    for index in sorted(set(batch.sparse or ())):
+    sparse = batch.sparse or ()
+    for index in sparse if len(sparse) == 1 else sorted(set(sparse)):
         place = index if position is None else int(position[index])
-        data = np.take(rows[index], columns)
+        data = rows[index].take(columns)
         batch.buffer.write(data, offset=place * stride)
         if packed is not None:
             if place < len(packed):
