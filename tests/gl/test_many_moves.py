@@ -201,3 +201,38 @@ def test_a_bad_value_in_a_setter_loop_is_refused_naming_the_node_and_the_frame_s
         assert e.stats["compiled"] is False
         assert moves[50].offset == tuple(positions[50].tolist())
         assert np.array_equal(image.array, fresh(scene))
+
+
+def test_transforms_replaced_between_setter_loops() -> None:
+    """A node's Translation replaced by a Matrix (and another node's Matrix by a Translation) between setter
+    loops: the map follows the replaced transforms (the same-role replacement keeps the chains' places)."""
+    scene, moves, positions = flat()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(6):
+            if frame in (1, 3):
+                node = scene.child(f"b{10 + frame}")
+                old = node.items[0]
+                k = moves.index(old)
+                m = np.eye(4)
+                m[:3, 3] = positions[k] + (0.0, 0.5, 0.0)
+                m[:3, :3] *= 1.3
+                node.remove(old)
+                node.insert(0, om.Matrix(m))
+                del moves[k]
+                positions = np.delete(positions, k, axis=0)
+            if frame == 4:  # the Matrix of frame 1 replaced by a Translation, moved with the others from now on
+                node = scene.child("b11")
+                t = om.Translation(-2.0, 5.0, 1.0)
+                node.remove(node.items[0])
+                node.insert(0, t)
+                moves.append(t)
+                positions = np.concatenate([positions, [t.offset]])
+            image = e.render(scene, background=(0, 0, 0))
+            assert np.array_equal(image.array, fresh(scene)), frame
+            positions[:, 1] += 0.2
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), frame

@@ -159,14 +159,7 @@ class TranslationMap:
             self.source[gone] = -1
             self.multi[gone] = False
         n = len(plan.items)
-        places = len(plan.matrices)
-        known = len(self.translation)
-        if places > known:
-            self.translation = np.concatenate(
-                [self.translation, _translations(plan.transforms[known:], places - known)]
-            )
-            self.fixed = np.concatenate([self.fixed, np.zeros(places - known, bool)])
-            self.translations = int(self.translation.sum())
+        self._grow(plan)
         extra = n - len(self.source)
         if extra > 0:
             self.source = np.concatenate([self.source, np.full(extra, -1, np.intp)])
@@ -176,6 +169,26 @@ class TranslationMap:
                 self.linear = np.concatenate([self.linear, np.broadcast_to(_EYE3, (extra, 3, 3))])
         self.fill(plan, np.arange(first_new, n))
         self._parts = None  # rows moved: grouped again when next applied
+
+    def replaced(self, plan: Any, places: list[int], items: np.ndarray) -> None:
+        """Follow :meth:`MovePlan.replace`: transforms at ``places`` are others now, the chains of ``items``
+        (indices) changed or hold them."""
+        self._grow(plan)
+        for k in places:
+            self.translation[k] = plan.transforms[k].__class__ is Translation
+        self.translations = int(self.translation.sum())
+        self.fill(plan, items)
+
+    def _grow(self, plan: Any) -> None:
+        """Places for the transforms the plan took since (their flags)."""
+        places = len(plan.matrices)
+        known = len(self.translation)
+        if places > known:
+            self.translation = np.concatenate(
+                [self.translation, _translations(plan.transforms[known:], places - known)]
+            )
+            self.fixed = np.concatenate([self.fixed, np.zeros(places - known, bool)])
+            self.translations = int(self.translation.sum())
 
     def stale(self, places: np.ndarray) -> bool:
         """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L
