@@ -822,6 +822,7 @@ class DrawListCompiler:
         item.source = source
         item.template = template
         item.source_colors = _colors_copy(source)
+        item.colors_at = source.written_at("colors")
         self._scope.entries.append(item)
         return item
 

@@ -675,17 +675,26 @@ class TransformUpdater:
             positions = _positions_only(shape, items)
             if positions is not None:
                 moves = [_moved_world(item, positions) for item in items]
-                # not finite (or beyond float32): the full path, which names the instance
+                # not finite (or beyond float32): the full path, whose compile names the instance and the node
                 if all(np.isfinite(world).all() for world, _ in moves):
                     out.extend(zip(items, moves, strict=True))
                     continue
-            matrices, colors, may_mirror = set_arrays(shape)
+            try:
+                matrices, colors, may_mirror = set_arrays(shape)
+            except ValueError:
+                return None  # a bad array: the compile raises, naming the instance and the set's node
             for item in items:
+                if (colors is None) != (item.source_colors is None):
+                    # colours given or taken away: the shape is captured again (under the probe colour or not)
+                    return None
                 template = item.template
                 model = _chain_matrix(item.chain)
-                made = instance_rows(
-                    template.row, template.local, template.transparent, model, matrices, colors, may_mirror
-                )
+                try:
+                    made = instance_rows(
+                        template.row, template.local, template.transparent, model, matrices, colors, may_mirror
+                    )
+                except ValueError:
+                    return None  # beyond float32: as above
                 if (
                     made.transparent != item.transparent
                     or self._instance_state(template, made.mirrored) is not item.state
@@ -753,12 +762,17 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
+#: "the set has no colours" in :func:`_positions_only` (None there means "not read yet")
+_NO_COLORS = np.empty((0, 4))
+
+
 def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Whether they
+    their conversion to linear is done once, not every frame, unless the set's
+    touches since then named only other arrays: ``touch("transforms")``).  Whether they
     are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
@@ -771,17 +785,29 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3:
         return None
-    colors = shape.colors
-    if colors is not None:
-        array = getattr(colors, "array", None)
-        colors = np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+    colors_at = shape.written_at("colors")
+    colors = None
     for item in items:
         if item.instances is None or len(item.instances) != len(t):
             return None
+        if item.colors_at == colors_at:  # only other arrays were touched since the colours were converted
+            continue
+        if colors is None:
+            colors = _colors_now(shape)
         before = item.source_colors
-        if (before is None) != (colors is None) or (before is not None and not np.array_equal(before, colors)):
+        if (before is None) != (colors is _NO_COLORS) or (before is not None and not np.array_equal(before, colors)):
             return None
+        item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _colors_now(shape: Any) -> np.ndarray:
+    """The set's colours as the application holds them (no copy), or :data:`_NO_COLORS`."""
+    colors = shape.colors
+    if colors is None:
+        return _NO_COLORS
+    array = getattr(colors, "array", None)
+    return np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
 
 
 def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -838,6 +864,7 @@ def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray])
         _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
+    item.colors_at = item.source.written_at("colors")
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:
