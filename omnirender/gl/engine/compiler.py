@@ -49,6 +49,9 @@ __all__ = ["DrawListCompiler", "TextureSet", "linear_rgb"]
 
 _DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, points get its default size
 _MODEL = ROW.slice("model")
+#: moved transforms up to which a frame asks whether they place no declaration (scene.node.declarations_kept,
+#: a Python step per transform) before pre-evaluating the scene (a walk of the changed paths only)
+_ASK_KEPT = 64
 _COLOR = ROW.slice("color")
 _SHADING_MODEL = ROW.at("emission", "model")
 _MATERIAL_ID = ROW.at("pbr", "material")
@@ -348,7 +351,11 @@ class DrawListCompiler:
                     updater = self.updater
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
-                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
+                    # (many moved: the pre-evaluation, which walks only the changed paths, costs less than asking)
+                    moved = updater.moved
+                    if updater.placed and (
+                        len(moved) > _ASK_KEPT or not declarations_kept(moved, engine.mask_function)
+                    ):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
