@@ -33,7 +33,7 @@ from ...attributes.surface import Appearance, appearance_key, resolve_appearance
 from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
-from ...core.transform import Transform
+from ...core.transform import Transform, TranslationArray
 from ...scene.node import Node, declarations_kept
 from .attributes import CullFace, GLState
 from .compile_state import CompileState
@@ -491,7 +491,13 @@ class DrawListCompiler:
         The new items replace the old in their batches (``BatchInstaller.splice``).
         Returns how many items were removed and added, or None when the full
         compile must run (nothing installed has changed then).
+
+        Transforms moved in the same frame (a simulation moving its objects
+        while one comes or goes) are applied by the updater after the splice,
+        wherever they are (the new subtrees were compiled with their values
+        already; their rows are written again the same).
         """
+        moves, changed = _moves_of(changed)
         plan = self._splice_plan(scene, edits, changed)
         if plan is None:
             return None
@@ -540,7 +546,10 @@ class DrawListCompiler:
             self._node_cache.clear()
             self._occurrence_of.clear()
             return None
-        return len(removed) + len(added)
+        count = len(removed) + len(added)
+        if moves:
+            count += self.updater.apply(moves) or 0  # (static transforms and arrays: always applied)
+        return count
 
     def _drop_entry(self, node: Any) -> None:
         key = self._key_of(node)
@@ -1057,3 +1066,19 @@ class DrawListCompiler:
             row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
         row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
         return row
+
+
+def _moves_of(changed: list[Any]) -> tuple[list[Any], list[Any]]:
+    """``changed`` split into what the updater applies after a splice (static transforms, translation arrays)
+    and the rest; one pass of C-level loops when all of them are moves (a simulation's thousands)."""
+    if not changed:
+        return [], changed
+    classes = set(map(type, changed))
+    if all(_is_move(cls) for cls in classes):
+        return changed, []
+    moves = [c for c in changed if _is_move(c.__class__)]
+    return moves, [c for c in changed if not _is_move(c.__class__)]
+
+
+def _is_move(cls: type) -> bool:
+    return cls is TranslationArray or (issubclass(cls, Transform) and cls.static)
