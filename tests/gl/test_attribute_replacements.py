@@ -303,3 +303,22 @@ def test_replacements_in_a_big_scene_match_a_fresh_engine(shadows):
             image = e.render(scene)
             assert e.stats["compiled"] == "dirty"
             assert np.array_equal(image.array, fresh(scene, shadows)), frame
+
+
+def test_a_replaced_transform_above_a_light_moves_the_light():
+    """Lights and the camera below a replaced transform are placed again (the declarations follow)."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    lamp = scene.add(om.Node("lamp", [om.Translation(0.0, 3.0, 4.0)]))
+    bulb = lamp.add(om.Node("bulb", [om.Translation(0.0, 0.0, 0.5), om.PointLight(intensity=2.0)]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(lamp, lamp.items[0], om.Matrix(np.array(om.Translation(-4.0, -2.0, 4.0).matrix)))
+        before = render_checked(e, scene, "dirty", before).array  # the light two nodes below it moved
+        replace(bulb, bulb.items[0], om.Translation(3.0, 3.0, 0.0))
+        before = render_checked(e, scene, "dirty", before).array
+        declared = e.declared
+        replace(leaves[4], leaves[4].items[0], om.Translation(0.0, 2.5, 1.0))  # declares nothing: kept
+        render_checked(e, scene, "dirty", before)
+        assert e.declared is declared
