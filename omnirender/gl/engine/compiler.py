@@ -55,6 +55,9 @@ _MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+#: (name, zeros) of each field of the row, in order (surface rows are made from lists of floats)
+_ROW_ZEROS = tuple((f.name, (0.0,) * f.size) for f in ROW.fields)
+assert ROW.fields[-1].name == "point" and _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
 
 
 def _uv_matrix(texture: Any) -> tuple[float, ...]:
@@ -1030,18 +1033,22 @@ class DrawListCompiler:
         return entry
 
     def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
-        row = np.zeros(ROW.stride, np.float32)
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear.
+
+        Made from one list of Python floats (one numpy call: a replaced Material makes one per frame)."""
         alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
-        row[_COLOR] = (*app.base, alpha)
+        fields: dict[str, tuple[float, ...]] = {"color": (*app.base, alpha)}
         if app.model == "pbr":
-            row[ROW.slice("emission")] = (*app.emission, PBR)
-            row[ROW.slice("pbr")] = (app.roughness, app.metallic, 0.0, 0.0)
+            fields["emission"] = (*app.emission, PBR)
+            fields["pbr"] = (app.roughness, app.metallic, 0.0, 0.0)
         else:
-            row[ROW.slice("specular")] = (*app.specular, app.shininess)
-            row[ROW.slice("emission")] = (*app.emission, PHONG)
-            row[ROW.slice("ambient")] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
+            fields["specular"] = (*app.specular, app.shininess)
+            fields["emission"] = (*app.emission, PHONG)
+            fields["ambient"] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
         if highlight is not None:
-            row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
-        row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
-        return row
+            fields["highlight"] = (*linear_rgb(highlight.color), 1.0)
+        fields["point"] = (_DEFAULT_POINT_SIZE, 0.0, 0.0, 0.0)
+        values: list[float] = []
+        for name, zeros in _ROW_ZEROS:
+            values.extend(fields.get(name, zeros))
+        return np.array(values, np.float32)
