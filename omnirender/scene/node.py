@@ -35,7 +35,7 @@ from ..core.light import Light
 from ..core.program import ENTER, LEAVE, NODE, compile_components
 from ..core.transform import Transform
 
-__all__ = ["Node", "Visitor"]
+__all__ = ["Node", "Visitor", "declarations_kept"]
 
 
 class Visitor:
@@ -177,6 +177,12 @@ class Node:
         """Counter bumped when this node's list, or the list of a node below it, changes (not parameters)."""
         _observe()
         return self._structure
+
+    @property
+    def versions(self) -> tuple[int, int]:
+        """``(version, structure_version)``, read in one observation (what a renderer asks every frame)."""
+        _observe()
+        return self._version, self._structure
 
     @property
     def list_version(self) -> int:
@@ -809,6 +815,31 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
                 out.append((item, m))
         node._declared = _Local(node._version, node._structure, mask_fn, out, relevant)
     return root._declared.placements  # type: ignore[union-attr]
+
+
+def declarations_kept(components: Iterable[Any], mask_fn: Any = None) -> bool:
+    """Whether new parameter values of ``components`` (no node's list changed) leave every declaration as it was.
+
+    True when each component's every owner is a node whose subtree declared
+    nothing (no light, camera, background) when last pre-evaluated under
+    ``mask_fn``, with its lists unchanged since: what such a component
+    changes (a transform moving the shapes after it) places no declared
+    component, so :meth:`Node.declarations` of any graph holding them gives
+    the same placements as before.  An engine moving one plain object skips
+    the pre-evaluation with it.  False when that is not known (an owner never
+    pre-evaluated, or under another mask, or not a node).
+    """
+    for component in components:
+        owners = component.owners
+        if not owners:
+            return False
+        for node in owners:
+            if node.__class__ is not Node and not isinstance(node, Node):
+                return False
+            entry = node._declared
+            if entry is None or entry.placements or entry.mask_fn is not mask_fn or entry.structure != node._structure:
+                return False
+    return True
 
 
 def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]] | None:

@@ -34,7 +34,7 @@ from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform
-from ...scene.node import Node
+from ...scene.node import Node, declarations_kept
 from .attributes import CullFace, GLState
 from .compile_state import CompileState
 from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
@@ -334,10 +334,11 @@ class DrawListCompiler:
             self._new_state_kinds()
             c = None
         if c is not None and c[0]() is scene and c[2] == mask_key:
-            if c[1] == scene.version:
+            version, structure = scene.versions
+            if c[1] == version:
                 self.engine.stats["compiled"] = False
                 return self.installer.root
-            if c[3] == scene.structure_version:
+            if c[3] == structure:
                 # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
                 count = self.updater.apply(changed)
                 if count is not None:
@@ -347,12 +348,15 @@ class DrawListCompiler:
                     # only the changed paths; the last frame's result is kept when it is the same (a recorded
                     # frame plan keys on it: moves of plain objects keep it)
                     engine = self.engine
-                    if self.updater.placed:
+                    updater = self.updater
+                    # (not when every moved transform sits in a node whose subtree declares nothing: a plain
+                    # object moved places no light or camera, and the walk up to the root is skipped)
+                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
                             engine.camera = declared.camera
-                    self._compiled = (c[0], scene.version, mask_key, c[3])
+                    self._compiled = (c[0], version, mask_key, c[3])  # (applying moved nothing of the graph)
                     self.engine.stats["compiled"] = False
                     return self.installer.root
             elif edits and self.installer.root is not None and self._full_key is not None:
@@ -821,6 +825,7 @@ class DrawListCompiler:
         item.source = source
         item.template = template
         item.source_colors = _colors_copy(source)
+        item.colors_at = source.written_at("colors")
         self._scope.entries.append(item)
         return item
 

@@ -152,6 +152,7 @@ class DrawItem:
         "source",
         "template",
         "source_colors",
+        "colors_at",
         "surface",
     )
 
@@ -194,6 +195,9 @@ class DrawItem:
         #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
         #: only positions changed writes the translations and keeps the converted colours
         self.source_colors: np.ndarray | None = None
+        #: for an instance set: its ``written_at("colors")`` when ``source_colors`` was last found equal to its
+        #: colours (a touch naming only other arrays keeps it: the colours are not compared then)
+        self.colors_at = -1
         #: the compiler's resolved surface the row's surface fields came from (appearance, row, texture set,
         #: context), or None; an attribute replaced by one of the same role is resolved again from it
         self.surface: Any = None

@@ -34,9 +34,10 @@ _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
+_EYE4_LIST = _EYE4.tolist()
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
-#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
+#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
 #: the key of the plan's own translations among its array maps
 _TRANSLATIONS = -1
@@ -92,8 +93,15 @@ class MovePlan:
         #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
+        #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
+        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame and again when
+        #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
+        #: append new items and leave removed ones' places)
+        self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
+        #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
+        self.rows_only = True
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
         #: frames since the last splice in which most of the translations moved (_apply_translations)
@@ -293,7 +301,7 @@ class MovePlan:
         if not changed:
             return 0
         if len(changed) <= _FEW:
-            return self._apply_few(changed)
+            return self.apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations = last
@@ -353,22 +361,30 @@ class MovePlan:
         bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
         return bulk.count + self._apply_instances(set(positions.tolist()))
 
-    def _apply_few(self, changed: list[Any]) -> int:
+    def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
-        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item."""
+        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item.
+
+        :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
+        item without a batch or an instance set moved)."""
+        self.rows_only = True
         users = self._users
         if users is None:
             users = self._users = {}
             for i, item in enumerate(self.items):
                 _add_user(users, item, i)
         index = self.index
+        matrices = self.matrices
         positions: list[int] = []
         affected: dict[int, None] = {}
         for t in changed:
             k = index.get(id(t))
             if k is None:
                 continue
-            self.matrices[k] = t.matrix
+            if t.__class__ is Translation:
+                matrices[k, :3, 3] = t.offset  # the rest of a translation's matrix is the identity already
+            else:
+                matrices[k] = t.matrix
             positions.append(k)
             for i in users.get(id(t), ()):
                 affected[i] = None
@@ -378,29 +394,47 @@ class MovePlan:
             for key, (_, bulk) in list(self.bulk.items()):
                 if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                     del self.bulk[key]
-        matrices, local = self.matrices, self.local
+        local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
         rows_of: dict[int, list[int]] = {}
         for i in affected:
-            links = [k for k in self.chain[i].tolist() if k != identity]
-            model = matrices[links[0]]
-            for k in links[1:]:
-                model = model @ matrices[k]
-            if local is not None:
-                model = model @ local[i]
-            row = model.T.reshape(16)  # rows hold M transposed
+            item = items[i]
+            chain = item.chain
+            only = plain.get(i)
+            if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
+                only = plain[i] = (chain, _translation_only(item))
+            if only[1]:
+                # the model is the translation's matrix, written from its offset in plain floats (rows hold M
+                # transposed; the numbers the product below gives); the whole matrix, not only its translation:
+                # the row may hold another transform's (one replaced in the chain since it was written)
+                x, y, z = chain[0].offset
+                where, values = _MODEL, (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
+            else:
+                links = [k for k in self.chain[i].tolist() if k != identity]
+                model = matrices[links[0]]
+                for k in links[1:]:
+                    model = model @ matrices[k]
+                if local is not None:
+                    model = model @ local[i]
+                where, values = _MODEL, model.T.reshape(16)
             b = int(self.batch_of[i])
             if b < 0:  # an item without a batch (transparent, overlay): its own row
-                self.items[i].row[_MODEL] = row
+                item.row[where] = values
+                self.rows_only = False
                 continue
             batch = self.batches[b]
             r = int(self.row_of[i])
-            batch.rows[r, _MODEL] = row
+            batch.rows[r, where] = values
             batch.row_changed(r)
             rows_of.setdefault(b, []).append(r)
         for b, where in rows_of.items():
             self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
-        return len(affected) + (self._apply_instances(set(positions)) if self.instance_items else 0)
+        if not self.instance_items:
+            return len(affected)
+        moved = self._apply_instances(set(positions))
+        if moved:
+            self.rows_only = False
+        return len(affected) + moved
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -461,6 +495,21 @@ class MovePlan:
         return count
 
 
+#: class -> whether it is a static transform (its matrix depends on its parameters only): the lean path's test
+_STATIC: dict[type, bool] = {}
+
+
+def _static_transform(cls: type) -> bool:
+    return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
+
+
+def _translation_only(item: Any) -> bool:
+    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
+    matrix, or the identity: a product with it changes no number)."""
+    chain, local = item.chain, item.local
+    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
+
+
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
     """Item ``i`` lies below each transform of its chain."""
     for t in dict.fromkeys(item.chain):
@@ -511,6 +560,9 @@ class TransformUpdater:
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
+        #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
+        #: may have moved a declared component (``declarations_kept``)
+        self.moved: list[Any] = []
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -556,9 +608,26 @@ class TransformUpdater:
         if not changed:
             return None
         plan = self._plan
-        if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
-            self.placed = True
-            return self._apply_moves(changed)
+        if plan is not None:
+            if len(changed) <= _FEW:
+                # an editor's drag, one simulated body: a few static transforms (the lean path, no passes over
+                # the list), else the general one below
+                statics = _STATIC
+                for c in changed:
+                    cls = c.__class__
+                    static = statics.get(cls)
+                    if static is None:
+                        static = statics[cls] = _static_transform(cls)
+                    if not static:
+                        break
+                else:
+                    self.placed = True
+                    self.moved = changed
+                    return self._apply_few(plan, changed)
+            elif plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+                self.placed = True
+                self.moved = changed
+                return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
         if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
@@ -581,6 +650,7 @@ class TransformUpdater:
         if updates is None:
             return None
         self.placed = bool(moved or arrays)
+        self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
@@ -605,17 +675,26 @@ class TransformUpdater:
             positions = _positions_only(shape, items)
             if positions is not None:
                 moves = [_moved_world(item, positions) for item in items]
-                # not finite (or beyond float32): the full path, which names the instance
+                # not finite (or beyond float32): the full path, whose compile names the instance and the node
                 if all(np.isfinite(world).all() for world, _ in moves):
                     out.extend(zip(items, moves, strict=True))
                     continue
-            matrices, colors, may_mirror = set_arrays(shape)
+            try:
+                matrices, colors, may_mirror = set_arrays(shape)
+            except ValueError:
+                return None  # a bad array: the compile raises, naming the instance and the set's node
             for item in items:
+                if (colors is None) != (item.source_colors is None):
+                    # colours given or taken away: the shape is captured again (under the probe colour or not)
+                    return None
                 template = item.template
                 model = _chain_matrix(item.chain)
-                made = instance_rows(
-                    template.row, template.local, template.transparent, model, matrices, colors, may_mirror
-                )
+                try:
+                    made = instance_rows(
+                        template.row, template.local, template.transparent, model, matrices, colors, may_mirror
+                    )
+                except ValueError:
+                    return None  # beyond float32: as above
                 if (
                     made.transparent != item.transparent
                     or self._instance_state(template, made.mirrored) is not item.state
@@ -623,6 +702,20 @@ class TransformUpdater:
                     return None
                 out.append((item, made))
         return out
+
+    def _apply_few(self, plan: MovePlan, changed: list[Any]) -> int:
+        """:meth:`_apply_moves` of a few static transforms (no arrays): their items' rows are rewritten, the
+        render index's bounds follow them, and the frame keeps its plan when every moved row lies in a batch."""
+        plan.moved_rows = []
+        count = plan.apply_few(changed)
+        if count:
+            moved_rows = plan.moved_rows
+            self.index.moved(moved_rows)
+            if plan.rows_only and self._rows_moved is not None:
+                self._rows_moved([batch for batch, _ in moved_rows])
+            else:
+                self._placements_changed()
+        return count
 
     def _apply_moves(self, changed: list[Any], arrays: list[Any] | None = None) -> int:
         """Recompose the model matrix of every item below a changed transform; returns how many rows changed.
@@ -669,12 +762,17 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
+#: "the set has no colours" in :func:`_positions_only` (None there means "not read yet")
+_NO_COLORS = np.empty((0, 4))
+
+
 def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Whether they
+    their conversion to linear is done once, not every frame, unless the set's
+    touches since then named only other arrays: ``touch("transforms")``).  Whether they
     are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
@@ -687,17 +785,29 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3:
         return None
-    colors = shape.colors
-    if colors is not None:
-        array = getattr(colors, "array", None)
-        colors = np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+    colors_at = shape.written_at("colors")
+    colors = None
     for item in items:
         if item.instances is None or len(item.instances) != len(t):
             return None
+        if item.colors_at == colors_at:  # only other arrays were touched since the colours were converted
+            continue
+        if colors is None:
+            colors = _colors_now(shape)
         before = item.source_colors
-        if (before is None) != (colors is None) or (before is not None and not np.array_equal(before, colors)):
+        if (before is None) != (colors is _NO_COLORS) or (before is not None and not np.array_equal(before, colors)):
             return None
+        item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _colors_now(shape: Any) -> np.ndarray:
+    """The set's colours as the application holds them (no copy), or :data:`_NO_COLORS`."""
+    colors = shape.colors
+    if colors is None:
+        return _NO_COLORS
+    array = getattr(colors, "array", None)
+    return np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
 
 
 def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -754,6 +864,7 @@ def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray])
         _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
+    item.colors_at = item.source.written_at("colors")
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:
