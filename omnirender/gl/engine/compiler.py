@@ -166,6 +166,27 @@ def _det3(m: np.ndarray) -> float:
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
+def _declares_below(declared: Any, ids: set[int]) -> bool:
+    """Whether a component of ``declared`` (a light, the camera...) lies in a node among ``ids`` or below one
+    (through any parent); True when that is not known (no declarations, a component held by a component)."""
+    if declared is None:
+        return True
+    for component, _ in declared.placements:
+        owners = component.owners
+        todo = [owner for owner in owners if isinstance(owner, Node)]
+        if len(todo) != len(owners):
+            return True
+        seen: set[int] = set()
+        while todo:
+            node = todo.pop()
+            if id(node) in ids:
+                return True
+            if id(node) not in seen:
+                seen.add(id(node))
+                todo.extend(node.parents)
+    return False
+
+
 def _same_declarations(a: Any, b: Any) -> bool:
     """Whether two pre-evaluations declare the same components (lights, camera, background) at the same places."""
     if a is None or b is None:
@@ -449,20 +470,21 @@ class DrawListCompiler:
         if news or moves:
             count += self.updater.apply([*(r.new for r in news), *moves]) or 0
             engine = self.engine
-            mask = engine.mask_function
-            # lights or the camera may sit below a replaced transform (a node that declares nothing: not there)
-            if moves or any(r.node.declarations(mask).placements for r in news):
+            # lights or the camera below a replaced or moved transform move with it: the declarations again (not
+            # when no declared component lies below a replaced transform's node and the moved ones declare nothing)
+            below = _declares_below(engine.declared, {id(r.node) for r in news})
+            if below or (moves and not declarations_kept(moves, engine.mask_function)):
                 declared = engine.preevaluate(scene)
                 if not _same_declarations(engine.declared, declared):
                     engine.declared = declared
                     engine.camera = declared.camera
-        for node in {id(r.node): r.node for r in replacements}.values():  # compiled with what it holds now
-            key = self._key_of(node)
-            entry = self._node_cache.get(key) if key is not None else None
-            if entry is not None:
-                own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
-                self._node_cache[key] = _NodeEntry(node, own, entry.entries)
-        self.engine.stats["dirty"] = tuple(sorted({r.kind for r in replacements}))
+        kinds: set[str] = set()
+        for r in replacements:  # each node's entry: compiled with what it holds now
+            kinds.add(r.kind)
+            entry = self._node_cache[self._key_of(r.node)]  # (classify found it)
+            entry.own = tuple([x if isinstance(x, Node) else (x, x.version) for x in r.node.items])
+            entry.version = r.node.version
+        self.engine.stats["dirty"] = tuple(sorted(kinds))
         return count
 
     def entries_of(self, node: Any) -> list[Any] | None:
