@@ -852,7 +852,7 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]]
     does not walk the root again.  None when the edit may change what is declared.
     """
     entry = node._declared
-    if entry is None or not _holds(entry, node):
+    if entry is None or entry.structure != node._structure:
         return None
     mask_fn = entry.mask_fn
     if isinstance(item, Node):
@@ -865,7 +865,10 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]]
             return None
     elif getattr(item, "declared", None) is not None:
         return None
-    chain = [(node, entry, True)]
+    # a node whose parameters moved since its result (a transform moved and no renderer asked since: the GL
+    # engine skips the pre-evaluation when what moved declares nothing) keeps its lists: its result stays a
+    # guide to the items to walk again, as its ancestors' do below (its version is left stale)
+    chain = [(node, entry, _holds(entry, node))]
     up = node._parents
     while len(up) == 1:
         above = up[0]

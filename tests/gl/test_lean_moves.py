@@ -225,3 +225,39 @@ def test_a_moved_node_whose_translation_is_replaced_then_moves_by_its_new_transf
             node.items[0].offset = (-0.5, 0.8, 1.0)
             image = e.render(scene, read_depth=False)
             assert np.array_equal(image.array, fresh(scene)), name
+
+
+def test_a_splice_after_a_lean_move_patches_the_declarations_instead_of_walking_every_child(monkeypatch):
+    """The lean path leaves the root's declaration result at an older version (nothing it declares moved); a
+    node added to or removed from the root afterwards still patches that result (its lists are a guide), so
+    the next pre-evaluation walks only the root's declaring items, not each of its children; and a light
+    added after such a move is found."""
+    from omnirender.gl import GLEngine
+    from omnirender.scene import node as node_module
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 12, 30), (0, 0, 0), fov=50)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=1.0)
+    moves = [om.Translation((i % 20) - 10.0, (i // 20) * 1.2 - 3.0, 0.0) for i in range(120)]
+    for i, t in enumerate(moves):
+        scene.add(om.Node(f"b{i}", [t, om.Material(diffuse=(0.4, 0.6, 0.2 + 0.005 * i)), box]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        moves[7].offset = (0.0, 0.0, 2.0)
+        e.render(scene, read_depth=False)  # the lean path: no pre-evaluation
+        extra = scene.add(om.Node("extra", [om.Translation(1.0, 1.0, 1.0), om.Material(), box]))
+        checked = []
+        original = node_module._Local.valid
+        monkeypatch.setattr(node_module._Local, "valid", lambda self, n, m: checked.append(n) or original(self, n, m))
+        image = e.render(scene, read_depth=False)
+        monkeypatch.undo()
+        assert e.stats["compiled"] == "subtrees"
+        assert len(checked) < 10, len(checked)  # not one per child of the root
+        assert np.array_equal(image.array, fresh(scene))
+        moves[8].offset = (1.0, 0.0, 2.0)
+        e.render(scene, read_depth=False)
+        scene.remove(extra)
+        scene.add(om.Node("lamp", [om.Translation(0.0, 0.0, 4.0), om.PointLight(color=(1.0, 0.2, 0.2), intensity=4.0)]))
+        image = e.render(scene, read_depth=False)
+        assert len(e.declared.lights) == 2
+        assert np.array_equal(image.array, fresh(scene))
