@@ -55,6 +55,9 @@ _MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+#: (name, zeros) of each field of the row, in order (surface rows are made from lists of floats)
+_ROW_ZEROS = tuple((f.name, (0.0,) * f.size) for f in ROW.fields)
+assert ROW.fields[-1].name == "point" and _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
 
 
 def _uv_matrix(texture: Any) -> tuple[float, ...]:
@@ -161,6 +164,27 @@ def _det3(m: np.ndarray) -> float:
     """The determinant of ``m[:3, :3]`` (Python floats: a tenth of ``np.linalg.det``'s cost for one matrix)."""
     (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def _declares_below(declared: Any, ids: set[int]) -> bool:
+    """Whether a component of ``declared`` (a light, the camera...) lies in a node among ``ids`` or below one
+    (through any parent); True when that is not known (no declarations, a component held by a component)."""
+    if declared is None:
+        return True
+    for component, _ in declared.placements:
+        owners = component.owners
+        todo = [owner for owner in owners if isinstance(owner, Node)]
+        if len(todo) != len(owners):
+            return True
+        seen: set[int] = set()
+        while todo:
+            node = todo.pop()
+            if id(node) in ids:
+                return True
+            if id(node) not in seen:
+                seen.add(id(node))
+                todo.extend(node.parents)
+    return False
 
 
 def _same_declarations(a: Any, b: Any) -> bool:
@@ -446,20 +470,21 @@ class DrawListCompiler:
         if news or moves:
             count += self.updater.apply([*(r.new for r in news), *moves]) or 0
             engine = self.engine
-            mask = engine.mask_function
-            # lights or the camera may sit below a replaced transform (a node that declares nothing: not there)
-            if moves or any(r.node.declarations(mask).placements for r in news):
+            # lights or the camera below a replaced or moved transform move with it: the declarations again (not
+            # when no declared component lies below a replaced transform's node and the moved ones declare nothing)
+            below = _declares_below(engine.declared, {id(r.node) for r in news})
+            if below or (moves and not declarations_kept(moves, engine.mask_function)):
                 declared = engine.preevaluate(scene)
                 if not _same_declarations(engine.declared, declared):
                     engine.declared = declared
                     engine.camera = declared.camera
-        for node in {id(r.node): r.node for r in replacements}.values():  # compiled with what it holds now
-            key = self._key_of(node)
-            entry = self._node_cache.get(key) if key is not None else None
-            if entry is not None:
-                own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
-                self._node_cache[key] = _NodeEntry(node, own, entry.entries)
-        self.engine.stats["dirty"] = tuple(sorted({r.kind for r in replacements}))
+        kinds: set[str] = set()
+        for r in replacements:  # each node's entry: compiled with what it holds now
+            kinds.add(r.kind)
+            entry = self._node_cache[self._key_of(r.node)]  # (classify found it)
+            entry.own = tuple([x if isinstance(x, Node) else (x, x.version) for x in r.node.items])
+            entry.version = r.node.version
+        self.engine.stats["dirty"] = tuple(sorted(kinds))
         return count
 
     def entries_of(self, node: Any) -> list[Any] | None:
@@ -1035,18 +1060,22 @@ class DrawListCompiler:
         return entry
 
     def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
-        row = np.zeros(ROW.stride, np.float32)
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear.
+
+        Made from one list of Python floats (one numpy call: a replaced Material makes one per frame)."""
         alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
-        row[_COLOR] = (*app.base, alpha)
+        fields: dict[str, tuple[float, ...]] = {"color": (*app.base, alpha)}
         if app.model == "pbr":
-            row[ROW.slice("emission")] = (*app.emission, PBR)
-            row[ROW.slice("pbr")] = (app.roughness, app.metallic, 0.0, 0.0)
+            fields["emission"] = (*app.emission, PBR)
+            fields["pbr"] = (app.roughness, app.metallic, 0.0, 0.0)
         else:
-            row[ROW.slice("specular")] = (*app.specular, app.shininess)
-            row[ROW.slice("emission")] = (*app.emission, PHONG)
-            row[ROW.slice("ambient")] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
+            fields["specular"] = (*app.specular, app.shininess)
+            fields["emission"] = (*app.emission, PHONG)
+            fields["ambient"] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
         if highlight is not None:
-            row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
-        row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
-        return row
+            fields["highlight"] = (*linear_rgb(highlight.color), 1.0)
+        fields["point"] = (_DEFAULT_POINT_SIZE, 0.0, 0.0, 0.0)
+        values: list[float] = []
+        for name, zeros in _ROW_ZEROS:
+            values.extend(fields.get(name, zeros))
+        return np.array(values, np.float32)

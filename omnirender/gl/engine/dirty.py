@@ -68,14 +68,9 @@ DIRTY_APPEARANCE = "appearance"
 _MODEL = ROW.slice("model")
 _POINT_SIZE = ROW.at("point", "size")
 _SHADING_MODEL = ROW.at("emission", "model")
-#: the row's fields a batch drawn with uniforms for its material shares (all but the model matrix and colour)
-_MATERIAL = np.concatenate(
-    [
-        np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
-        for f in ROW.fields
-        if f.name not in ("model", "color")
-    ]
-)
+#: the row's fields a batch drawn with uniforms for its material shares: all after the model matrix and colour
+_MATERIAL = slice(ROW.offsets["color"] + 4, ROW.stride)
+assert [f.name for f in ROW.fields[:2]] == ["model", "color"]
 #: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
 _KINDS = frozenset(("mesh", "points", "lines"))
 _TEXSET_FIELDS = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
@@ -255,7 +250,7 @@ def restyle(changes: list[Restyle]) -> tuple[list[Any], bool]:
             same = False
             continue
         batch, r = slot
-        if batch.uniform and not (batch.rows[r, _MATERIAL] == row[_MATERIAL]).all():
+        if batch.uniform and item.row[_MATERIAL].tobytes() != row[_MATERIAL].tobytes():
             same = False
             item.row[:] = row
             batch.uniform = uniform_material(batch.rows)

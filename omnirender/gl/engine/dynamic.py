@@ -582,11 +582,20 @@ class TransformUpdater:
     ``instance_state`` (the draw state of an instance set's template).
     """
 
-    def __init__(self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None) -> None:
+    def __init__(
+        self,
+        index: Any,
+        placements_changed: Any,
+        instance_state: Any,
+        rows_moved: Any = None,
+        rows_restyled: Any = None,
+    ) -> None:
         self.index = index
         self._placements_changed = placements_changed
         #: tells the frame that only these batches' rows moved in place (it may keep its recorded plan), or None
         self._rows_moved = rows_moved
+        #: tells the frame that only these batches' rows' surface fields changed (:meth:`rows_rewritten`), or None
+        self._rows_restyled = rows_restyled
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
@@ -615,9 +624,14 @@ class TransformUpdater:
             self._plan.replace(swaps)
 
     def rows_rewritten(self, batches: list[Any], same: bool) -> None:
-        """Rows of ``batches`` were rewritten in place (not moved: the bounds hold); ``same``: they draw as
-        before, so a recorded frame plan may be replayed after their upload."""
-        if same and self._rows_moved is not None:
+        """The surface fields of rows of ``batches`` were rewritten in place (not moved: the bounds, the
+        casters and the shadow maps hold); ``same``: they draw as before, so a recorded frame plan may be
+        replayed after their upload."""
+        if not same:
+            self._placements_changed()
+        elif self._rows_restyled is not None:
+            self._rows_restyled(batches)
+        elif self._rows_moved is not None:
             self._rows_moved(batches)
         else:
             self._placements_changed()

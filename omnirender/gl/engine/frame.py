@@ -177,6 +177,27 @@ class FrameRunner:
         for batch in batches:
             self._moved[id(batch)] = batch
 
+    def rows_restyled(self, batches: list[Any]) -> None:
+        """Only the surface fields of rows of ``batches`` changed in place (a Material replaced by one drawn
+        with the same state: ``engine/dirty.py``); nothing moved, so no stage forgets what it derived from
+        placements (the shadow maps, which read no surface, stay).  A recorded plan is kept when every stage
+        follows rows and no scope filters batches for its passes (their copies follow a source only in frames
+        drawn in full); the next frame uploads those rows and replays it."""
+        plan = self.plan
+        if plan is None:
+            return  # the next frame is drawn in full: it uploads the changed rows
+        engine = self.engine
+        root = engine.root_scope
+        if (
+            root is None
+            or any(scope.filtered for scope in root.walk())
+            or not all(stage.follows_rows(engine) for stage in self.stages.frozen())
+        ):
+            self.placements_changed()
+            return
+        for batch in batches:
+            self._moved[id(batch)] = batch
+
     def _taint(self, why: str) -> None:
         """The frame being drawn does something a replay would not repeat: it keeps no plan."""
         recorder = self.state.recorder
