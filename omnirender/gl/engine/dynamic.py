@@ -27,6 +27,7 @@ from .bulk import BulkMap
 from .drawlist import set_translations
 from .instancing import InstanceRows, instance_rows, set_arrays
 from .layout import ROW
+from .translations import TranslationMap
 
 __all__ = ["MovePlan", "TransformUpdater"]
 
@@ -39,8 +40,6 @@ _EYE4_LIST = _EYE4.tolist()
 _MANY = 64
 #: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
-#: the key of the plan's own translations among its array maps
-_TRANSLATIONS = -1
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
 _IDENTITY = object()
 
@@ -104,8 +103,12 @@ class MovePlan:
         self.rows_only = True
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
-        #: frames since the last splice in which most of the translations moved (_apply_translations)
-        self.many_moves = 0
+        #: where each item's translation column comes from, for frames that move most translations (made on the
+        #: first such frame, followed through splices: translations.py)
+        self._map: TranslationMap | None = None
+        #: by place among the matrices: whether the identity is there (the padding of chains)
+        self._identity = np.zeros(identity + 1, bool)
+        self._identity[identity] = True
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
         self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
@@ -128,7 +131,8 @@ class MovePlan:
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
-        self.many_moves = 0
+        first_new = len(self.items)
+        gone: list[int] = []
         # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
         # held every transform of the list)
         where = self._where
@@ -141,6 +145,7 @@ class MovePlan:
             if i is not None:
                 self.chain[i] = identity  # never recomposed again
                 self.batch_of[i] = -1
+                gone.append(i)
                 if users is not None:
                     _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
@@ -182,6 +187,12 @@ class MovePlan:
                 self.batches.append(batch)
             self.batch_of[i] = b
             self.row_of[i] = row
+        if self._map is not None:
+            self._map.splice(self, gone, first_new)
+
+    def identity_places(self) -> np.ndarray:
+        """By place among :attr:`matrices`: whether the identity is there (chains' padding), read-only."""
+        return self._identity
 
     def _add_transforms(self, fresh: list[Any]) -> int:
         """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
@@ -198,6 +209,9 @@ class MovePlan:
             matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
         identity = len(self.transforms)
         matrices[identity] = np.eye(4)
+        marks = self._extend("_identity", len(fresh) + 1)
+        marks[-len(fresh) - 1 :] = False
+        marks[identity] = True
         return identity
 
     def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
@@ -206,7 +220,6 @@ class MovePlan:
         map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
         :meth:`apply` of the new transforms."""
         self.bulk.clear()  # the arrays' maps name rows below the old transforms: made again
-        self.many_moves = 0
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -222,6 +235,7 @@ class MovePlan:
             if i is not None:
                 below.setdefault(id(old), (old, new, set()))[2].add(i)
         general = []
+        taken: list[int] = []
         for key, (old, new, swapped) in below.items():
             k = index.get(key)
             if k is None or id(new) in index or set(users.get(key, ())) != swapped:
@@ -233,7 +247,12 @@ class MovePlan:
             self.transforms[k] = new
             self.matrices[k] = new.matrix
             users[id(new)] = users.pop(key)
+            taken.append(k)
+        if self._map is not None:  # (after the chains changed below)
+            swapped_items = np.array(sorted({i for _, _, items in below.values() for i in items}), np.intp)
         if not general:
+            if self._map is not None:
+                self._map.replaced(self, taken, swapped_items)
             return
         swaps = [s for s in swaps if s[1] in general]
         fresh = [new for _, _, new in swaps if id(new) not in self.index]
@@ -250,6 +269,8 @@ class MovePlan:
             found = users.setdefault(id(new), [])
             if i not in found:
                 found.append(i)
+        if self._map is not None:
+            self._map.replaced(self, taken, swapped_items)
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
         """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
@@ -339,27 +360,26 @@ class MovePlan:
     def _apply_translations(self, positions: np.ndarray, moved: list[Any]) -> int | None:
         """Many plain ``Translation`` objects moved (a simulation's setter loop): written like an array's rows.
 
-        The plan's translations are taken as one array (:class:`~.bulk.BulkMap`
-        over all of them): the moved offsets go into the plan's matrices, and
-        every row below a translation takes its translation column from them.
-        None when fewer than half of them moved (the rows below the others
-        would be uploaded for nothing) or an item lies below two translations.
+        The moved offsets go into the plan's matrices, and every row below one
+        translation takes its translation column from them
+        (:class:`~.translations.TranslationMap`, followed through splices);
+        rows below several translations are recomposed from their chains.
+        None when fewer than half of the plan's translations moved (the rows
+        below the others would be uploaded for nothing).
         """
-        entry = self.bulk.get(_TRANSLATIONS)
-        if entry is None:
-            # made on the second such frame since the last splice: a frame that also adds or removes nodes
-            # would make it for one use (its cost is about the general path's)
-            self.many_moves += 1
-            if self.many_moves < 2:
-                return None
-            own = [t for t in self.transforms if t.__class__ is Translation]
-            entry = self.bulk[_TRANSLATIONS] = (own, BulkMap(self, own))
-        own, bulk = entry
-        if not bulk.valid or 2 * len(moved) < len(own):
+        found = self._map
+        if found is None:
+            found = self._map = TranslationMap(self)
+        if 2 * len(moved) < found.translations:
             return None
         self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
-        bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
-        return bulk.count + self._apply_instances(set(positions.tolist()))
+        count = found.apply(self)
+        multi = found.multi_items()
+        if len(multi):
+            hit = np.zeros(len(self.matrices), bool)
+            hit[positions] = True
+            count += self._write_items(multi[hit[self.chain[multi]].any(axis=1)])
+        return count + (self._apply_instances(set(positions.tolist())) if self.instance_items else 0)
 
     def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
@@ -390,10 +410,8 @@ class MovePlan:
                 affected[i] = None
         if not positions:
             return 0
-        if self.bulk:
-            for key, (_, bulk) in list(self.bulk.items()):
-                if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
-                    del self.bulk[key]
+        if self.bulk or self._map is not None:
+            self._follow_maps(positions, np.fromiter(affected, np.intp, len(affected)))
         local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
         rows_of: dict[int, list[int]] = {}
@@ -444,9 +462,23 @@ class MovePlan:
         affected = np.flatnonzero(hit[self.chain].any(axis=1))
         if not len(affected):
             return 0
+        self._follow_maps(positions, affected)
+        return self._write_items(affected)
+
+    def _follow_maps(self, positions: Any, affected: np.ndarray) -> None:
+        """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
+        array maps made from them are dropped; the translation map fills the ``affected`` items again."""
         for key, (_, bulk) in list(self.bulk.items()):
             if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                 del self.bulk[key]
+        found = self._map
+        if found is not None and found.stale(positions):
+            found.fill(self, affected)
+
+    def _write_items(self, affected: np.ndarray) -> int:
+        """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""
+        if not len(affected):
+            return 0
         chain = self.chain[affected]
         models = self.matrices[chain[:, 0]]
         for k in range(1, chain.shape[1]):
