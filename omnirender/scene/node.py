@@ -105,8 +105,42 @@ class Node:
                 f"Node {self._name!r}: items must be a list of components and nodes, got {type(items).__name__}; "
                 f"write Node({self._name!r}, [item])"
             )
+        if type(self).insert is not Node.insert:  # a subclass's own insert sees every item, as add() would
+            for item in items:
+                self.add(item)
+            return
+        self._fill(items)
+
+    def _fill(self, items: Iterable[Any]) -> None:
+        """The constructor's items appended to the new node: what :meth:`insert` does for each, less what a new
+        node needs not (no parent to touch, no declaration to patch, no journal that saw it: a simulation adding
+        a node per frame pays one pass, and engines see only the edit of the parent it is added to)."""
+        flush_changes()
+        own = self._items
         for item in items:
-            self.add(item)
+            if isinstance(item, Node):
+                # a new node has no parent: the item cannot be its ancestor, and it cannot be the node itself
+                item._parents.append(self)
+                _LINKS[0] = next(_LINK_COUNT)
+            elif isinstance(item, RenderingComponent):
+                item._attach(self)
+            else:
+                self._check_item(item)
+            own.append(item)
+        if own:
+            epoch = _EPOCH[0]
+            n = len(own)
+            self._own = self._structure = self._version = n  # one bump per item, as insert() makes
+            self._sstamp = self._stamp = epoch
+
+    def _check_item(self, item: Any) -> None:
+        """Raise the error for an item a node cannot hold (a class, anything not a component or node)."""
+        if isinstance(item, type):
+            raise TypeError(f"Node {self.path}: cannot add the class {item.__name__}; did you mean {item.__name__}()?")
+        raise TypeError(
+            f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
+            f"handler, technique or Node"
+        )
 
     @classmethod
     def transient(cls, items: Iterable[Any], name: str = "components") -> Node:
@@ -242,13 +276,8 @@ class Node:
             _LINKS[0] = next(_LINK_COUNT)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
-        elif isinstance(item, type):
-            raise TypeError(f"Node {self.path}: cannot add the class {item.__name__}; did you mean {item.__name__}()?")
         else:
-            raise TypeError(
-                f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
-                f"handler, technique or Node"
-            )
+            self._check_item(item)
         patch = _declaration_patch(self, item)
         n = len(self._items)
         at = min(index, n) if index >= 0 else max(0, n + index)  # where list.insert puts it
@@ -331,6 +360,10 @@ class Node:
     def items(self) -> tuple[Any, ...]:
         """Components and child nodes in order."""
         return tuple(self._items)
+
+    def last_items(self, count: int) -> tuple[Any, ...]:
+        """The last ``count`` items in order (what was appended last), without copying the whole list."""
+        return tuple(self._items[len(self._items) - count :]) if count > 0 else ()
 
     @property
     def children(self) -> list[Node]:

@@ -495,17 +495,15 @@ class DrawListCompiler:
             leaf_list.append((node, self._key_of(node), path))
         group_list = []
         for node, key, appended, gone in groups.values():
-            items = node.items
-            if appended and (
-                len(appended) > len(items) or {id(x) for x in items[len(items) - len(appended) :]} != set(appended)
-            ):
+            tail = node.last_items(len(appended))
+            if appended and (len(appended) > len(node) or {id(x) for x in tail} != set(appended)):
                 return None  # not appended at the end
             if any(self._key_of(child) is None for child in gone.values()):
                 return None
             path = self._path_to(scene, node)
             if path is None or _below(node, removed_ids):
                 return None
-            ordered = [x for x in items[len(items) - len(appended) :]] if appended else []
+            ordered = list(tail)
             group_list.append((node, key, path, ordered, list(gone.values())))
         return leaf_list, group_list
 
