@@ -98,7 +98,7 @@ class Node:
         self._program_version = -1
         self._local: list[tuple[int, Any]] | None = None
         self._local_version = -1
-        self._pre: tuple[int, Any, Any] | None = None
+        self._pre: tuple[int, Any, Any, Any] | None = None  # (version, mask, result, local placements)
         self._declared: _Local | None = None
         if isinstance(items, (RenderingComponent, Node)) or not hasattr(items, "__iter__"):
             raise TypeError(
@@ -531,9 +531,16 @@ class Node:
             return cached[2]
         if self._groups and mask_fn is not None and not mask_fn(self._groups):
             result = Declarations([])
+            local = None
         else:
-            result = Declarations(_placements(self, mask_fn))
-        self._pre = (self._version, mask_fn, result)
+            local = _local_placements(self, mask_fn)
+            if cached is not None and cached[1] is mask_fn and cached[3] is local:
+                # the same placements (a node added or removed that declares nothing, a quiet node moved):
+                # the same result, so what keys on it (an engine's recorded frame) holds
+                self._pre = (self._version, mask_fn, cached[2], local)
+                return cached[2]
+            result = Declarations(_world(local))
+        self._pre = (self._version, mask_fn, result, local)
         return result
 
     def preevaluate(
@@ -762,14 +769,8 @@ class _Local:
         return False
 
 
-def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
-    """Declared placements below ``root`` in world (root) coordinates, re-using per-node local results.
-
-    Post-order with an explicit stack, so graphs of any depth need no deep
-    recursion; a child whose local result is valid for its version and the
-    mask is not walked again.
-    """
-    local = _local_placements(root, mask_fn)
+def _world(local: list[tuple[Any, np.ndarray | None]]) -> list[tuple[Any, np.ndarray]]:
+    """A root's declared placements (:func:`_local_placements`) with its own coordinates' identity matrices made."""
     eye = np.eye(4)
     return [(c, eye if m is None else m) for c, m in local]
 
@@ -788,6 +789,9 @@ def _relevant_items(node: Node, mask_fn: Any) -> tuple[list[Any], list[int] | No
 
 
 def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | None]]:
+    """Declared placements below ``root`` in its own coordinates (matrix None: the identity), re-using per-node
+    local results: post-order with an explicit stack, so graphs of any depth need no deep recursion; a child
+    whose local result is valid for its version and the mask is not walked again."""
     stack: list[tuple[Node, bool]] = [(root, False)]
     while stack:
         node, expanded = stack.pop()
