@@ -20,7 +20,7 @@ import weakref
 from collections import deque
 from collections.abc import Callable
 from itertools import chain
-from operator import attrgetter
+from operator import attrgetter, is_
 from typing import Any
 
 __all__ = [
@@ -48,18 +48,23 @@ class ChangeJournal:
     store per journal.
     """
 
-    __slots__ = ("_changed", "_edits", "__weakref__")
+    __slots__ = ("_changed", "_edits", "_held", "__weakref__")
 
     def __init__(self) -> None:
         changed: dict[int, RenderingComponent] = {}
         edits: list[tuple[Any, str, Any, int] | None] = []
+        #: [a batch of changes noted for later told as a whole (_Bulk, or None), the last such batch (kept), the
+        #: components told before that batch (taken out of the dict)]
+        held: list[Any] = [None, None, None]
         self._changed = changed
         self._edits = edits
+        self._held = held
         # touch() stores into the live journals' dicts directly (no weak reference to follow per change);
         # the journal's collection takes its dict and its edit list out of the lists
+        _HELD[id(changed)] = held
         _JOURNALS.append(changed)
         _EDIT_LOGS.append(edits)
-        weakref.finalize(self, _forget_journal, changed, edits)
+        weakref.finalize(self, _forget_journal, changed, edits, held)
 
     def drain(self) -> list[RenderingComponent]:
         """The components changed since the last drain, in the order they were told of; empties the journal.
@@ -67,6 +72,9 @@ class ChangeJournal:
         Changes noted for later (:func:`note_later`) are told first.
         """
         flush_changes()
+        held = self._held
+        if held[0] is not None:  # a simulation loop's batch told as a whole (see flush_changes)
+            return _drain_held(self._changed, held)
         changed = list(self._changed.values())
         self._changed.clear()
         return changed
@@ -84,6 +92,8 @@ class ChangeJournal:
 
     def __len__(self) -> int:
         flush_changes()
+        if self._held[0] is not None:
+            _absorb(self._changed, self._held)
         return len(self._changed)
 
 
@@ -97,7 +107,13 @@ _EDIT_LOGS: list[list[tuple[Any, str, Any, int] | None]] = []
 EDIT_LIMIT = 4096
 
 
-def _forget_journal(changed: dict[int, RenderingComponent], edits: list) -> None:
+#: id(a live journal's dict) -> [a batch told to it as a whole and not drained yet, the last such batch]
+_HELD: dict[int, list[Any]] = {}
+
+
+def _forget_journal(changed: dict[int, RenderingComponent], edits: list, held: list) -> None:
+    if _HELD.get(id(changed)) is held:
+        del _HELD[id(changed)]
     for registry, own in ((_JOURNALS, changed), (_EDIT_LOGS, edits)):
         for i, d in enumerate(registry):
             if d is own:
@@ -146,6 +162,13 @@ def flush_changes() -> None:
     their component was noted: a node's version moves at least once).  Cheap
     when nothing is pending (one truth test).  Safe against a thread noting
     changes meanwhile: what is noted after the batch is taken stays pending.
+
+    A batch of at least :data:`BULK_MIN` distinct components (a simulation
+    loop's setters) is told to a journal with nothing else in it as a whole,
+    without a store per component; the same components again, in the same
+    order, with no component gaining or losing an owner since, reuse the
+    owners collected for the last such batch (a simulation moves the same
+    objects every frame).
     """
     pending = _PENDING
     if not pending:
@@ -154,15 +177,156 @@ def flush_changes() -> None:
         n = len(pending)
         batch = pending[:n]
         del pending[:n]
-    for changed in _JOURNALS:
-        changed.update(zip(map(id, batch), batch, strict=True))
-    owners = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+    bulk = _bulk_of(batch) if n >= BULK_MIN else None
+    if bulk is None or not bulk.whole:
+        for changed in _JOURNALS:
+            changed.update(zip(map(id, batch), batch, strict=True))
+    else:
+        for changed in _JOURNALS:
+            held = _HELD.get(id(changed))
+            if held is None:  # (a journal being made or collected meanwhile)
+                changed.update(zip(map(id, batch), batch, strict=True))
+                continue
+            _tell_whole(changed, held, bulk)
+    if bulk is None:
+        owners: list[Any] = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+    else:
+        owners = bulk.owners
+        for held in list(_HELD.values()):
+            held[1] = bulk  # kept while the journals live: the next batch of the same components finds it
     touch_many = OWNER_TOUCH[0]
     if touch_many is not None:
         touch_many(owners)
     else:
         for owner in owners:
             owner.touch()
+
+
+#: Batches of at least this many components noted for later are told to journals as a whole (flush_changes).
+BULK_MIN = 256
+
+
+class _Owners(list):  # type: ignore[type-arg]
+    """The owners of a batch of components: a list the owners' touch may recognise again (weakly referenced)."""
+
+    __slots__ = ("__weakref__",)
+
+
+class _Bulk:
+    """A batch of components noted for later, with their owners.
+
+    ``whole``: it is told to journals as a whole (its components are
+    distinct, ``ids`` holds theirs, and it came at least twice: a batch seen
+    once is told component by component, as cheap as finding out).
+    """
+
+    __slots__ = ("components", "owners", "ids", "whole", "__weakref__")
+
+    def __init__(self, components: list[Any]) -> None:
+        self.components = components
+        self.owners = _Owners(chain.from_iterable(filter(None, map(_OWNERS_OF, components))))
+        self.ids: set[int] | None = None
+        self.whole = False
+
+    def distinct(self) -> bool:
+        """Whether no component is in it twice (``ids`` made on the first call)."""
+        if self.ids is None:
+            self.ids = set(map(id, self.components))
+        return len(self.ids) == len(self.components)
+
+
+#: The last batch seen (weakly: the journals told of it keep it), for :func:`_bulk_of`.
+_LAST_BULK: list[Any] = [None]
+#: ids of the components that gained or lost an owner since :func:`_bulk_of` last looked (None: too many)
+_RELINKED: list[list[int] | None] = [[]]
+#: components :data:`_RELINKED` lists before it only records that too many changed
+RELINKED_LIMIT = 1024
+#: components told to a journal before a batch told as a whole that it keeps aside (more: the batch is stored
+#: component by component)
+BEFORE_LIMIT = 64
+
+
+def _bulk_of(batch: list[Any]) -> _Bulk | None:
+    """``batch`` as a :class:`_Bulk`: the last one when it holds the same components in the same order and
+    none of them gained or lost an owner since (then ``whole`` when they are distinct), else a new one; None
+    when no journal would keep it."""
+    if not _JOURNALS:
+        return None
+    ref = _LAST_BULK[0]
+    last = ref() if ref is not None else None
+    relinked = _RELINKED[0]
+    _RELINKED[0] = []
+    if (
+        last is not None
+        and len(last.components) == len(batch)
+        and all(map(is_, batch, last.components))
+        and relinked is not None
+        and (not relinked or (last.distinct() and last.ids.isdisjoint(relinked)))  # type: ignore[union-attr]
+    ):
+        last.whole = last.distinct()
+        return last
+    bulk = _Bulk(batch)
+    _LAST_BULK[0] = weakref.ref(bulk)
+    return bulk
+
+
+def _tell_whole(changed: dict[int, Any], held: list[Any], bulk: _Bulk) -> None:
+    """Tell a journal (its dict and its ``held`` list) of the batch ``bulk`` as a whole where it can."""
+    ids = bulk.ids
+    assert ids is not None
+    if held[0] is bulk and not changed:
+        return  # the same components told already, nothing since
+    if held[0] is None and len(changed) <= BEFORE_LIMIT and ids.isdisjoint(changed):
+        held[0] = bulk
+        held[2] = list(changed.values()) if changed else None  # told before the batch: they come first
+        changed.clear()
+        return
+    if held[0] is not None:
+        _absorb(changed, held)
+    changed.update(zip(map(id, bulk.components), bulk.components, strict=True))
+
+
+def _relinked(component: Any) -> None:
+    """``component`` gained or lost an owner: a batch holding it collects its owners again."""
+    found = _RELINKED[0]
+    if found is not None:
+        if len(found) < RELINKED_LIMIT:
+            found.append(id(component))
+        else:
+            _RELINKED[0] = None
+
+
+def _absorb(changed: dict[int, Any], held: list[Any]) -> None:
+    """Make the batch a journal holds as a whole (``held``), and what was told before it, entries of its dict
+    ``changed``, before the entries the dict holds (told after the batch), each once."""
+    bulk, before = held[0], held[2]
+    held[0] = held[2] = None
+    later = list(changed.items())
+    changed.clear()
+    if before:
+        changed.update(zip(map(id, before), before, strict=True))
+    changed.update(zip(map(id, bulk.components), bulk.components, strict=True))
+    changed.update(later)
+
+
+def _drain_held(changed: dict[int, Any], held: list[Any]) -> list[Any]:
+    """What a journal holding a batch as a whole drains: what came before it, the batch, what came after (each
+    once); empties the journal."""
+    bulk, before = held[0], held[2]
+    if len(changed) > BEFORE_LIMIT:
+        _absorb(changed, held)
+        out = list(changed.values())
+        changed.clear()
+        return out
+    held[0] = held[2] = None
+    out = list(before) if before else []
+    out.extend(bulk.components)
+    if changed:
+        ids = bulk.ids
+        first = set(map(id, before)) if before else ()
+        out.extend(v for k, v in changed.items() if k not in ids and k not in first)
+        changed.clear()
+    return out
 
 
 #: How :func:`flush_changes` touches the owners it collected: ``[None]`` calls each one's ``touch()``; the scene
@@ -255,6 +419,7 @@ class RenderingComponent:
         self._detach(owner)
 
     def _attach(self, owner: Any) -> None:
+        _relinked(self)
         owners = self._owners
         if owners is None:
             object.__setattr__(self, "_owners", [owner])
@@ -262,6 +427,7 @@ class RenderingComponent:
             owners.append(owner)
 
     def _detach(self, owner: Any) -> None:
+        _relinked(self)
         owners = self._owners
         if owners:
             for i, o in enumerate(owners):

@@ -21,6 +21,7 @@ from .component import (  # _PENDING: the list note_later appends to (Translatio
     PENDING_LIMIT,
     MonoAttribute,
     RenderingComponent,
+    _Owners,
     flush_changes,
     note_change,
     note_later,
@@ -625,7 +626,7 @@ class TranslationArray(Sequence[Translation]):
         # added to a node or removed from one
         found = self._owner_list
         if found is None:
-            found = self._owner_list = list(chain.from_iterable(filter(None, map(_OWNERS_OF, self._translations))))
+            found = self._owner_list = _Owners(chain.from_iterable(filter(None, map(_OWNERS_OF, self._translations))))
         return found
 
     def _owners_changed(self) -> None:

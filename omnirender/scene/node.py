@@ -16,7 +16,6 @@ detached), and compiled programs and pre-evaluation caches are rebuilt on use.
 
 from __future__ import annotations
 
-import itertools
 import threading
 import weakref
 from collections import deque
@@ -35,7 +34,7 @@ from ..core.light import Light
 from ..core.program import ENTER, LEAVE, NODE, compile_components
 from ..core.transform import Transform
 
-__all__ = ["Node", "Visitor"]
+__all__ = ["Node", "Visitor", "declarations_kept"]
 
 
 class Visitor:
@@ -121,7 +120,7 @@ class Node:
             if isinstance(item, Node):
                 # a new node has no parent: the item cannot be its ancestor, and it cannot be the node itself
                 item._parents.append(self)
-                _LINKS[0] = next(_LINK_COUNT)
+                _relinked(item)
             elif isinstance(item, RenderingComponent):
                 item._attach(self)
             else:
@@ -213,6 +212,12 @@ class Node:
         return self._structure
 
     @property
+    def versions(self) -> tuple[int, int]:
+        """``(version, structure_version)``, read in one observation (what a renderer asks every frame)."""
+        _observe()
+        return self._version, self._structure
+
+    @property
     def list_version(self) -> int:
         """Counter bumped when this node's own list (or its groups) changes; a descendant's list does not bump it."""
         return self._own
@@ -273,7 +278,7 @@ class Node:
             if item is self or item._is_ancestor_of(self):
                 raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
             item._parents.append(self)
-            _LINKS[0] = next(_LINK_COUNT)
+            _relinked(item)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
         else:
@@ -302,7 +307,7 @@ class Node:
                 if p is self:
                     del item._parents[j]
                     break
-            _LINKS[0] = next(_LINK_COUNT)
+            _relinked(item)
         else:
             item._detach(self)
         self._restructure()
@@ -588,7 +593,7 @@ class Node:
         Node.__init__(self, state["name"], groups=state["groups"])  # every slot fresh: caches empty
         self._items = list(state["items"])
         self._version = state["version"]
-        _LINKS[0] = next(_LINK_COUNT)  # its children gain this parent below
+        _RELINKED[0] = None  # its children gain this parent below: every kept set of parents is made again
         if len(state["parent_keys"]) > 1:
             _PARENT_ORDER[self] = state["parent_keys"]
         key = state["key"]
@@ -694,27 +699,57 @@ def touch_nodes(owners: list[Any]) -> None:
             parent.touch()
 
 
-#: Bumped whenever a node gains or loses a parent: the distinct parents :func:`touch_nodes` found for the last
-#: owners (their ids, this counter, weak references to the parents) hold while it has not moved.
-_LINKS = [0]
-#: the values _LINKS takes: each change writes a new one (two threads changing links never write the same value)
-_LINK_COUNT = itertools.count(1)
+#: ids of the nodes that gained or lost a parent since :func:`_parents_of` last looked (None: too many); the
+#: distinct parents it found for the last owners (their ids, weak references to the parents, the owners' list,
+#: the set of their ids) hold while none of those nodes is among them
+_RELINKED: list[list[int] | None] = [[]]
+#: nodes :data:`_RELINKED` lists before it only records that too many changed
+RELINKED_LIMIT = 1024
 _LAST_PARENTS: list[Any] = [None]
 
 
 def _parents_of(owners: list[Node]) -> list[Node]:
     """The distinct parents of ``owners``: those of the last call when the same nodes come again (a simulation
-    moves the same nodes every frame) and no node gained or lost a parent since."""
-    ids = list(map(id, owners))  # ids, not the nodes: the cache keeps no node alive
+    moves the same nodes every frame) and none of them gained or lost a parent since.
+
+    The same list object as the last call's (the owners a change batch kept, ``core.component``) is known
+    without a pass over it."""
     last = _LAST_PARENTS[0]
-    if last is not None and last[1] == _LINKS[0] and last[0] == ids:
+    relinked = _RELINKED[0]
+    _RELINKED[0] = []
+    if last is not None and (relinked is None or not last[4].isdisjoint(relinked)):
+        last = None  # one of the owners gained or lost a parent
+    if last is not None and last[3] is not None and last[3]() is owners:
         parents = [ref() for ref in last[2]]
         if None not in parents:
             return parents  # type: ignore[return-value]
-    every = list(chain.from_iterable(map(_PARENTS_OF, owners)))
-    parents = list(dict(zip(map(id, every), every, strict=True)).values())
-    _LAST_PARENTS[0] = (ids, _LINKS[0], [weakref.ref(p) for p in parents])
+    ids = list(map(id, owners))  # ids, not the nodes: the cache keeps no node alive
+    if last is not None and last[0] == ids:
+        parents = [ref() for ref in last[2]]
+        if None not in parents:
+            _LAST_PARENTS[0] = (ids, None, last[2], _weak(owners), last[4])
+            return parents  # type: ignore[return-value]
+    parents = list(dict.fromkeys(chain.from_iterable(map(_PARENTS_OF, owners))))  # nodes hash by identity
+    _LAST_PARENTS[0] = (ids, None, [weakref.ref(p) for p in parents], _weak(owners), set(ids))
     return parents
+
+
+def _relinked(node: Node) -> None:
+    """``node`` gained or lost a parent: the parents :func:`_parents_of` keeps for owners holding it are made again."""
+    found = _RELINKED[0]
+    if found is not None:
+        if len(found) < RELINKED_LIMIT:
+            found.append(id(node))
+        else:
+            _RELINKED[0] = None
+
+
+def _weak(owners: list[Node]) -> Any:
+    """A weak reference to the list ``owners`` where it takes one (a plain list does not), else None."""
+    try:
+        return weakref.ref(owners)
+    except TypeError:
+        return None
 
 
 def _bump_ancestors(start: list[Node], epoch: int, counter: str, stamp: str) -> None:
@@ -848,6 +883,31 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
     return root._declared.placements  # type: ignore[union-attr]
 
 
+def declarations_kept(components: Iterable[Any], mask_fn: Any = None) -> bool:
+    """Whether new parameter values of ``components`` (no node's list changed) leave every declaration as it was.
+
+    True when each component's every owner is a node whose subtree declared
+    nothing (no light, camera, background) when last pre-evaluated under
+    ``mask_fn``, with its lists unchanged since: what such a component
+    changes (a transform moving the shapes after it) places no declared
+    component, so :meth:`Node.declarations` of any graph holding them gives
+    the same placements as before.  An engine moving one plain object skips
+    the pre-evaluation with it.  False when that is not known (an owner never
+    pre-evaluated, or under another mask, or not a node).
+    """
+    for component in components:
+        owners = component.owners
+        if not owners:
+            return False
+        for node in owners:
+            if node.__class__ is not Node and not isinstance(node, Node):
+                return False
+            entry = node._declared
+            if entry is None or entry.placements or entry.mask_fn is not mask_fn or entry.structure != node._structure:
+                return False
+    return True
+
+
 def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]] | None:
     """Before ``item`` enters or leaves ``node``'s list: the valid declaration results that the edit keeps.
 
@@ -858,7 +918,7 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]]
     does not walk the root again.  None when the edit may change what is declared.
     """
     entry = node._declared
-    if entry is None or not _holds(entry, node):
+    if entry is None or entry.structure != node._structure:
         return None
     mask_fn = entry.mask_fn
     if isinstance(item, Node):
@@ -871,7 +931,10 @@ def _declaration_patch(node: Node, item: Any) -> list[tuple[Node, _Local, bool]]
             return None
     elif getattr(item, "declared", None) is not None:
         return None
-    chain = [(node, entry, True)]
+    # a node whose parameters moved since its result (a transform moved and no renderer asked since: the GL
+    # engine skips the pre-evaluation when what moved declares nothing) keeps its lists: its result stays a
+    # guide to the items to walk again, as its ancestors' do below (its version is left stale)
+    chain = [(node, entry, _holds(entry, node))]
     up = node._parents
     while len(up) == 1:
         above = up[0]

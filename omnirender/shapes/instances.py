@@ -5,7 +5,9 @@ transforms (``(N, 4, 4)`` matrices or ``(N, 3)`` positions), colours, scales
 and visibility are numpy arrays (or ``om.data`` sequences) the instance set
 holds *without copying*.  A simulation writes its array in place and calls
 ``instances.touch()``; the next frame reads the array once (the GL engine
-uploads it as one instanced draw).  Assigning a new array (of any length)
+uploads it as one instanced draw).  ``touch("transforms")`` says that only
+the named arrays were written, so an engine need not look at the others
+(:meth:`InstanceSet.written_at`).  Assigning a new array (of any length)
 works too.
 
 Every engine sees N shapes: the default simplifier gives one node per visible
@@ -59,7 +61,11 @@ class InstanceSet(Shape):
     a ``MeshFile``...).
     """
 
-    __slots__ = ("_shape", "_transforms", "_colors", "_scales", "_visible")
+    __slots__ = ("_shape", "_transforms", "_colors", "_scales", "_visible", "_written", "_touched_at")
+    #: which touch wrote which array: not pickled (an unpickled set counts every array as written at its version)
+    _transient = {"_written": lambda: None, "_touched_at": lambda: -1}
+    #: the arrays ``touch`` may name
+    ARRAYS = ("transforms", "colors", "scales", "visible")
 
     def __init__(
         self,
@@ -75,6 +81,8 @@ class InstanceSet(Shape):
                 f"InstanceSet: shape must be a shape (om.Box(), om.TriangleSet(...)), not {type(shape).__name__}"
             )
         object.__setattr__(self, "_shape", shape)
+        object.__setattr__(self, "_written", None)
+        object.__setattr__(self, "_touched_at", -1)
         for name, value in (("transforms", transforms), ("colors", colors), ("scales", scales), ("visible", visible)):
             object.__setattr__(self, "_" + name, value)
         self.validate()
@@ -133,6 +141,42 @@ class InstanceSet(Shape):
 
     def __len__(self) -> int:
         return len(_array(self._transforms))
+
+    # -- changes ------------------------------------------------------------------------
+    def touch(self, *arrays: str) -> None:
+        """Say that the arrays were written in place (the version is bumped, as for any component).
+
+        With no names any array may have changed.  Name the ones written
+        (``touch("transforms")``, ``touch("transforms", "colors")``, from
+        :attr:`ARRAYS`) when only those were: an engine then need not look at
+        the others (GL compares the colours with the ones it converted
+        otherwise).  Naming an array that was not written is harmless; leaving
+        out one that was is a bug of the caller (its change may not be drawn).
+        """
+        for name in arrays:
+            if name not in self.ARRAYS:
+                raise ValueError(
+                    f"InstanceSet.touch: {name!r} is not one of its arrays; name some of {', '.join(self.ARRAYS)} "
+                    "(or none: any may have changed)"
+                )
+        written = self._written
+        if written is None or self._touched_at != self._version or not arrays:
+            # changed since the last touch through another route (a parameter assigned): all written then
+            written = dict.fromkeys(self.ARRAYS, self._version)
+        super().touch()
+        version = self._version
+        for name in arrays or self.ARRAYS:
+            written[name] = version
+        object.__setattr__(self, "_written", written)
+        object.__setattr__(self, "_touched_at", version)
+
+    def written_at(self, name: str) -> int:
+        """The :attr:`version` at which the array ``name`` was last (maybe) written: equal at two moments means
+        it was not written in between (only touches naming other arrays came)."""
+        written = self._written
+        if written is None or self._touched_at != self._version:
+            return self._version
+        return written[name]
 
     # -- the arrays, checked ------------------------------------------------------------
     def validate(self) -> None:

@@ -80,7 +80,8 @@ def test_list_edits_compile_only_their_subtrees_and_match_a_fresh_engine(n, shad
             for name, edit in edits(scene, nodes, box, frame):
                 edit()
                 image = e.render(scene)
-                assert e.stats["compiled"] == "subtrees", name
+                # an attribute replaced by one of the same role: dirty bits (dirty.py), no subtree compile
+                assert e.stats["compiled"] == ("dirty" if name in ("matrix", "material") else "subtrees"), name
                 assert e.stats["items"] == len(scene.children), name
                 assert np.array_equal(image.array, fresh(scene, shadows)), name
             nodes[0].items[0].offset = (0.0, -4.0, 0.0)  # moves still take the in-place path afterwards

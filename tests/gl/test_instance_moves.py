@@ -230,3 +230,142 @@ def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options)
             image = e.render(scene).array
             with GLEngine(size=SIZE, samples=0, **options) as f:
                 assert np.array_equal(image, f.render(scene).array), step
+
+
+# -- the GPU's row order, touches naming arrays, bad positions, tiny sets ------------------------------------
+POLICIES = ["front to back", "row order"]
+
+
+def engine_for(policy: str, **options):
+    """A GL engine drawing opaque instance sets front to back (a software rasteriser's way) or in row order (a
+    GPU's, :func:`~omnirender.gl.engine.drawer.sorts_instances`), whatever the machine's GL is."""
+    from omnirender.gl import GLEngine
+
+    e = GLEngine(size=SIZE, samples=0, shadows=False, **options)
+    e.drawer.sorts_instances = policy == "front to back"
+    return e
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_a_touch_naming_the_transforms_keeps_the_colours_and_one_naming_the_colours_draws_them(policy):
+    positions, colors = swarm(300)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with engine_for(policy) as e:
+        e.render(scene)
+        e.render(scene)
+        positions[:, 1] += 0.1
+        balls.touch("transforms")
+        image = e.render(scene)
+        assert image.info["replayed"] and not e.stats["compiled"]
+        assert np.array_equal(image.array, fresh(scene))
+        # colours written with the positions, the touch naming both: drawn
+        colors[:40, :3] = (0.9, 0.2, 0.1)
+        positions[:, 0] += 0.1
+        balls.touch("transforms", "colors")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        # two touches before a frame: a plain one (the colours may have changed), then a named one
+        colors[40:80, :3] = (0.1, 0.2, 0.9)
+        balls.touch()
+        positions[:, 2] += 0.1
+        balls.touch("transforms")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        # a new colour array assigned, then a touch naming the transforms only
+        balls.colors = np.concatenate([colors[:, :3][::-1], colors[:, 3:]], axis=1)
+        positions[:, 1] -= 0.1
+        balls.touch("transforms")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        # a plain touch that wrote no colour: compared, found equal, the positions-only path again
+        positions[:, 1] += 0.05
+        balls.touch()
+        image = e.render(scene)
+        assert image.info["replayed"] and np.array_equal(image.array, fresh(scene))
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+def test_overlapping_translucent_and_opaque_instances_after_many_moves_match_a_fresh_sort(policy):
+    from omnirender.gl.engine.drawer import RESORT_AFTER
+
+    rng = np.random.default_rng(11)
+    n = 90
+    # translucent boxes crowded along the view axis (each one's blend depends on which are in front) and an
+    # opaque set interleaved with them
+    glass = rng.uniform((-0.8, -0.6, -4.0), (0.8, 0.6, 4.0), (n, 3))
+    tint = np.concatenate([rng.uniform(0.1, 1.0, (n, 3)), np.full((n, 1), 0.45)], axis=1)
+    solid = rng.uniform((-2.5, -1.5, -4.0), (2.5, 1.5, 4.0), (n, 3))
+    glass_set = om.InstanceSet(om.Box(size=0.6), glass, colors=tint)
+    solid_set = om.InstanceSet(om.Box(size=0.35), solid, colors=np.full((n, 3), 0.7))
+    camera = om.Camera.look_at((0.5, 0.8, 10), (0, 0, 0), fov=40)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.3, -0.5, -1.0)), glass_set, solid_set])
+    with engine_for(policy) as e:
+        e.render(scene)
+        for step in range(RESORT_AFTER + 7):
+            glass[:, 2] = glass[rng.permutation(n), 2]  # the depth order shuffled: another blend order
+            solid[:, 2] = solid[rng.permutation(n), 2]
+            glass_set.touch("transforms")
+            solid_set.touch("transforms")
+            image = e.render(scene).array
+            if step % 20 == 0:
+                assert np.array_equal(image, fresh(scene)), step
+        assert np.array_equal(image, fresh(scene))
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast:RuntimeWarning")
+@pytest.mark.parametrize("value", [np.nan, np.inf, 1e39], ids=["nan", "inf", "beyond float32"])
+@pytest.mark.parametrize("names", [(), ("transforms",)], ids=["touch()", "touch('transforms')"])
+def test_a_bad_position_is_refused_naming_the_instance_and_the_node(value, names):
+    positions, colors = swarm(120)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), om.Node("swarm", [balls])])
+    with engine_for("row order") as e:
+        e.render(scene)
+        positions[17, 1] = value
+        balls.touch(*names)
+        with pytest.raises(ValueError, match=r"instance 17 .*\(in node /scene/swarm\)"):
+            e.render(scene)
+        positions[17, 1] = 0.5  # fixed: drawn again
+        balls.touch(*names)
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+@pytest.mark.parametrize("n", [0, 1, 2])
+def test_sets_of_no_one_or_two_instances_move(policy, n):
+    positions, colors = swarm(n, seed=n)
+    balls = om.InstanceSet(om.Sphere(radius=0.8), positions, colors=colors)
+    camera = om.Camera.look_at((0, 2, 9), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with engine_for(policy) as e:
+        e.render(scene)
+        for step in range(3):
+            positions += (0.3, -0.2, 0.1)
+            balls.touch("transforms")
+            assert np.array_equal(e.render(scene).array, fresh(scene)), step
+        balls.colors = None  # colours taken away (the shape was captured under the instances' colours)
+        m = 1 - min(n, 1)
+        balls.transforms = np.zeros((m, 3))  # one instance where there were none, or none
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        balls.colors = np.full((m, 3), (0.9, 0.3, 0.2))  # and given again
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+
+
+def test_in_row_order_a_partly_culled_set_is_neither_culled_nor_sorted_and_its_moves_replay(sorts):
+    positions, colors = swarm(300)
+    balls = om.InstanceSet(om.Box(size=0.25), positions, colors=colors)
+    camera = om.Camera.look_at((0.0, 1.0, 2.5), (0, 0, 0), fov=45)  # close up: some instances out of view
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with engine_for("row order") as e:
+        e.render(scene)
+        e.render(scene)
+        assert sum(p["items"] for p in e.stats["passes"] if p["name"] == "opaque") == 300, "all of them drawn"
+        for _ in range(3):
+            positions[:, 2] += 0.2
+            balls.touch("transforms")
+            image = e.render(scene)
+            assert image.info["replayed"], e.frame_runner.not_recorded
+            assert np.array_equal(image.array, fresh_uncounted(scene, sorts))
+        camera.eye = (0.5, 1.0, 2.5)  # another view: still row order
+        assert np.array_equal(e.render(scene).array, fresh_uncounted(scene, sorts))
+        assert sorts == [], "row order: nothing sorted"

@@ -94,7 +94,7 @@ def test_a_replaced_material_redraws_no_map():
         node.remove(node.items[1])
         node.insert(1, om.Material(diffuse=(1.0, 0.1, 0.1)))
         image = e.render(scene)
-        assert e.stats["compiled"] == "subtrees"
+        assert e.stats["compiled"] == "dirty"  # a Material replaced by a Material: dirty bits (dirty.py)
         assert e.stats["shadow_maps"]["kept"] == 1 and map_passes(e) == []
         same_as_fresh(e, image, scene)
 
@@ -121,7 +121,7 @@ def test_a_replaced_matrix_and_an_added_and_removed_node_match_a_fresh_engine():
         node.remove(node.items[0])
         node.insert(0, om.Matrix(m))
         image = e.render(scene)
-        assert e.stats["compiled"] == "subtrees" and e.stats["shadow_maps"]["partial"] == 1
+        assert e.stats["compiled"] == "dirty" and e.stats["shadow_maps"]["partial"] == 1  # (dirty.py)
         same_as_fresh(e, image, scene)
         scene.remove(nodes.pop(3))
         nodes.append(scene.add(om.Node("extra", [om.Translation(0.1, 1.1, 0.2), om.Material(), box])))

@@ -258,3 +258,19 @@ def test_nodes_added_in_one_frame_under_a_textured_parent_and_a_plain_one_each_t
             lit.add(leaf(f"h{frame}", (frame - 0.5, 0.0, 0.0), box, diffuse=(0.9, 0.9, 0.9)))
             scene.add(leaf(f"s{frame}", (2.5 * frame - 3.0, 0.0, 2.0), box, diffuse=(0.9, 0.9, 0.9)))
             check(e, scene, f"frame {frame}")
+
+
+def test_a_material_of_equal_values_replaced_after_a_splice_restyles_its_own_node():
+    """Nodes added with materials of equal values share what was made for the values, but each item's
+    resolved surface names its own material: replacing one of them restyles its node, not the others."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, box = base_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        nodes = [scene.add(leaf(f"e{k}", (2.0 * k - 2.0, 2.6, 1.0), box, diffuse=(0.9, 0.3, 0.1))) for k in range(3)]
+        check(e, scene, "three equal materials added")
+        for frame, node in enumerate([nodes[1], nodes[2], nodes[0]]):
+            node.remove(node.items[1])
+            node.insert(1, om.Material(diffuse=(0.1, 0.3 + 0.3 * frame, 0.9)))
+            check(e, scene, f"replaced in {node.name}", spliced=False)

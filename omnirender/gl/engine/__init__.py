@@ -2,7 +2,7 @@
 
 Context and GPU resources (``context``, ``resources``, ``glstate``, ``framebuffer``),
 the declarative GL state (``state``, ``attributes``), the compile side (``compiler``,
-``drawlist``, ``dynamic``, ``instancing``, ``geometry``, ``layout``), programs
+``drawlist``, ``dynamic``, ``translations``, ``instancing``, ``geometry``, ``layout``), programs
 (``shaders``, ``shadow_glsl``, ``lighting``), the pass language (``technique``,
 ``passes``, ``imagespace``) and the frame side (``renderer``, ``frame``,
 ``pipelines``, ``render_texture``).

@@ -29,15 +29,16 @@ import numpy as np
 
 from ...attributes import BumpMap, DrawStyle, Fog, Highlight, Material, MultiTexture, Texture
 from ...attributes.photometry import linear_rgb
-from ...attributes.surface import Appearance, appearance_key, resolve_appearance
+from ...attributes.surface import Appearance, appearance_key, decided_by, resolve_appearance
 from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform
-from ...scene.node import Node
+from ...scene.node import Node, declarations_kept
 from .attributes import CullFace, GLState
 from .compile_state import CompileState
-from .drawlist import DrawItem, DrawState, Scope
+from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
+from .drawlist import DrawItem, DrawState, Scope, drawn_transparent
 from .geometry import Geometry
 from .instancing import instance_rows
 from .layout import PBR, PHONG, ROW
@@ -230,6 +231,7 @@ class DrawListCompiler:
         #: ids of a splice's ancestors -> (their refs, versions, the resolved draw state where a child enters)
         self._entry_states: dict[tuple[int, ...], tuple[Any, ...]] = {}
         self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
+        self._surface_entry: Any = None  # the surface_entry() the surface row was made from
         self._texset: Any = None
         self._point_size = 1.0
         self._blend_on = False
@@ -338,10 +340,11 @@ class DrawListCompiler:
             self._new_state_kinds()
             c = None
         if c is not None and c[0]() is scene and c[2] == mask_key:
-            if c[1] == scene.version:
+            version, structure = scene.versions
+            if c[1] == version:
                 self.engine.stats["compiled"] = False
                 return self.installer.root
-            if c[3] == scene.structure_version:
+            if c[3] == structure:
                 # only transforms moved or instance arrays changed: rewrite those rows, no traversal (dynamic.py)
                 count = self.updater.apply(changed)
                 if count is not None:
@@ -351,15 +354,25 @@ class DrawListCompiler:
                     # only the changed paths; the last frame's result is kept when it is the same (a recorded
                     # frame plan keys on it: moves of plain objects keep it)
                     engine = self.engine
-                    if self.updater.placed:
+                    updater = self.updater
+                    # (not when every moved transform sits in a node whose subtree declares nothing: a plain
+                    # object moved places no light or camera, and the walk up to the root is skipped)
+                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
                             engine.camera = declared.camera
-                    self._compiled = (c[0], scene.version, mask_key, c[3])
+                    self._compiled = (c[0], version, mask_key, c[3])  # (applying moved nothing of the graph)
                     self.engine.stats["compiled"] = False
                     return self.installer.root
             elif edits and self.installer.root is not None and self._full_key is not None:
+                # attributes replaced by ones of the same role: dirty bits on the items, rows patched (dirty.py)
+                count = self._replace(scene, edits, changed)
+                if count is not None:
+                    self.engine.stats["incremental"] = count
+                    self._compiled = (c[0], scene.version, mask_key, scene.structure_version)
+                    self.engine.stats["compiled"] = "dirty"
+                    return self.installer.root
                 # nodes added or removed, attributes replaced: compile only the subtrees the edits touch
                 count = self._splice(scene, edits, changed)
                 if count is not None:
@@ -403,6 +416,69 @@ class DrawListCompiler:
         self.installer.install(root)
         self.engine.stats["compiled"] = True
         return root
+
+    # -- attributes replaced by attributes of the same role: dirty bits (dirty.py) -------------
+    def _replace(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
+        """Apply the frame's list edits as dirty bits when they only replaced attributes by attributes of the
+        same role (:func:`.dirty.classify`): transforms recompose the rows below them, surfaces rewrite the
+        rows' surface fields; no subtree compile, no splice.  Returns how many items changed, or None (nothing
+        modified) for the splice path.  Other components changed in the same frame may only be static
+        transforms (moved with the others)."""
+        replacements = classify(edits, self._own)
+        if replacements is None:
+            return None
+        replaced = {id(r.old) for r in replacements}
+        replaced.update(id(r.new) for r in replacements)
+        moves: list[Any] = []
+        for c in changed:
+            if id(c) in replaced or isinstance(c, Node):
+                continue
+            if not (isinstance(c, Transform) and c.static):
+                return None  # a parameter changed beside the replacements: the splice compiles it
+            moves.append(c)
+        swaps = transform_swaps(replacements, self.entries_of)
+        if swaps is None:
+            return None
+        table = self.engine.material_table
+        generation, version = table.generation, table.version
+        changes = restyles(replacements, self.entries_of, self.surface_entry)
+        if changes is None or table.generation != generation:
+            return None
+        # every replacement is handled: from here on the draw list changes
+        self.updater.replace(swaps)
+        count = 0
+        if changes:
+            batches, same = restyle(changes)
+            self.updater.rows_rewritten(batches, same and table.version == version)
+            count += len(changes)
+        news = [r for r in replacements if r.kind == DIRTY_TRANSFORM]
+        if news or moves:
+            count += self.updater.apply([*(r.new for r in news), *moves]) or 0
+            engine = self.engine
+            mask = engine.mask_function
+            # lights or the camera may sit below a replaced transform (a node that declares nothing: not there)
+            if moves or any(r.node.declarations(mask).placements for r in news):
+                declared = engine.preevaluate(scene)
+                if not _same_declarations(engine.declared, declared):
+                    engine.declared = declared
+                    engine.camera = declared.camera
+        for node in {id(r.node): r.node for r in replacements}.values():  # compiled with what it holds now
+            key = self._key_of(node)
+            entry = self._node_cache.get(key) if key is not None else None
+            if entry is not None:
+                own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
+                self._node_cache[key] = _NodeEntry(node, own, entry.entries)
+        self.engine.stats["dirty"] = tuple(sorted({r.kind for r in replacements}))
+        return count
+
+    def entries_of(self, node: Any) -> list[Any] | None:
+        """The draw items and scopes ``node``'s one compiled occurrence made (its descendants' included), or
+        None when it was not compiled once or its entry is gone."""
+        key = self._key_of(node)
+        entry = None if key is None else self._node_cache.get(key)
+        if entry is None or entry.ref() is not node:
+            return None
+        return entry.entries
 
     # -- compiling only the subtrees that list edits touched --------------------------------
     def _splice(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
@@ -738,10 +814,7 @@ class DrawListCompiler:
             )
         app = self._appearance
         if transparent is None:
-            see_through = app.alpha_mode == "blend" or (
-                app.alpha_mode == "opaque" and app.model == "phong" and geometry.translucent
-            )
-            transparent = self._blend_on or (see_through and not self._alpha_tested)
+            transparent = drawn_transparent(app, geometry, self._blend_on, self._alpha_tested)
         cull = None
         single = not app.double_sided and kind == "mesh"
         if (single or (geometry.closed and not transparent)) and kind == "mesh" and self._auto_cull:
@@ -760,6 +833,7 @@ class DrawListCompiler:
             local,
             self._technique_path,
         )
+        item.surface = self._surface_entry
         self._scope.entries.append(item)
         return item
 
@@ -803,6 +877,7 @@ class DrawListCompiler:
         item.source = source
         item.template = template
         item.source_colors = _colors_copy(source)
+        item.colors_at = source.written_at("colors")
         self._scope.entries.append(item)
         return item
 
@@ -975,23 +1050,45 @@ class DrawListCompiler:
 
     def _resolve_surface(self) -> None:
         """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
-        texture, layers, bump, highlight, description = self._surroundings()
-        surface = self.state.surface
-        top = surface[-1] if surface else None
-        if top.__class__ is Material and texture is layers is bump is highlight is description is None:
+        entry = self._surface_entry = self.surface_entry(self.state.surface, self._surroundings())
+        app, row, texset, _ = entry
+        point_size = self._point_size
+        if row[_POINT_SIZE] != point_size:
+            row = row.copy()
+            row[_POINT_SIZE] = point_size
+        self._appearance = app
+        self._texset = texset
+        self._surface_row = row
+        self.state.surface_dirty = False
+
+    def surface_entry(self, stack: Any, context: tuple) -> tuple[Any, np.ndarray, TextureSet, tuple]:
+        """The resolved surface of the surface ``stack`` (Material / PBRMaterial / Color, outermost first) in
+        ``context`` (the Texture, MultiTexture, BumpMap, Highlight and material description in force, each or
+        None): ``(appearance, row of its surface fields, texture set, context)``, memoised by what it reads.
+
+        Draw items keep the entry their row was made from (``DrawItem.surface``): an attribute replaced by one
+        of the same role is resolved again from it (:mod:`.dirty`)."""
+        texture, layers, bump, highlight, description = context
+        top = stack[-1] if stack else None
+        plain = top.__class__ is Material and texture is None and layers is None and bump is None
+        if plain and highlight is None and description is None:
             # the innermost is a plain Material and nothing else is read: its values decide (a node added per
             # frame with a new Material of the same colour finds the row, ids and texture set made before)
             key: tuple = (Material, top.values())
         else:
+            plain = False
             key = (
-                appearance_key(surface, texture, layers, bump),
+                appearance_key(stack, texture, layers, bump),
                 None if highlight is None else (id(highlight), highlight.version),
                 None if description is None else (id(description), description.version),
             )
         memo = self._surface_memo
         entry = memo.get(key)
+        if entry is not None and plain and entry[0].material is not top:
+            # made for another material of these values: the appearance names this one (dirty.py follows it)
+            return (decided_by(entry[0], top), *entry[1:])
         if entry is None:
-            app = resolve_appearance(surface, texture, layers, bump)
+            app = resolve_appearance(stack, texture, layers, bump)
             for tex in app.textures:
                 self._check_texture(tex)
             # the attributes are kept alive with the entry, so the ids in its key stay theirs
@@ -1004,15 +1101,7 @@ class DrawListCompiler:
             if len(memo) > 256:
                 memo.clear()
             memo[key] = entry
-        app, row, texset, _ = entry
-        point_size = self._point_size
-        if row[_POINT_SIZE] != point_size:
-            row = row.copy()
-            row[_POINT_SIZE] = point_size
-        self._appearance = app
-        self._texset = texset
-        self._surface_row = row
-        self.state.surface_dirty = False
+        return entry
 
     def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
         """A row holding the surface fields (the model matrix is filled per item); colours are linear."""

@@ -19,7 +19,17 @@ import numpy as np
 
 from .layout import ROW
 
-__all__ = ["DrawItem", "DrawState", "Batch", "Scope", "Segment", "plan_batches", "uniform_material", "position_of"]
+__all__ = [
+    "DrawItem",
+    "DrawState",
+    "Batch",
+    "Scope",
+    "Segment",
+    "plan_batches",
+    "uniform_material",
+    "position_of",
+    "drawn_transparent",
+]
 
 _MODEL = ROW.slice("model")
 _MATERIAL = np.concatenate(
@@ -142,6 +152,8 @@ class DrawItem:
         "source",
         "template",
         "source_colors",
+        "colors_at",
+        "surface",
     )
 
     def __init__(
@@ -183,6 +195,12 @@ class DrawItem:
         #: for an instance set: a copy of the colours its rows were made from (None: none), so a frame where
         #: only positions changed writes the translations and keeps the converted colours
         self.source_colors: np.ndarray | None = None
+        #: for an instance set: its ``written_at("colors")`` when ``source_colors`` was last found equal to its
+        #: colours (a touch naming only other arrays keeps it: the colours are not compared then)
+        self.colors_at = -1
+        #: the compiler's resolved surface the row's surface fields came from (appearance, row, texture set,
+        #: context), or None; an attribute replaced by one of the same role is resolved again from it
+        self.surface: Any = None
 
     @property
     def instance_models(self) -> np.ndarray | None:
@@ -230,6 +248,15 @@ class DrawItem:
 
     def __repr__(self) -> str:
         return f"DrawItem({self.geometry.label}, {self.state.kind}, transparent={self.transparent})"
+
+
+def drawn_transparent(app: Any, geometry: Any, blend_on: bool, alpha_tested: bool) -> bool:
+    """Whether a surface of ``app`` (a resolved ``Appearance``) on ``geometry`` is drawn with the transparent
+    items (blended, sorted): under an ``om.gl.Blend``, or see-through and not cut out by an ``om.gl.AlphaTest``."""
+    see_through = app.alpha_mode == "blend" or (
+        app.alpha_mode == "opaque" and app.model == "phong" and geometry.translucent
+    )
+    return blend_on or (see_through and not alpha_tested)
 
 
 def world_bounds(items: Any) -> tuple[np.ndarray, np.ndarray] | None:

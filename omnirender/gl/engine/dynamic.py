@@ -27,6 +27,7 @@ from .bulk import BulkMap
 from .drawlist import set_translations
 from .instancing import InstanceRows, instance_rows, set_arrays
 from .layout import ROW
+from .translations import TranslationMap
 
 __all__ = ["MovePlan", "TransformUpdater"]
 
@@ -34,12 +35,11 @@ _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
+_EYE4_LIST = _EYE4.tolist()
 #: moved transforms from which a frame of only Translations takes the array path (bulk.py)
 _MANY = 64
-#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan._apply_few)
+#: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
-#: the key of the plan's own translations among its array maps
-_TRANSLATIONS = -1
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
 _IDENTITY = object()
 
@@ -96,12 +96,23 @@ class MovePlan:
         #: id(transform) -> indices in items of the items whose chain holds it (made on the first few-moved frame,
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
+        #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
+        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame and again when
+        #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
+        #: append new items and leave removed ones' places)
+        self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
+        #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
+        self.rows_only = True
         #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
         self.bulk: dict[int, tuple[Any, BulkMap]] = {}
-        #: frames since the last splice in which most of the translations moved (_apply_translations)
-        self.many_moves = 0
+        #: where each item's translation column comes from, for frames that move most translations (made on the
+        #: first such frame, followed through splices: translations.py)
+        self._map: TranslationMap | None = None
+        #: by place among the matrices: whether the identity is there (the padding of chains)
+        self._identity = np.zeros(identity + 1, bool)
+        self._identity[identity] = True
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
         self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
@@ -124,7 +135,8 @@ class MovePlan:
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
         self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
-        self.many_moves = 0
+        first_new = len(self.items)
+        gone: list[int] = []
         # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
         # held every transform of the list)
         where = self._where
@@ -137,24 +149,14 @@ class MovePlan:
             if i is not None:
                 self.chain[i] = identity  # never recomposed again
                 self.batch_of[i] = -1
+                gone.append(i)
                 if users is not None:
                     _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
         _note_clipping(self.clipping, new)
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
-            fresh = list({id(t): t for t in fresh}.values())
-            # the identity's place stays an identity (the padding of every chain and the removed items' chains
-            # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
-            self.transforms.append(_IDENTITY)
-            for t in fresh:
-                self.index[id(t)] = len(self.transforms)
-                self.transforms.append(t)
-            matrices = self._extend("matrices", len(fresh) + 1)
-            for cls, members in _by_class(range(len(fresh)), fresh).items():
-                matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
-            identity = len(self.transforms)
-            matrices[identity] = np.eye(4)
+            identity = self._add_transforms(fresh)
         if new:
             length = max(self.chain.shape[1], max(len(it.chain) for it in new))
             if length > self.chain.shape[1]:
@@ -190,6 +192,90 @@ class MovePlan:
                 self.batches.append(batch)
             self.batch_of[i] = b
             self.row_of[i] = row
+        if self._map is not None:
+            self._map.splice(self, gone, first_new)
+
+    def identity_places(self) -> np.ndarray:
+        """By place among :attr:`matrices`: whether the identity is there (chains' padding), read-only."""
+        return self._identity
+
+    def _add_transforms(self, fresh: list[Any]) -> int:
+        """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
+        fresh = list({id(t): t for t in fresh}.values())
+        identity = len(self.transforms)
+        # the identity's place stays an identity (the padding of every chain and the removed items' chains
+        # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
+        self.transforms.append(_IDENTITY)
+        for t in fresh:
+            self.index[id(t)] = len(self.transforms)
+            self.transforms.append(t)
+        matrices = self._extend("matrices", len(fresh) + 1)
+        for cls, members in _by_class(range(len(fresh)), fresh).items():
+            matrices[[identity + 1 + k for k in members]] = cls.stack_matrices([fresh[k] for k in members])
+        identity = len(self.transforms)
+        matrices[identity] = np.eye(4)
+        marks = self._extend("_identity", len(fresh) + 1)
+        marks[-len(fresh) - 1 :] = False
+        marks[identity] = True
+        return identity
+
+    def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
+        """Transforms replaced by transforms (the dirty bits of :mod:`.dirty`): ``(item, old, new)`` where the
+        item's chain now holds ``new`` at ``old``'s place.  The item's chain indices and the transform -> items
+        map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
+        :meth:`apply` of the new transforms."""
+        self.bulk.clear()  # the arrays' maps name rows below the old transforms: made again
+        where = self._where
+        if where is None:
+            where = self._where = {id(it): i for i, it in enumerate(self.items)}
+        users = self._users
+        if users is None:
+            users = self._users = {}
+            for i, item in enumerate(self.items):
+                _add_user(users, item, i)
+        index = self.index
+        below: dict[int, tuple[Any, Any, set[int]]] = {}  # id(old) -> (old, new, the items swapped)
+        for item, old, new in swaps:
+            i = where.get(id(item))
+            if i is not None:
+                below.setdefault(id(old), (old, new, set()))[2].add(i)
+        general = []
+        taken: list[int] = []
+        for key, (old, new, swapped) in below.items():
+            k = index.get(key)
+            if k is None or id(new) in index or set(users.get(key, ())) != swapped:
+                general.append(old)
+                continue
+            # no other item lies below the old transform: the new one takes its place (no chain changes)
+            del index[key]
+            index[id(new)] = k
+            self.transforms[k] = new
+            self.matrices[k] = new.matrix
+            users[id(new)] = users.pop(key)
+            taken.append(k)
+        if self._map is not None:  # (after the chains changed below)
+            swapped_items = np.array(sorted({i for _, _, items in below.values() for i in items}), np.intp)
+        if not general:
+            if self._map is not None:
+                self._map.replaced(self, taken, swapped_items)
+            return
+        swaps = [s for s in swaps if s[1] in general]
+        fresh = [new for _, _, new in swaps if id(new) not in self.index]
+        if fresh:
+            self._add_transforms(fresh)
+        for item, old, new in swaps:
+            i = where.get(id(item))
+            if i is None:
+                continue  # not in the plan (an instance set's item)
+            self.chain[i, : len(item.chain)] = [index[id(t)] for t in item.chain]
+            found = users.get(id(old))
+            if found is not None and i in found and old not in item.chain:
+                found.remove(i)
+            found = users.setdefault(id(new), [])
+            if i not in found:
+                found.append(i)
+        if self._map is not None:
+            self._map.replaced(self, taken, swapped_items)
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
         """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
@@ -241,7 +327,7 @@ class MovePlan:
         if not changed:
             return 0
         if len(changed) <= _FEW:
-            return self._apply_few(changed)
+            return self.apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations = last
@@ -279,76 +365,99 @@ class MovePlan:
     def _apply_translations(self, positions: np.ndarray, moved: list[Any]) -> int | None:
         """Many plain ``Translation`` objects moved (a simulation's setter loop): written like an array's rows.
 
-        The plan's translations are taken as one array (:class:`~.bulk.BulkMap`
-        over all of them): the moved offsets go into the plan's matrices, and
-        every row below a translation takes its translation column from them.
-        None when fewer than half of them moved (the rows below the others
-        would be uploaded for nothing) or an item lies below two translations.
+        The moved offsets go into the plan's matrices, and every row below one
+        translation takes its translation column from them
+        (:class:`~.translations.TranslationMap`, followed through splices);
+        rows below several translations are recomposed from their chains.
+        None when fewer than half of the plan's translations moved (the rows
+        below the others would be uploaded for nothing).
         """
-        entry = self.bulk.get(_TRANSLATIONS)
-        if entry is None:
-            # made on the second such frame since the last splice: a frame that also adds or removes nodes
-            # would make it for one use (its cost is about the general path's)
-            self.many_moves += 1
-            if self.many_moves < 2:
-                return None
-            own = [t for t in self.transforms if t.__class__ is Translation]
-            entry = self.bulk[_TRANSLATIONS] = (own, BulkMap(self, own))
-        own, bulk = entry
-        if not bulk.valid or 2 * len(moved) < len(own):
+        found = self._map
+        if found is None:
+            found = self._map = TranslationMap(self)
+        if 2 * len(moved) < found.translations:
             return None
         self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
-        bulk.apply(self, self.matrices[bulk.positions, :3, 3])  # own is in plan order: its rows are 0..n-1
-        return bulk.count + self._apply_instances(set(positions.tolist()))
+        count = found.apply(self)
+        multi = found.multi_items()
+        if len(multi):
+            hit = np.zeros(len(self.matrices), bool)
+            hit[positions] = True
+            count += self._write_items(multi[hit[self.chain[multi]].any(axis=1)])
+        return count + (self._apply_instances(set(positions.tolist())) if self.instance_items else 0)
 
-    def _apply_few(self, changed: list[Any]) -> int:
+    def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
-        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item."""
+        :attr:`_users`, are recomposed one by one and their rows marked; nothing is visited per installed item.
+
+        :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
+        item without a batch or an instance set moved)."""
+        self.rows_only = True
         users = self._users
         if users is None:
             users = self._users = {}
             for i, item in enumerate(self.items):
                 _add_user(users, item, i)
         index = self.index
+        matrices = self.matrices
         positions: list[int] = []
         affected: dict[int, None] = {}
         for t in changed:
             k = index.get(id(t))
             if k is None:
                 continue
-            self.matrices[k] = t.matrix
+            if t.__class__ is Translation:
+                matrices[k, :3, 3] = t.offset  # the rest of a translation's matrix is the identity already
+            else:
+                matrices[k] = t.matrix
             positions.append(k)
             for i in users.get(id(t), ()):
                 affected[i] = None
         if not positions:
             return 0
-        if self.bulk:
-            for key, (_, bulk) in list(self.bulk.items()):
-                if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
-                    del self.bulk[key]
-        matrices, local = self.matrices, self.local
+        if self.bulk or self._map is not None:
+            self._follow_maps(positions, np.fromiter(affected, np.intp, len(affected)))
+        local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
         rows_of: dict[int, list[int]] = {}
         for i in affected:
-            links = [k for k in self.chain[i].tolist() if k != identity]
-            model = matrices[links[0]]
-            for k in links[1:]:
-                model = model @ matrices[k]
-            if local is not None:
-                model = model @ local[i]
-            row = model.T.reshape(16)  # rows hold M transposed
+            item = items[i]
+            chain = item.chain
+            only = plain.get(i)
+            if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
+                only = plain[i] = (chain, _translation_only(item))
+            if only[1]:
+                # the model is the translation's matrix, written from its offset in plain floats (rows hold M
+                # transposed; the numbers the product below gives); the whole matrix, not only its translation:
+                # the row may hold another transform's (one replaced in the chain since it was written)
+                x, y, z = chain[0].offset
+                where, values = _MODEL, (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
+            else:
+                links = [k for k in self.chain[i].tolist() if k != identity]
+                model = matrices[links[0]]
+                for k in links[1:]:
+                    model = model @ matrices[k]
+                if local is not None:
+                    model = model @ local[i]
+                where, values = _MODEL, model.T.reshape(16)
             b = int(self.batch_of[i])
             if b < 0:  # an item without a batch (transparent, overlay): its own row
-                self.items[i].row[_MODEL] = row
+                item.row[where] = values
+                self.rows_only = False
                 continue
             batch = self.batches[b]
             r = int(self.row_of[i])
-            batch.rows[r, _MODEL] = row
+            batch.rows[r, where] = values
             batch.row_changed(r)
             rows_of.setdefault(b, []).append(r)
         for b, where in rows_of.items():
             self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
-        return len(affected) + (self._apply_instances(set(positions)) if self.instance_items else 0)
+        if not self.instance_items:
+            return len(affected)
+        moved = self._apply_instances(set(positions))
+        if moved:
+            self.rows_only = False
+        return len(affected) + moved
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -358,9 +467,23 @@ class MovePlan:
         affected = np.flatnonzero(hit[self.chain].any(axis=1))
         if not len(affected):
             return 0
+        self._follow_maps(positions, affected)
+        return self._write_items(affected)
+
+    def _follow_maps(self, positions: Any, affected: np.ndarray) -> None:
+        """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
+        array maps made from them are dropped; the translation map fills the ``affected`` items again."""
         for key, (_, bulk) in list(self.bulk.items()):
             if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
                 del self.bulk[key]
+        found = self._map
+        if found is not None and found.stale(positions):
+            found.fill(self, affected)
+
+    def _write_items(self, affected: np.ndarray) -> int:
+        """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""
+        if not len(affected):
+            return 0
         chain = self.chain[affected]
         models = self.matrices[chain[:, 0]]
         for k in range(1, chain.shape[1]):
@@ -407,6 +530,21 @@ class MovePlan:
                 self.moved_rows.append((batch, None))
             count += 1
         return count
+
+
+#: class -> whether it is a static transform (its matrix depends on its parameters only): the lean path's test
+_STATIC: dict[type, bool] = {}
+
+
+def _static_transform(cls: type) -> bool:
+    return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
+
+
+def _translation_only(item: Any) -> bool:
+    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
+    matrix, or the identity: a product with it changes no number)."""
+    chain, local = item.chain, item.local
+    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
 
 
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
@@ -459,6 +597,9 @@ class TransformUpdater:
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
+        #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
+        #: may have moved a declared component (``declarations_kept``)
+        self.moved: list[Any] = []
 
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
@@ -468,6 +609,23 @@ class TransformUpdater:
         """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
         if self._plan is not None:
             self._plan.splice(removed, added, moved)
+
+    def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
+        """Items' transforms replaced by transforms (``(item, old, new)``, :mod:`.dirty`): each chain takes
+        ``new`` at ``old``'s place, and the plan follows; :meth:`apply` of the new transforms then recomposes
+        their rows."""
+        for item, old, new in swaps:
+            item.chain = tuple([new if t is old else t for t in item.chain])
+        if self._plan is not None and swaps:
+            self._plan.replace(swaps)
+
+    def rows_rewritten(self, batches: list[Any], same: bool) -> None:
+        """Rows of ``batches`` were rewritten in place (not moved: the bounds hold); ``same``: they draw as
+        before, so a recorded frame plan may be replayed after their upload."""
+        if same and self._rows_moved is not None:
+            self._rows_moved(batches)
+        else:
+            self._placements_changed()
 
     def plan(self) -> MovePlan:
         """The installed items' :class:`MovePlan` (made now when there is none)."""
@@ -487,9 +645,26 @@ class TransformUpdater:
         if not changed:
             return None
         plan = self._plan
-        if plan is not None and plan.same_as_last(changed):  # a simulation's loop: the same transforms again
-            self.placed = True
-            return self._apply_moves(changed)
+        if plan is not None:
+            if len(changed) <= _FEW:
+                # an editor's drag, one simulated body: a few static transforms (the lean path, no passes over
+                # the list), else the general one below
+                statics = _STATIC
+                for c in changed:
+                    cls = c.__class__
+                    static = statics.get(cls)
+                    if static is None:
+                        static = statics[cls] = _static_transform(cls)
+                    if not static:
+                        break
+                else:
+                    self.placed = True
+                    self.moved = changed
+                    return self._apply_few(plan, changed)
+            elif plan.same_as_last(changed):  # a simulation's loop: the same transforms again
+                self.placed = True
+                self.moved = changed
+                return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
         if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
@@ -517,6 +692,7 @@ class TransformUpdater:
         if updates is None:
             return None
         self.placed = bool(moved or arrays)
+        self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
         for item, made in updates:
             _install_rows(item, made)
@@ -541,17 +717,26 @@ class TransformUpdater:
             positions = _positions_only(shape, items)
             if positions is not None:
                 moves = [_moved_world(item, positions) for item in items]
-                # not finite (or beyond float32): the full path, which names the instance
+                # not finite (or beyond float32): the full path, whose compile names the instance and the node
                 if all(np.isfinite(world).all() for world, _ in moves):
                     out.extend(zip(items, moves, strict=True))
                     continue
-            matrices, colors, may_mirror = set_arrays(shape)
+            try:
+                matrices, colors, may_mirror = set_arrays(shape)
+            except ValueError:
+                return None  # a bad array: the compile raises, naming the instance and the set's node
             for item in items:
+                if (colors is None) != (item.source_colors is None):
+                    # colours given or taken away: the shape is captured again (under the probe colour or not)
+                    return None
                 template = item.template
                 model = _chain_matrix(item.chain)
-                made = instance_rows(
-                    template.row, template.local, template.transparent, model, matrices, colors, may_mirror
-                )
+                try:
+                    made = instance_rows(
+                        template.row, template.local, template.transparent, model, matrices, colors, may_mirror
+                    )
+                except ValueError:
+                    return None  # beyond float32: as above
                 if (
                     made.transparent != item.transparent
                     or self._instance_state(template, made.mirrored) is not item.state
@@ -559,6 +744,20 @@ class TransformUpdater:
                     return None
                 out.append((item, made))
         return out
+
+    def _apply_few(self, plan: MovePlan, changed: list[Any]) -> int:
+        """:meth:`_apply_moves` of a few static transforms (no arrays): their items' rows are rewritten, the
+        render index's bounds follow them, and the frame keeps its plan when every moved row lies in a batch."""
+        plan.moved_rows = []
+        count = plan.apply_few(changed)
+        if count:
+            moved_rows = plan.moved_rows
+            self.index.moved(moved_rows)
+            if plan.rows_only and self._rows_moved is not None:
+                self._rows_moved([batch for batch, _ in moved_rows])
+            else:
+                self._placements_changed()
+        return count
 
     def _apply_moves(self, changed: list[Any], arrays: list[Any] | None = None) -> int:
         """Recompose the model matrix of every item below a changed transform; returns how many rows changed.
@@ -612,12 +811,17 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
+#: "the set has no colours" in :func:`_positions_only` (None there means "not read yet")
+_NO_COLORS = np.empty((0, 4))
+
+
 def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
     That is: positions, no scales, no visibility mask, the same count and the
     same colours as the items' rows were made from (colours are compared, so
-    their conversion to linear is done once, not every frame).  Whether they
+    their conversion to linear is done once, not every frame, unless the set's
+    touches since then named only other arrays: ``touch("transforms")``).  Whether they
     are finite is checked on what :func:`_moved_world` makes of them.
     """
     if shape.scales is not None or shape.visible is not None:
@@ -630,17 +834,29 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3:
         return None
-    colors = shape.colors
-    if colors is not None:
-        array = getattr(colors, "array", None)
-        colors = np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
+    colors_at = shape.written_at("colors")
+    colors = None
     for item in items:
         if item.instances is None or len(item.instances) != len(t):
             return None
+        if item.colors_at == colors_at:  # only other arrays were touched since the colours were converted
+            continue
+        if colors is None:
+            colors = _colors_now(shape)
         before = item.source_colors
-        if (before is None) != (colors is None) or (before is not None and not np.array_equal(before, colors)):
+        if (before is None) != (colors is _NO_COLORS) or (before is not None and not np.array_equal(before, colors)):
             return None
+        item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _colors_now(shape: Any) -> np.ndarray:
+    """The set's colours as the application holds them (no copy), or :data:`_NO_COLORS`."""
+    colors = shape.colors
+    if colors is None:
+        return _NO_COLORS
+    array = getattr(colors, "array", None)
+    return np.asarray(colors.array() if callable(array) and not isinstance(colors, np.ndarray) else colors)
 
 
 def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -697,6 +913,7 @@ def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray])
         _write_positions(item, *made)
         return
     item.source_colors = _colors_of(item.source)
+    item.colors_at = item.source.written_at("colors")
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:

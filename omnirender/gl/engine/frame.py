@@ -97,6 +97,9 @@ class FrameRunner:
         #: id(batch) -> batch whose rows moved in place since the plan was recorded or last replayed: the next
         #: replay uploads their changed rows first (:meth:`rows_moved`)
         self._moved: dict[int, Any] = {}
+        #: (plan, root scope, draw-list version, stages) for which :meth:`rows_moved` found that the plan may be
+        #: kept after rows moved in place, or None
+        self._follows: tuple[Any, ...] | None = None
         #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
         self._resized: dict[int, Any] = {}
 
@@ -153,16 +156,23 @@ class FrameRunner:
         plan = self.plan
         engine = self.engine
         root = engine.root_scope
-        if (
-            plan is None
-            or plan.stats.get("shadow_plan") is not None
-            or root is None
-            or any(scope.filtered for scope in root.walk())
-            or not all(stage.follows_rows(engine) for stage in self.stages)
-        ):
-            self.placements_changed()
-            return
-        for stage in self.stages:
+        stages = self.stages.frozen()
+        # (the answer holds for one plan, root scope, draw-list version and stage list: an editor's drag asks it
+        # once; scopes gain filtered batches only in frames drawn in full, which record a new plan)
+        follows = (plan, root, engine.draw_list_version, stages)
+        if self._follows != follows:  # (identities, and the version's value)
+            if (
+                plan is None
+                or plan.stats.get("shadow_plan") is not None
+                or root is None
+                or any(scope.filtered for scope in root.walk())
+                or not all(stage.follows_rows(engine) for stage in stages)
+            ):
+                self._follows = None
+                self.placements_changed()
+                return
+            self._follows = follows
+        for stage in stages:
             stage.changed()
         for batch in batches:
             self._moved[id(batch)] = batch

@@ -85,7 +85,9 @@ def instance_rows(
     world = models if _is_identity(model) else model @ models
     rows = np.empty((n, ROW.stride), np.float32)
     rows[:] = row
-    rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(n, 16)
+    with np.errstate(over="ignore"):
+        rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(n, 16)
+    _check_float32(rows[:, _MODEL], world)
     if colors is not None and takes_instance_colours(row):
         rows[:, _COLOR.start : _COLOR.start + 3] = srgb_to_linear(colors[:, :3])
         rows[:, _ALPHA] = colors[:, 3] * row[_ALPHA]
@@ -95,6 +97,17 @@ def instance_rows(
     may_mirror = may_mirror or model_mirrors(model) or (local is not None and model_mirrors(local))
     mirrored = bool(n) and may_mirror and bool((np.linalg.det(world[:, :3, :3]) < 0.0).any())
     return InstanceRows(rows, models, transparent, mirrored)
+
+
+def _check_float32(models: np.ndarray, world: np.ndarray) -> None:
+    """ValueError naming the first instance whose matrix (finite in float64) is beyond float32's range."""
+    finite = np.isfinite(models).all(axis=1)
+    if not finite.all():
+        bad = int(np.argmin(finite))
+        raise ValueError(
+            f"InstanceSet: the transform of instance {bad} is beyond float32's range (|x| > 3.4e38) after the "
+            f"transforms above it: translation {world[bad, :3, 3].tolist()}; GL draws float32, keep it in range"
+        )
 
 
 def model_mirrors(m: np.ndarray) -> bool:

@@ -48,6 +48,7 @@ class InstanceLayout:
         #: floats per row
         self.stride = offset
         self._by_name = {f.name: f for f in fields}
+        self._names = tuple(f.name for f in fields)
 
     def field(self, name: str) -> Field:
         return self._by_name[name]
@@ -81,7 +82,7 @@ class InstanceLayout:
         return fmt, tuple(f.attribute for f in self.fields)
 
     def names(self) -> tuple[str, ...]:
-        return tuple(f.name for f in self.fields)
+        return self._names
 
     def __repr__(self) -> str:
         return f"InstanceLayout({', '.join(f'{f.name}[{f.size}]' for f in self.fields)})"

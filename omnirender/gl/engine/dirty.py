@@ -1,0 +1,266 @@
+"""Dirty bits for attributes replaced by attributes of the same role: no subtree compile, rows patched in place.
+
+OpenUSD Hydra's ``HdChangeTracker`` marks what changed on a prim as dirty
+bits (transform, primvars, topology...) and a sync rewrites only that.  A
+node's list edits of one frame (``node.remove(t); node.insert(0, om.Matrix(m))``)
+are classified here the same way: when, after all of them, the node holds the
+same list as when it was compiled except that some entries were replaced by
+components of the same *role*, each replacement is a dirty bit on the node's
+draw items instead of a topology change:
+
+* :data:`DIRTY_TRANSFORM`: a static transform replaced by a static transform
+  (any kinds: ``Translation`` -> ``Matrix``, ``Matrix`` -> ``Rotation``).  The
+  items below it (the node's and its descendants') take the new transform at
+  the old one's place in their chains (:attr:`~.drawlist.DrawItem.chain`, so a
+  chain of several transforms keeps its order) and their rows are recomposed
+  like moved transforms' (:mod:`.dynamic`).  Declined (the subtree compile
+  runs) where the compile read the matrix for more than the model matrix:
+  clip planes, a technique's scope (levels of detail), instance sets, or a
+  mirroring change of the face culling (the determinants' signs differ).
+* :data:`DIRTY_APPEARANCE`: a ``Material`` / ``PBRMaterial`` replaced by one
+  of either, or a ``Color`` by a ``Color``.  Each item whose resolved surface
+  the old one decided (:attr:`~.drawlist.DrawItem.surface`: the material or
+  colour of its appearance) is resolved again with the new one in the same
+  context (textures, highlight, material description), and its row's surface
+  fields are written in place.  Declined where the new surface would choose
+  another draw state: other textures or program features, another shading
+  model, one- or two-sided, or opaque <-> transparent (a Material whose
+  opacity falls below 1 goes to the transparent items through the splice).
+
+Anything else - a kind added or removed, a role changed, state attributes,
+techniques, shapes, lights, clip planes, child nodes - is not classified
+(:func:`classify` returns None) and keeps the subtree compile + splice path.
+Nothing is modified before every replacement of the frame is known to be
+handled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ...attributes import Color, Material, PBRMaterial
+from ...core.transform import Transform
+from ...scene.node import Node
+from .attributes import AlphaTest, Blend
+from .drawlist import DrawItem, drawn_transparent, uniform_material
+from .layout import ROW
+
+__all__ = [
+    "DIRTY_TRANSFORM",
+    "DIRTY_APPEARANCE",
+    "Replacement",
+    "Restyle",
+    "classify",
+    "role",
+    "transform_swaps",
+    "restyles",
+    "restyle",
+]
+
+#: a static transform replaced by a static transform: the rows below it are recomposed
+DIRTY_TRANSFORM = "transform"
+#: a surface attribute replaced by one of the same role: the rows' surface fields are resolved again
+DIRTY_APPEARANCE = "appearance"
+
+_MODEL = ROW.slice("model")
+_POINT_SIZE = ROW.at("point", "size")
+_SHADING_MODEL = ROW.at("emission", "model")
+#: the row's fields a batch drawn with uniforms for its material shares (all but the model matrix and colour)
+_MATERIAL = np.concatenate(
+    [
+        np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
+        for f in ROW.fields
+        if f.name not in ("model", "color")
+    ]
+)
+#: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
+_KINDS = frozenset(("mesh", "points", "lines"))
+_TEXSET_FIELDS = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+
+
+class Replacement(NamedTuple):
+    """``old`` at a place of ``node``'s list was replaced by ``new`` of the same role (``kind``: a dirty bit)."""
+
+    node: Any
+    old: Any
+    new: Any
+    kind: str
+
+
+class Restyle(NamedTuple):
+    """An item's new surface: the compiler's resolved ``surface`` entry and the full ``row`` to write."""
+
+    item: DrawItem
+    surface: tuple
+    row: np.ndarray
+
+
+def role(component: Any) -> str | None:
+    """The role a replacement must keep: ``"transform"`` (static transforms), ``"material"``, ``"color"``, or
+    None (anything else: its replacement is a topology change)."""
+    if isinstance(component, Transform):
+        return DIRTY_TRANSFORM if component.static else None
+    if isinstance(component, (Material, PBRMaterial)):
+        return "material"
+    if isinstance(component, Color):
+        return "color"
+    return None
+
+
+def classify(
+    edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], tuple | None]
+) -> list[Replacement] | None:
+    """The frame's list ``edits`` as same-role replacements, or None when they change anything else.
+
+    ``compiled(node)`` gives the items ``node`` held when it was last
+    compiled (None: not compiled once, or its entry is gone); the node's list
+    now must hold as many, each the same object or one of the same
+    :func:`role`.  An empty list: the edits left every list as it was.
+    """
+    nodes: dict[int, Any] = {}
+    for container, op, item, _ in edits:
+        if (op != "insert" and op != "remove") or isinstance(item, Node) or not isinstance(container, Node):
+            return None
+        nodes[id(container)] = container
+    out: list[Replacement] = []
+    for node in nodes.values():
+        before = compiled(node)
+        after = node.items
+        if before is None or len(before) != len(after):
+            return None
+        for old, new in zip(before, after, strict=True):
+            if old is new:
+                continue
+            kind = role(old)
+            if kind is None or kind != role(new):
+                return None
+            out.append(Replacement(node, old, new, DIRTY_TRANSFORM if kind == DIRTY_TRANSFORM else DIRTY_APPEARANCE))
+    return out
+
+
+def _det_sign(m: np.ndarray) -> int:
+    (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
+    det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return (det > 0.0) - (det < 0.0)
+
+
+def transform_swaps(
+    replacements: list[Replacement], entries: Callable[[Any], list[Any] | None]
+) -> list[tuple[DrawItem, Any, Any]] | None:
+    """``(item, old, new)`` for every draw item whose chain holds a replaced transform, or None to decline.
+
+    ``entries(node)`` gives the node's compiled entries (its items and its
+    descendants', nested scopes as they are).  Items whose chain does not
+    hold ``old`` (shapes before it in the list) are not below it.
+    """
+    out: list[tuple[DrawItem, Any, Any]] = []
+    for node, old, new, kind in replacements:
+        if kind != DIRTY_TRANSFORM:
+            continue
+        if _det_sign(old.matrix) != _det_sign(new.matrix):
+            return None  # mirrored now (or no more): the culled faces change
+        found = entries(node)
+        if found is None:
+            return None
+        for item in found:
+            if not isinstance(item, DrawItem):
+                return None  # a technique's scope (a level of detail keeps the chain above it)
+            count = sum(1 for t in item.chain if t is old)
+            if not count:
+                continue
+            if count > 1 or item.instances is not None or item.state.clip or item.techniques:
+                return None
+            out.append((item, old, new))
+    return out
+
+
+def _same_texture_set(a: Any, b: Any) -> bool:
+    return a is b or all(getattr(a, k) == getattr(b, k) for k in _TEXSET_FIELDS)
+
+
+def restyles(
+    replacements: list[Replacement],
+    entries: Callable[[Any], list[Any] | None],
+    surface_entry: Callable[[list[Any], tuple], tuple],
+) -> list[Restyle] | None:
+    """The new surface of every draw item a replaced Material / PBRMaterial / Color decided, or None to
+    decline (an item whose surface is not known, or whose draw state the new surface would change)."""
+    pairs: dict[int, list[Any]] = {}  # id(item) -> [item, material, colour] after the replacements so far
+    for node, old, new, kind in replacements:
+        if kind != DIRTY_APPEARANCE:
+            continue
+        found = entries(node)
+        if found is None:
+            return None
+        for item in found:
+            if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None:
+                return None
+            pair = pairs.get(id(item))
+            if pair is None:
+                app = item.surface[0]
+                pair = [item, app.material, app.color]
+            if pair[1] is old:
+                pair[1] = new
+            elif pair[2] is old:
+                pair[2] = new
+            else:
+                continue  # an inner material or colour decides this item's surface
+            pairs[id(item)] = pair
+    out: list[Restyle] = []
+    for item, material, color in pairs.values():
+        app, _, texset, context = item.surface
+        stack = [x for x in (material, color) if x is not None]
+        entry = surface_entry(stack, context)
+        new_app, row, new_texset, _ = entry
+        state = item.state
+        if (
+            state.kind not in _KINDS
+            or state.overlay
+            or row[_SHADING_MODEL] != item.row[_SHADING_MODEL]
+            or new_app.double_sided != app.double_sided
+            or not _same_texture_set(new_texset, texset)
+            or _transparent(new_app, item) != item.transparent
+        ):
+            return None
+        full = row.copy()
+        full[_MODEL] = item.row[_MODEL]
+        full[_POINT_SIZE] = item.row[_POINT_SIZE]
+        out.append(Restyle(item, entry, full))
+    return out
+
+
+def _transparent(app: Any, item: DrawItem) -> bool:
+    """Whether the compile would draw ``item`` with ``app`` as a transparent item (its state decides the rest)."""
+    state = item.state
+    return drawn_transparent(app, item.geometry, state.value(Blend) is not None, state.value(AlphaTest) is not None)
+
+
+def restyle(changes: list[Restyle]) -> tuple[list[Any], bool]:
+    """Write the new rows: ``(batches whose rows changed, whether they draw as before)``.
+
+    False when a batch drawn with its material as uniforms (``Batch.uniform``)
+    got a row of another material, or an item outside batches changed (drawn
+    in full): the frame must be drawn in full, not replayed.
+    """
+    batches: dict[int, Any] = {}
+    same = True
+    for item, surface, row in changes:
+        item.surface = surface
+        slot = item.slot
+        if slot is None:
+            item.row[:] = row
+            same = False
+            continue
+        batch, r = slot
+        if batch.uniform and not (batch.rows[r, _MATERIAL] == row[_MATERIAL]).all():
+            same = False
+            item.row[:] = row
+            batch.uniform = uniform_material(batch.rows)
+        else:
+            item.row[:] = row
+        batch.row_changed(r)
+        batches[id(batch)] = batch
+    return list(batches.values()), same

@@ -1,0 +1,276 @@
+"""Where every installed item's translation column comes from when many ``om.Translation`` objects move at once.
+
+A simulation moves thousands of nodes per frame through their plain
+``Translation`` objects (``t.offset = row``).  Most items then lie below
+exactly one translation, and their world translation column is an affine
+function of that translation's offset (the formula of :mod:`.bulk`)::
+
+    M = P @ T(offset) @ S     =>     M[:3, 3] = L @ offset + c,  L = P[:3, :3],  c = L @ S[:3, 3] + P[:3, 3]
+
+:class:`TranslationMap` keeps, per item of a :class:`~.dynamic.MovePlan` (in
+the plan's item order), the place among the plan's matrices of its one
+translation, ``c`` and, where it is not the identity, ``L``.  A frame in
+which most translations moved writes the new offsets into the plan's
+matrices and then, per batch, gathers them into the rows' translation
+columns in one numpy operation; items below two or more translations (nested
+translated nodes) are recomposed from their chains.
+
+The map follows the plan: a splice fills the constants of the new items only
+and drops the removed ones (the per-batch grouping is made again, in numpy
+operations, when next applied); a change to another transform of an item's
+chain (a rotation above a translation) fills that item's constants again.
+Nothing here visits installed items one by one in Python.
+"""
+
+from __future__ import annotations
+
+from itertools import repeat
+from operator import is_
+from typing import Any
+
+import numpy as np
+
+from ...core.transform import Translation
+from .layout import ROW
+
+__all__ = ["TranslationMap"]
+
+_TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_EYE3 = np.eye(3)
+
+
+class _Part:
+    """The rows of one batch (or the loose items, ``batch`` None) the map writes."""
+
+    __slots__ = ("batch", "where", "span", "source", "constant", "linear", "items")
+
+    def __init__(
+        self,
+        batch: Any,
+        where: np.ndarray,
+        source: np.ndarray,
+        constant: np.ndarray | None,
+        linear: np.ndarray | None,
+        items: list[Any] | None,
+    ) -> None:
+        self.batch = batch
+        lo, hi = (int(where[0]), int(where[-1]) + 1) if len(where) else (0, 0)
+        #: the batch rows, ascending; a slice when they are one contiguous range (a view, not a scatter)
+        self.where: np.ndarray | slice = slice(lo, hi) if hi - lo == len(where) else where
+        self.span = (lo, hi)
+        #: the place among the plan's matrices of each row's translation, c (None: all zero) and L (None: all I)
+        self.source = source
+        self.constant = constant
+        self.linear = linear
+        #: the loose items themselves (no batch: each writes its own row)
+        self.items = items
+
+
+class TranslationMap:
+    """Per item of a move plan: the place of its one translation among the plan's matrices, ``c`` and ``L``.
+
+    ``source[i]`` is -1 for an item below no translation or several (those
+    are in :attr:`multi`), and for items that left the plan.
+    """
+
+    __slots__ = (
+        "source",
+        "constant",
+        "linear",
+        "multi",
+        "fixed",
+        "translation",
+        "translations",
+        "_parts",
+        "_multi_items",
+    )
+
+    def __init__(self, plan: Any) -> None:
+        n = len(plan.items)
+        self.source = np.full(n, -1, np.intp)
+        self.constant = np.zeros((n, 3))
+        #: L per item, made when a first item's L is not the identity
+        self.linear: np.ndarray | None = None
+        #: items below two or more translations: recomposed from their chains
+        self.multi = np.zeros(n, bool)
+        #: by place among the plan's matrices: a transform that some item's c or L was made from (its change
+        #: makes them stale: those items are filled again)
+        self.fixed = np.zeros(len(plan.matrices), bool)
+        #: by place among the plan's matrices: whether a plain ``Translation`` is there
+        self.translation = _translations(plan.transforms, len(plan.matrices))
+        #: how many places hold one
+        self.translations = int(self.translation.sum())
+        self._parts: list[_Part] | None = None
+        self._multi_items: np.ndarray | None = None
+        self.fill(plan, np.arange(n))
+
+    # -- following the plan ----------------------------------------------------------
+    def fill(self, plan: Any, items: np.ndarray) -> None:
+        """Make ``source``, ``c`` and ``L`` of the plan items ``items`` (indices) from the plan's chains."""
+        self._parts = None
+        self._multi_items = None
+        if not len(items):
+            return
+        chain = plan.chain[items]
+        hits = self.translation[chain]
+        per_item = hits.sum(axis=1)
+        self.multi[items] = per_item > 1
+        self.source[items] = -1
+        one = per_item == 1
+        if not one.any():
+            return
+        items, chain, hits = items[one], chain[one], hits[one]
+        at = hits.argmax(axis=1)  # where the translation is in each chain
+        rows = np.arange(len(items))
+        self.source[items] = chain[rows, at]
+        matrices = plan.matrices
+        identity = plan.identity_places()
+        # S's translation column: the shape-local matrix's, carried out through the links below the translation
+        point = np.zeros((len(items), 3)) if plan.local is None else plan.local[items, :3, 3].copy()
+        linear = np.broadcast_to(_EYE3, (len(items), 3, 3)).copy()
+        any_linear = False
+        for k in range(chain.shape[1] - 1, -1, -1):
+            links = chain[:, k]
+            use = (k != at) & ~identity[links]
+            if not use.any():
+                continue
+            self.fixed[links[use]] = True
+            m = matrices[links[use]]
+            point[use] = np.einsum("nij,nj->ni", m[:, :3, :3], point[use]) + m[:, :3, 3]
+            above = use & (k < at)
+            if above.any():  # L = P[:3, :3]: the links above, outermost first
+                linear[above] = matrices[links[above], :3, :3] @ linear[above]
+                any_linear = True
+        self.constant[items] = point
+        if any_linear and not (linear == _EYE3).all():
+            if self.linear is None:
+                self.linear = np.broadcast_to(_EYE3, (len(self.source), 3, 3)).copy()
+            self.linear[items] = linear
+        elif self.linear is not None:
+            self.linear[items] = _EYE3
+
+    def splice(self, plan: Any, removed: list[int], first_new: int) -> None:
+        """Follow :meth:`MovePlan.splice`: items ``removed`` (indices) left, items from ``first_new`` on came.
+
+        Call after the plan took them (its chains, matrices and transforms hold the new ones).
+        """
+        if removed:
+            gone = np.array(removed, np.intp)
+            self.source[gone] = -1
+            self.multi[gone] = False
+        n = len(plan.items)
+        self._grow(plan)
+        extra = n - len(self.source)
+        if extra > 0:
+            self.source = np.concatenate([self.source, np.full(extra, -1, np.intp)])
+            self.constant = np.concatenate([self.constant, np.zeros((extra, 3))])
+            self.multi = np.concatenate([self.multi, np.zeros(extra, bool)])
+            if self.linear is not None:
+                self.linear = np.concatenate([self.linear, np.broadcast_to(_EYE3, (extra, 3, 3))])
+        self.fill(plan, np.arange(first_new, n))
+        self._parts = None  # rows moved: grouped again when next applied
+
+    def replaced(self, plan: Any, places: list[int], items: np.ndarray) -> None:
+        """Follow :meth:`MovePlan.replace`: transforms at ``places`` are others now, the chains of ``items``
+        (indices) changed or hold them."""
+        self._grow(plan)
+        for k in places:
+            self.translation[k] = plan.transforms[k].__class__ is Translation
+        self.translations = int(self.translation.sum())
+        self.fill(plan, items)
+
+    def _grow(self, plan: Any) -> None:
+        """Places for the transforms the plan took since (their flags)."""
+        places = len(plan.matrices)
+        known = len(self.translation)
+        if places > known:
+            self.translation = np.concatenate(
+                [self.translation, _translations(plan.transforms[known:], places - known)]
+            )
+            self.fixed = np.concatenate([self.fixed, np.zeros(places - known, bool)])
+            self.translations = int(self.translation.sum())
+
+    def stale(self, places: np.ndarray) -> bool:
+        """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L
+        was made from."""
+        return bool(self.fixed[places].any())
+
+    # -- writing rows ----------------------------------------------------------------
+    def multi_items(self) -> np.ndarray:
+        """The indices of the items below two or more translations."""
+        found = self._multi_items
+        if found is None:
+            found = self._multi_items = np.flatnonzero(self.multi)
+        return found
+
+    def parts(self, plan: Any) -> list[_Part]:
+        """The mapped items grouped by batch, rows ascending (made again after a splice or a fill)."""
+        parts = self._parts
+        if parts is not None:
+            return parts
+        parts = self._parts = []
+        chosen = np.flatnonzero(self.source >= 0)
+        if not len(chosen):
+            return parts
+        owners = plan.batch_of[chosen]
+        rows = plan.row_of[chosen]
+        if (owners == owners[0]).all():
+            groups = [np.argsort(rows, kind="stable")]
+        else:
+            order = np.lexsort((rows, owners))  # by batch, then by row
+            groups = np.split(order, np.flatnonzero(np.diff(owners[order])) + 1)
+        for part in groups:
+            items = chosen[part]
+            b = int(plan.batch_of[items[0]])
+            constant = self.constant[items]
+            linear = None if self.linear is None else self.linear[items]
+            parts.append(
+                _Part(
+                    None if b < 0 else plan.batches[b],
+                    np.arange(len(items)) if b < 0 else plan.row_of[items],
+                    self.source[items],
+                    constant if constant.any() else None,
+                    None if linear is None or (linear == _EYE3).all() else linear,
+                    [plan.items[i] for i in items.tolist()] if b < 0 else None,
+                )
+            )
+        return parts
+
+    def apply(self, plan: Any) -> int:
+        """Write the translation column of every mapped item from the plan's matrices; returns how many.
+
+        The rows' batches are marked as moved (translation columns only) and
+        listed in ``plan.moved_rows``.  Items below several translations are
+        not written here (:meth:`multi_items`).
+        """
+        matrices = plan.matrices
+        count = 0
+        for part in self.parts(plan):
+            world = matrices[part.source, :3, 3]
+            lin = part.linear
+            if lin is not None:  # three scaled columns rather than a batched product (see dynamic.py on BLAS)
+                world = world[:, 0:1] * lin[:, :, 0] + world[:, 1:2] * lin[:, :, 1] + world[:, 2:3] * lin[:, :, 2]
+            if part.constant is not None:
+                world += part.constant
+            count += len(world)
+            if part.batch is None:
+                for item, w in zip(part.items, world, strict=True):  # type: ignore[arg-type]
+                    item.row[_TRANSLATION] = w
+                continue
+            batch = part.batch
+            batch.rows[part.where, _TRANSLATION] = world
+            lo, hi = part.span
+            if hi - lo <= 8 and isinstance(part.where, np.ndarray):
+                for w in part.where.tolist():
+                    batch.row_changed(w)
+            else:
+                batch.moved(lo, hi)  # translation columns only: the upload rewrites just those (drawer.py)
+            plan.moved_rows.append((batch, part.where))
+        return count
+
+
+def _translations(transforms: list[Any], places: int) -> np.ndarray:
+    """By place: whether ``transforms[k]`` is a plain ``Translation`` (places beyond the list: no)."""
+    out = np.zeros(places, bool)
+    out[: len(transforms)] = np.fromiter(map(is_, map(type, transforms), repeat(Translation)), bool, len(transforms))
+    return out

@@ -1,0 +1,305 @@
+"""An attribute replaced by one of the same role is a dirty bit, not a subtree compile (issue 22, ``dirty.py``).
+
+A transform replaced by a transform (any kinds) recomposes the rows below it; a Material / PBRMaterial
+replaced by one of either, or a Color by a Color, rewrites the surface fields of the rows it decided.  Each
+case is checked against a fresh engine's picture of the same scene, and the path taken is checked too: what
+would choose another draw state (transparent now, a texture, another shading model, a mirroring transform)
+must take the subtree compile instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.gl
+
+SIZE = (80, 64)
+
+
+def fresh(scene: om.Node, shadows: bool = False) -> np.ndarray:
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=SIZE, samples=0, shadows=shadows) as e:
+        return e.render(scene).array
+
+
+def nested_scene() -> tuple[om.Node, list[om.Node], list[om.Node]]:
+    """Groups (a Translation, then a Rotation) of five leaves (a Translation, a Material, a box or a sphere)."""
+    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    groups = [
+        scene.add(om.Node(f"g{g}", [om.Translation(2.5 * g - 3.5, 0.0, 0.0), om.Rotation(10.0 * g, (0, 1, 0))]))
+        for g in range(4)
+    ]
+    leaves = []
+    for g, group in enumerate(groups):
+        for i in range(5):
+            shape = om.Box(size=(0.6, 0.4, 0.5)) if (g + i) % 2 else om.Sphere(radius=0.35)
+            leaves.append(
+                group.add(
+                    om.Node(
+                        f"l{g}_{i}",
+                        [om.Translation(0.0, i - 2.0, 0.0), om.Material(diffuse=(0.2 * i, 0.5, 0.3 * g)), shape],
+                    )
+                )
+            )
+    return scene, groups, leaves
+
+
+def replace(node: om.Node, old: object, new: object) -> None:
+    """What applications write: the old attribute out, the new one in at its place."""
+    at = node.items.index(old)
+    node.remove(old)
+    node.insert(at, new)
+
+
+def render_checked(e, scene: om.Node, path: str, before: np.ndarray | None = None, shadows: bool = False):
+    image = e.render(scene)
+    assert e.stats["compiled"] == path
+    assert np.array_equal(image.array, fresh(scene, shadows))
+    if before is not None:
+        assert not np.array_equal(image.array, before)  # the change shows: a stale row would be seen
+    return image
+
+
+def test_a_translation_replaced_by_a_matrix_recomposes_its_rows_in_place():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        e.render(scene)
+        for frame, leaf in enumerate(leaves[2:12:3]):
+            m = np.eye(4)
+            m[:3, 3] = np.asarray(leaf.items[0].offset) + (0.3, 0.2 * frame, 0.4)
+            replace(leaf, leaf.items[0], om.Matrix(m))
+            image = render_checked(e, scene, "dirty", before)
+            assert e.stats["dirty"] == ("transform",) and e.stats["incremental"] == 1
+            assert image.info["replayed"]  # rows uploaded, the recorded plan replayed
+            before = image.array
+        assert e.stats["items"] == len(leaves)
+
+
+def test_a_parents_transform_replaced_moves_every_row_below_it():
+    """Matrix -> Rotation and Rotation -> Matrix on a group with five leaves: each leaf's chain of three
+    transforms (the group's two, its own) keeps its order with the new one at the old one's place."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    group = groups[1]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        rotation = group.items[1]
+        m = om.Rotation(35.0, (0, 1, 0)).matrix.copy()
+        m[:3, 3] = (0.0, 0.5, 0.0)
+        replace(group, rotation, om.Matrix(m))  # Rotation -> Matrix
+        before = render_checked(e, scene, "dirty", before).array
+        assert e.stats["incremental"] == 5
+        replace(group, group.items[1], om.Rotation(-25.0, (1, 0, 0)))  # Matrix -> Rotation
+        before = render_checked(e, scene, "dirty", before).array
+        replace(group, group.items[0], om.Scaling(0.8))  # the first of the chain: Translation -> Scaling
+        before = render_checked(e, scene, "dirty", before).array
+        assert e.stats["incremental"] == 5
+
+
+def test_a_transform_in_the_middle_of_a_nodes_chain_is_replaced_at_its_place():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    leaf = leaves[6]
+    spin = om.Rotation(30.0, (0, 0, 1))
+    leaf.insert(1, spin)
+    leaf.insert(2, om.Scaling((1.0, 2.0, 1.0)))  # Translation, Rotation, Scaling: the order matters
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(leaf, spin, om.Matrix(om.Rotation(-50.0, (0, 0, 1)).matrix))
+        render_checked(e, scene, "dirty", before)
+
+
+def test_a_mirroring_transform_takes_the_subtree_compile():
+    """A transform that flips the determinant's sign changes which faces are culled: another draw state."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    leaf = leaves[3]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(leaf, leaf.items[0], om.Matrix(np.diag([-1.5, 1.0, 1.0, 1.0])))
+        render_checked(e, scene, "subtrees", before)
+
+
+def test_a_material_replaced_by_a_material_rewrites_its_row():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        e.render(scene)
+        for frame, leaf in enumerate(leaves[1:16:4]):
+            material = om.Material(diffuse=(1.0, 0.1 * frame, 0.1), specular=(0.5, 0.5, 0.5), shininess=40)
+            replace(leaf, leaf.items[1], material)
+            image = render_checked(e, scene, "dirty", before)
+            assert e.stats["dirty"] == ("appearance",) and e.stats["incremental"] == 1
+            before = image.array
+        leaf = leaves[9]
+        replace(leaf, leaf.items[1], om.PBRMaterial(base_color=(0.2, 0.9, 0.3), roughness=0.3))
+        before = render_checked(e, scene, "subtrees", before).array  # another shading model: another program
+        replace(leaf, leaf.items[1], om.PBRMaterial(base_color=(0.9, 0.2, 0.8), metallic=0.7))
+        render_checked(e, scene, "dirty", before)  # PBR -> PBR
+
+
+def test_a_material_made_transparent_or_textured_takes_the_subtree_compile():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    texture = om.Texture(np.array([[[255, 0, 0], [0, 0, 255]], [[0, 255, 0], [255, 255, 0]]], np.uint8))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        glass = leaves[7]
+        replace(glass, glass.items[1], om.Material(diffuse=(0.2, 0.4, 1.0), opacity=0.4))
+        before = render_checked(e, scene, "subtrees", before).array  # opaque -> transparent
+        assert any(item.transparent and item.node is glass for item in e.index.items())
+        replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2), opacity=0.6))
+        before = render_checked(e, scene, "dirty", before).array  # transparent -> transparent: the row only
+        replace(glass, glass.items[1], om.PBRMaterial(base_color=(0.3, 1.0, 0.2), opacity=0.5, roughness=0.2))
+        before = render_checked(e, scene, "subtrees", before).array  # transparent too, another shading model
+        replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2), opacity=0.6))
+        before = render_checked(e, scene, "subtrees", before).array
+        replace(glass, glass.items[1], om.Material(diffuse=(1.0, 0.4, 0.2)))
+        before = render_checked(e, scene, "subtrees", before).array  # back to opaque
+        box = leaves[4]  # (a box: texture coordinates)
+        replace(box, box.items[1], om.PBRMaterial(base_color_texture=texture))
+        before = render_checked(e, scene, "subtrees", before).array  # Material -> textured material
+        replace(box, box.items[1], om.PBRMaterial(base_color=(0.3, 0.3, 0.9)))
+        render_checked(e, scene, "subtrees", before)  # the texture leaves: another program
+
+
+def test_a_replaced_attribute_is_drawn_the_same_in_the_next_frames():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        leaf = leaves[10]
+        replace(leaf, leaf.items[1], om.Material(diffuse=(0.9, 0.9, 0.1)))
+        replace(leaf, leaf.items[0], om.Matrix(np.array(om.Translation(0.5, 0.0, 1.0).matrix)))
+        first = render_checked(e, scene, "dirty")
+        assert e.stats["dirty"] == ("appearance", "transform")
+        second = e.render(scene)
+        assert e.stats["compiled"] is False and second.info["replayed"]
+        assert np.array_equal(second.array, first.array)
+        groups[2].items[0].offset = (1.0, 0.5, 0.0)  # a transform above the new one moves
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        assert e.stats["compiled"] is False
+        replace(leaf, leaf.items[1], om.Material(diffuse=(0.1, 0.9, 0.9)))  # replaced again: the new entry
+        render_checked(e, scene, "dirty", first.array)
+        groups[2].remove(leaf)  # a splice after dirty bits
+        render_checked(e, scene, "subtrees")
+
+
+def test_replaced_and_moved_in_the_same_frame():
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        leaf = leaves[12]
+        replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 0.0, 0.5)))
+        leaf.items[0].offset = (0.0, 0.5, 1.5)  # its own transform moved
+        before = render_checked(e, scene, "dirty", before).array
+        replace(leaf, leaf.items[0], om.Matrix(np.array(om.Translation(0.3, -1.0, 1.0).matrix)))
+        groups[2].items[1].angle = 40.0  # the parent's rotation moved
+        before = render_checked(e, scene, "dirty", before).array
+        new = om.Translation(0.0, 1.0, 0.0)
+        replace(groups[3], groups[3].items[0], new)
+        new.offset = (1.5, 1.0, 0.5)  # the new transform itself moved after it came
+        before = render_checked(e, scene, "dirty", before).array
+        replace(leaf, leaf.items[1], om.Material(diffuse=(0.0, 1.0, 0.5)))
+        leaf.items[2].radius = 0.5  # another parameter changed in the node: the subtree compile
+        render_checked(e, scene, "subtrees", before)
+
+
+def test_a_colour_or_a_parents_material_rewrites_only_the_rows_it_decides():
+    """A group's Material decides the leaves without one of their own; a Color after a Material tints it."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 3, 10), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    group = scene.add(om.Node("group", [om.Material(diffuse=(0.8, 0.8, 0.8)), om.Color(0.9, 0.3, 0.3)]))
+    shapes = []
+    for i in range(4):
+        own = [om.Material(diffuse=(0.1, 0.9, 0.1))] if i == 2 else []
+        shapes.append(group.add(om.Node(f"s{i}", [om.Translation(2.0 * i - 3.0, 0, 0), *own, om.Sphere(radius=0.6)])))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(group, group.items[1], om.Color(0.2, 0.3, 0.9))
+        before = render_checked(e, scene, "dirty", before).array
+        assert e.stats["incremental"] == 3  # the leaf with its own material is not below the colour
+        replace(group, group.items[0], om.Material(diffuse=(0.5, 0.5, 0.5), specular=(1, 1, 1), shininess=80))
+        before = render_checked(e, scene, "dirty", before).array  # the colour still tints it
+        assert e.stats["incremental"] == 3
+        replace(shapes[2], shapes[2].items[1], om.Material(diffuse=(0.9, 0.9, 0.1)))
+        render_checked(e, scene, "dirty", before)
+
+
+def test_a_material_replaced_in_a_batch_of_one_material_draws_the_batch_anew():
+    """Boxes sharing one material are drawn with it as uniforms; a different one makes the rows differ."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 4, 12), (0, 0, 0), fov=45)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=0.8)
+    nodes = [
+        scene.add(om.Node(f"b{i}", [om.Translation(i % 4 - 1.5, i // 4 - 1.0, 0), om.Material(), box]))
+        for i in range(12)
+    ]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        (batch,) = e.batches
+        assert batch.uniform
+        replace(nodes[5], nodes[5].items[1], om.Material(diffuse=(0.9, 0.1, 0.1)))  # another colour only
+        before = render_checked(e, scene, "dirty", before).array
+        assert batch.uniform
+        replace(nodes[0], nodes[0].items[1], om.Material(specular=(1, 1, 1), shininess=10, emission=(0.3, 0, 0)))
+        image = render_checked(e, scene, "dirty", before)
+        assert not batch.uniform and not image.info["replayed"]  # packed again with the material per row
+        e.render(scene)
+        assert e.render(scene).info["replayed"]
+
+
+@pytest.mark.parametrize("shadows", [False, True])
+def test_replacements_in_a_big_scene_match_a_fresh_engine(shadows):
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 22), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
+    box = om.Box(size=0.7)
+    nodes = [
+        scene.add(
+            om.Node(
+                f"b{i}",
+                [
+                    om.Translation(i % 12 - 5.5, i // 12 - 4.0, 0),
+                    om.Material(diffuse=(0.2 + (i % 5) / 6, 0.5, 0.7)),
+                    box,
+                ],
+            )
+        )
+        for i in range(96)
+    ]
+    with GLEngine(size=SIZE, samples=0, shadows=shadows) as e:
+        e.render(scene)
+        for frame in range(6):
+            node = nodes[(frame * 37 + 11) % len(nodes)]
+            if frame % 2:
+                m = np.eye(4)
+                m[:3, 3] = node.items[0].matrix[:3, 3] + (0.2, 0.3, 0.5)
+                replace(node, node.items[0], om.Matrix(m))
+            else:
+                replace(node, node.items[1], om.Material(diffuse=(1.0, 0.2 * frame, 0.1)))
+            image = e.render(scene)
+            assert e.stats["compiled"] == "dirty"
+            assert np.array_equal(image.array, fresh(scene, shadows)), frame

@@ -1,0 +1,238 @@
+"""Frames in which most translations move (a simulation's setter loop): the plan's translation map (issue 22).
+
+The move plan keeps, per installed item, where its translation column comes
+from (``gl/engine/translations.py``): rows below one translation are written
+from the moved offsets in one numpy operation per batch, rows below several
+(nested translated nodes) are recomposed from their chains, and the map
+follows splices and changes of the other transforms in the items' chains.
+Every frame must render what a fresh engine renders for the same state.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import omnirender as om
+
+pytestmark = pytest.mark.gl
+
+SIZE = (96, 72)
+
+
+def fresh(scene: om.Node) -> np.ndarray:
+    from omnirender.gl import GLEngine
+
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        return e.render(scene, background=(0, 0, 0)).array
+
+
+def engine():  # noqa: ANN201
+    from omnirender.gl import GLEngine
+
+    return GLEngine(size=SIZE, samples=0, shadows=False)
+
+
+def flat(n: int = 80) -> tuple[om.Node, list[om.Translation], np.ndarray]:
+    """n spheres, each below its own Translation (one shared sphere shape, a colour each)."""
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 30), (0, 0, 0), fov=50), om.DirectionalLight()])
+    grid = np.stack(np.meshgrid(np.arange(10.0), np.arange(8.0)), -1).reshape(-1, 2)[:n]
+    positions = np.zeros((n, 3))
+    positions[:, :2] = grid * 2.0 - (9.0, 7.0)
+    sphere = om.Sphere(radius=0.6)
+    moves = []
+    for i in range(n):
+        t = om.Translation(offset=positions[i])
+        moves.append(t)
+        scene.add(om.Node(f"b{i}", [t, om.Color(0.3 + 0.7 * i / n, 0.6, 0.3), sphere]))
+    return scene, moves, positions
+
+
+def nested(groups: int = 8, per: int = 10) -> tuple[om.Node, list[om.Translation], list[om.Translation], om.Rotation]:
+    """Groups of boxes: even groups below a translated parent node (the children below two translations), odd
+    groups below a rotated one (the children below a rotation and their own translation)."""
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 30), (0, 0, 0), fov=50), om.DirectionalLight()])
+    spin = om.Rotation(axis=(0, 0, 1), angle=20.0)
+    moves: list[om.Translation] = []
+    parents: list[om.Translation] = []
+    for g in range(groups):
+        x = -8.0 + 2.2 * g
+        if g % 2:
+            parent = scene.add(om.Node(f"g{g}", [spin]))
+        else:
+            parent_move = om.Translation(x, -5.0, 0.0)
+            moves.append(parent_move)
+            parents.append(parent_move)
+            parent = scene.add(om.Node(f"g{g}", [parent_move]))
+        for k in range(per):
+            t = om.Translation(x, 1.1 * k - 5.0, 0.0) if g % 2 else om.Translation(0.0, 1.1 * k, 0.0)
+            moves.append(t)
+            parent.add(om.Node(f"c{k}", [t, om.Color(0.2 + 0.07 * k, 0.3 + 0.06 * g, 0.5), om.Box(size=0.7)]))
+    return scene, moves, parents, spin
+
+
+def test_most_translations_moved_write_their_rows_and_match_a_fresh_render() -> None:
+    scene, moves, positions = flat()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(4):
+            positions[:, 1] += 0.3
+            positions[:, 0] -= 0.1 * frame
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False and e.stats["incremental"] == len(moves)
+            assert np.array_equal(image.array, fresh(scene)), frame
+
+
+def test_nested_translations_and_a_moved_parent_with_its_children() -> None:
+    """Items below two translations are recomposed from their chains; items below one and a rotation take L."""
+    scene, moves, parents, spin = nested()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(3):
+            for i, t in enumerate(moves):  # parents and children, all in one loop
+                x, y, z = t.offset
+                t.offset = (x + 0.05 * (i % 3), y - 0.2, z + 0.1 * frame)
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), frame
+        # only the parents move (their children with them); then the shared rotation turns
+        for t in parents:
+            x, y, z = t.offset
+            t.offset = (x, y + 0.7, z)
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        spin.angle = -35.0
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        for t in moves:  # all again, after the rotation changed what the rows below it are made from
+            x, y, z = t.offset
+            t.offset = (x - 0.1, y, z)
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, fresh(scene))
+
+
+def test_a_rotation_above_translations_changed_in_the_same_frame_as_them() -> None:
+    scene, moves, _, spin = nested(6, 12)
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(3):
+            for t in moves:
+                x, y, z = t.offset
+                t.offset = (x + 0.1, y, z)
+            spin.angle = 10.0 * frame  # another class in the list: the general path, the map filled again
+            assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene)), frame
+            for t in moves:  # then translations alone: the map (its L made from the new angle)
+                x, y, z = t.offset
+                t.offset = (x, y - 0.1, z)
+            assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene)), frame
+
+
+def test_culled_nodes_moved_into_the_view_by_a_setter_loop_are_drawn() -> None:
+    scene, moves, positions = flat()
+    outside = positions.copy()
+    outside[:40, 0] += 60.0  # half the nodes far to the right, out of the view
+    for t, row in zip(moves, outside, strict=True):
+        t.offset = row
+    with engine() as e:
+        first = e.render(scene, background=(0, 0, 0)).array
+        assert np.array_equal(first, fresh(scene))
+        for t, row in zip(moves, positions, strict=True):  # all back into the view
+            t.offset = row
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, fresh(scene))
+        assert (image.array[..., :3].sum(axis=-1) > 0).mean() > (first[..., :3].sum(axis=-1) > 0).mean()
+
+
+def test_setter_loops_between_splices_and_mixed_with_them() -> None:
+    """Nodes added and removed between setter loops (the map follows the splices: rows moved, new items mapped,
+    removed ones dropped), and in the same frame as one."""
+    scene, moves, positions = flat()
+    box = om.Box(size=0.8)
+    rotated = om.Node("r", [om.Rotation(axis=(0, 0, 1), angle=30.0)])
+    scene.add(rotated)
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(8):
+            if frame % 2:  # a splice alone: one node removed, one added (below a rotation on odd splices)
+                gone = scene.child(f"b{9 * frame}")
+                scene.remove(gone)
+                k = moves.index(gone.items[0])
+                del moves[k]
+                positions = np.delete(positions, k, axis=0)
+                t = om.Translation(3.0 - frame, 6.0, 0.0)
+                (rotated if frame % 4 == 1 else scene).add(om.Node(f"x{frame}", [t, om.Color(1, 1, 1), box]))
+                moves.append(t)
+                positions = np.concatenate([positions, [t.offset]])
+                compiled = "subtrees"
+            else:  # a setter loop over every translation
+                positions[:, 1] -= 0.15
+                positions[:, 0] += 0.05 * (frame - 3)
+                for t, row in zip(moves, positions, strict=True):
+                    t.offset = row
+                compiled = False
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] == compiled, frame
+            assert np.array_equal(image.array, fresh(scene)), frame
+        # moves and a splice in one frame
+        positions[:, 1] += 0.4
+        for t, row in zip(moves, positions, strict=True):
+            t.offset = row
+        scene.remove(scene.child("b2"))
+        image = e.render(scene, background=(0, 0, 0))
+        assert np.array_equal(image.array, fresh(scene))
+
+
+def test_a_bad_value_in_a_setter_loop_is_refused_naming_the_node_and_the_frame_stays_right() -> None:
+    scene, moves, positions = flat()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        positions[:, 0] += 0.2
+        for t, row in zip(moves[:50], positions[:50], strict=True):
+            t.offset = row
+        bad = positions[50].copy()
+        bad[1] = np.inf
+        with pytest.raises(ValueError, match="/scene/b50"):
+            moves[50].offset = bad
+        for t, row in zip(moves[50:], positions[50:], strict=True):
+            t.offset = row
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False
+        assert moves[50].offset == tuple(positions[50].tolist())
+        assert np.array_equal(image.array, fresh(scene))
+
+
+def test_transforms_replaced_between_setter_loops() -> None:
+    """A node's Translation replaced by a Matrix (and another node's Matrix by a Translation) between setter
+    loops: the map follows the replaced transforms (the same-role replacement keeps the chains' places)."""
+    scene, moves, positions = flat()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(6):
+            if frame in (1, 3):
+                node = scene.child(f"b{10 + frame}")
+                old = node.items[0]
+                k = moves.index(old)
+                m = np.eye(4)
+                m[:3, 3] = positions[k] + (0.0, 0.5, 0.0)
+                m[:3, :3] *= 1.3
+                node.remove(old)
+                node.insert(0, om.Matrix(m))
+                del moves[k]
+                positions = np.delete(positions, k, axis=0)
+            if frame == 4:  # the Matrix of frame 1 replaced by a Translation, moved with the others from now on
+                node = scene.child("b11")
+                t = om.Translation(-2.0, 5.0, 1.0)
+                node.remove(node.items[0])
+                node.insert(0, t)
+                moves.append(t)
+                positions = np.concatenate([positions, [t.offset]])
+            image = e.render(scene, background=(0, 0, 0))
+            assert np.array_equal(image.array, fresh(scene)), frame
+            positions[:, 1] += 0.2
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), frame
