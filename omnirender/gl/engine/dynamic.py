@@ -71,6 +71,10 @@ class MovePlan:
                     transforms.append(t)
         self.index = index
         self.transforms = transforms
+        #: ids of the transforms above an item drawn with clip planes: the planes were placed in world coordinates
+        #: when it was compiled, so a move of one of them compiles again (TransformUpdater.apply)
+        self.clipping: set[int] = set()
+        _note_clipping(self.clipping, (*self.items, *self.instance_items))
         identity = len(transforms)
         length = max((len(it.chain) for it in self.items), default=0)
         self.chain = np.full((len(self.items), length), identity, np.intp)
@@ -149,6 +153,7 @@ class MovePlan:
                 if users is not None:
                     _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
+        _note_clipping(self.clipping, new)
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
             identity = self._add_transforms(fresh)
@@ -699,6 +704,11 @@ class TransformUpdater:
                     sets.append(c)
                 else:
                     return None
+        clipping = self.plan().clipping
+        if clipping and (
+            not clipping.isdisjoint(map(id, moved)) or any(not clipping.isdisjoint(map(id, a)) for a in arrays)
+        ):
+            return None  # a clip plane below a moved transform: placed again by a compile
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
@@ -801,6 +811,13 @@ class TransformUpdater:
             else:
                 self._rows_moved(batches)
         return count
+
+
+def _note_clipping(clipping: set[int], items: Any) -> None:
+    """Add to ``clipping`` the transforms above those of ``items`` that are drawn with clip planes."""
+    for item in items:
+        if getattr(item.state, "clip", None):
+            clipping.update(map(id, item.chain))
 
 
 def _moved_batches(moved_rows: list[tuple[Any, Any]], count: int) -> list[Any] | None:
