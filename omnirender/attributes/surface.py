@@ -52,6 +52,7 @@ __all__ = [
     "Appearance",
     "resolve_appearance",
     "appearance_key",
+    "decided_by",
     "resolve_surface",
     "track_surfaces",
     "SurfaceTracker",
@@ -183,6 +184,15 @@ def appearance_key(stack: Sequence[Any], texture: Any = None, layers: Any = None
         None if bump is None else _version(bump.texture),
         tuple(_version(t) for t in slots),
     )
+
+
+def decided_by(app: Appearance, material: Any) -> Appearance:
+    """``app`` as decided by ``material``, a material of the values of the one that decided it (resolving
+    ``material`` gives an equal appearance): the same appearance naming ``material``, made without resolving."""
+    out = object.__new__(Appearance)
+    out.__dict__.update(app.__dict__)
+    out.__dict__["material"] = material  # (a frozen dataclass: what __init__ would have set)
+    return out
 
 
 def _texture_has_alpha(texture: Texture | None) -> bool:
