@@ -312,6 +312,7 @@ def test_overlapping_translucent_and_opaque_instances_after_many_moves_match_a_f
 
 
 @pytest.mark.filterwarnings("ignore:overflow encountered in cast:RuntimeWarning")
+@pytest.mark.filterwarnings("ignore:invalid value encountered in dot:RuntimeWarning")
 @pytest.mark.parametrize("value", [np.nan, np.inf, 1e39], ids=["nan", "inf", "beyond float32"])
 @pytest.mark.parametrize("names", [(), ("transforms",)], ids=["touch()", "touch('transforms')"])
 def test_a_bad_position_is_refused_naming_the_instance_and_the_node(value, names):

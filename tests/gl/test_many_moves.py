@@ -176,6 +176,7 @@ def test_setter_loops_between_splices_and_mixed_with_them() -> None:
             assert e.stats["compiled"] == compiled, frame
             assert np.array_equal(image.array, fresh(scene)), frame
 
+
 def test_moves_and_splices_in_one_frame_take_the_splice_and_the_updater() -> None:
     """A setter loop and nodes added or removed in the same frame: the splice compiles the new subtrees and the
     updater moves the rows of the rest (no full compile), also when a moved node is removed, when a node is

@@ -350,11 +350,8 @@ class BatchDrawer:
             return False
         if not (batch.sparse or batch.dirty is not None):
             return True
-        moved, mr = batch.moved_offsets, batch.moved_range
-        if moved is None or mr is None or not mr[0] == batch.version == moved[0] or batch.sparse:
-            return False  # not positions only: drawn in full
-        _upload_instance_set(batch, self._columns(batch.layout), batch.offset_order)
-        return True
+        # positions only, else drawn in full
+        return _upload_moved_offsets(batch, batch.offset_order)
 
     def _prepare_instance_set(self, batch: Batch, columns: np.ndarray, n: int) -> int:
         """Upload what changed of an instance set's batch; returns how many instances to draw.
@@ -875,18 +872,7 @@ def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | 
     row order, else taken in buffer order.  Any other change rewrites both
     buffers.
     """
-    moved = batch.moved_offsets  # kept for batches following this one (Batch.follow) while its version holds
-    mr = batch.moved_range
-    if (
-        not everything
-        and moved is not None
-        and mr is not None
-        and mr[0] == batch.version == moved[0]
-        and not batch.sparse
-        and len(moved[1]) == batch.size
-    ):
-        batch.offsets.write(moved[1] if order is None else np.take(moved[1], order, axis=0))
-        batch.dirty = None
+    if not everything and _upload_moved_offsets(batch, order):
         return
     batch.buffer.write(_pack(batch.rows, order, columns))
     translations = batch.rows[:, _TRANSLATION] if order is None else np.take(batch.rows[:, _TRANSLATION], order, axis=0)
@@ -894,6 +880,25 @@ def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | 
     batch.packed = None
     batch.sparse = None
     batch.dirty = None
+
+
+def _upload_moved_offsets(batch: Batch, order: np.ndarray | None) -> bool:
+    """When only the positions moved since the last upload (``Batch.moved`` with ``moved_offsets`` of the same
+    version), upload just them to the offsets buffer (row order: the array as it is; else taken in ``order``);
+    False, with nothing uploaded, otherwise."""
+    moved = batch.moved_offsets  # kept for batches following this one (Batch.follow) while its version holds
+    mr = batch.moved_range
+    if (
+        moved is None
+        or mr is None
+        or not mr[0] == batch.version == moved[0]
+        or batch.sparse
+        or len(moved[1]) != batch.size
+    ):
+        return False
+    batch.offsets.write(moved[1] if order is None else np.take(moved[1], order, axis=0))
+    batch.dirty = None
+    return True
 
 
 _ARANGE = np.arange(0)

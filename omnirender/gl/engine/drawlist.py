@@ -460,8 +460,23 @@ class Batch:
         the rows (a strided write over all of them: 0.25-1 ms per 100,000).
         """
         self._pending = world
-        self.moved(0, len(world))
-        self.moved_offsets = (self.version, world)
+        n = len(world)
+        # self.moved(0, n) written out (a frame's few Python calls count: every row moved, one range)
+        d = self._dirty
+        only = self.moved_range is not None or (d is None and not self.sparse)
+        version = self.version
+        seen = self.highlight_seen
+        if seen is not None and seen[0] == version:
+            self.highlight_seen = (version + 1, seen[1])  # translations change no highlight
+        self.version = version = version + 1
+        log = self.log
+        log.append((version, 0, n))
+        if len(log) > 32:
+            del log[:16]
+        self.sparse = None
+        self._dirty = d = (0, n) if d is None else (min(d[0], 0), max(d[1], n))
+        self.moved_range = (version, *d) if only else None
+        self.moved_offsets = (version, world)
 
     def hold(self, rows: np.ndarray) -> None:
         """Take ``rows`` (N, stride) into storage with spare rows; the items' rows become views of them."""

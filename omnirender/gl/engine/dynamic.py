@@ -71,6 +71,10 @@ class MovePlan:
                     transforms.append(t)
         self.index = index
         self.transforms = transforms
+        #: ids of the transforms above an item drawn with clip planes: the planes were placed in world coordinates
+        #: when it was compiled, so a move of one of them compiles again (TransformUpdater.apply)
+        self.clipping: set[int] = set()
+        _note_clipping(self.clipping, (*self.items, *self.instance_items))
         identity = len(transforms)
         length = max((len(it.chain) for it in self.items), default=0)
         self.chain = np.full((len(self.items), length), identity, np.intp)
@@ -149,6 +153,7 @@ class MovePlan:
                 if users is not None:
                     _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
+        _note_clipping(self.clipping, new)
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
             identity = self._add_transforms(fresh)
@@ -582,11 +587,20 @@ class TransformUpdater:
     ``instance_state`` (the draw state of an instance set's template).
     """
 
-    def __init__(self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None) -> None:
+    def __init__(
+        self,
+        index: Any,
+        placements_changed: Any,
+        instance_state: Any,
+        rows_moved: Any = None,
+        rows_restyled: Any = None,
+    ) -> None:
         self.index = index
         self._placements_changed = placements_changed
         #: tells the frame that only these batches' rows moved in place (it may keep its recorded plan), or None
         self._rows_moved = rows_moved
+        #: tells the frame that only these batches' rows' surface fields changed (:meth:`rows_rewritten`), or None
+        self._rows_restyled = rows_restyled
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
@@ -615,9 +629,14 @@ class TransformUpdater:
             self._plan.replace(swaps)
 
     def rows_rewritten(self, batches: list[Any], same: bool) -> None:
-        """Rows of ``batches`` were rewritten in place (not moved: the bounds hold); ``same``: they draw as
-        before, so a recorded frame plan may be replayed after their upload."""
-        if same and self._rows_moved is not None:
+        """The surface fields of rows of ``batches`` were rewritten in place (not moved: the bounds, the
+        casters and the shadow maps hold); ``same``: they draw as before, so a recorded frame plan may be
+        replayed after their upload."""
+        if not same:
+            self._placements_changed()
+        elif self._rows_restyled is not None:
+            self._rows_restyled(batches)
+        elif self._rows_moved is not None:
             self._rows_moved(batches)
         else:
             self._placements_changed()
@@ -639,6 +658,13 @@ class TransformUpdater:
         """
         if not changed:
             return None
+        if len(changed) == 1 and isinstance(changed[0], InstanceSet):  # a simulation touched its array
+            updates = self._instance_updates(changed)
+            if updates is None:
+                return None
+            self.placed = False
+            self.moved = []
+            return self._install(updates)
         plan = self._plan
         if plan is not None:
             if len(changed) <= _FEW:
@@ -678,29 +704,42 @@ class TransformUpdater:
                     sets.append(c)
                 else:
                     return None
+        clipping = self.plan().clipping
+        if clipping and (
+            not clipping.isdisjoint(map(id, moved)) or any(not clipping.isdisjoint(map(id, a)) for a in arrays)
+        ):
+            return None  # a clip plane below a moved transform: placed again by a compile
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
         self.placed = bool(moved or arrays)
         self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
+        return count + (self._install(updates) if updates else 0)
+
+    def _install(self, updates: list[tuple[Any, Any]]) -> int:
+        """Install instance sets' new rows or moved positions (:meth:`_instance_updates`); returns how many."""
+        batches = []
         for item, made in updates:
-            _install_rows(item, made)
-        if updates:
-            self.index.moved(None)  # instance rows replaced: every bound again
-            # positions only, in opaque batches: a recorded frame plan may be replayed after their upload
-            batches = [item.slot[0] for item, made in updates if isinstance(made, tuple) and item.slot is not None]
-            if self._rows_moved is not None and len(batches) == len(updates):
-                self._rows_moved(batches)
+            if made.__class__ is tuple:  # positions only
+                _write_positions(item, *made)
+                if item.slot is not None:
+                    batches.append(item.slot[0])
             else:
-                self._placements_changed()
-        return count + len(updates)
+                _install_rows(item, made)
+        self.index.moved(None)  # instance rows replaced: every bound again
+        # positions only, in opaque batches: a recorded frame plan may be replayed after their upload
+        if self._rows_moved is not None and len(batches) == len(updates):
+            self._rows_moved(batches)
+        else:
+            self._placements_changed()
+        return len(updates)
 
     def _instance_updates(self, sets: list[Any]) -> list[tuple[Any, Any]] | None:
         """New rows for every installed item of ``sets``, or None when one cannot be updated in place."""
         plan = self.plan()
         out = []
-        for shape in {id(s): s for s in sets}.values():
+        for shape in sets if len(sets) == 1 else {id(s): s for s in sets}.values():
             items = plan.sources.get(id(shape))
             if not items:
                 return None
@@ -708,7 +747,7 @@ class TransformUpdater:
             if positions is not None:
                 moves = [_moved_world(item, positions) for item in items]
                 # not finite (or beyond float32): the full path, whose compile names the instance and the node
-                if all(np.isfinite(world).all() for world, _ in moves):
+                if _finite(moves):
                     out.extend(zip(items, moves, strict=True))
                     continue
             try:
@@ -772,6 +811,13 @@ class TransformUpdater:
             else:
                 self._rows_moved(batches)
         return count
+
+
+def _note_clipping(clipping: set[int], items: Any) -> None:
+    """Add to ``clipping`` the transforms above those of ``items`` that are drawn with clip planes."""
+    for item in items:
+        if getattr(item.state, "clip", None):
+            clipping.update(map(id, item.chain))
 
 
 def _moved_batches(moved_rows: list[tuple[Any, Any]], count: int) -> list[Any] | None:
@@ -871,6 +917,22 @@ def _moved_world(item: Any, positions: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.ascontiguousarray(world, dtype=np.float32), offset if offset is not positions else np.array(offset)
 
 
+def _finite(moves: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Whether every moved world translation (float32, C-contiguous) is finite: one dot product with zeros each
+    (0 unless some value is infinite or NaN; no temporary array)."""
+    global _ZEROS
+    for world, _ in moves:
+        flat = world.reshape(-1)
+        if len(_ZEROS) < len(flat):
+            _ZEROS = np.zeros(max(len(flat), 2 * len(_ZEROS)), np.float32)
+        if np.dot(flat, _ZEROS[: len(flat)]) != 0.0:
+            return False
+    return True
+
+
+_ZEROS = np.zeros(0, np.float32)
+
+
 def _write_positions(item: Any, world: np.ndarray, translations: np.ndarray) -> None:
     """Move an instance set's rows to ``world`` (from :func:`_moved_world`).
 
@@ -887,14 +949,8 @@ def _write_positions(item: Any, world: np.ndarray, translations: np.ndarray) -> 
         item.slot[0].move_to(world)
 
 
-def _install_rows(item: Any, made: InstanceRows | tuple[np.ndarray, np.ndarray]) -> None:
-    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed).
-
-    A pair of arrays instead: only the instance positions changed (:func:`_moved_world`).
-    """
-    if isinstance(made, tuple):
-        _write_positions(item, *made)
-        return
+def _install_rows(item: Any, made: InstanceRows) -> None:
+    """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed)."""
     item.source_colors = _colors_of(item.source)
     item.colors_at = item.source.written_at("colors")
     item.instances = made.rows
