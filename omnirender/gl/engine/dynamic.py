@@ -624,7 +624,7 @@ class TransformUpdater:
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
         #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
-        #: may have moved a declared component (``declarations_kept``)
+        #: may have moved a declared component (``declarations_kept``), and empties it
         self.moved: list[Any] = []
 
     def forget(self) -> None:
