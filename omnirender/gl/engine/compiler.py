@@ -70,10 +70,11 @@ class TextureSet:
 
     ``textures`` are (sampler uniform, om.Texture, sRGB) triples; ``features``
     and ``uniforms`` apply where the shape has texture coordinates, ``alpha``
-    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.
+    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.  ``key`` holds
+    them all: two sets with equal keys give draw items the same draw state.
     """
 
-    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base", "key")
 
     def __init__(self, app: Appearance) -> None:
         textures: list[tuple[str, Any, bool]] = []
@@ -120,6 +121,8 @@ class TextureSet:
             self.alpha, self.alpha_uniforms = (("ALPHA_OPAQUE", True),), ()
         else:
             self.alpha, self.alpha_uniforms = (), ()
+        self.key = (self.textures, self.features, self.uniforms, self.uv1, self.normal, self.alpha,
+                    self.alpha_uniforms, self.base)  # fmt: skip
 
 
 class _NodeEntry:
