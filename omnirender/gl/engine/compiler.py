@@ -388,7 +388,7 @@ class DrawListCompiler:
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
                     # (many moved: the pre-evaluation, which walks only the changed paths, costs less than asking)
-                    moved = updater.moved
+                    moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
                     if updater.placed and (
                         len(moved) > _ASK_KEPT or not declarations_kept(moved, engine.mask_function)
                     ):
