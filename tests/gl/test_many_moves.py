@@ -179,8 +179,9 @@ def test_setter_loops_between_splices_and_mixed_with_them() -> None:
 
 def test_moves_and_splices_in_one_frame_take_the_splice_and_the_updater() -> None:
     """A setter loop and nodes added or removed in the same frame: the splice compiles the new subtrees and the
-    updater moves the rows of the rest (no full compile), also when a moved node is removed, when a node is
-    added below a moved translation, and when a moved transform places a light (then the full compile)."""
+    updater moves the rows of the rest (no full compile, once the updater has its move plan), also when a moved
+    node is removed, when a node is added below a moved translation, and when a moved transform places a light
+    (then the full compile)."""
     scene, moves, positions = flat()
     box = om.Box(size=0.8)
     group_move = om.Translation(0.0, -2.0, 0.0)
@@ -188,6 +189,9 @@ def test_moves_and_splices_in_one_frame_take_the_splice_and_the_updater() -> Non
     lamp_move = om.Translation(0.0, 0.0, 5.0)
     scene.add(om.Node("lamp", [lamp_move, om.PointLight(intensity=0.5)]))
     with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for t, row in zip(moves, positions, strict=True):  # a frame of moves alone first (the move plan made)
+            t.offset = row
         e.render(scene, background=(0, 0, 0))
         for frame in range(6):
             positions[:, 1] -= 0.1
@@ -282,3 +286,25 @@ def test_with_default_shadows_setter_loops_and_splices_match_a_fresh_render() ->
             image = e.render(scene, background=(0, 0, 0)).array
             with GLEngine(size=SIZE, samples=0) as f:
                 assert np.array_equal(image, f.render(scene, background=(0, 0, 0)).array), frame
+
+
+def test_a_clip_planes_ancestor_moved_once_the_move_plan_exists_compiles_again() -> None:
+    """Clip planes are placed in world coordinates when compiled: a move of a transform above one compiles again,
+    on the few-moves path too (after another move made the plan), and alongside a splice."""
+    scene, moves, positions = flat(20)
+    group_move = om.Translation(0.0, 0.0, 0.0)
+    clip = om.ClipPlane(normal=(1.0, 0.0, 0.0), offset=0.0)
+    group = scene.add(om.Node("group", [group_move, clip, om.Color(0.9, 0.9, 0.2)]))
+    for k in range(3):
+        group.add(om.Node(f"s{k}", [om.Translation(-1.0 + k, 4.0, 0.0), om.Sphere(radius=0.8)]))
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        moves[0].offset = (0.0, -6.0, 0.0)  # an unrelated move: the plan is made
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        group_move.offset = (1.5, 0.0, 0.0)  # the clip plane moves with its node
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        moves[1].offset = (0.0, -5.0, 0.0)
+        e.render(scene, background=(0, 0, 0))
+        group_move.offset = (-1.0, 0.0, 0.0)  # and with a node added in the same frame
+        scene.add(om.Node("late", [om.Translation(3.0, -3.0, 0.0), om.Sphere(radius=0.5)]))
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))

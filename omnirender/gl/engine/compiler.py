@@ -534,7 +534,11 @@ class DrawListCompiler:
         wherever they are (the new subtrees were compiled with their values
         already; their rows are written again the same).
         """
-        moves, changed = _moves_of(changed)
+        moves, rest = _moves_of(changed)
+        if moves and self.updater.follows(moves):
+            changed = rest
+        else:
+            moves = []  # (no plan to move rows with, or a clip plane moved: as any other change)
         plan = self._splice_plan(scene, edits, changed)
         if plan is None:
             return None
@@ -585,7 +589,10 @@ class DrawListCompiler:
             return None
         count = len(removed) + len(added)
         if moves:
-            count += self.updater.apply(moves) or 0  # (static transforms and arrays: always applied)
+            moved = self.updater.apply(moves)
+            if moved is None:  # (not expected: follows() said it would)
+                return None
+            count += moved
         return count
 
     def _drop_entry(self, node: Any) -> None:
