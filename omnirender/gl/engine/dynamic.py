@@ -478,7 +478,7 @@ class MovePlan:
                 del self.bulk[key]
         found = self._map
         if found is not None and found.stale(positions):
-            found.fill(self, affected)
+            found.refill(affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
         """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""
