@@ -384,7 +384,8 @@ class DrawListCompiler:
                     updater = self.updater
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
-                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
+                    moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
+                    if updater.placed and not declarations_kept(moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared

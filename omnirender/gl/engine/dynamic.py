@@ -101,6 +101,9 @@ class MovePlan:
         #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
         #: append new items and leave removed ones' places)
         self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
+        #: per item index, whether its shape-local matrix is the identity (made from ``local`` at once when first
+        #: asked; items spliced in later are asked one by one)
+        self._eye_local: list[bool] | None = None
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
@@ -416,16 +419,16 @@ class MovePlan:
         if not positions:
             return 0
         if self.bulk or self._map is not None:
-            self._follow_maps(positions, np.fromiter(affected, np.intp, len(affected)))
+            self._follow_maps(positions, affected)
         local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
-        rows_of: dict[int, list[int]] = {}
+        rows_of: dict[int, tuple[Any, list[int]]] = {}
         for i in affected:
             item = items[i]
             chain = item.chain
             only = plain.get(i)
             if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
-                only = plain[i] = (chain, _translation_only(item))
+                only = plain[i] = (chain, self._translation_only(i, item))
             if only[1]:
                 # the model is the translation's matrix, written from its offset in plain floats (rows hold M
                 # transposed; the numbers the product below gives); the whole matrix, not only its translation:
@@ -440,24 +443,43 @@ class MovePlan:
                 if local is not None:
                     model = model @ local[i]
                 where, values = _MODEL, model.T.reshape(16)
-            b = int(self.batch_of[i])
-            if b < 0:  # an item without a batch (transparent, overlay): its own row
+            slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
+            if slot is None:  # an item without a batch (transparent, overlay): its own row
                 item.row[where] = values
                 self.rows_only = False
                 continue
-            batch = self.batches[b]
-            r = int(self.row_of[i])
+            batch, r = slot
             batch.rows[r, where] = values
             batch.row_changed(r)
-            rows_of.setdefault(b, []).append(r)
-        for b, where in rows_of.items():
-            self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
+            found = rows_of.get(id(batch))
+            if found is None:
+                rows_of[id(batch)] = (batch, [r])
+            else:
+                found[1].append(r)
+        for batch, where in rows_of.values():
+            self.moved_rows.append((batch, np.array(where, np.intp)))
         if not self.instance_items:
             return len(affected)
         moved = self._apply_instances(set(positions))
         if moved:
             self.rows_only = False
         return len(affected) + moved
+
+    def _translation_only(self, i: int, item: Any) -> bool:
+        """Whether item ``i``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no
+        shape-local matrix, or the identity: a product with it changes no number)."""
+        chain, local = item.chain, item.local
+        if len(chain) != 1 or chain[0].__class__ is not Translation:
+            return False
+        if local is None:
+            return True
+        eye = self._eye_local
+        if eye is None:  # which items' shape-local matrices are the identity, asked of all at once (C loops)
+            held = self.local
+            eye = self._eye_local = [] if held is None else (held == _EYE4).all(axis=(1, 2)).tolist()
+        if i < len(eye):  # (``local`` holds the items' matrices in their order; spliced items come after)
+            return eye[i]
+        return local.tolist() == _EYE4_LIST
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -470,7 +492,7 @@ class MovePlan:
         self._follow_maps(positions, affected)
         return self._write_items(affected)
 
-    def _follow_maps(self, positions: Any, affected: np.ndarray) -> None:
+    def _follow_maps(self, positions: Any, affected: np.ndarray | dict[int, None]) -> None:
         """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
         array maps made from them are dropped; the translation map fills the ``affected`` items again."""
         for key, (_, bulk) in list(self.bulk.items()):
@@ -478,6 +500,8 @@ class MovePlan:
                 del self.bulk[key]
         found = self._map
         if found is not None and found.stale(positions):
+            if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
+                affected = np.fromiter(affected, np.intp, len(affected))
             found.refill(affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
@@ -540,13 +564,6 @@ def _static_transform(cls: type) -> bool:
     return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
 
 
-def _translation_only(item: Any) -> bool:
-    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
-    matrix, or the identity: a product with it changes no number)."""
-    chain, local = item.chain, item.local
-    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
-
-
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
     """Item ``i`` lies below each transform of its chain."""
     for t in dict.fromkeys(item.chain):
@@ -607,7 +624,7 @@ class TransformUpdater:
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
         #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
-        #: may have moved a declared component (``declarations_kept``)
+        #: may have moved a declared component (``declarations_kept``), and empties it
         self.moved: list[Any] = []
 
     def forget(self) -> None:
