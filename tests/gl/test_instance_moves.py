@@ -399,3 +399,41 @@ def test_the_instance_cull_keeps_exactly_the_spheres_meeting_the_frustum():
     assert 0 < sum(expected) < n
     assert visible is not None and visible.tolist() == expected
     assert cull_spheres(rows[np.array(expected)], bounds, clip) is None, "all of them in view: None"
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+@pytest.mark.parametrize("center", [(0.0, 0.0, 0.0), (0.4, 0.0, 0.2)], ids=["centred", "shifted shape"])
+def test_a_set_with_scales_and_a_mask_moves_its_positions_alone_while_they_are_not_written(policy, center):
+    """The README's swarm (radii, an alive mask, colours): ``touch("transforms")`` moves the visible instances'
+    rows without making them again; a touch naming the scales or the mask (or a plain one) makes them again."""
+    positions, colors = swarm(240, seed=9)
+    radii = np.random.default_rng(9).uniform(0.1, 0.3, 240)
+    alive = np.ones(240, bool)
+    alive[::7] = False
+    balls = om.InstanceSet(om.Box(size=1.0, center=center), positions, colors=colors, scales=radii, visible=alive)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with engine_for(policy) as e:
+        e.render(scene)
+        e.render(scene)
+        for step in range(3):
+            positions[:, 1] += 0.15
+            positions[step * 7] += 0.4  # a hidden one moves too
+            balls.touch("transforms")
+            image = e.render(scene)
+            assert not e.stats["compiled"]
+            assert image.info["replayed"] == (center == (0.0, 0.0, 0.0)), "positions alone: uploaded, replayed"
+            assert np.array_equal(image.array, fresh(scene)), step
+        alive[::7] = True  # the mask written (as many hidden, others): rows made again for the visible ones
+        alive[1::7] = False
+        assert (~alive).sum() == 35
+        positions[:, 0] -= 0.1
+        balls.touch("transforms", "visible")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        radii *= 1.5  # the scales written
+        balls.touch("scales")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        positions[:, 2] += 0.2
+        balls.touch("transforms")
+        image = e.render(scene)
+        assert np.array_equal(image.array, fresh(scene))

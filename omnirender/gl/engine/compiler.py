@@ -823,6 +823,7 @@ class DrawListCompiler:
         item.template = template
         item.source_colors = _colors_copy(source)
         item.colors_at = source.written_at("colors")
+        item.mask_at = (source.written_at("scales"), source.written_at("visible"))
         self._scope.entries.append(item)
         return item
 
