@@ -437,3 +437,16 @@ def test_a_set_with_scales_and_a_mask_moves_its_positions_alone_while_they_are_n
         balls.touch("transforms")
         image = e.render(scene)
         assert np.array_equal(image.array, fresh(scene))
+        # plain touches: the scales and the mask are compared with the rows' copies
+        positions[:, 2] -= 0.2
+        balls.touch()
+        image = e.render(scene)
+        assert image.info["replayed"] == (center == (0.0, 0.0, 0.0)), "unchanged scales and mask: positions alone"
+        assert np.array_equal(image.array, fresh(scene))
+        alive[1::7] = True  # as many hidden, others again, in place
+        alive[2::7] = False
+        balls.touch()
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        radii[:10] *= 0.5
+        balls.touch()
+        assert np.array_equal(e.render(scene).array, fresh(scene))

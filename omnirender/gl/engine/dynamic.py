@@ -25,7 +25,7 @@ from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .bulk import BulkMap
 from .drawlist import set_translations
-from .instancing import InstanceRows, instance_rows, set_arrays
+from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
 from .layout import ROW
 from .translations import TranslationMap
 
@@ -817,7 +817,8 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
     That is: positions, the same count, scales and visibility mask (both
-    unwritten since, by ``written_at``; then the visible instances' positions)
+    unwritten since, by ``written_at``, or equal to the rows' copies of them;
+    then the visible instances' positions)
     and the same colours as the items' rows were made from (colours are compared, so
     their conversion to linear is done once, not every frame, unless the set's
     touches since then named only other arrays: ``touch("transforms")``).  Whether they
@@ -829,9 +830,17 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         # the same scales and mask as the rows were made with (only touches naming other arrays since): the
         # rows keep their 3x3 parts and the visible instances, and take the moved positions of those
         mask_at = (shape.written_at("scales"), shape.written_at("visible"))
+        now = None
         for item in items:
-            if item.mask_at != mask_at or (scaled and _shifted(item)):
-                return None  # (a shape's local shift would be scaled per instance)
+            if scaled and _shifted(item):
+                return None  # a shape's local shift would be scaled per instance
+            if item.mask_at == mask_at:
+                continue
+            if now is None:  # a touch that may have written them (a plain one): compared with the rows' copies
+                now = held(shape.scales), held(shape.visible)
+            if not all(_same(a, b) for a, b in zip(item.source_mask, now, strict=True)):
+                return None
+            item.mask_at = mask_at  # the same: not compared again until a touch may have written them
     source = shape.transforms
     array = getattr(source, "array", None)
     t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
@@ -862,6 +871,13 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
             return None
         item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _same(before: np.ndarray | None, now: np.ndarray | None) -> bool:
+    """Whether an array the rows were made with (a copy, or None) equals the application's now."""
+    if before is None or now is None:
+        return before is now
+    return before.shape == now.shape and bool(np.array_equal(before, now))
 
 
 def _shifted(item: Any) -> bool:
@@ -945,6 +961,7 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
     item.source_colors = _colors_of(item.source)
     item.colors_at = item.source.written_at("colors")
     item.mask_at = (item.source.written_at("scales"), item.source.written_at("visible"))
+    item.source_mask = mask_copies(item.source)
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:
