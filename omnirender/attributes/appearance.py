@@ -126,6 +126,11 @@ class Material(Parameterised, MonoAttribute):
     def hints(self) -> frozenset[str]:  # type: ignore[override]
         return frozenset({"transparent"}) if self._opacity < 1.0 else frozenset()
 
+    def values(self) -> tuple[Any, ...]:
+        """Every parameter in one hashable tuple: materials of equal values give equal tuples (what a renderer
+        keys what it made of a material on, so that a new material of the same values finds it)."""
+        return (self._ambient, self._diffuse, self._specular, self._shininess, self._emission, self._opacity)
+
 
 def _check_texture(owner: str, name: str, value: Any) -> Any:
     if value is None or isinstance(value, Texture):

@@ -20,6 +20,7 @@ __all__ = ["RenderingContext"]
 
 _IDENTITY = np.eye(4)
 _IDENTITY.setflags(write=False)
+_F64 = np.dtype(np.float64)
 
 
 class RenderingContext:
@@ -79,7 +80,11 @@ class RenderingContext:
         current = matrices[valid - 1][1] if valid > 1 else _IDENTITY
         for i in range(valid - 1, n):
             t = transforms[i]
-            current = current @ t.matrix
+            m = t.matrix
+            if current is _IDENTITY and m.dtype == _F64 and not m.flags.writeable:
+                current = m  # the first transform's own (read-only) matrix is the product: no multiplication
+            else:
+                current = current @ m
             if not np.abs(current).max() <= MAX_MAGNITUDE:  # NaN fails too
                 raise ValueError(
                     f"{type(t).__name__}: the accumulated model matrix exceeds {MAX_MAGNITUDE:.0e} here ({i + 1} "

@@ -197,7 +197,11 @@ class GLEngine(Engine):
         # scopes as batches, the compiler owns the compile state and hands its results to both
         placements_changed = self.frame_runner.placements_changed
         self.updater = TransformUpdater(
-            self.index, placements_changed, self.instance_state, self.frame_runner.rows_moved
+            self.index,
+            placements_changed,
+            self.instance_state,
+            self.frame_runner.rows_moved,
+            self.frame_runner.rows_restyled,
         )
         self.installer = BatchInstaller(
             self.ctx,

@@ -97,15 +97,49 @@ class Node:
         self._program_version = -1
         self._local: list[tuple[int, Any]] | None = None
         self._local_version = -1
-        self._pre: tuple[int, Any, Any] | None = None
+        self._pre: tuple[int, Any, Any, Any] | None = None  # (version, mask, result, local placements)
         self._declared: _Local | None = None
         if isinstance(items, (RenderingComponent, Node)) or not hasattr(items, "__iter__"):
             raise TypeError(
                 f"Node {self._name!r}: items must be a list of components and nodes, got {type(items).__name__}; "
                 f"write Node({self._name!r}, [item])"
             )
+        if type(self).insert is not Node.insert:  # a subclass's own insert sees every item, as add() would
+            for item in items:
+                self.add(item)
+            return
+        self._fill(items)
+
+    def _fill(self, items: Iterable[Any]) -> None:
+        """The constructor's items appended to the new node: what :meth:`insert` does for each, less what a new
+        node needs not (no parent to touch, no declaration to patch, no journal that saw it: a simulation adding
+        a node per frame pays one pass, and engines see only the edit of the parent it is added to)."""
+        flush_changes()
+        own = self._items
         for item in items:
-            self.add(item)
+            if isinstance(item, Node):
+                # a new node has no parent: the item cannot be its ancestor, and it cannot be the node itself
+                item._parents.append(self)
+                _relinked(item)
+            elif isinstance(item, RenderingComponent):
+                item._attach(self)
+            else:
+                self._check_item(item)
+            own.append(item)
+        if own:
+            epoch = _EPOCH[0]
+            n = len(own)
+            self._own = self._structure = self._version = n  # one bump per item, as insert() makes
+            self._sstamp = self._stamp = epoch
+
+    def _check_item(self, item: Any) -> None:
+        """Raise the error for an item a node cannot hold (a class, anything not a component or node)."""
+        if isinstance(item, type):
+            raise TypeError(f"Node {self.path}: cannot add the class {item.__name__}; did you mean {item.__name__}()?")
+        raise TypeError(
+            f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
+            f"handler, technique or Node"
+        )
 
     @classmethod
     def transient(cls, items: Iterable[Any], name: str = "components") -> Node:
@@ -247,13 +281,8 @@ class Node:
             _relinked(item)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
-        elif isinstance(item, type):
-            raise TypeError(f"Node {self.path}: cannot add the class {item.__name__}; did you mean {item.__name__}()?")
         else:
-            raise TypeError(
-                f"Node {self.path}: cannot add {type(item).__name__}; expected a shape, attribute, "
-                f"handler, technique or Node"
-            )
+            self._check_item(item)
         patch = _declaration_patch(self, item)
         n = len(self._items)
         at = min(index, n) if index >= 0 else max(0, n + index)  # where list.insert puts it
@@ -336,6 +365,10 @@ class Node:
     def items(self) -> tuple[Any, ...]:
         """Components and child nodes in order."""
         return tuple(self._items)
+
+    def last_items(self, count: int) -> tuple[Any, ...]:
+        """The last ``count`` items in order (what was appended last), without copying the whole list."""
+        return tuple(self._items[len(self._items) - count :]) if count > 0 else ()
 
     @property
     def children(self) -> list[Node]:
@@ -503,9 +536,16 @@ class Node:
             return cached[2]
         if self._groups and mask_fn is not None and not mask_fn(self._groups):
             result = Declarations([])
+            local = None
         else:
-            result = Declarations(_placements(self, mask_fn))
-        self._pre = (self._version, mask_fn, result)
+            local = _local_placements(self, mask_fn)
+            if cached is not None and cached[1] is mask_fn and cached[3] is local:
+                # the same placements (a node added or removed that declares nothing, a quiet node moved):
+                # the same result, so what keys on it (an engine's recorded frame) holds
+                self._pre = (self._version, mask_fn, cached[2], local)
+                return cached[2]
+            result = Declarations(_world(local))
+        self._pre = (self._version, mask_fn, result, local)
         return result
 
     def preevaluate(
@@ -764,14 +804,8 @@ class _Local:
         return False
 
 
-def _placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray]]:
-    """Declared placements below ``root`` in world (root) coordinates, re-using per-node local results.
-
-    Post-order with an explicit stack, so graphs of any depth need no deep
-    recursion; a child whose local result is valid for its version and the
-    mask is not walked again.
-    """
-    local = _local_placements(root, mask_fn)
+def _world(local: list[tuple[Any, np.ndarray | None]]) -> list[tuple[Any, np.ndarray]]:
+    """A root's declared placements (:func:`_local_placements`) with its own coordinates' identity matrices made."""
     eye = np.eye(4)
     return [(c, eye if m is None else m) for c, m in local]
 
@@ -790,6 +824,9 @@ def _relevant_items(node: Node, mask_fn: Any) -> tuple[list[Any], list[int] | No
 
 
 def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | None]]:
+    """Declared placements below ``root`` in its own coordinates (matrix None: the identity), re-using per-node
+    local results: post-order with an explicit stack, so graphs of any depth need no deep recursion; a child
+    whose local result is valid for its version and the mask is not walked again."""
     stack: list[tuple[Node, bool]] = [(root, False)]
     while stack:
         node, expanded = stack.pop()

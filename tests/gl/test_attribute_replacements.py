@@ -272,26 +272,20 @@ def test_a_material_replaced_in_a_batch_of_one_material_draws_the_batch_anew():
 
 @pytest.mark.parametrize("shadows", [False, True])
 def test_replacements_in_a_big_scene_match_a_fresh_engine(shadows):
+    """With shadows too: a Material replaced changes no shadow map, so the recorded frame is replayed (the maps
+    kept); a Matrix replaced moves a caster (its maps' region is redrawn: the frame is drawn in full)."""
     from omnirender.gl import GLEngine
 
     scene = om.Node("scene", [om.Camera.look_at((0, 0, 22), (0, 0, 0), fov=40)])
     scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
     box = om.Box(size=0.7)
-    nodes = [
-        scene.add(
-            om.Node(
-                f"b{i}",
-                [
-                    om.Translation(i % 12 - 5.5, i // 12 - 4.0, 0),
-                    om.Material(diffuse=(0.2 + (i % 5) / 6, 0.5, 0.7)),
-                    box,
-                ],
-            )
-        )
-        for i in range(96)
-    ]
+    nodes = []
+    for i in range(96):
+        color = om.Material(diffuse=(0.2 + (i % 5) / 6, 0.5, 0.7))
+        nodes.append(scene.add(om.Node(f"b{i}", [om.Translation(i % 12 - 5.5, i // 12 - 4.0, 0), color, box])))
     with GLEngine(size=SIZE, samples=0, shadows=shadows) as e:
-        e.render(scene)
+        for _ in range(3):
+            e.render(scene)
         for frame in range(6):
             node = nodes[(frame * 37 + 11) % len(nodes)]
             if frame % 2:
@@ -303,3 +297,45 @@ def test_replacements_in_a_big_scene_match_a_fresh_engine(shadows):
             image = e.render(scene)
             assert e.stats["compiled"] == "dirty"
             assert np.array_equal(image.array, fresh(scene, shadows)), frame
+            if frame % 2 == 0:
+                assert image.info["replayed"], frame  # the surface rows uploaded, the plan (and maps) kept
+                if shadows:
+                    assert e.stats["shadow_maps"]["kept"] == 1
+            e.render(scene)  # (a frame recorded again after a frame drawn in full)
+
+
+def test_a_material_replaced_beside_items_casting_no_shadow():
+    """Shadow casters drawn from copies of the batches (some items cast none) follow their source only in frames
+    drawn in full: the frame after a replaced Material is drawn in full, and right."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    groups[3].insert(0, om.Shadowing(cast=False))
+    with GLEngine(size=SIZE, samples=0, shadows=True) as e:
+        before = e.render(scene).array
+        e.render(scene)
+        leaf = leaves[6]
+        replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 1.0, 0.2)))
+        render_checked(e, scene, "dirty", before, shadows=True)
+        leaf = leaves[17]  # one of the items casting no shadow
+        replace(leaf, leaf.items[1], om.Material(diffuse=(0.2, 1.0, 1.0)))
+        render_checked(e, scene, "dirty", before, shadows=True)
+
+
+def test_a_replaced_transform_above_a_light_moves_the_light():
+    """Lights and the camera below a replaced transform are placed again (the declarations follow)."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    lamp = scene.add(om.Node("lamp", [om.Translation(0.0, 3.0, 4.0)]))
+    bulb = lamp.add(om.Node("bulb", [om.Translation(0.0, 0.0, 0.5), om.PointLight(intensity=2.0)]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(lamp, lamp.items[0], om.Matrix(np.array(om.Translation(-4.0, -2.0, 4.0).matrix)))
+        before = render_checked(e, scene, "dirty", before).array  # the light two nodes below it moved
+        replace(bulb, bulb.items[0], om.Translation(3.0, 3.0, 0.0))
+        before = render_checked(e, scene, "dirty", before).array
+        declared = e.declared
+        replace(leaves[4], leaves[4].items[0], om.Translation(0.0, 2.5, 1.0))  # declares nothing: kept
+        render_checked(e, scene, "dirty", before)
+        assert e.declared is declared

@@ -261,3 +261,66 @@ def test_a_splice_after_a_lean_move_patches_the_declarations_instead_of_walking_
         image = e.render(scene, read_depth=False)
         assert len(e.declared.lights) == 2
         assert np.array_equal(image.array, fresh(scene))
+
+
+def shadow_scene() -> tuple[om.Node, list[om.Translation]]:
+    """Boxes over a ground slab under a light from above: each box's shadow shows on the ground."""
+    scene = om.Node("scene", [om.Camera.look_at((0, 9, 9), (0, 0, 0), fov=45)])
+    scene.add(om.DirectionalLight(direction=(-0.3, -1.0, -0.2)))
+    scene.add(om.Node("ground", [om.Translation(0.0, -0.6, 0.0), om.Box(size=(12.0, 0.2, 12.0))]))
+    box = om.Box(size=1.0)
+    moves = []
+    for i in range(9):
+        t = om.Translation(2.2 * (i % 3) - 2.2, 1.0, 2.2 * (i // 3) - 2.2)
+        moves.append(t)
+        scene.add(om.Node(f"b{i}", [t, om.Material(diffuse=(0.8, 0.3 + 0.05 * i, 0.3)), box]))
+    return scene, moves
+
+
+def test_a_moved_caster_updates_its_shadow_and_replays_the_frame_plan():
+    """With default shadows, a caster moved inside the casters' fitted bounds redraws the region of the map its
+    old and new places cover, then the recorded frame is replayed; a move that changes the fitted bounds draws
+    the frame in full.  Every picture is a fresh engine's."""
+    from omnirender.gl import GLEngine
+
+    scene, moves = shadow_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=True) as e:
+        e.render(scene, read_depth=False)
+        before = e.render(scene, read_depth=False).array
+        assert e.render(scene, read_depth=False).info["replayed"]
+        for step, (k, offset) in enumerate(((4, (0.4, 1.0, 0.3)), (0, (-2.0, 1.0, -1.6)), (4, (0.0, 1.0, 0.0)))):
+            moves[k].offset = offset
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False
+            assert image.info["replayed"], step
+            assert e.stats["shadow_maps"]["partial"] == 1, e.stats["shadow_maps"]
+            assert not np.array_equal(image.array, before)
+            before = image.array
+            assert np.array_equal(image.array, fresh(scene, True)), step
+            assert np.array_equal(e.render(scene, read_depth=False).array, image.array)
+        moves[8].offset = (9.0, 1.0, 2.2)  # beyond the casters' bounds: other light cameras, a full frame
+        image = e.render(scene, read_depth=False)
+        assert not image.info["replayed"]
+        assert np.array_equal(image.array, fresh(scene, True))
+
+
+def test_nodes_spliced_in_after_a_lean_move_are_moved_by_their_own_shape_local_matrices():
+    """Which items' shape-local matrices are the identity is asked of the installed items at once on the first
+    lean move; items spliced in later (a scaled box, a unit box) are asked one by one when they first move."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        nodes["p0"].items[0].offset = (-3.0, -1.2, 0.3)
+        e.render(scene, read_depth=False)
+        small = om.Translation(-1.0, 2.2, 0.0)
+        unit = om.Translation(1.0, 2.2, 0.0)
+        scene.add(om.Node("small", [small, om.Material(diffuse=(0.2, 0.8, 0.8)), om.Box(size=0.4)]))
+        scene.add(om.Node("unit", [unit, om.Material(diffuse=(0.8, 0.2, 0.8)), om.Box(size=1.0)]))
+        e.render(scene, read_depth=False)
+        for t, offset in ((small, (-1.5, 2.0, 0.5)), (unit, (1.5, 2.0, 0.5)), (small, (-0.5, 1.8, 1.0))):
+            t.offset = offset
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), offset

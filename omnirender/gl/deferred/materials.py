@@ -38,6 +38,9 @@ class MaterialTable:
         self.generation = 0
         self._texture: Any = None
         self._uploaded: tuple[int, int] | None = None
+        #: (shading model, specular, shininess) of built-in materials -> (generation, id): an appearance's id
+        #: without packing its values again (a replaced Material resolves one each frame)
+        self._builtin: dict[tuple, tuple[int, int]] = {}
 
     def __len__(self) -> int:
         return len(self._rows) - 1
@@ -61,10 +64,19 @@ class MaterialTable:
         """The id of a resolved appearance (``attributes.surface.Appearance``), or of ``description``."""
         if description is not None:
             return self.index(description.model.number, description.packed)
+        key = ("pbr",) if app.model == "pbr" else ("phong", app.specular, app.shininess)
+        found = self._builtin.get(key)
+        if found is not None and found[0] == self.generation:
+            return found[1]
         if app.model == "pbr":
-            return self.index(PBR.number, PBR.pack({}))
-        values = {"specular": app.specular, "shininess": app.shininess}
-        return self.index(PHONG.number, PHONG.pack(values, linear=True))
+            found_id = self.index(PBR.number, PBR.pack({}))
+        else:
+            values = {"specular": app.specular, "shininess": app.shininess}
+            found_id = self.index(PHONG.number, PHONG.pack(values, linear=True))
+        if len(self._builtin) > 4096:
+            self._builtin.clear()
+        self._builtin[key] = (self.generation, found_id)
+        return found_id
 
     def data(self) -> np.ndarray:
         """(rows, width, 4) float32: column 0 holds (model number, 0, 0, 0), then one vec4 per parameter."""

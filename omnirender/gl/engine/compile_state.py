@@ -20,7 +20,7 @@ __all__ = ["CompileState"]
 class CompileState:
     """The surface stack, the clip planes and the dirty flags of one compile (see the module doc)."""
 
-    __slots__ = ("surface", "clips", "state_dirty", "surface_dirty")
+    __slots__ = ("surface", "clips", "state_dirty", "surface_dirty", "changes")
 
     def __init__(self) -> None:
         #: Material, PBRMaterial and Color attributes in force, outermost first
@@ -31,6 +31,9 @@ class CompileState:
         self.state_dirty = True
         #: the surface row and texture set must be resolved again
         self.surface_dirty = True
+        #: bumped whenever anything but the surface stack changes (raster state, textures, clip planes,
+        #: highlight...): what the compiler read besides the surface stack holds while it has not moved
+        self.changes = 0
 
     def push_surface(self, attribute: Any) -> None:
         """``attribute`` (a Material, PBRMaterial or Color) is in force from now on."""
@@ -50,6 +53,7 @@ class CompileState:
         """The clip plane ``attribute`` is active, as ``plane`` in world coordinates."""
         self.clips.append((attribute, plane))
         self.state_dirty = True
+        self.changes += 1
 
     def remove_clip(self, attribute: Any) -> None:
         """The clip plane ``attribute`` is no longer active."""
@@ -59,6 +63,7 @@ class CompileState:
                 del clips[i]
                 break
         self.state_dirty = True
+        self.changes += 1
 
     @property
     def clip_count(self) -> int:
@@ -69,15 +74,18 @@ class CompileState:
         """A raster-state attribute (draw style, texture, fog, an ``om.gl`` state...) came or went."""
         self.state_dirty = True
         self.surface_dirty = True
+        self.changes += 1
 
     def surface_changed(self) -> None:
         """Something the surface row reads (a Highlight, a material description) came or went."""
         self.surface_dirty = True
+        self.changes += 1
 
     def invalidate(self) -> None:
         """Resolve everything again before the next draw item (a new traversal begins)."""
         self.state_dirty = True
         self.surface_dirty = True
+        self.changes += 1
 
     def clear(self) -> None:
         """Drop the stacks after a failed compile (the traversal state was rolled back)."""

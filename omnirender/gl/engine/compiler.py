@@ -27,9 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from ...attributes import BumpMap, DrawStyle, Fog, Highlight, MultiTexture, Texture
+from ...attributes import BumpMap, DrawStyle, Fog, Highlight, Material, MultiTexture, Texture
 from ...attributes.photometry import linear_rgb
-from ...attributes.surface import Appearance, appearance_key, resolve_appearance
+from ...attributes.surface import Appearance, appearance_key, decided_by, resolve_appearance
 from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
@@ -55,6 +55,9 @@ _MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
+#: (name, zeros) of each field of the row, in order (surface rows are made from lists of floats)
+_ROW_ZEROS = tuple((f.name, (0.0,) * f.size) for f in ROW.fields)
+assert ROW.fields[-1].name == "point" and _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
 
 
 def _uv_matrix(texture: Any) -> tuple[float, ...]:
@@ -67,10 +70,11 @@ class TextureSet:
 
     ``textures`` are (sampler uniform, om.Texture, sRGB) triples; ``features``
     and ``uniforms`` apply where the shape has texture coordinates, ``alpha``
-    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.
+    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.  ``key`` holds
+    them all: two sets with equal keys give draw items the same draw state.
     """
 
-    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base", "key")
 
     def __init__(self, app: Appearance) -> None:
         textures: list[tuple[str, Any, bool]] = []
@@ -117,6 +121,8 @@ class TextureSet:
             self.alpha, self.alpha_uniforms = (("ALPHA_OPAQUE", True),), ()
         else:
             self.alpha, self.alpha_uniforms = (), ()
+        self.key = (self.textures, self.features, self.uniforms, self.uv1, self.normal, self.alpha,
+                    self.alpha_uniforms, self.base)  # fmt: skip
 
 
 class _NodeEntry:
@@ -161,6 +167,27 @@ def _det3(m: np.ndarray) -> float:
     """The determinant of ``m[:3, :3]`` (Python floats: a tenth of ``np.linalg.det``'s cost for one matrix)."""
     (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
     return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def _declares_below(declared: Any, ids: set[int]) -> bool:
+    """Whether a component of ``declared`` (a light, the camera...) lies in a node among ``ids`` or below one
+    (through any parent); True when that is not known (no declarations, a component held by a component)."""
+    if declared is None:
+        return True
+    for component, _ in declared.placements:
+        owners = component.owners
+        todo = [owner for owner in owners if isinstance(owner, Node)]
+        if len(todo) != len(owners):
+            return True
+        seen: set[int] = set()
+        while todo:
+            node = todo.pop()
+            if id(node) in ids:
+                return True
+            if id(node) not in seen:
+                seen.add(id(node))
+                todo.extend(node.parents)
+    return False
 
 
 def _same_declarations(a: Any, b: Any) -> bool:
@@ -221,6 +248,15 @@ class DrawListCompiler:
         self._states: dict[tuple, DrawState] = {}
         self._surface_row = np.zeros(ROW.stride, np.float32)
         self._surface_memo: dict[tuple, tuple[Any, ...]] = {}
+        #: what the surface row reads besides the surface stack (texture, layers, bump, highlight, material
+        #: description), read when the compile state's ``changes`` counter was ``_around_changes``
+        self._around: tuple[Any, ...] = (None,) * 5
+        self._around_changes = -1
+        #: id(node) -> (ref, its leading components (the tuple _leading keeps), their program, their undo ops):
+        #: the ancestors a splice enters
+        self._leading_programs: dict[int, tuple[Any, tuple, list, list]] = {}
+        #: ids of a splice's ancestors -> (their refs, versions, the resolved draw state where a child enters)
+        self._entry_states: dict[tuple[int, ...], tuple[Any, ...]] = {}
         self._appearance: Any = None  # the resolved appearance and its texture set (set with the surface row)
         self._surface_entry: Any = None  # the surface_entry() the surface row was made from
         self._texset: Any = None
@@ -348,7 +384,8 @@ class DrawListCompiler:
                     updater = self.updater
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
-                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
+                    moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
+                    if updater.placed and not declarations_kept(moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
@@ -389,7 +426,7 @@ class DrawListCompiler:
                 self._node_cache.clear()
                 self._occurrence_of.clear()
                 self._surface_memo.clear()
-                self.state.state_dirty = self.state.surface_dirty = True
+                self.state.invalidate()
                 root = self._scope = Scope(None)
                 self._compile_frames = [[0, 0, False]]
                 self.engine.run(scene)
@@ -446,20 +483,21 @@ class DrawListCompiler:
         if news or moves:
             count += self.updater.apply([*(r.new for r in news), *moves]) or 0
             engine = self.engine
-            mask = engine.mask_function
-            # lights or the camera may sit below a replaced transform (a node that declares nothing: not there)
-            if moves or any(r.node.declarations(mask).placements for r in news):
+            # lights or the camera below a replaced or moved transform move with it: the declarations again (not
+            # when no declared component lies below a replaced transform's node and the moved ones declare nothing)
+            below = _declares_below(engine.declared, {id(r.node) for r in news})
+            if below or (moves and not declarations_kept(moves, engine.mask_function)):
                 declared = engine.preevaluate(scene)
                 if not _same_declarations(engine.declared, declared):
                     engine.declared = declared
                     engine.camera = declared.camera
-        for node in {id(r.node): r.node for r in replacements}.values():  # compiled with what it holds now
-            key = self._key_of(node)
-            entry = self._node_cache.get(key) if key is not None else None
-            if entry is not None:
-                own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
-                self._node_cache[key] = _NodeEntry(node, own, entry.entries)
-        self.engine.stats["dirty"] = tuple(sorted({r.kind for r in replacements}))
+        kinds: set[str] = set()
+        for r in replacements:  # each node's entry: compiled with what it holds now
+            kinds.add(r.kind)
+            entry = self._node_cache[self._key_of(r.node)]  # (classify found it)
+            entry.own = tuple([x if isinstance(x, Node) else (x, x.version) for x in r.node.items])
+            entry.version = r.node.version
+        self.engine.stats["dirty"] = tuple(sorted(kinds))
         return count
 
     def entries_of(self, node: Any) -> list[Any] | None:
@@ -571,17 +609,15 @@ class DrawListCompiler:
             leaf_list.append((node, self._key_of(node), path))
         group_list = []
         for node, key, appended, gone in groups.values():
-            items = node.items
-            if appended and (
-                len(appended) > len(items) or {id(x) for x in items[len(items) - len(appended) :]} != set(appended)
-            ):
+            tail = node.last_items(len(appended))
+            if appended and (len(appended) > len(node) or {id(x) for x in tail} != set(appended)):
                 return None  # not appended at the end
             if any(self._key_of(child) is None for child in gone.values()):
                 return None
             path = self._path_to(scene, node)
             if path is None or _below(node, removed_ids):
                 return None
-            ordered = [x for x in items[len(items) - len(appended) :]] if appended else []
+            ordered = list(tail)
             group_list.append((node, key, path, ordered, list(gone.values())))
         return leaf_list, group_list
 
@@ -684,16 +720,17 @@ class DrawListCompiler:
         sink = Scope()
         self._scope = sink
         undos = []
+        leadings = []
+        versions: list[int] = []
         for above in path:
-            leading = self._leading(above)
-            program = compile_components(leading, [])
-            if any(code == TECHNIQUE for code, _ in program):
-                raise _Bail
-            cut = len(program) - sum(1 for code, _ in program if code in _UNDO)
+            program, undo, leading = self._leading_program(above)
             ops[ENTER](above)
-            for code, arg in program[:cut]:
+            for code, arg in program:
                 ops[code](arg)
-            undos.append(program[cut:])
+            undos.append(undo)
+            leadings.append(leading)  # the tuple _leading keeps while the node's leading components are the same
+            versions.extend([x.version for x in leading])
+        self._enter_state(path, leadings, tuple(versions))
         target = Scope(None)
         self._scope = target
         own = tuple([x if isinstance(x, Node) else (x, x.version) for x in node.items])
@@ -709,13 +746,60 @@ class DrawListCompiler:
             ops[LEAVE](-1)
         return target.entries
 
+    def _leading_program(self, node: Any) -> tuple[list, list, tuple]:
+        """The ops of ``node``'s leading components (what its children are entered after), their undo ops, and
+        the components; cached per own list.  A technique among them is not followed (raises _Bail)."""
+        leading = self._leading(node)
+        found = self._leading_programs.get(id(node))
+        if found is not None and found[0]() is node and found[1] is leading:
+            return found[2], found[3], leading
+        program = compile_components(leading, [])
+        if any(code == TECHNIQUE for code, _ in program):
+            raise _Bail
+        cut = len(program) - sum(1 for code, _ in program if code in _UNDO)
+        if len(self._leading_programs) > 4096:
+            self._leading_programs.clear()
+        self._leading_programs[id(node)] = (weakref.ref(node), leading, program[:cut], program[cut:])
+        return program[:cut], program[cut:], leading
+
+    def _enter_state(self, path: tuple[Any, ...], leadings: list[tuple], versions: tuple[int, ...]) -> None:
+        """Resolve the draw state where a child of ``path[-1]`` is entered (after the leading components
+        ``leadings`` of its ancestors ran, at ``versions``): kept per path while those components and their
+        versions are the same, so that frames adding a node under one parent resolve it once.  What the child's
+        own attributes change is resolved again as usual (their painters mark the compile state dirty)."""
+        key = tuple(map(id, path))
+        found = self._entry_states.get(key)
+        state = self.state
+        if (
+            found is not None
+            and found[1] == versions
+            and found[2] == self._kinds_seen
+            and all(ref() is above for ref, above in zip(found[0], path, strict=True))
+            and all(a is b for a, b in zip(found[4], leadings, strict=True))
+        ):
+            (self._state_base, self._fill, self._point_size, self._blend_on, self._alpha_tested,
+             self._auto_cull, self._around) = found[3]  # fmt: skip
+            self._around_changes = state.changes
+            state.state_dirty = False
+            state.surface_dirty = True
+            return
+        self._resolve_state()
+        around = self._surroundings()
+        if len(self._entry_states) > 64:
+            self._entry_states.clear()
+        resolved = (self._state_base, self._fill, self._point_size, self._blend_on, self._alpha_tested,
+                    self._auto_cull, around)  # fmt: skip
+        refs = [weakref.ref(above) for above in path]
+        self._entry_states[key] = (refs, versions, self._kinds_seen, resolved, leadings)
+
     def _new_state_kinds(self) -> None:
         """A GL state class was defined since the last compile: items must capture one more value."""
         self._kinds_seen = len(kinds())
         self._states.clear()
         self._node_cache.clear()
         self._compiled = None
-        self.state.state_dirty = True
+        self._entry_states.clear()
+        self.state.invalidate()
 
     def _prune_caches(self) -> None:
         """Drop cache entries of nodes that no longer exist (amortised: when the cache doubled)."""
@@ -984,17 +1068,20 @@ class DrawListCompiler:
             )
         return state
 
+    def _surroundings(self) -> tuple[Any, ...]:
+        """(texture, layers, bump, highlight, material description) in force: read again only when the compile
+        state changed otherwise than by its surface stack since they were last read."""
+        state = self.state
+        if state.changes != self._around_changes:
+            mono = self.engine.mono
+            description = None if self.description is None else mono(self.description)
+            self._around = (mono(Texture), mono(MultiTexture), mono(BumpMap), mono(Highlight), description)
+            self._around_changes = state.changes
+        return self._around
+
     def _resolve_surface(self) -> None:
         """The one appearance model (``resolve_appearance``) as an instance row and a texture set."""
-        mono = self.engine.mono
-        context = (
-            mono(Texture),
-            mono(MultiTexture),
-            mono(BumpMap),
-            mono(Highlight),
-            None if self.description is None else mono(self.description),
-        )
-        entry = self._surface_entry = self.surface_entry(self.state.surface, context)
+        entry = self._surface_entry = self.surface_entry(self.state.surface, self._surroundings())
         app, row, texset, _ = entry
         point_size = self._point_size
         if row[_POINT_SIZE] != point_size:
@@ -1013,13 +1100,24 @@ class DrawListCompiler:
         Draw items keep the entry their row was made from (``DrawItem.surface``): an attribute replaced by one
         of the same role is resolved again from it (:mod:`.dirty`)."""
         texture, layers, bump, highlight, description = context
-        key = (
-            appearance_key(stack, texture, layers, bump),
-            None if highlight is None else (id(highlight), highlight.version),
-            None if description is None else (id(description), description.version),
-        )
+        top = stack[-1] if stack else None
+        plain = top.__class__ is Material and texture is None and layers is None and bump is None
+        if plain and highlight is None and description is None:
+            # the innermost is a plain Material and nothing else is read: its values decide (a node added per
+            # frame with a new Material of the same colour finds the row, ids and texture set made before)
+            key: tuple = (Material, top.values())
+        else:
+            plain = False
+            key = (
+                appearance_key(stack, texture, layers, bump),
+                None if highlight is None else (id(highlight), highlight.version),
+                None if description is None else (id(description), description.version),
+            )
         memo = self._surface_memo
         entry = memo.get(key)
+        if entry is not None and plain and entry[0].material is not top:
+            # made for another material of these values: the appearance names this one (dirty.py follows it)
+            return (decided_by(entry[0], top), *entry[1:])
         if entry is None:
             app = resolve_appearance(stack, texture, layers, bump)
             for tex in app.textures:
@@ -1037,18 +1135,22 @@ class DrawListCompiler:
         return entry
 
     def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item); colours are linear."""
-        row = np.zeros(ROW.stride, np.float32)
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear.
+
+        Made from one list of Python floats (one numpy call: a replaced Material makes one per frame)."""
         alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
-        row[_COLOR] = (*app.base, alpha)
+        fields: dict[str, tuple[float, ...]] = {"color": (*app.base, alpha)}
         if app.model == "pbr":
-            row[ROW.slice("emission")] = (*app.emission, PBR)
-            row[ROW.slice("pbr")] = (app.roughness, app.metallic, 0.0, 0.0)
+            fields["emission"] = (*app.emission, PBR)
+            fields["pbr"] = (app.roughness, app.metallic, 0.0, 0.0)
         else:
-            row[ROW.slice("specular")] = (*app.specular, app.shininess)
-            row[ROW.slice("emission")] = (*app.emission, PHONG)
-            row[ROW.slice("ambient")] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
+            fields["specular"] = (*app.specular, app.shininess)
+            fields["emission"] = (*app.emission, PHONG)
+            fields["ambient"] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
         if highlight is not None:
-            row[ROW.slice("highlight")] = (*linear_rgb(highlight.color), 1.0)
-        row[_POINT_SIZE] = _DEFAULT_POINT_SIZE
-        return row
+            fields["highlight"] = (*linear_rgb(highlight.color), 1.0)
+        fields["point"] = (_DEFAULT_POINT_SIZE, 0.0, 0.0, 0.0)
+        values: list[float] = []
+        for name, zeros in _ROW_ZEROS:
+            values.extend(fields.get(name, zeros))
+        return np.array(values, np.float32)

@@ -42,7 +42,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ...attributes import Color, Material, PBRMaterial
-from ...core.transform import Transform
+from ...core.transform import Rotation, Transform, Translation
 from ...scene.node import Node
 from .attributes import AlphaTest, Blend
 from .drawlist import DrawItem, drawn_transparent, uniform_material
@@ -68,17 +68,11 @@ DIRTY_APPEARANCE = "appearance"
 _MODEL = ROW.slice("model")
 _POINT_SIZE = ROW.at("point", "size")
 _SHADING_MODEL = ROW.at("emission", "model")
-#: the row's fields a batch drawn with uniforms for its material shares (all but the model matrix and colour)
-_MATERIAL = np.concatenate(
-    [
-        np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
-        for f in ROW.fields
-        if f.name not in ("model", "color")
-    ]
-)
+#: the row's fields a batch drawn with uniforms for its material shares: all after the model matrix and colour
+_MATERIAL = slice(ROW.offsets["color"] + 4, ROW.stride)
+assert [f.name for f in ROW.fields[:2]] == ["model", "color"]
 #: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
 _KINDS = frozenset(("mesh", "points", "lines"))
-_TEXSET_FIELDS = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
 
 
 class Replacement(NamedTuple):
@@ -101,13 +95,26 @@ class Restyle(NamedTuple):
 def role(component: Any) -> str | None:
     """The role a replacement must keep: ``"transform"`` (static transforms), ``"material"``, ``"color"``, or
     None (anything else: its replacement is a topology change)."""
-    if isinstance(component, Transform):
-        return DIRTY_TRANSFORM if component.static else None
-    if isinstance(component, (Material, PBRMaterial)):
+    cls = component.__class__
+    found = _ROLES.get(cls, _UNKNOWN)
+    if found is _UNKNOWN:
+        found = _ROLES[cls] = _role_of(cls)
+    return found
+
+
+def _role_of(cls: type) -> str | None:
+    if issubclass(cls, Transform):
+        return DIRTY_TRANSFORM if cls.static else None
+    if issubclass(cls, (Material, PBRMaterial)):
         return "material"
-    if isinstance(component, Color):
+    if issubclass(cls, Color):
         return "color"
     return None
+
+
+#: class -> its role (:func:`role`), asked once per class
+_ROLES: dict[type, str | None] = {}
+_UNKNOWN = object()
 
 
 def classify(
@@ -141,8 +148,11 @@ def classify(
     return out
 
 
-def _det_sign(m: np.ndarray) -> int:
-    (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
+def _det_sign(t: Any) -> int:
+    """The sign of the determinant of ``t``'s matrix (a translation's and a rotation's: 1, unasked)."""
+    if t.__class__ is Translation or t.__class__ is Rotation:
+        return 1
+    (a, b, c), (d, e, f), (g, h, i) = t.matrix[:3, :3].tolist()
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     return (det > 0.0) - (det < 0.0)
 
@@ -160,7 +170,7 @@ def transform_swaps(
     for node, old, new, kind in replacements:
         if kind != DIRTY_TRANSFORM:
             continue
-        if _det_sign(old.matrix) != _det_sign(new.matrix):
+        if _det_sign(old) != _det_sign(new):
             return None  # mirrored now (or no more): the culled faces change
         found = entries(node)
         if found is None:
@@ -178,7 +188,7 @@ def transform_swaps(
 
 
 def _same_texture_set(a: Any, b: Any) -> bool:
-    return a is b or all(getattr(a, k) == getattr(b, k) for k in _TEXSET_FIELDS)
+    return a is b or a.key == b.key
 
 
 def restyles(
@@ -255,7 +265,7 @@ def restyle(changes: list[Restyle]) -> tuple[list[Any], bool]:
             same = False
             continue
         batch, r = slot
-        if batch.uniform and not (batch.rows[r, _MATERIAL] == row[_MATERIAL]).all():
+        if batch.uniform and item.row[_MATERIAL].tobytes() != row[_MATERIAL].tobytes():
             same = False
             item.row[:] = row
             batch.uniform = uniform_material(batch.rows)

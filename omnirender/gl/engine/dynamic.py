@@ -71,6 +71,10 @@ class MovePlan:
                     transforms.append(t)
         self.index = index
         self.transforms = transforms
+        #: ids of the transforms above an item drawn with clip planes: the planes were placed in world coordinates
+        #: when it was compiled, so a move of one of them compiles again (TransformUpdater.apply)
+        self.clipping: set[int] = set()
+        _note_clipping(self.clipping, (*self.items, *self.instance_items))
         identity = len(transforms)
         length = max((len(it.chain) for it in self.items), default=0)
         self.chain = np.full((len(self.items), length), identity, np.intp)
@@ -97,6 +101,9 @@ class MovePlan:
         #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
         #: append new items and leave removed ones' places)
         self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
+        #: per item index, whether its shape-local matrix is the identity (made from ``local`` at once when first
+        #: asked; items spliced in later are asked one by one)
+        self._eye_local: list[bool] | None = None
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
@@ -149,6 +156,7 @@ class MovePlan:
                 if users is not None:
                     _drop_user(users, item, i)
         new = [it for it in added if it.instances is None and it.chain]
+        _note_clipping(self.clipping, new)
         fresh = [t for it in new for t in it.chain if id(t) not in self.index]
         if fresh:
             identity = self._add_transforms(fresh)
@@ -411,16 +419,16 @@ class MovePlan:
         if not positions:
             return 0
         if self.bulk or self._map is not None:
-            self._follow_maps(positions, np.fromiter(affected, np.intp, len(affected)))
+            self._follow_maps(positions, affected)
         local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
-        rows_of: dict[int, list[int]] = {}
+        rows_of: dict[int, tuple[Any, list[int]]] = {}
         for i in affected:
             item = items[i]
             chain = item.chain
             only = plain.get(i)
             if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
-                only = plain[i] = (chain, _translation_only(item))
+                only = plain[i] = (chain, self._translation_only(i, item))
             if only[1]:
                 # the model is the translation's matrix, written from its offset in plain floats (rows hold M
                 # transposed; the numbers the product below gives); the whole matrix, not only its translation:
@@ -435,24 +443,43 @@ class MovePlan:
                 if local is not None:
                     model = model @ local[i]
                 where, values = _MODEL, model.T.reshape(16)
-            b = int(self.batch_of[i])
-            if b < 0:  # an item without a batch (transparent, overlay): its own row
+            slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
+            if slot is None:  # an item without a batch (transparent, overlay): its own row
                 item.row[where] = values
                 self.rows_only = False
                 continue
-            batch = self.batches[b]
-            r = int(self.row_of[i])
+            batch, r = slot
             batch.rows[r, where] = values
             batch.row_changed(r)
-            rows_of.setdefault(b, []).append(r)
-        for b, where in rows_of.items():
-            self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
+            found = rows_of.get(id(batch))
+            if found is None:
+                rows_of[id(batch)] = (batch, [r])
+            else:
+                found[1].append(r)
+        for batch, where in rows_of.values():
+            self.moved_rows.append((batch, np.array(where, np.intp)))
         if not self.instance_items:
             return len(affected)
         moved = self._apply_instances(set(positions))
         if moved:
             self.rows_only = False
         return len(affected) + moved
+
+    def _translation_only(self, i: int, item: Any) -> bool:
+        """Whether item ``i``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no
+        shape-local matrix, or the identity: a product with it changes no number)."""
+        chain, local = item.chain, item.local
+        if len(chain) != 1 or chain[0].__class__ is not Translation:
+            return False
+        if local is None:
+            return True
+        eye = self._eye_local
+        if eye is None:  # which items' shape-local matrices are the identity, asked of all at once (C loops)
+            held = self.local
+            eye = self._eye_local = [] if held is None else (held == _EYE4).all(axis=(1, 2)).tolist()
+        if i < len(eye):  # (``local`` holds the items' matrices in their order; spliced items come after)
+            return eye[i]
+        return local.tolist() == _EYE4_LIST
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -465,7 +492,7 @@ class MovePlan:
         self._follow_maps(positions, affected)
         return self._write_items(affected)
 
-    def _follow_maps(self, positions: Any, affected: np.ndarray) -> None:
+    def _follow_maps(self, positions: Any, affected: np.ndarray | dict[int, None]) -> None:
         """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
         array maps made from them are dropped; the translation map fills the ``affected`` items again."""
         for key, (_, bulk) in list(self.bulk.items()):
@@ -473,6 +500,8 @@ class MovePlan:
                 del self.bulk[key]
         found = self._map
         if found is not None and found.stale(positions):
+            if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
+                affected = np.fromiter(affected, np.intp, len(affected))
             found.fill(self, affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
@@ -535,13 +564,6 @@ def _static_transform(cls: type) -> bool:
     return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
 
 
-def _translation_only(item: Any) -> bool:
-    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
-    matrix, or the identity: a product with it changes no number)."""
-    chain, local = item.chain, item.local
-    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
-
-
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
     """Item ``i`` lies below each transform of its chain."""
     for t in dict.fromkeys(item.chain):
@@ -582,18 +604,27 @@ class TransformUpdater:
     ``instance_state`` (the draw state of an instance set's template).
     """
 
-    def __init__(self, index: Any, placements_changed: Any, instance_state: Any, rows_moved: Any = None) -> None:
+    def __init__(
+        self,
+        index: Any,
+        placements_changed: Any,
+        instance_state: Any,
+        rows_moved: Any = None,
+        rows_restyled: Any = None,
+    ) -> None:
         self.index = index
         self._placements_changed = placements_changed
         #: tells the frame that only these batches' rows moved in place (it may keep its recorded plan), or None
         self._rows_moved = rows_moved
+        #: tells the frame that only these batches' rows' surface fields changed (:meth:`rows_rewritten`), or None
+        self._rows_restyled = rows_restyled
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
         #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
-        #: may have moved a declared component (``declarations_kept``)
+        #: may have moved a declared component (``declarations_kept``), and empties it
         self.moved: list[Any] = []
 
     def forget(self) -> None:
@@ -615,9 +646,14 @@ class TransformUpdater:
             self._plan.replace(swaps)
 
     def rows_rewritten(self, batches: list[Any], same: bool) -> None:
-        """Rows of ``batches`` were rewritten in place (not moved: the bounds hold); ``same``: they draw as
-        before, so a recorded frame plan may be replayed after their upload."""
-        if same and self._rows_moved is not None:
+        """The surface fields of rows of ``batches`` were rewritten in place (not moved: the bounds, the
+        casters and the shadow maps hold); ``same``: they draw as before, so a recorded frame plan may be
+        replayed after their upload."""
+        if not same:
+            self._placements_changed()
+        elif self._rows_restyled is not None:
+            self._rows_restyled(batches)
+        elif self._rows_moved is not None:
             self._rows_moved(batches)
         else:
             self._placements_changed()
@@ -685,6 +721,11 @@ class TransformUpdater:
                     sets.append(c)
                 else:
                     return None
+        clipping = self.plan().clipping
+        if clipping and (
+            not clipping.isdisjoint(map(id, moved)) or any(not clipping.isdisjoint(map(id, a)) for a in arrays)
+        ):
+            return None  # a clip plane below a moved transform: placed again by a compile
         updates = self._instance_updates(sets) if sets else []
         if updates is None:
             return None
@@ -787,6 +828,13 @@ class TransformUpdater:
             else:
                 self._rows_moved(batches)
         return count
+
+
+def _note_clipping(clipping: set[int], items: Any) -> None:
+    """Add to ``clipping`` the transforms above those of ``items`` that are drawn with clip planes."""
+    for item in items:
+        if getattr(item.state, "clip", None):
+            clipping.update(map(id, item.chain))
 
 
 def _moved_batches(moved_rows: list[tuple[Any, Any]], count: int) -> list[Any] | None:

@@ -48,7 +48,7 @@ from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import Composed, FullScreen, Pass, Target
 from .plan import FramePlan, FrameRecorder, PlanKey
 from .report import PassRecord, PassReport
-from .stages import StageList
+from .stages import FrameStage, StageList
 from .state import FillMode, GLCalls, RasterApplier, defaults
 from .targets import FrameTargets
 
@@ -100,6 +100,10 @@ class FrameRunner:
         #: (plan, root scope, draw-list version, stages) for which :meth:`rows_moved` found that the plan may be
         #: kept after rows moved in place, or None
         self._follows: tuple[Any, ...] | None = None
+        #: the same for :meth:`rows_restyled` (which keeps plans with shadow maps)
+        self._restyles: tuple[Any, ...] | None = None
+        #: (stages, those of them that override FrameStage.follow_rows): what runs before a replay after moves
+        self._followers: tuple[tuple[Any, ...], list[Any]] | None = None
         #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
         self._resized: dict[int, Any] = {}
 
@@ -150,9 +154,11 @@ class FrameRunner:
     def rows_moved(self, batches: list[Any]) -> None:
         """Only the rows of ``batches`` moved in place (model matrices; nothing added, removed or re-made):
         every stage forgets what it derived from placements, and a recorded plan is kept when every stage
-        follows rows (:meth:`~.stages.FrameStage.follows_rows`), the recorded frame planned no shadow map and
-        no scope filters batches for its passes; the next frame then uploads those rows and replays it (the
-        drawer declines a batch whose draw would sort, cull or pack again: that frame is drawn in full)."""
+        follows rows (:meth:`~.stages.FrameStage.follows_rows`) and no scope filters batches for its passes;
+        the next frame then uploads those rows, lets the stages that keep something up to date with rows draw
+        it (:meth:`~.stages.FrameStage.follow_rows`: the shadow maps) and replays it (the drawer declines a
+        batch whose draw would sort, cull or pack again, a stage one whose draws changed: that frame is drawn
+        in full)."""
         plan = self.plan
         engine = self.engine
         root = engine.root_scope
@@ -163,7 +169,6 @@ class FrameRunner:
         if self._follows != follows:  # (identities, and the version's value)
             if (
                 plan is None
-                or plan.stats.get("shadow_plan") is not None
                 or root is None
                 or any(scope.filtered for scope in root.walk())
                 or not all(stage.follows_rows(engine) for stage in stages)
@@ -174,6 +179,34 @@ class FrameRunner:
             self._follows = follows
         for stage in stages:
             stage.changed()
+        for batch in batches:
+            self._moved[id(batch)] = batch
+
+    def rows_restyled(self, batches: list[Any]) -> None:
+        """Only the surface fields of rows of ``batches`` changed in place (a Material replaced by one drawn
+        with the same state: ``engine/dirty.py``); nothing moved, so no stage forgets what it derived from
+        placements (the shadow maps, which read no surface, stay).  A recorded plan is kept when every stage
+        follows rows and no scope filters batches for its passes (their copies follow a source only in frames
+        drawn in full); the next frame uploads those rows and replays it."""
+        plan = self.plan
+        if plan is None:
+            return  # the next frame is drawn in full: it uploads the changed rows
+        engine = self.engine
+        root = engine.root_scope
+        stages = self.stages.frozen()
+        # (asked once per plan, root scope, draw-list version and stage list, as rows_moved asks; what it found
+        # holds here too: its conditions include these)
+        follows = (plan, root, engine.draw_list_version, stages)
+        if self._follows != follows and self._restyles != follows:
+            if (
+                root is None
+                or any(scope.filtered for scope in root.walk())
+                or not all(stage.follows_rows(engine) for stage in stages)
+            ):
+                self._restyles = None
+                self.placements_changed()
+                return
+            self._restyles = follows
         for batch in batches:
             self._moved[id(batch)] = batch
 
@@ -306,7 +339,7 @@ class FrameRunner:
         if key is not None and plan is not None and plan.key.matches(key):
             moved = self._moved
             if (not self._resized or self._resize_ops(plan)) and (
-                not moved or all(self.drawer.upload_moved(batch) for batch in moved.values())
+                not moved or (self._upload_moved(moved) and self._follow_rows(stages, plan, installed, fbo, size))
             ):
                 moved.clear()
                 self._replay(plan, fbo, size)
@@ -350,6 +383,40 @@ class FrameRunner:
             self.not_recorded = recorder.tainted
             if self.plan is not None:
                 engine.programs.owner = self.plan
+
+    def _upload_moved(self, moved: dict[int, Any]) -> bool:
+        """Upload the rows moved in place since the plan was recorded (:meth:`rows_moved`); False when a batch's
+        draw would do more than that (the frame is drawn in full)."""
+        upload = self.drawer.upload_moved
+        for batch in moved.values():
+            if not upload(batch):
+                return False
+        return True
+
+    def _follow_rows(
+        self, stages: tuple[Any, ...], plan: FramePlan, root: Any, fbo: Any, size: tuple[int, int]
+    ) -> bool:
+        """Before a plan is replayed after rows moved in place: the stages that keep something up to date with
+        rows (:meth:`~.stages.FrameStage.follow_rows`: the shadow maps' regions the moved casters cover) draw it
+        now; False when one says the plan's draws no longer hold (the frame is drawn in full)."""
+        followers = self._followers
+        if followers is None or followers[0] is not stages:
+            base = FrameStage.follow_rows
+            followers = self._followers = (stages, [s for s in stages if type(s).follow_rows is not base])
+        if not followers[1]:
+            return True
+        engine, state = self.engine, self.state
+        state.shadow_plan = None
+        state.drawing = True
+        self.report.begin_frame(False)
+        try:
+            held = all(stage.follow_rows(self, root, plan) for stage in followers[1])
+        finally:
+            state.drawing = False
+            self.report.close()
+            self._restore_defaults(fbo, size)  # a replay starts from the defaults with the frame's target bound
+            engine.programs.owner = None  # programs the stages drew with may be the plan's: every write again
+        return held
 
     def _plan_key(
         self,

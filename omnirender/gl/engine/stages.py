@@ -72,6 +72,15 @@ class FrameStage:
         instead of drawing in full.  False by default (the frame is drawn in full after any move)."""
         return False
 
+    def follow_rows(self, frame: Any, root: Scope, plan: Any) -> bool:
+        """Rows moved in place and the recorded frame ``plan`` is about to be replayed (every stage said it
+        :meth:`follows_rows`): draw here what this stage keeps up to date with rows, into its own targets
+        (e.g. the regions of the shadow maps the moved casters cover), and return whether the plan's draws
+        still hold (what the stage hands the frame's passes, its uniforms and textures, is what the plan
+        recorded); False draws the frame in full.  A stage that overrides nothing is not called.  The frame
+        runner then binds the frame's target again with every GL state at its default."""
+        return True
+
     def release(self) -> None:
         """The engine is released: free what the stage holds on the GPU."""
 

@@ -190,10 +190,13 @@ class TranslationMap:
             self.fixed = np.concatenate([self.fixed, np.zeros(places - known, bool)])
             self.translations = int(self.translation.sum())
 
-    def stale(self, places: np.ndarray) -> bool:
+    def stale(self, places: np.ndarray | list[int]) -> bool:
         """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L
         was made from."""
-        return bool(self.fixed[places].any())
+        fixed = self.fixed
+        if places.__class__ is list and len(places) <= 8:  # a few moved (MovePlan.apply_few): no fancy index
+            return any(fixed[k] for k in places)
+        return bool(fixed[places].any())
 
     # -- writing rows ----------------------------------------------------------------
     def multi_items(self) -> np.ndarray:

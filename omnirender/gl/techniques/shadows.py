@@ -390,9 +390,19 @@ class ShadowMapStage(FrameStage):
         return True
 
     def follows_rows(self, engine: Any) -> bool:
-        """The maps follow moved casters: a frame with shadow maps is drawn in full after a move (the frame
-        runner replays one after moves only when the recorded frame planned no map)."""
+        """The maps follow moved casters (:meth:`follow_rows` before the replay of a recorded frame)."""
         return True
+
+    def follow_rows(self, frame: Any, root: Scope, plan: Any) -> bool:
+        """Before the replay of a recorded frame after rows moved in place: the maps follow the moved casters
+        (the regions their old and new boxes cover, as :meth:`draw` does); the plan holds while the faces are
+        the ones it was recorded with (the same light cameras and tiles: the same uniforms), i.e. the
+        casters' fitted bounds held."""
+        recorded = plan.stats.get("shadow_plan")
+        if recorded is None:  # the recorded frame drew no maps: there are none to follow
+            return True
+        self.draw(frame, root)
+        return frame.state.shadow_plan is recorded
 
     def release(self) -> None:
         for _, batch in self._scratch.values():
