@@ -40,7 +40,7 @@ from .compile_state import CompileState
 from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
 from .drawlist import DrawItem, DrawState, Scope, drawn_transparent
 from .geometry import Geometry
-from .instancing import instance_rows
+from .instancing import instance_rows, mask_copies
 from .layout import PBR, PHONG, ROW
 from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, kinds
@@ -929,6 +929,8 @@ class DrawListCompiler:
         item.template = template
         item.source_colors = _colors_copy(source)
         item.colors_at = source.written_at("colors")
+        item.mask_at = (source.written_at("scales"), source.written_at("visible"))
+        item.source_mask = mask_copies(source)
         self._scope.entries.append(item)
         return item
 
