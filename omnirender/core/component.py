@@ -189,7 +189,10 @@ def flush_changes() -> None:
                 continue
             _tell_whole(changed, held, bulk)
     if bulk is None:
-        owners: list[Any] = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+        # (one component, a touched TranslationArray: its own list, which the owners' touch recognises)
+        owners: list[Any] = (
+            (batch[0]._owners or []) if n == 1 else list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+        )
     else:
         owners = bulk.owners
         for held in list(_HELD.values()):
