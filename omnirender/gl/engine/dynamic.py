@@ -502,7 +502,7 @@ class MovePlan:
         if found is not None and found.stale(positions):
             if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
                 affected = np.fromiter(affected, np.intp, len(affected))
-            found.fill(self, affected)
+            found.refill(affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
         """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""

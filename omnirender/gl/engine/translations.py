@@ -83,10 +83,18 @@ class TranslationMap:
         "translations",
         "_parts",
         "_multi_items",
+        "_plan",
+        "_pending",
     )
 
     def __init__(self, plan: Any) -> None:
         n = len(plan.items)
+        #: the move plan this maps (fills read its chains and matrices)
+        self._plan = plan
+        #: items whose chains changed (transforms replaced) or whose c or L went stale since: filled again before
+        #: the map is next read (:meth:`parts`, :meth:`multi_items`), so a frame that replaces or moves a few
+        #: transforms pays no fill of its own
+        self._pending: list[np.ndarray] = []
         self.source = np.full(n, -1, np.intp)
         self.constant = np.zeros((n, 3))
         #: L per item, made when a first item's L is not the identity
@@ -105,6 +113,19 @@ class TranslationMap:
         self.fill(plan, np.arange(n))
 
     # -- following the plan ----------------------------------------------------------
+    def refill(self, items: np.ndarray) -> None:
+        """The items ``items`` (indices) are filled again (:meth:`fill`) before the map is next read."""
+        self._pending.append(items)
+        self._parts = None
+        self._multi_items = None
+
+    def _flush(self) -> None:
+        pending = self._pending
+        if pending:
+            items = pending[0] if len(pending) == 1 else np.unique(np.concatenate(pending))
+            self._pending = []
+            self.fill(self._plan, items)
+
     def fill(self, plan: Any, items: np.ndarray) -> None:
         """Make ``source``, ``c`` and ``L`` of the plan items ``items`` (indices) from the plan's chains."""
         self._parts = None
@@ -175,9 +196,11 @@ class TranslationMap:
         (indices) changed or hold them."""
         self._grow(plan)
         for k in places:
-            self.translation[k] = plan.transforms[k].__class__ is Translation
-        self.translations = int(self.translation.sum())
-        self.fill(plan, items)
+            now = plan.transforms[k].__class__ is Translation
+            if now != self.translation[k]:  # (the count follows: no pass over every place)
+                self.translation[k] = now
+                self.translations += 1 if now else -1
+        self.refill(items)
 
     def _grow(self, plan: Any) -> None:
         """Places for the transforms the plan took since (their flags)."""
@@ -201,6 +224,7 @@ class TranslationMap:
     # -- writing rows ----------------------------------------------------------------
     def multi_items(self) -> np.ndarray:
         """The indices of the items below two or more translations."""
+        self._flush()
         found = self._multi_items
         if found is None:
             found = self._multi_items = np.flatnonzero(self.multi)
@@ -208,6 +232,7 @@ class TranslationMap:
 
     def parts(self, plan: Any) -> list[_Part]:
         """The mapped items grouped by batch, rows ascending (made again after a splice or a fill)."""
+        self._flush()
         parts = self._parts
         if parts is not None:
             return parts
