@@ -379,7 +379,7 @@ class MovePlan:
             return None
         self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
         count = found.apply(self)
-        multi = found.multi_items()
+        multi = found.multi_items(self)
         if len(multi):
             hit = np.zeros(len(self.matrices), bool)
             hit[positions] = True
