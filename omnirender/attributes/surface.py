@@ -39,7 +39,7 @@ the sRGB curve), ready for lighting.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -227,7 +227,7 @@ def resolve_appearance(
             mode = "blend" if alpha < 1.0 else "opaque"
         strength = float(material.emissive_strength)
         emission = tuple(c * strength for c in linear_rgb(material.emission))
-        return Appearance(
+        return _appearance(
             model="pbr",
             material=material,
             color=color,
@@ -263,7 +263,7 @@ def resolve_appearance(
         follows = True
     # a layer's alpha only blends the layer in; the base texture's alpha is the surface's
     see_through = alpha < 1.0 or _texture_has_alpha(texture)
-    return Appearance(
+    return _appearance(
         model="phong",
         material=material,
         color=color,
@@ -280,6 +280,21 @@ def resolve_appearance(
         alpha_mode="blend" if see_through else "opaque",
         vertex_colors="replace",
     )
+
+
+#: Appearance's defaults by field name (the mutable ``extras`` made per appearance)
+_DEFAULTS = {f.name: f.default for f in fields(Appearance) if f.default is not MISSING}
+
+
+def _appearance(**values: Any) -> Appearance:
+    """``Appearance(**values)`` without the frozen dataclass's per-field ``object.__setattr__`` (resolving a
+    new material is on the path of a frame that replaced one): the same fields, equality, hash and repr."""
+    out = object.__new__(Appearance)
+    state = dict(_DEFAULTS)
+    state["extras"] = {}
+    state.update(values)
+    out.__dict__.update(state)
+    return out
 
 
 def vertex_rgba(app: Appearance, colors: Any) -> np.ndarray:

@@ -75,3 +75,29 @@ def test_texture_integer_lists_become_uint8():
     assert t.image_array()[0, 1].tolist() == [0, 255, 0, 255]
     with pytest.raises(ValueError, match=r"Texture: image integer values must be in \[0, 255\]"):
         om.Texture([[[256, 0, 0]]])
+
+
+def test_resolved_appearances_are_the_dataclass_made_from_their_fields():
+    """resolve_appearance builds its results without the frozen dataclass's __init__ (a hot path): they must be
+    the same objects the dataclass makes from the same fields (equality, hash, repr, frozen, a fresh extras)."""
+    import dataclasses
+
+    from omnirender.attributes.surface import Appearance, resolve_appearance
+
+    texture = om.Texture(np.zeros((2, 2, 3), np.uint8))
+    stacks = [
+        [],
+        [om.Color(0.2, 0.4, 0.6, 0.5)],
+        [om.Material(diffuse=(0.3, 0.4, 0.5), specular=(1, 1, 1), shininess=7, opacity=0.25)],
+        [om.Material(), om.Color(0.9, 0.1, 0.1)],
+        [om.PBRMaterial(base_color=(0.2, 0.3, 0.4), metallic=0.5, roughness=0.3, base_color_texture=texture)],
+        [om.PBRMaterial(opacity=0.5, alpha_mode="mask", alpha_cutoff=0.3, double_sided=False)],
+    ]
+    for stack in stacks:
+        got = resolve_appearance(stack, texture if not stack else None)
+        made = Appearance(**{f.name: getattr(got, f.name) for f in dataclasses.fields(Appearance)})
+        assert got == made and hash(got) == hash(made) and repr(got) == repr(made)
+        assert set(vars(got)) == set(vars(made))
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            got.alpha = 0.0  # type: ignore[misc]
+        assert got.extras == {} and got.extras is not resolve_appearance(stack).extras

@@ -302,3 +302,25 @@ def test_a_moved_caster_updates_its_shadow_and_replays_the_frame_plan():
         image = e.render(scene, read_depth=False)
         assert not image.info["replayed"]
         assert np.array_equal(image.array, fresh(scene, True))
+
+
+def test_nodes_spliced_in_after_a_lean_move_are_moved_by_their_own_shape_local_matrices():
+    """Which items' shape-local matrices are the identity is asked of the installed items at once on the first
+    lean move; items spliced in later (a scaled box, a unit box) are asked one by one when they first move."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        nodes["p0"].items[0].offset = (-3.0, -1.2, 0.3)
+        e.render(scene, read_depth=False)
+        small = om.Translation(-1.0, 2.2, 0.0)
+        unit = om.Translation(1.0, 2.2, 0.0)
+        scene.add(om.Node("small", [small, om.Material(diffuse=(0.2, 0.8, 0.8)), om.Box(size=0.4)]))
+        scene.add(om.Node("unit", [unit, om.Material(diffuse=(0.8, 0.2, 0.8)), om.Box(size=1.0)]))
+        e.render(scene, read_depth=False)
+        for t, offset in ((small, (-1.5, 2.0, 0.5)), (unit, (1.5, 2.0, 0.5)), (small, (-0.5, 1.8, 1.0))):
+            t.offset = offset
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False
+            assert np.array_equal(image.array, fresh(scene)), offset

@@ -40,7 +40,7 @@ from .compile_state import CompileState
 from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
 from .drawlist import DrawItem, DrawState, Scope, drawn_transparent
 from .geometry import Geometry
-from .instancing import instance_rows
+from .instancing import instance_rows, mask_copies
 from .layout import PBR, PHONG, ROW
 from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, kinds
@@ -70,10 +70,11 @@ class TextureSet:
 
     ``textures`` are (sampler uniform, om.Texture, sRGB) triples; ``features``
     and ``uniforms`` apply where the shape has texture coordinates, ``alpha``
-    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.
+    and ``alpha_uniforms`` (cut-out, opaque alpha) everywhere.  ``key`` holds
+    them all: two sets with equal keys give draw items the same draw state.
     """
 
-    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
+    __slots__ = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base", "key")
 
     def __init__(self, app: Appearance) -> None:
         textures: list[tuple[str, Any, bool]] = []
@@ -120,6 +121,8 @@ class TextureSet:
             self.alpha, self.alpha_uniforms = (("ALPHA_OPAQUE", True),), ()
         else:
             self.alpha, self.alpha_uniforms = (), ()
+        self.key = (self.textures, self.features, self.uniforms, self.uv1, self.normal, self.alpha,
+                    self.alpha_uniforms, self.base)  # fmt: skip
 
 
 class _NodeEntry:
@@ -381,7 +384,8 @@ class DrawListCompiler:
                     updater = self.updater
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
-                    if updater.placed and not declarations_kept(updater.moved, engine.mask_function):
+                    moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
+                    if updater.placed and not declarations_kept(moved, engine.mask_function):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
@@ -903,6 +907,8 @@ class DrawListCompiler:
         item.template = template
         item.source_colors = _colors_copy(source)
         item.colors_at = source.written_at("colors")
+        item.mask_at = (source.written_at("scales"), source.written_at("visible"))
+        item.source_mask = mask_copies(source)
         self._scope.entries.append(item)
         return item
 

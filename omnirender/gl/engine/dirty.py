@@ -42,7 +42,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ...attributes import Color, Material, PBRMaterial
-from ...core.transform import Transform
+from ...core.transform import Rotation, Transform, Translation
 from ...scene.node import Node
 from .attributes import AlphaTest, Blend
 from .drawlist import DrawItem, drawn_transparent, uniform_material
@@ -73,7 +73,6 @@ _MATERIAL = slice(ROW.offsets["color"] + 4, ROW.stride)
 assert [f.name for f in ROW.fields[:2]] == ["model", "color"]
 #: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
 _KINDS = frozenset(("mesh", "points", "lines"))
-_TEXSET_FIELDS = ("textures", "features", "uniforms", "uv1", "normal", "alpha", "alpha_uniforms", "base")
 
 
 class Replacement(NamedTuple):
@@ -96,13 +95,26 @@ class Restyle(NamedTuple):
 def role(component: Any) -> str | None:
     """The role a replacement must keep: ``"transform"`` (static transforms), ``"material"``, ``"color"``, or
     None (anything else: its replacement is a topology change)."""
-    if isinstance(component, Transform):
-        return DIRTY_TRANSFORM if component.static else None
-    if isinstance(component, (Material, PBRMaterial)):
+    cls = component.__class__
+    found = _ROLES.get(cls, _UNKNOWN)
+    if found is _UNKNOWN:
+        found = _ROLES[cls] = _role_of(cls)
+    return found
+
+
+def _role_of(cls: type) -> str | None:
+    if issubclass(cls, Transform):
+        return DIRTY_TRANSFORM if cls.static else None
+    if issubclass(cls, (Material, PBRMaterial)):
         return "material"
-    if isinstance(component, Color):
+    if issubclass(cls, Color):
         return "color"
     return None
+
+
+#: class -> its role (:func:`role`), asked once per class
+_ROLES: dict[type, str | None] = {}
+_UNKNOWN = object()
 
 
 def classify(
@@ -136,8 +148,11 @@ def classify(
     return out
 
 
-def _det_sign(m: np.ndarray) -> int:
-    (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
+def _det_sign(t: Any) -> int:
+    """The sign of the determinant of ``t``'s matrix (a translation's and a rotation's: 1, unasked)."""
+    if t.__class__ is Translation or t.__class__ is Rotation:
+        return 1
+    (a, b, c), (d, e, f), (g, h, i) = t.matrix[:3, :3].tolist()
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     return (det > 0.0) - (det < 0.0)
 
@@ -155,7 +170,7 @@ def transform_swaps(
     for node, old, new, kind in replacements:
         if kind != DIRTY_TRANSFORM:
             continue
-        if _det_sign(old.matrix) != _det_sign(new.matrix):
+        if _det_sign(old) != _det_sign(new):
             return None  # mirrored now (or no more): the culled faces change
         found = entries(node)
         if found is None:
@@ -173,7 +188,7 @@ def transform_swaps(
 
 
 def _same_texture_set(a: Any, b: Any) -> bool:
-    return a is b or all(getattr(a, k) == getattr(b, k) for k in _TEXSET_FIELDS)
+    return a is b or a.key == b.key
 
 
 def restyles(

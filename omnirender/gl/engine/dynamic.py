@@ -25,7 +25,7 @@ from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .bulk import BulkMap
 from .drawlist import set_translations
-from .instancing import InstanceRows, instance_rows, set_arrays
+from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
 from .layout import ROW
 from .translations import TranslationMap
 
@@ -101,6 +101,9 @@ class MovePlan:
         #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
         #: append new items and leave removed ones' places)
         self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
+        #: per item index, whether its shape-local matrix is the identity (made from ``local`` at once when first
+        #: asked; items spliced in later are asked one by one)
+        self._eye_local: list[bool] | None = None
         #: (batch, row indices, a slice of them, or None: all) the last apply() rewrote, for the render index's bounds
         self.moved_rows: list[tuple[Any, Any]] = []
         #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
@@ -379,7 +382,7 @@ class MovePlan:
             return None
         self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
         count = found.apply(self)
-        multi = found.multi_items(self)
+        multi = found.multi_items()
         if len(multi):
             hit = np.zeros(len(self.matrices), bool)
             hit[positions] = True
@@ -416,16 +419,16 @@ class MovePlan:
         if not positions:
             return 0
         if self.bulk or self._map is not None:
-            self._follow_maps(positions, np.fromiter(affected, np.intp, len(affected)))
+            self._follow_maps(positions, affected)
         local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
-        rows_of: dict[int, list[int]] = {}
+        rows_of: dict[int, tuple[Any, list[int]]] = {}
         for i in affected:
             item = items[i]
             chain = item.chain
             only = plain.get(i)
             if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
-                only = plain[i] = (chain, _translation_only(item))
+                only = plain[i] = (chain, self._translation_only(i, item))
             if only[1]:
                 # the model is the translation's matrix, written from its offset in plain floats (rows hold M
                 # transposed; the numbers the product below gives); the whole matrix, not only its translation:
@@ -440,24 +443,43 @@ class MovePlan:
                 if local is not None:
                     model = model @ local[i]
                 where, values = _MODEL, model.T.reshape(16)
-            b = int(self.batch_of[i])
-            if b < 0:  # an item without a batch (transparent, overlay): its own row
+            slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
+            if slot is None:  # an item without a batch (transparent, overlay): its own row
                 item.row[where] = values
                 self.rows_only = False
                 continue
-            batch = self.batches[b]
-            r = int(self.row_of[i])
+            batch, r = slot
             batch.rows[r, where] = values
             batch.row_changed(r)
-            rows_of.setdefault(b, []).append(r)
-        for b, where in rows_of.items():
-            self.moved_rows.append((self.batches[b], np.array(where, np.intp)))
+            found = rows_of.get(id(batch))
+            if found is None:
+                rows_of[id(batch)] = (batch, [r])
+            else:
+                found[1].append(r)
+        for batch, where in rows_of.values():
+            self.moved_rows.append((batch, np.array(where, np.intp)))
         if not self.instance_items:
             return len(affected)
         moved = self._apply_instances(set(positions))
         if moved:
             self.rows_only = False
         return len(affected) + moved
+
+    def _translation_only(self, i: int, item: Any) -> bool:
+        """Whether item ``i``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no
+        shape-local matrix, or the identity: a product with it changes no number)."""
+        chain, local = item.chain, item.local
+        if len(chain) != 1 or chain[0].__class__ is not Translation:
+            return False
+        if local is None:
+            return True
+        eye = self._eye_local
+        if eye is None:  # which items' shape-local matrices are the identity, asked of all at once (C loops)
+            held = self.local
+            eye = self._eye_local = [] if held is None else (held == _EYE4).all(axis=(1, 2)).tolist()
+        if i < len(eye):  # (``local`` holds the items' matrices in their order; spliced items come after)
+            return eye[i]
+        return local.tolist() == _EYE4_LIST
 
     def _apply_items(self, positions: np.ndarray) -> int:
         if not len(self.items):
@@ -470,7 +492,7 @@ class MovePlan:
         self._follow_maps(positions, affected)
         return self._write_items(affected)
 
-    def _follow_maps(self, positions: Any, affected: np.ndarray) -> None:
+    def _follow_maps(self, positions: Any, affected: np.ndarray | dict[int, None]) -> None:
         """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
         array maps made from them are dropped; the translation map fills the ``affected`` items again."""
         for key, (_, bulk) in list(self.bulk.items()):
@@ -478,7 +500,9 @@ class MovePlan:
                 del self.bulk[key]
         found = self._map
         if found is not None and found.stale(positions):
-            found.fill(self, affected)
+            if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
+                affected = np.fromiter(affected, np.intp, len(affected))
+            found.refill(affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
         """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""
@@ -538,13 +562,6 @@ _STATIC: dict[type, bool] = {}
 
 def _static_transform(cls: type) -> bool:
     return issubclass(cls, Transform) and bool(cls.static) and not issubclass(cls, TranslationArray)
-
-
-def _translation_only(item: Any) -> bool:
-    """Whether ``item``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no shape-local
-    matrix, or the identity: a product with it changes no number)."""
-    chain, local = item.chain, item.local
-    return len(chain) == 1 and chain[0].__class__ is Translation and (local is None or local.tolist() == _EYE4_LIST)
 
 
 def _add_user(users: dict[int, list[int]], item: Any, i: int) -> None:
@@ -607,7 +624,7 @@ class TransformUpdater:
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
         #: the transforms (and translation arrays) the last :meth:`apply` moved: the compiler asks whether they
-        #: may have moved a declared component (``declarations_kept``)
+        #: may have moved a declared component (``declarations_kept``), and empties it
         self.moved: list[Any] = []
 
     def forget(self) -> None:
@@ -847,14 +864,31 @@ _NO_COLORS = np.empty((0, 4))
 def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
-    That is: positions, no scales, no visibility mask, the same count and the
-    same colours as the items' rows were made from (colours are compared, so
+    That is: positions, the same count, scales and visibility mask (both
+    unwritten since, by ``written_at``, or equal to the rows' copies of them;
+    then the visible instances' positions)
+    and the same colours as the items' rows were made from (colours are compared, so
     their conversion to linear is done once, not every frame, unless the set's
     touches since then named only other arrays: ``touch("transforms")``).  Whether they
     are finite is checked on what :func:`_moved_world` makes of them.
     """
-    if shape.scales is not None or shape.visible is not None:
-        return None
+    scaled = shape.scales is not None
+    visible = shape.visible
+    if scaled or visible is not None:
+        # the same scales and mask as the rows were made with (only touches naming other arrays since): the
+        # rows keep their 3x3 parts and the visible instances, and take the moved positions of those
+        mask_at = (shape.written_at("scales"), shape.written_at("visible"))
+        now = None
+        for item in items:
+            if scaled and _shifted(item):
+                return None  # a shape's local shift would be scaled per instance
+            if item.mask_at == mask_at:
+                continue
+            if now is None:  # a touch that may have written them (a plain one): compared with the rows' copies
+                now = held(shape.scales), held(shape.visible)
+            if not all(_same(a, b) for a, b in zip(item.source_mask, now, strict=True)):
+                return None
+            item.mask_at = mask_at  # the same: not compared again until a touch may have written them
     source = shape.transforms
     array = getattr(source, "array", None)
     t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
@@ -863,6 +897,14 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3:
         return None
+    if visible is not None:
+        try:
+            v = shape.visible_array()
+        except ValueError:
+            return None  # the compile names the set
+        if v is None or len(v) != len(t):
+            return None
+        t = t[v]  # the visible instances' positions: the rows are theirs
     colors_at = shape.written_at("colors")
     colors = None
     for item in items:
@@ -877,6 +919,19 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
             return None
         item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _same(before: np.ndarray | None, now: np.ndarray | None) -> bool:
+    """Whether an array the rows were made with (a copy, or None) equals the application's now."""
+    if before is None or now is None:
+        return before is now
+    return before.shape == now.shape and bool(np.array_equal(before, now))
+
+
+def _shifted(item: Any) -> bool:
+    """Whether the instance set item's shape has a local matrix that moves it (a translation)."""
+    local = item.template.local
+    return local is not None and bool(local[:3, 3].any())
 
 
 def _colors_now(shape: Any) -> np.ndarray:
@@ -953,6 +1008,8 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
     """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed)."""
     item.source_colors = _colors_of(item.source)
     item.colors_at = item.source.written_at("colors")
+    item.mask_at = (item.source.written_at("scales"), item.source.written_at("visible"))
+    item.source_mask = mask_copies(item.source)
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:

@@ -100,6 +100,8 @@ class FrameRunner:
         #: (plan, root scope, draw-list version, stages) for which :meth:`rows_moved` found that the plan may be
         #: kept after rows moved in place, or None
         self._follows: tuple[Any, ...] | None = None
+        #: the same for :meth:`rows_restyled` (which keeps plans with shadow maps)
+        self._restyles: tuple[Any, ...] | None = None
         #: (stages, those of them that override FrameStage.follow_rows): what runs before a replay after moves
         self._followers: tuple[tuple[Any, ...], list[Any]] | None = None
         #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
@@ -191,13 +193,20 @@ class FrameRunner:
             return  # the next frame is drawn in full: it uploads the changed rows
         engine = self.engine
         root = engine.root_scope
-        if (
-            root is None
-            or any(scope.filtered for scope in root.walk())
-            or not all(stage.follows_rows(engine) for stage in self.stages.frozen())
-        ):
-            self.placements_changed()
-            return
+        stages = self.stages.frozen()
+        # (asked once per plan, root scope, draw-list version and stage list, as rows_moved asks; what it found
+        # holds here too: its conditions include these)
+        follows = (plan, root, engine.draw_list_version, stages)
+        if self._follows != follows and self._restyles != follows:
+            if (
+                root is None
+                or any(scope.filtered for scope in root.walk())
+                or not all(stage.follows_rows(engine) for stage in stages)
+            ):
+                self._restyles = None
+                self.placements_changed()
+                return
+            self._restyles = follows
         for batch in batches:
             self._moved[id(batch)] = batch
 

@@ -16,7 +16,7 @@ import numpy as np
 from ...attributes.photometry import srgb_to_linear
 from .layout import PBR, ROW
 
-__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours"]
+__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours", "held", "mask_copies"]
 
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
@@ -62,6 +62,21 @@ def set_arrays(shape: Any) -> tuple[np.ndarray, np.ndarray | None, bool]:
         matrices = matrices[visible]
         colors = colors[visible] if colors is not None else None
     return matrices, colors, shape.may_mirror()
+
+
+def held(value: Any) -> np.ndarray | None:
+    """The array the application holds for an instance set's parameter (no copy; ``.array()`` of a sequence)."""
+    if value is None:
+        return None
+    array = getattr(value, "array", None)
+    return np.asarray(value.array() if callable(array) and not isinstance(value, np.ndarray) else value)
+
+
+def mask_copies(shape: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Copies of the set's scales and visibility mask as the application holds them (None where it has none):
+    compared after a plain ``touch()`` to know whether the rows' 3x3 parts and visible instances still hold."""
+    scales, visible = held(shape.scales), held(shape.visible)
+    return (None if scales is None else scales.copy()), (None if visible is None else visible.copy())
 
 
 def instance_rows(

@@ -83,12 +83,19 @@ class TranslationMap:
         "translations",
         "_parts",
         "_multi_items",
-        "_stores",
+        "_plan",
         "_pending",
+        "_stores",
     )
 
     def __init__(self, plan: Any) -> None:
         n = len(plan.items)
+        #: the move plan this maps (fills read its chains and matrices)
+        self._plan = plan
+        #: items whose chains changed (transforms replaced) or whose c or L went stale since: filled again before
+        #: the map is next read (:meth:`parts`, :meth:`multi_items`), so a frame that replaces or moves a few
+        #: transforms pays no fill of its own
+        self._pending: list[np.ndarray] = []
         self.source = np.full(n, -1, np.intp)
         self.constant = np.zeros((n, 3))
         #: L per item, made when a first item's L is not the identity
@@ -106,12 +113,22 @@ class TranslationMap:
         self._multi_items: np.ndarray | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        #: items a splice brought whose constants are made when the map is next used (in one fill for all the
-        #: splices since: frames adding a node each pay no numpy pass of their own)
-        self._pending: dict[int, None] = {}
         self.fill(plan, np.arange(n))
 
     # -- following the plan ----------------------------------------------------------
+    def refill(self, items: np.ndarray) -> None:
+        """The items ``items`` (indices) are filled again (:meth:`fill`) before the map is next read."""
+        self._pending.append(items)
+        self._parts = None
+        self._multi_items = None
+
+    def _flush(self) -> None:
+        pending = self._pending
+        if pending:
+            items = pending[0] if len(pending) == 1 else np.unique(np.concatenate(pending))
+            self._pending = []
+            self.fill(self._plan, items)
+
     def fill(self, plan: Any, items: np.ndarray) -> None:
         """Make ``source``, ``c`` and ``L`` of the plan items ``items`` (indices) from the plan's chains."""
         self._parts = None
@@ -159,13 +176,11 @@ class TranslationMap:
     def splice(self, plan: Any, removed: list[int], first_new: int) -> None:
         """Follow :meth:`MovePlan.splice`: items ``removed`` (indices) left, items from ``first_new`` on came.
 
-        Call after the plan took them (its chains, matrices and transforms hold the new ones).  The new items'
-        constants are made when the map is next used (:meth:`parts`, :meth:`multi_items`).
+        Call after the plan took them (its chains, matrices and transforms hold the new ones).  The new items
+        are filled when the map is next read (:meth:`refill`: frames adding a node each pay no numpy fill; a
+        removed item waiting there is filled as what it is now, below no translation).
         """
-        pending = self._pending
         if removed:
-            for i in removed:
-                pending.pop(i, None)
             gone = np.array(removed, np.intp)
             self.source[gone] = -1
             self.multi[gone] = False
@@ -178,26 +193,18 @@ class TranslationMap:
             self._extend("multi", extra)[-extra:] = False
             if self.linear is not None:
                 self._extend("linear", extra)[-extra:] = _EYE3
-        pending.update(dict.fromkeys(range(first_new, n)))
-        self._parts = None  # rows moved: grouped again when next applied
-        self._multi_items = None
-
-    def _settle(self, plan: Any) -> None:
-        """Make the constants of the items splices brought since the map was last used."""
-        pending = self._pending
-        if pending:
-            items = np.fromiter(pending, np.intp, len(pending))
-            pending.clear()
-            self.fill(plan, items)
+        self.refill(np.arange(first_new, n))  # (rows moved: grouped again when next read)
 
     def replaced(self, plan: Any, places: list[int], items: np.ndarray) -> None:
         """Follow :meth:`MovePlan.replace`: transforms at ``places`` are others now, the chains of ``items``
         (indices) changed or hold them."""
         self._grow(plan)
         for k in places:
-            self.translation[k] = plan.transforms[k].__class__ is Translation
-        self.translations = int(self.translation.sum())
-        self.fill(plan, items)
+            now = plan.transforms[k].__class__ is Translation
+            if now != self.translation[k]:  # (the count follows: no pass over every place)
+                self.translation[k] = now
+                self.translations += 1 if now else -1
+        self.refill(items)
 
     def _grow(self, plan: Any) -> None:
         """Places for the transforms the plan took since (their flags)."""
@@ -225,15 +232,18 @@ class TranslationMap:
         setattr(self, name, out)
         return out
 
-    def stale(self, places: np.ndarray) -> bool:
+    def stale(self, places: np.ndarray | list[int]) -> bool:
         """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L
         was made from."""
-        return bool(self.fixed[places].any())
+        fixed = self.fixed
+        if places.__class__ is list and len(places) <= 8:  # a few moved (MovePlan.apply_few): no fancy index
+            return any(fixed[k] for k in places)
+        return bool(fixed[places].any())
 
     # -- writing rows ----------------------------------------------------------------
-    def multi_items(self, plan: Any) -> np.ndarray:
+    def multi_items(self) -> np.ndarray:
         """The indices of the items below two or more translations."""
-        self._settle(plan)
+        self._flush()
         found = self._multi_items
         if found is None:
             found = self._multi_items = np.flatnonzero(self.multi)
@@ -241,7 +251,7 @@ class TranslationMap:
 
     def parts(self, plan: Any) -> list[_Part]:
         """The mapped items grouped by batch, rows ascending (made again after a splice or a fill)."""
-        self._settle(plan)
+        self._flush()
         parts = self._parts
         if parts is not None:
             return parts
