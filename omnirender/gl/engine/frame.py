@@ -405,17 +405,18 @@ class FrameRunner:
             followers = self._followers = (stages, [s for s in stages if type(s).follow_rows is not base])
         if not followers[1]:
             return True
-        engine, state = self.engine, self.state
+        engine, state, report = self.engine, self.state, self.report
         state.shadow_plan = None
         state.drawing = True
-        self.report.begin_frame(False)
+        report.begin_frame(False)
         try:
             held = all(stage.follow_rows(self, root, plan) for stage in followers[1])
         finally:
             state.drawing = False
-            self.report.close()
-            self._restore_defaults(fbo, size)  # a replay starts from the defaults with the frame's target bound
-            engine.programs.owner = None  # programs the stages drew with may be the plan's: every write again
+            report.close()
+            if report.records:  # passes ran (stages draw with frame.run); else GL is as the frame began
+                self._restore_defaults(fbo, size)  # a replay starts from the defaults with the target bound
+                engine.programs.owner = None  # programs the stages drew with may be the plan's: all writes again
         return held
 
     def _plan_key(
