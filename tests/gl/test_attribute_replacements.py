@@ -339,3 +339,33 @@ def test_a_replaced_transform_above_a_light_moves_the_light():
         replace(leaves[4], leaves[4].items[0], om.Translation(0.0, 2.5, 1.0))  # declares nothing: kept
         render_checked(e, scene, "dirty", before)
         assert e.declared is declared
+
+
+def test_replacements_in_frames_that_move_every_other_node():
+    """A replaced transform in a frame whose setter loop moves all the other nodes (the translation map of many
+    moves follows the replaced chain), then loops without replacements: each frame as a fresh engine draws it."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 24), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
+    box = om.Box(size=0.6)
+    nodes = [
+        scene.add(om.Node(f"b{i}", [om.Translation(i % 10 - 4.5, i // 10 - 4.5, 0), om.Material(), box]))
+        for i in range(100)
+    ]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        for frame in range(6):
+            node = nodes[(frame * 31 + 7) % len(nodes)]
+            if frame in (2, 4):
+                m = np.eye(4)
+                m[:3, 3] = node.items[0].matrix[:3, 3] + (0.0, 0.0, 1.0)
+                replace(node, node.items[0], om.Matrix(m))
+            for other in nodes:
+                t = other.items[0]
+                if isinstance(t, om.Translation):
+                    x, y, z = t.offset
+                    t.offset = (x, y + 0.05, z)
+            image = e.render(scene)
+            assert e.stats["compiled"] == ("dirty" if frame in (2, 4) else False), frame
+            assert np.array_equal(image.array, fresh(scene)), frame

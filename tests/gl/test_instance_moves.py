@@ -203,10 +203,12 @@ def test_a_set_moved_in_view_replays_the_frame_plan_and_one_that_must_be_culled_
         assert np.array_equal(e.render(scene).array, image.array)
 
 
+@pytest.mark.parametrize("sorted_", [True, False], ids=["front to back", "row order"])
 @pytest.mark.parametrize("options", [{"shadows": True}, {"pipeline": "deferred", "shadows": True}], ids=str)
-def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options):
+def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options, sorted_):
     """Pending translations meet every other path: shadow maps (bounds read every frame), the deferred
-    pipeline, a transform above the set moving, a node added (a splice) between moves."""
+    pipeline, a transform above the set moving, a node added (a splice) between moves; drawn front to back
+    or in row order (a GPU's way), against a fresh engine drawing front to back."""
     from omnirender.gl import GLEngine
 
     positions, colors = swarm(200, seed=2)
@@ -218,6 +220,7 @@ def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options)
         "scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), floor, om.Node("s", [lift, balls])]
     )
     with GLEngine(size=SIZE, samples=0, **options) as e:
+        e.drawer.sorts_instances = sorted_
         e.render(scene)
         for step in range(5):
             positions[:, 1] += 0.1
@@ -370,3 +373,83 @@ def test_in_row_order_a_partly_culled_set_is_neither_culled_nor_sorted_and_its_m
         camera.eye = (0.5, 1.0, 2.5)  # another view: still row order
         assert np.array_equal(e.render(scene).array, fresh_uncounted(scene, sorts))
         assert sorts == [], "row order: nothing sorted"
+
+
+def test_the_instance_cull_keeps_exactly_the_spheres_meeting_the_frustum():
+    """``drawer.cull_spheres`` (column by column) against the plain per-instance computation."""
+    from omnirender.gl.engine.drawer import cull_spheres
+
+    rng = np.random.default_rng(3)
+    camera = om.Camera.look_at((3, 4, 10), (0, 0, 0), fov=45)
+    clip = camera.projection_matrix(1.3) @ camera.view_matrix()
+    planes = [clip[3] + clip[i // 2] * (1 if i % 2 == 0 else -1) for i in range(6)]
+    n = 400
+    m = np.zeros((n, 4, 4))
+    m[:, :3, :3] = rng.normal(size=(n, 3, 3))  # rotations, shears, mirrors, scales
+    m[: n // 2, :3, :3] = np.eye(3) * rng.uniform(0.2, 2.0, (n // 2, 1, 1))  # positions with uniform scales
+    m[:, :3, 3] = rng.uniform(-15, 15, (n, 3))
+    m[:, 3, 3] = 1.0
+    bounds = (np.array([-0.5, -0.2, 0.1]), np.array([0.7, 0.4, 0.3]))
+    center = np.append((bounds[0] + bounds[1]) / 2, 1.0)
+    radius = np.linalg.norm(bounds[1] - bounds[0]) / 2
+    rows = m.transpose(0, 2, 1).reshape(n, 16).astype(np.float32)  # as the rows hold them: M transposed
+    expected = []
+    for i in range(n):
+        mi = rows[i].reshape(4, 4).T.astype(np.float64)
+        c, scale = mi @ center, max(np.linalg.norm(mi[:3, k]) for k in range(3))
+        expected.append(all(p @ c / np.linalg.norm(p[:3]) > -radius * scale for p in planes))
+    visible = cull_spheres(rows, bounds, clip)
+    assert 0 < sum(expected) < n
+    assert visible is not None and visible.tolist() == expected
+    assert cull_spheres(rows[np.array(expected)], bounds, clip) is None, "all of them in view: None"
+
+
+@pytest.mark.parametrize("policy", POLICIES)
+@pytest.mark.parametrize("center", [(0.0, 0.0, 0.0), (0.4, 0.0, 0.2)], ids=["centred", "shifted shape"])
+def test_a_set_with_scales_and_a_mask_moves_its_positions_alone_while_they_are_not_written(policy, center):
+    """The README's swarm (radii, an alive mask, colours): ``touch("transforms")`` moves the visible instances'
+    rows without making them again; a touch naming the scales or the mask (or a plain one) makes them again."""
+    positions, colors = swarm(240, seed=9)
+    radii = np.random.default_rng(9).uniform(0.1, 0.3, 240)
+    alive = np.ones(240, bool)
+    alive[::7] = False
+    balls = om.InstanceSet(om.Box(size=1.0, center=center), positions, colors=colors, scales=radii, visible=alive)
+    camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
+    scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
+    with engine_for(policy) as e:
+        e.render(scene)
+        e.render(scene)
+        for step in range(3):
+            positions[:, 1] += 0.15
+            positions[step * 7] += 0.4  # a hidden one moves too
+            balls.touch("transforms")
+            image = e.render(scene)
+            assert not e.stats["compiled"]
+            assert image.info["replayed"] == (center == (0.0, 0.0, 0.0)), "positions alone: uploaded, replayed"
+            assert np.array_equal(image.array, fresh(scene)), step
+        alive[::7] = True  # the mask written (as many hidden, others): rows made again for the visible ones
+        alive[1::7] = False
+        assert (~alive).sum() == 35
+        positions[:, 0] -= 0.1
+        balls.touch("transforms", "visible")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        radii *= 1.5  # the scales written
+        balls.touch("scales")
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        positions[:, 2] += 0.2
+        balls.touch("transforms")
+        image = e.render(scene)
+        assert np.array_equal(image.array, fresh(scene))
+        # plain touches: the scales and the mask are compared with the rows' copies
+        positions[:, 2] -= 0.2
+        balls.touch()
+        image = e.render(scene)
+        assert image.info["replayed"] == (center == (0.0, 0.0, 0.0)), "unchanged scales and mask: positions alone"
+        assert np.array_equal(image.array, fresh(scene))
+        alive[1::7] = True  # as many hidden, others again, in place
+        alive[2::7] = False
+        balls.touch()
+        assert np.array_equal(e.render(scene).array, fresh(scene))
+        radii[:10] *= 0.5
+        balls.touch()
+        assert np.array_equal(e.render(scene).array, fresh(scene))

@@ -407,20 +407,7 @@ class BatchDrawer:
 
     def _cull(self, batch: Batch) -> np.ndarray | None:
         """Which instances' bounding spheres meet the view frustum (None: all of them)."""
-        rows = batch.rows
-        b0, b1 = batch.geometry.bounds
-        center = np.append((b0 + b1) / 2.0, 1.0)
-        radius = float(np.linalg.norm(b1 - b0)) / 2.0
-        mt = rows[:, _MODEL].reshape(-1, 4, 4).astype(np.float64)  # each row holds M transposed
-        centers = center @ mt  # (n, 4): M @ center
-        scale = np.sqrt((mt[:, :3, :3] ** 2).sum(axis=2)).max(axis=1)
-        clip = self.state.proj @ self.state.view
-        planes = np.array([clip[3] + clip[0], clip[3] - clip[0], clip[3] + clip[1], clip[3] - clip[1],
-                           clip[3] + clip[2], clip[3] - clip[2]])  # fmt: skip
-        planes /= np.linalg.norm(planes[:, :3], axis=1)[:, None]
-        distance = centers @ planes.T  # (n, 6) signed distances of the centres
-        visible = (distance > -(radius * scale)[:, None]).all(axis=1)
-        return None if visible.all() else visible
+        return cull_spheres(batch.rows[:, _MODEL], batch.geometry.bounds, self.state.proj @ self.state.view)
 
     def _layout(self, fields: tuple[str, ...]) -> Any:
         """The instance layout of ``fields`` (in the row's order: compared with a batch's to know whether the
@@ -744,6 +731,34 @@ class BatchDrawer:
 def _two_faced(geometry: Geometry, state: DrawState) -> bool:
     """Whether a transparent draw renders back faces, then front faces (closed shapes without culling)."""
     return state.value(CullFace) == "none" and geometry.mode == "triangles" and state.kind == "mesh"
+
+
+def cull_spheres(models: np.ndarray, bounds: tuple[np.ndarray, np.ndarray], clip: np.ndarray) -> np.ndarray | None:
+    """Which of the instances whose model matrices are the rows of ``models`` ((N, 16), each M transposed, as
+    the rows hold them) have the bounding sphere of ``bounds`` meeting the frustum of ``clip`` (None: all).
+
+    Column by column (an (N, 16) @ (16, 6) product for the six distances, the
+    axes' squared lengths summed per column): numpy's reductions over short
+    axes cost ten times more.
+    """
+    b0, b1 = bounds
+    center = np.append((b0 + b1) / 2.0, 1.0)
+    radius = float(np.linalg.norm(b1 - b0)) / 2.0
+    planes = np.array([clip[3] + clip[0], clip[3] - clip[0], clip[3] + clip[1], clip[3] - clip[1],
+                       clip[3] + clip[2], clip[3] - clip[2]])  # fmt: skip
+    planes /= np.linalg.norm(planes[:, :3], axis=1)[:, None]
+    m = models.astype(np.float64)  # m[:, 4r + c] = M[c, r]: column r of M is m[:, 4r : 4r + 4]
+    # distance_j = planes_j . (M @ center) = sum over r, c of center[r] * planes[j, c] * M[c, r]
+    distance = m @ (center[:, None, None] * planes.T[None, :, :]).reshape(16, 6)
+    longest = None  # the longest axis of M's 3x3 part, squared: the sphere's radius scales with it
+    for r in range(3):
+        axis = m[:, 4 * r] ** 2 + m[:, 4 * r + 1] ** 2 + m[:, 4 * r + 2] ** 2
+        longest = axis if longest is None else np.maximum(longest, axis, out=longest)
+    limit = -radius * np.sqrt(longest)
+    visible = distance[:, 0] > limit
+    for j in range(1, 6):
+        visible &= distance[:, j] > limit
+    return None if visible.all() else visible
 
 
 def _depth_order(batch: Batch, view_key: Any, view: np.ndarray, n: int) -> np.ndarray:

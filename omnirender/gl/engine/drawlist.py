@@ -153,6 +153,8 @@ class DrawItem:
         "template",
         "source_colors",
         "colors_at",
+        "mask_at",
+        "source_mask",
         "surface",
     )
 
@@ -198,6 +200,11 @@ class DrawItem:
         #: for an instance set: its ``written_at("colors")`` when ``source_colors`` was last found equal to its
         #: colours (a touch naming only other arrays keeps it: the colours are not compared then)
         self.colors_at = -1
+        #: for an instance set: its ``written_at`` of its scales and its visibility mask when its rows were made
+        #: (while they hold, a touch of the transforms alone moves the rows' translations only)
+        self.mask_at: tuple[int, int] = (-1, -1)
+        #: for an instance set: copies of the scales and the mask its rows were made with (None where none)
+        self.source_mask: tuple[Any, Any] = (None, None)
         #: the compiler's resolved surface the row's surface fields came from (appearance, row, texture set,
         #: context), or None; an attribute replaced by one of the same role is resolved again from it
         self.surface: Any = None

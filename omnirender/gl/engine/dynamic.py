@@ -25,7 +25,7 @@ from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .bulk import BulkMap
 from .drawlist import set_translations
-from .instancing import InstanceRows, instance_rows, set_arrays
+from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
 from .layout import ROW
 from .translations import TranslationMap
 
@@ -502,7 +502,7 @@ class MovePlan:
         if found is not None and found.stale(positions):
             if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
                 affected = np.fromiter(affected, np.intp, len(affected))
-            found.fill(self, affected)
+            found.refill(affected)
 
     def _write_items(self, affected: np.ndarray) -> int:
         """Recompose the model matrices of the items ``affected`` (indices) from their chains into their rows."""
@@ -696,6 +696,8 @@ class TransformUpdater:
                     if not static:
                         break
                 else:
+                    if plan.clipping and not plan.clipping.isdisjoint(map(id, changed)):
+                        return None  # a clip plane below a moved transform: placed again by a compile
                     self.placed = True
                     self.moved = changed
                     return self._apply_few(plan, changed)
@@ -733,6 +735,20 @@ class TransformUpdater:
         self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
         return count + (self._install(updates) if updates else 0)
+
+    def follows(self, moves: list[Any]) -> bool:
+        """Whether :meth:`apply` of ``moves`` (static transforms, translation arrays) would move rows in place
+        with the plan there is (none made for it): a compile that splices new subtrees in the same frame
+        leaves them to it."""
+        plan = self._plan
+        if plan is None:
+            return False
+        clipping = plan.clipping
+        if not clipping:
+            return True
+        return clipping.isdisjoint(map(id, moves)) and not any(
+            not clipping.isdisjoint(map(id, a)) for a in moves if a.__class__ is TranslationArray
+        )
 
     def _install(self, updates: list[tuple[Any, Any]]) -> int:
         """Install instance sets' new rows or moved positions (:meth:`_instance_updates`); returns how many."""
@@ -864,14 +880,31 @@ _NO_COLORS = np.empty((0, 4))
 def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
 
-    That is: positions, no scales, no visibility mask, the same count and the
-    same colours as the items' rows were made from (colours are compared, so
+    That is: positions, the same count, scales and visibility mask (both
+    unwritten since, by ``written_at``, or equal to the rows' copies of them;
+    then the visible instances' positions)
+    and the same colours as the items' rows were made from (colours are compared, so
     their conversion to linear is done once, not every frame, unless the set's
     touches since then named only other arrays: ``touch("transforms")``).  Whether they
     are finite is checked on what :func:`_moved_world` makes of them.
     """
-    if shape.scales is not None or shape.visible is not None:
-        return None
+    scaled = shape.scales is not None
+    visible = shape.visible
+    if scaled or visible is not None:
+        # the same scales and mask as the rows were made with (only touches naming other arrays since): the
+        # rows keep their 3x3 parts and the visible instances, and take the moved positions of those
+        mask_at = (shape.written_at("scales"), shape.written_at("visible"))
+        now = None
+        for item in items:
+            if scaled and _shifted(item):
+                return None  # a shape's local shift would be scaled per instance
+            if item.mask_at == mask_at:
+                continue
+            if now is None:  # a touch that may have written them (a plain one): compared with the rows' copies
+                now = held(shape.scales), held(shape.visible)
+            if not all(_same(a, b) for a, b in zip(item.source_mask, now, strict=True)):
+                return None
+            item.mask_at = mask_at  # the same: not compared again until a touch may have written them
     source = shape.transforms
     array = getattr(source, "array", None)
     t = source.array() if callable(array) and not isinstance(source, np.ndarray) else source
@@ -880,6 +913,14 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
         t = t.astype(np.float64)
     if t.ndim != 2 or t.shape[1] != 3:
         return None
+    if visible is not None:
+        try:
+            v = shape.visible_array()
+        except ValueError:
+            return None  # the compile names the set
+        if v is None or len(v) != len(t):
+            return None
+        t = t[v]  # the visible instances' positions: the rows are theirs
     colors_at = shape.written_at("colors")
     colors = None
     for item in items:
@@ -894,6 +935,19 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
             return None
         item.colors_at = colors_at  # the same colours: not compared again until a touch may have written them
     return t
+
+
+def _same(before: np.ndarray | None, now: np.ndarray | None) -> bool:
+    """Whether an array the rows were made with (a copy, or None) equals the application's now."""
+    if before is None or now is None:
+        return before is now
+    return before.shape == now.shape and bool(np.array_equal(before, now))
+
+
+def _shifted(item: Any) -> bool:
+    """Whether the instance set item's shape has a local matrix that moves it (a translation)."""
+    local = item.template.local
+    return local is not None and bool(local[:3, 3].any())
 
 
 def _colors_now(shape: Any) -> np.ndarray:
@@ -970,6 +1024,8 @@ def _install_rows(item: Any, made: InstanceRows) -> None:
     """``made`` becomes the item's rows and, where it has one, its batch's (re-culled when the count changed)."""
     item.source_colors = _colors_of(item.source)
     item.colors_at = item.source.written_at("colors")
+    item.mask_at = (item.source.written_at("scales"), item.source.written_at("visible"))
+    item.source_mask = mask_copies(item.source)
     item.instances = made.rows
     item.instance_models = made.models
     if item.slot is None:

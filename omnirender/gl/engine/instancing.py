@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 
 from ...attributes.photometry import srgb_to_linear
+from ...shapes.instances import determinants
 from .layout import PBR, ROW
 
-__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours"]
+__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours", "held", "mask_copies"]
 
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
@@ -64,6 +65,21 @@ def set_arrays(shape: Any) -> tuple[np.ndarray, np.ndarray | None, bool]:
     return matrices, colors, shape.may_mirror()
 
 
+def held(value: Any) -> np.ndarray | None:
+    """The array the application holds for an instance set's parameter (no copy; ``.array()`` of a sequence)."""
+    if value is None:
+        return None
+    array = getattr(value, "array", None)
+    return np.asarray(value.array() if callable(array) and not isinstance(value, np.ndarray) else value)
+
+
+def mask_copies(shape: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Copies of the set's scales and visibility mask as the application holds them (None where it has none):
+    compared after a plain ``touch()`` to know whether the rows' 3x3 parts and visible instances still hold."""
+    scales, visible = held(shape.scales), held(shape.visible)
+    return (None if scales is None else scales.copy()), (None if visible is None else visible.copy())
+
+
 def instance_rows(
     row: np.ndarray,
     local: np.ndarray | None,
@@ -81,7 +97,7 @@ def instance_rows(
     only when ``may_mirror`` (positions and positive scales never mirror).
     """
     n = len(matrices)
-    models = matrices if local is None else matrices @ local
+    models = matrices if local is None or _is_identity(local) else matrices @ local
     world = models if _is_identity(model) else model @ models
     rows = np.empty((n, ROW.stride), np.float32)
     rows[:] = row
@@ -95,7 +111,7 @@ def instance_rows(
             rows[:, _FOLLOWS_COLOR] = 1.0
         transparent = transparent or bool((rows[:, _ALPHA] < 1.0).any())
     may_mirror = may_mirror or model_mirrors(model) or (local is not None and model_mirrors(local))
-    mirrored = bool(n) and may_mirror and bool((np.linalg.det(world[:, :3, :3]) < 0.0).any())
+    mirrored = bool(n) and may_mirror and bool((determinants(world[:, :3, :3]) < 0.0).any())
     return InstanceRows(rows, models, transparent, mirrored)
 
 
