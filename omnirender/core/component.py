@@ -185,7 +185,8 @@ def flush_changes() -> None:
         if one:
             touch_one = OWNER_TOUCH[0]
             if touch_one is not None:
-                touch_one(list(one))
+                # (an array's kept owner list as it is: the owners' touch recognises it, no pass over it)
+                touch_one(one if one.__class__ is _Owners else list(one))
             else:
                 for owner in one:
                     owner.touch()
