@@ -369,3 +369,22 @@ def test_replacements_in_frames_that_move_every_other_node():
             image = e.render(scene)
             assert e.stats["compiled"] == ("dirty" if frame in (2, 4) else False), frame
             assert np.array_equal(image.array, fresh(scene)), frame
+
+
+def test_a_material_replaced_on_points_and_lines_keeps_their_draw_style():
+    """Points sized by a DrawStyle and lines: the new surface fields only (the row's point size stays)."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 6), (0, 0, 0), fov=40)])
+    scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
+    grid = np.array([(x, y, 0.0) for x in np.linspace(-1.5, 1.5, 5) for y in np.linspace(-1, 1, 4)])
+    dots = scene.add(om.Node("dots", [om.DrawStyle(point_size=7.0), om.Material(diffuse=(0.9, 0.2, 0.2))]))
+    dots.add(om.PointSet(grid))
+    lines = scene.add(om.Node("lines", [om.Color(0.2, 0.9, 0.2)]))
+    lines.add(om.LineSet(grid[:8] + (0.0, 0.0, 0.5), [(0, 5), (1, 6), (2, 7)]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        replace(dots, dots.items[1], om.Material(diffuse=(0.2, 0.3, 1.0)))
+        before = render_checked(e, scene, "dirty", before).array
+        replace(lines, lines.items[0], om.Color(1.0, 0.8, 0.1))
+        render_checked(e, scene, "dirty", before)
