@@ -388,3 +388,27 @@ def test_a_material_replaced_on_points_and_lines_keeps_their_draw_style():
         before = render_checked(e, scene, "dirty", before).array
         replace(lines, lines.items[0], om.Color(1.0, 0.8, 0.1))
         render_checked(e, scene, "dirty", before)
+
+
+def test_replacements_below_a_technique_take_the_compile():
+    """A technique's passes may draw what a surface or a transform decides their own way (a highlight pass):
+    items in a technique's scope take the compile, and the picture is right."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    groups[1].insert(0, om.gl.PhongHighlight(om.Texture(om.gl.PhongHighlight.lobe(30.0, 32))))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        leaf = leaves[6]
+        replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 1.0, 0.2), specular=(1, 1, 1), shininess=20))
+        image = e.render(scene)
+        assert e.stats["compiled"] in (True, "subtrees")
+        assert np.array_equal(image.array, fresh(scene)) and not np.array_equal(image.array, before)
+        before = image.array
+        replace(leaf, leaf.items[0], om.Matrix(np.array(om.Translation(0.5, 0.0, 1.0).matrix)))
+        image = e.render(scene)
+        assert e.stats["compiled"] in (True, "subtrees")
+        assert np.array_equal(image.array, fresh(scene)) and not np.array_equal(image.array, before)
+        leaf = leaves[2]  # outside the technique: dirty bits
+        replace(leaf, leaf.items[1], om.Material(diffuse=(0.1, 1.0, 0.2)))
+        render_checked(e, scene, "dirty", image.array)

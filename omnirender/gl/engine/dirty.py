@@ -207,8 +207,8 @@ def restyles(
         if found is None:
             return None
         for item in found:
-            if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None:
-                return None
+            if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None or item.techniques:
+                return None  # (a technique's passes may draw what the surface decides their own way)
             pair = pairs.get(id(item))
             if pair is None:
                 app = item.surface[0]
