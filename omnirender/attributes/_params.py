@@ -23,6 +23,7 @@ from ..core.limits import MAX_MAGNITUDE, as_float, check_array_magnitude
 
 __all__ = [
     "Param",
+    "assign_new",
     "Parameterised",
     "check_color",
     "check_rgb",
@@ -90,6 +91,17 @@ def declared_params(cls: type) -> tuple[Param, ...]:
     return found
 
 
+def assign_new(obj: Any, values: tuple[tuple[str, Any], ...]) -> None:
+    """Set the parameters of ``obj`` under construction: ``(name, value)`` pairs, each checked as an assignment
+    is, without a version bump and a journal entry per parameter (nothing can have compiled a component that
+    is being made; an application making a node per frame pays one pass)."""
+    cls = type(obj)
+    owner = cls.__name__
+    for name, value in values:
+        param = getattr(cls, name)
+        object.__setattr__(obj, param.slot, param.check(owner, name, value))
+
+
 class Parameterised:
     """Mixin: ``parameters()`` from the class's :class:`Param` declarations."""
 
@@ -139,10 +151,26 @@ def _plain_unit_values(value: Any) -> tuple[float, ...] | None:
     return tuple(out)
 
 
+#: tuples of plain numbers checked as colours -> the colour (equal tuples give equal colours): the defaults and
+#: the few colours an application repeats are not checked again
+_COLORS: dict[tuple, tuple[float, ...]] = {}
+
+
 def check_color(owner: str, name: str, value: Any) -> tuple[float, ...]:
     """3 or 4 finite values in [0, 1], returned as given (length kept)."""
+    if value.__class__ is tuple:
+        try:
+            found = _COLORS.get(value)
+        except TypeError:  # unhashable members: the general check words the error
+            found = None
+        if found is not None:
+            return found
     plain = _plain_unit_values(value)
     if plain is not None:
+        if value.__class__ is tuple:
+            if len(_COLORS) >= 1024:
+                _COLORS.clear()
+            _COLORS[value] = plain
         return plain
     arr = _numbers(owner, name, value)
     if arr.size not in (3, 4):

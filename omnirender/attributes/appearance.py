@@ -18,6 +18,7 @@ from ..core.limits import MAX_PIXEL_SIZE
 from ._params import (
     Param,
     Parameterised,
+    assign_new,
     check_bool,
     check_choice,
     check_number,
@@ -76,10 +77,7 @@ class Color(Parameterised, MonoAttribute):
                 a = values[3]
         elif g is None or b is None:
             raise ValueError("Color: give r, g and b (or one sequence of 3 or 4 values)")
-        self.r = r
-        self.g = g
-        self.b = b
-        self.a = a
+        assign_new(self, (("r", r), ("g", g), ("b", b), ("a", a)))
 
     @property
     def rgba(self) -> tuple[float, float, float, float]:
@@ -115,12 +113,17 @@ class Material(Parameterised, MonoAttribute):
         opacity: float = 1.0,
     ) -> None:
         super().__init__()
-        self.ambient = ambient
-        self.diffuse = diffuse
-        self.specular = specular
-        self.shininess = shininess
-        self.emission = emission
-        self.opacity = opacity
+        assign_new(
+            self,
+            (
+                ("ambient", ambient),
+                ("diffuse", diffuse),
+                ("specular", specular),
+                ("shininess", shininess),
+                ("emission", emission),
+                ("opacity", opacity),
+            ),
+        )
 
     @property
     def hints(self) -> frozenset[str]:  # type: ignore[override]

@@ -108,6 +108,8 @@ def plain_triple(value: object) -> tuple[float, float, float] | None:
 
 
 _MAX = MAX_MAGNITUDE
+_MAX2 = MAX_MAGNITUDE * MAX_MAGNITUDE
+_NDARRAY = np.ndarray
 
 
 _DIAGONAL = np.arange(4)
@@ -255,9 +257,9 @@ class Translation(Transform):
     value until the array's next ``touch()``.
     """
 
-    __slots__ = ("_offset", "_bound", "_row", "_synced")
+    __slots__ = ("_offset", "_bound", "_row", "_synced", "_matrix_of")
     #: the array binding is not copied or pickled: a copy is an ordinary translation with the current offset
-    _transient = {"_bound": lambda: None, "_row": lambda: 0, "_synced": lambda: 0}
+    _transient = {"_bound": lambda: None, "_row": lambda: 0, "_synced": lambda: 0, "_matrix_of": lambda: None}
 
     def __init__(
         self,
@@ -269,6 +271,8 @@ class Translation(Transform):
     ) -> None:
         super().__init__()
         object.__setattr__(self, "_bound", None)  # the TranslationArray whose row it views (see there)
+        object.__setattr__(self, "_matrix", None)
+        object.__setattr__(self, "_matrix_of", None)  # the offset object the kept matrix was made from
         object.__setattr__(self, "_row", 0)
         object.__setattr__(self, "_synced", 0)  # the array's version its own offset is current for
         if offset is not None:
@@ -281,28 +285,28 @@ class Translation(Transform):
         # numpy row or three Python floats without a call to plain_triple (the other plain inputs take it)
         if name == "offset":
             cls = value.__class__
-            x = y = z = None
-            if cls is np.ndarray:
+            if cls is _NDARRAY:
                 try:
                     x, y, z = value.tolist()  # shape (3,): three Python numbers; any other shape fails or nests
                 except (TypeError, ValueError):
-                    pass
+                    x = None
             elif cls is tuple and len(value) == 3:
                 x, y, z = value
+            else:
+                x = None
+            # three Python floats whose squares sum to at most _MAX2 are each within the limit (NaN compares
+            # False, an infinity or an overflow gives one: they take the validating path, as a sum above it does)
             if (
                 x.__class__ is float
                 and y.__class__ is float
                 and z.__class__ is float
-                and -_MAX <= x <= _MAX  # False for NaN: a non-finite number takes the validating path
-                and -_MAX <= y <= _MAX
-                and -_MAX <= z <= _MAX
+                and x * x + y * y + z * z <= _MAX2
             ):
                 offset = (x, y, z)
             else:
                 offset = plain_triple(value)
             if offset is not None:  # Transform.touch, inline: a version bump and one list append
-                _set_offset(self, offset)
-                _set_matrix(self, None)
+                _set_offset(self, offset)  # (the kept matrix is of another offset object now: see matrix)
                 _set_version(self, self._version + 1)
                 bound = self._bound
                 if bound is not None:  # its own value holds until the array's next touch
@@ -341,10 +345,21 @@ class Translation(Transform):
 
     @property
     def matrix(self) -> np.ndarray:
-        """The 4x4 float64 matrix (an array's translation takes its row first)."""
+        """The 4x4 float64 matrix (an array's translation takes its row first).
+
+        The matrix is kept with the offset object it was made from: the
+        setter stores a new offset tuple and leaves the kept matrix alone.
+        """
         if self._bound is not None:
             self._sync()
-        return Transform.matrix.fget(self)  # type: ignore[attr-defined]
+        m = self._matrix
+        offset = self._offset
+        if m is None or self._matrix_of is not offset:
+            m = self._build_matrix()
+            m.setflags(write=False)
+            _set_matrix(self, m)
+            _set_matrix_of(self, offset)
+        return m
 
     def _sync(self) -> None:
         """A translation of an array touched since its offset was last current takes its row of the snapshot."""
@@ -355,6 +370,7 @@ class Translation(Transform):
             _set_synced(self, bound._version)
 
     def _bind(self, array: TranslationArray, row: int) -> None:
+        _EVER_BOUND[0] = True
         object.__setattr__(self, "_bound", array)
         object.__setattr__(self, "_row", row)
         object.__setattr__(self, "_synced", array._version)
@@ -391,7 +407,7 @@ class Translation(Transform):
     def stack_offsets(translations: Sequence[Translation]) -> np.ndarray:
         """The ``(N, 3)`` float64 offsets of ``translations``, read with no Python step per translation."""
         n = len(translations)
-        if any(map(_BOUND, translations)):  # an array's translations take their rows first
+        if _EVER_BOUND[0] and any(map(_BOUND, translations)):  # an array's translations take their rows first
             deque(map(Translation._sync, compress(translations, map(_BOUND, translations))), 0)
         flat = chain.from_iterable(map(_OFFSET, translations))  # C-level loops
         return np.fromiter(flat, np.float64, 3 * n).reshape(n, 3)
@@ -401,12 +417,15 @@ class Translation(Transform):
 
 
 _OFFSET = attrgetter("_offset")
+#: whether a translation was ever bound to an array (until then no translation needs its row read first)
+_EVER_BOUND = [False]
 _BOUND = attrgetter("_bound")
 _set_synced = Translation._synced.__set__  # type: ignore[attr-defined]
 _append = _PENDING.append
 _set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 _set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
 _set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]
+_set_matrix_of = Translation._matrix_of.__set__  # type: ignore[attr-defined]
 
 
 def axis_angle_matrix(axis: np.ndarray, angle_rad: float) -> np.ndarray:

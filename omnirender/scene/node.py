@@ -20,7 +20,7 @@ import threading
 import weakref
 from collections import deque
 from collections.abc import Iterable, Iterator
-from itertools import chain, repeat
+from itertools import chain
 from operator import attrgetter
 from typing import Any
 
@@ -679,8 +679,12 @@ def touch_nodes(owners: list[Any]) -> None:
 
     What :func:`~omnirender.core.component.flush_changes` calls with the
     owners of the transforms a simulation loop moved: every node's version
-    moves and is stamped in the current epoch, then each distinct parent is
-    touched once (its ancestors follow as :meth:`Node.touch` does).
+    moves, then each distinct parent is touched once (its ancestors follow as
+    :meth:`Node.touch` does).  The owners are not stamped in the current
+    epoch (a pass less): a later change below one of them in the same epoch
+    bumps it again on its way up, which a version allows (it only has to
+    differ from what an observer read), and an owner that is also a parent of
+    another is touched as a parent.
     """
     if len(owners) < 16:  # a few: their own touch() is cheaper than the passes below
         for owner in owners:
@@ -693,7 +697,6 @@ def touch_nodes(owners: list[Any]) -> None:
             owner.touch()
         return
     epoch = _EPOCH[0]
-    deque(map(_SET_STAMP, owners, repeat(epoch)), 0)
     for parent in _parents_of(owners):
         if parent._stamp != epoch:
             parent.touch()
@@ -1002,7 +1005,6 @@ def _check_group(group: str) -> str:
 
 
 _SET_VERSION = Node._version.__set__  # type: ignore[attr-defined]
-_SET_STAMP = Node._stamp.__set__  # type: ignore[attr-defined]
 _VERSION_OF = attrgetter("_version")
 _PARENTS_OF = attrgetter("_parents")
 _PLUS_ONE = (1).__add__

@@ -175,13 +175,44 @@ def test_setter_loops_between_splices_and_mixed_with_them() -> None:
             image = e.render(scene, background=(0, 0, 0))
             assert e.stats["compiled"] == compiled, frame
             assert np.array_equal(image.array, fresh(scene)), frame
-        # moves and a splice in one frame
-        positions[:, 1] += 0.4
-        for t, row in zip(moves, positions, strict=True):
+
+
+def test_moves_and_splices_in_one_frame_take_the_splice_and_the_updater() -> None:
+    """A setter loop and nodes added or removed in the same frame: the splice compiles the new subtrees and the
+    updater moves the rows of the rest (no full compile, once the updater has its move plan), also when a moved
+    node is removed, when a node is added below a moved translation, and when a moved transform places a light
+    (then the full compile)."""
+    scene, moves, positions = flat()
+    box = om.Box(size=0.8)
+    group_move = om.Translation(0.0, -2.0, 0.0)
+    group = scene.add(om.Node("group", [group_move]))
+    lamp_move = om.Translation(0.0, 0.0, 5.0)
+    scene.add(om.Node("lamp", [lamp_move, om.PointLight(intensity=0.5)]))
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for t, row in zip(moves, positions, strict=True):  # a frame of moves alone first (the move plan made)
             t.offset = row
-        scene.remove(scene.child("b2"))
-        image = e.render(scene, background=(0, 0, 0))
-        assert np.array_equal(image.array, fresh(scene))
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(6):
+            positions[:, 1] -= 0.1
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            group_move.offset = (0.1 * frame, -2.0, 0.0)
+            if frame == 0:  # a moved node removed
+                gone = scene.child("b20")
+                scene.remove(gone)
+            elif frame == 1:  # a node added below a moved translation
+                group.add(om.Node("g1", [om.Translation(1.0, 0.0, 0.0), om.Color(1, 1, 0), box]))
+            elif frame == 2:  # one added at the top, one removed
+                scene.add(om.Node("top", [om.Translation(-3.0, 4.0, 0.0), om.Color(0, 1, 1), box]))
+                scene.remove(scene.child("b33"))
+            elif frame == 4:  # the light's transform moves too: its declarations changed, the full compile
+                lamp_move.offset = (1.0, 1.0, 5.0)
+                group.add(om.Node("g4", [om.Translation(-1.0, 0.0, 0.0), om.Color(1, 0, 1), box]))
+            image = e.render(scene, background=(0, 0, 0))
+            if frame in (0, 1, 2):
+                assert e.stats["compiled"] == "subtrees", frame
+            assert np.array_equal(image.array, fresh(scene)), frame
 
 
 def test_a_bad_value_in_a_setter_loop_is_refused_naming_the_node_and_the_frame_stays_right() -> None:
@@ -236,3 +267,44 @@ def test_transforms_replaced_between_setter_loops() -> None:
             image = e.render(scene, background=(0, 0, 0))
             assert e.stats["compiled"] is False
             assert np.array_equal(image.array, fresh(scene)), frame
+
+
+def test_with_default_shadows_setter_loops_and_splices_match_a_fresh_render() -> None:
+    from omnirender.gl import GLEngine
+
+    scene, moves, positions = flat(72)
+    scene.insert(0, om.Node("floor", [om.Translation(0.0, 0.0, -1.0), om.Box(size=(30.0, 30.0, 0.2))]))
+    box = om.Box(size=0.8)
+    with GLEngine(size=SIZE, samples=0) as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(4):
+            positions[:, 0] += 0.2
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            if frame % 2:
+                scene.add(om.Node(f"x{frame}", [om.Translation(2.0 * frame, 5.0, 0.5), om.Color(1, 1, 1), box]))
+            image = e.render(scene, background=(0, 0, 0)).array
+            with GLEngine(size=SIZE, samples=0) as f:
+                assert np.array_equal(image, f.render(scene, background=(0, 0, 0)).array), frame
+
+
+def test_a_clip_planes_ancestor_moved_once_the_move_plan_exists_compiles_again() -> None:
+    """Clip planes are placed in world coordinates when compiled: a move of a transform above one compiles again,
+    on the few-moves path too (after another move made the plan), and alongside a splice."""
+    scene, moves, positions = flat(20)
+    group_move = om.Translation(0.0, 0.0, 0.0)
+    clip = om.ClipPlane(normal=(1.0, 0.0, 0.0), offset=0.0)
+    group = scene.add(om.Node("group", [group_move, clip, om.Color(0.9, 0.9, 0.2)]))
+    for k in range(3):
+        group.add(om.Node(f"s{k}", [om.Translation(-1.0 + k, 4.0, 0.0), om.Sphere(radius=0.8)]))
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        moves[0].offset = (0.0, -6.0, 0.0)  # an unrelated move: the plan is made
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        group_move.offset = (1.5, 0.0, 0.0)  # the clip plane moves with its node
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        moves[1].offset = (0.0, -5.0, 0.0)
+        e.render(scene, background=(0, 0, 0))
+        group_move.offset = (-1.0, 0.0, 0.0)  # and with a node added in the same frame
+        scene.add(om.Node("late", [om.Translation(3.0, -3.0, 0.0), om.Sphere(radius=0.5)]))
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))

@@ -274,3 +274,36 @@ def test_a_material_of_equal_values_replaced_after_a_splice_restyles_its_own_nod
             node.remove(node.items[1])
             node.insert(1, om.Material(diffuse=(0.1, 0.3 + 0.3 * frame, 0.9)))
             check(e, scene, f"replaced in {node.name}", spliced=False)
+
+
+def test_nodes_added_and_removed_between_setter_loops_before_the_translation_map_is_used_again():
+    """The map of many moved translations takes the nodes splices brought when it is next used: a node added
+    and removed again before that, and one added twice over, leave no row written for a removed item."""
+    from omnirender.gl import GLEngine
+
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 16), (0, 0, 0), fov=50)])
+    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
+    box = om.Box(size=0.5)
+    moves = []
+    for i in range(100):
+        t = om.Translation(i % 10 - 4.5, i // 10 - 4.5, 0.0)
+        moves.append(t)
+        scene.add(om.Node(f"b{i}", [t, om.Material(diffuse=(0.3 + 0.007 * i, 0.5, 0.4)), box]))
+    spun = scene.add(om.Node("spun", [om.Rotation(30.0, (0, 0, 1))]))  # new nodes below a rotation too
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        extra: list[om.Node] = []
+        for frame in range(4):
+            for k, t in enumerate(moves):  # all of them: the translation map writes the rows
+                t.offset = (k % 10 - 4.5 + 0.1 * frame, k // 10 - 4.5, 0.2 * frame)
+            check(e, scene, f"loop {frame}", spliced=False)
+            for step in range(3):  # splices with no loop between: the map is not used in between
+                parent = spun if step == 1 else scene
+                node = parent.add(leaf(f"x{frame}_{step}", (step - 1.0, 4.5 - frame, 1.0), box, diffuse=(1, 0, 0)))
+                moves.append(node.items[0])
+                extra.append(node)
+                if step == 2:
+                    gone = extra.pop(-2)  # the one added just before, still waiting for the map
+                    moves.remove(gone.items[0])
+                    gone.parent.remove(gone)
+                check(e, scene, f"splice {frame}.{step}")

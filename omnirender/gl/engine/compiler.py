@@ -33,7 +33,7 @@ from ...attributes.surface import Appearance, appearance_key, decided_by, resolv
 from ...core.component import ChangeJournal, RenderingComponent
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
-from ...core.transform import Transform
+from ...core.transform import Transform, TranslationArray
 from ...scene.node import Node, declarations_kept
 from .attributes import CullFace, GLState
 from .compile_state import CompileState
@@ -49,6 +49,9 @@ __all__ = ["DrawListCompiler", "TextureSet", "linear_rgb"]
 
 _DEFAULT_POINT_SIZE = float(DrawStyle().point_size)  # without a DrawStyle, points get its default size
 _MODEL = ROW.slice("model")
+#: moved transforms up to which a frame asks whether they place no declaration (scene.node.declarations_kept,
+#: a Python step per transform) before pre-evaluating the scene (a walk of the changed paths only)
+_ASK_KEPT = 64
 _COLOR = ROW.slice("color")
 _SHADING_MODEL = ROW.at("emission", "model")
 _MATERIAL_ID = ROW.at("pbr", "material")
@@ -384,8 +387,11 @@ class DrawListCompiler:
                     updater = self.updater
                     # (not when every moved transform sits in a node whose subtree declares nothing: a plain
                     # object moved places no light or camera, and the walk up to the root is skipped)
+                    # (many moved: the pre-evaluation, which walks only the changed paths, costs less than asking)
                     moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
-                    if updater.placed and not declarations_kept(moved, engine.mask_function):
+                    if updater.placed and (
+                        len(moved) > _ASK_KEPT or not declarations_kept(moved, engine.mask_function)
+                    ):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):
                             engine.declared = declared
@@ -522,7 +528,17 @@ class DrawListCompiler:
         The new items replace the old in their batches (``BatchInstaller.splice``).
         Returns how many items were removed and added, or None when the full
         compile must run (nothing installed has changed then).
+
+        Transforms moved in the same frame (a simulation moving its objects
+        while one comes or goes) are applied by the updater after the splice,
+        wherever they are (the new subtrees were compiled with their values
+        already; their rows are written again the same).
         """
+        moves, rest = _moves_of(changed)
+        if moves and self.updater.follows(moves):
+            changed = rest
+        else:
+            moves = []  # (no plan to move rows with, or a clip plane moved: as any other change)
         plan = self._splice_plan(scene, edits, changed)
         if plan is None:
             return None
@@ -571,7 +587,13 @@ class DrawListCompiler:
             self._node_cache.clear()
             self._occurrence_of.clear()
             return None
-        return len(removed) + len(added)
+        count = len(removed) + len(added)
+        if moves:
+            moved = self.updater.apply(moves)
+            if moved is None:  # (not expected: follows() said it would)
+                return None
+            count += moved
+        return count
 
     def _drop_entry(self, node: Any) -> None:
         key = self._key_of(node)
@@ -1154,3 +1176,19 @@ class DrawListCompiler:
         for name, zeros in _ROW_ZEROS:
             values.extend(fields.get(name, zeros))
         return np.array(values, np.float32)
+
+
+def _moves_of(changed: list[Any]) -> tuple[list[Any], list[Any]]:
+    """``changed`` split into what the updater applies after a splice (static transforms, translation arrays)
+    and the rest; one pass of C-level loops when all of them are moves (a simulation's thousands)."""
+    if not changed:
+        return [], changed
+    classes = set(map(type, changed))
+    if all(_is_move(cls) for cls in classes):
+        return changed, []
+    moves = [c for c in changed if _is_move(c.__class__)]
+    return moves, [c for c in changed if not _is_move(c.__class__)]
+
+
+def _is_move(cls: type) -> bool:
+    return cls is TranslationArray or (issubclass(cls, Transform) and cls.static)

@@ -697,6 +697,8 @@ class TransformUpdater:
                     if not static:
                         break
                 else:
+                    if plan.clipping and not plan.clipping.isdisjoint(map(id, changed)):
+                        return None  # a clip plane below a moved transform: placed again by a compile
                     self.placed = True
                     self.moved = changed
                     return self._apply_few(plan, changed)
@@ -734,6 +736,20 @@ class TransformUpdater:
         self.moved = [*moved, *arrays]
         count = self._apply_moves(moved, arrays) if self.placed else 0
         return count + (self._install(updates) if updates else 0)
+
+    def follows(self, moves: list[Any]) -> bool:
+        """Whether :meth:`apply` of ``moves`` (static transforms, translation arrays) would move rows in place
+        with the plan there is (none made for it): a compile that splices new subtrees in the same frame
+        leaves them to it."""
+        plan = self._plan
+        if plan is None:
+            return False
+        clipping = plan.clipping
+        if not clipping:
+            return True
+        return clipping.isdisjoint(map(id, moves)) and not any(
+            not clipping.isdisjoint(map(id, a)) for a in moves if a.__class__ is TranslationArray
+        )
 
     def _install(self, updates: list[tuple[Any, Any]]) -> int:
         """Install instance sets' new rows or moved positions (:meth:`_instance_updates`); returns how many."""

@@ -403,14 +403,15 @@ class FrameRunner:
         if followers is None or followers[0] is not stages:
             base = FrameStage.follow_rows
             followers = self._followers = (stages, [s for s in stages if type(s).follow_rows is not base])
-        if not followers[1]:
-            return True
+        active = [stage for stage in followers[1] if stage.follows_plan(plan)]
+        if not active:
+            return True  # nothing to draw: the frame's target and state stay as they are for the replay
         engine, state = self.engine, self.state
         state.shadow_plan = None
         state.drawing = True
         self.report.begin_frame(False)
         try:
-            held = all(stage.follow_rows(self, root, plan) for stage in followers[1])
+            held = all(stage.follow_rows(self, root, plan) for stage in active)
         finally:
             state.drawing = False
             self.report.close()

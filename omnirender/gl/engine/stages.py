@@ -81,6 +81,12 @@ class FrameStage:
         runner then binds the frame's target again with every GL state at its default."""
         return True
 
+    def follows_plan(self, plan: Any) -> bool:
+        """Whether :meth:`follow_rows` has anything to draw before ``plan`` is replayed (True by default); a
+        stage saying False is not called, and when none says True the frame is replayed without binding its
+        target again or writing every uniform (e.g. shadow maps the recorded frame did not draw)."""
+        return True
+
     def release(self) -> None:
         """The engine is released: free what the stage holds on the GPU."""
 

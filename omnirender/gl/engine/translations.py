@@ -85,6 +85,7 @@ class TranslationMap:
         "_multi_items",
         "_plan",
         "_pending",
+        "_stores",
     )
 
     def __init__(self, plan: Any) -> None:
@@ -110,6 +111,8 @@ class TranslationMap:
         self.translations = int(self.translation.sum())
         self._parts: list[_Part] | None = None
         self._multi_items: np.ndarray | None = None
+        #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
+        self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.fill(plan, np.arange(n))
 
     # -- following the plan ----------------------------------------------------------
@@ -173,7 +176,9 @@ class TranslationMap:
     def splice(self, plan: Any, removed: list[int], first_new: int) -> None:
         """Follow :meth:`MovePlan.splice`: items ``removed`` (indices) left, items from ``first_new`` on came.
 
-        Call after the plan took them (its chains, matrices and transforms hold the new ones).
+        Call after the plan took them (its chains, matrices and transforms hold the new ones).  The new items
+        are filled when the map is next read (:meth:`refill`: frames adding a node each pay no numpy fill; a
+        removed item waiting there is filled as what it is now, below no translation).
         """
         if removed:
             gone = np.array(removed, np.intp)
@@ -183,13 +188,12 @@ class TranslationMap:
         self._grow(plan)
         extra = n - len(self.source)
         if extra > 0:
-            self.source = np.concatenate([self.source, np.full(extra, -1, np.intp)])
-            self.constant = np.concatenate([self.constant, np.zeros((extra, 3))])
-            self.multi = np.concatenate([self.multi, np.zeros(extra, bool)])
+            self._extend("source", extra)[-extra:] = -1
+            self._extend("constant", extra)[-extra:] = 0.0
+            self._extend("multi", extra)[-extra:] = False
             if self.linear is not None:
-                self.linear = np.concatenate([self.linear, np.broadcast_to(_EYE3, (extra, 3, 3))])
-        self.fill(plan, np.arange(first_new, n))
-        self._parts = None  # rows moved: grouped again when next applied
+                self._extend("linear", extra)[-extra:] = _EYE3
+        self.refill(np.arange(first_new, n))  # (rows moved: grouped again when next read)
 
     def replaced(self, plan: Any, places: list[int], items: np.ndarray) -> None:
         """Follow :meth:`MovePlan.replace`: transforms at ``places`` are others now, the chains of ``items``
@@ -207,11 +211,26 @@ class TranslationMap:
         places = len(plan.matrices)
         known = len(self.translation)
         if places > known:
-            self.translation = np.concatenate(
-                [self.translation, _translations(plan.transforms[known:], places - known)]
-            )
-            self.fixed = np.concatenate([self.fixed, np.zeros(places - known, bool)])
-            self.translations = int(self.translation.sum())
+            flags = _translations(plan.transforms[known:], places - known)
+            self._extend("translation", places - known)[known:] = flags
+            self._extend("fixed", places - known)[known:] = False
+            self.translations += int(flags.sum())
+
+    def _extend(self, name: str, extra: int) -> np.ndarray:
+        """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
+        rows so that a splice appends in place (amortised: a copy only when the storage is full)."""
+        view = getattr(self, name)
+        n = len(view)
+        held = self._stores.get(name)
+        if held is not None and held[1] is view and n + extra <= len(held[0]):
+            store = held[0]
+        else:
+            store = np.empty((max(n + extra, n + n // 4, 16), *view.shape[1:]), view.dtype)
+            store[:n] = view
+        out = store[: n + extra]
+        self._stores[name] = (store, out)
+        setattr(self, name, out)
+        return out
 
     def stale(self, places: np.ndarray | list[int]) -> bool:
         """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L

@@ -393,6 +393,10 @@ class ShadowMapStage(FrameStage):
         """The maps follow moved casters (:meth:`follow_rows` before the replay of a recorded frame)."""
         return True
 
+    def follows_plan(self, plan: Any) -> bool:
+        """Only a recorded frame that drew shadow maps has maps to follow."""
+        return plan.stats.get("shadow_plan") is not None
+
     def follow_rows(self, frame: Any, root: Scope, plan: Any) -> bool:
         """Before the replay of a recorded frame after rows moved in place: the maps follow the moved casters
         (the regions their old and new boxes cover, as :meth:`draw` does); the plan holds while the faces are
