@@ -177,6 +177,19 @@ def flush_changes() -> None:
         n = len(pending)
         batch = pending[:n]
         del pending[:n]
+    if n == 1:  # one component (an editor's drag, one simulated body): told without iterators made
+        component = batch[0]
+        for changed in _JOURNALS:
+            changed[id(component)] = component
+        one = component._owners
+        if one:
+            touch_one = OWNER_TOUCH[0]
+            if touch_one is not None:
+                touch_one(list(one))
+            else:
+                for owner in one:
+                    owner.touch()
+        return
     bulk = _bulk_of(batch) if n >= BULK_MIN else None
     if bulk is None or not bulk.whole:
         for changed in _JOURNALS:

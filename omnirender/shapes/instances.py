@@ -200,7 +200,7 @@ class InstanceSet(Shape):
             )
         _check_finite(_rows(t), "transforms")  # the application's rows, as it wrote them
         if t.ndim == 3 and len(m):
-            singular = np.nonzero(np.abs(np.linalg.det(m[:, :3, :3])) < _SINGULAR)[0]
+            singular = np.nonzero(np.abs(determinants(m[:, :3, :3])) < _SINGULAR)[0]
             if len(singular):
                 raise ValueError(
                     f"InstanceSet: the transform of instance {int(singular[0])} is singular (it flattens the shape, "
@@ -261,6 +261,15 @@ class InstanceSet(Shape):
 
 #: |det| of an instance matrix's 3x3 part below which it counts as singular (a scale of about 1e-4 per axis).
 _SINGULAR = 1e-12
+
+
+def determinants(m: np.ndarray) -> np.ndarray:
+    """The determinants of ``(N, 3, 3)`` matrices by cofactors, column by column (``numpy.linalg.det`` factors
+    each small matrix: 20 times slower for thousands of them)."""
+    a, b, c = m[:, 0, 0], m[:, 0, 1], m[:, 0, 2]
+    d, e, f = m[:, 1, 0], m[:, 1, 1], m[:, 1, 2]
+    g, h, i = m[:, 2, 0], m[:, 2, 1], m[:, 2, 2]
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
 
 
 def _rows(a: np.ndarray) -> np.ndarray:

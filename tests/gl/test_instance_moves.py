@@ -203,10 +203,12 @@ def test_a_set_moved_in_view_replays_the_frame_plan_and_one_that_must_be_culled_
         assert np.array_equal(e.render(scene).array, image.array)
 
 
+@pytest.mark.parametrize("sorted_", [True, False], ids=["front to back", "row order"])
 @pytest.mark.parametrize("options", [{"shadows": True}, {"pipeline": "deferred", "shadows": True}], ids=str)
-def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options):
+def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options, sorted_):
     """Pending translations meet every other path: shadow maps (bounds read every frame), the deferred
-    pipeline, a transform above the set moving, a node added (a splice) between moves."""
+    pipeline, a transform above the set moving, a node added (a splice) between moves; drawn front to back
+    or in row order (a GPU's way), against a fresh engine drawing front to back."""
     from omnirender.gl import GLEngine
 
     positions, colors = swarm(200, seed=2)
@@ -218,6 +220,7 @@ def test_moves_between_splices_and_transform_moves_match_a_fresh_engine(options)
         "scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), floor, om.Node("s", [lift, balls])]
     )
     with GLEngine(size=SIZE, samples=0, **options) as e:
+        e.drawer.sorts_instances = sorted_
         e.render(scene)
         for step in range(5):
             positions[:, 1] += 0.1

@@ -324,3 +324,20 @@ def test_nodes_spliced_in_after_a_lean_move_are_moved_by_their_own_shape_local_m
             image = e.render(scene, read_depth=False)
             assert e.stats["compiled"] is False
             assert np.array_equal(image.array, fresh(scene)), offset
+
+
+def test_one_moved_node_reaches_every_engine_drawing_the_scene():
+    """One pending change is told to every live journal (two engines) and its nodes' versions move once."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as a, GLEngine(size=SIZE, samples=0, shadows=False) as b:
+        a.render(scene, read_depth=False)
+        b.render(scene, read_depth=False)
+        version = scene.version
+        nodes["p3"].items[0].offset = (0.2, -1.0, 1.2)
+        assert scene.version > version
+        for e in (a, b):
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False and e.stats["incremental"] == 1
+            assert np.array_equal(image.array, fresh(scene))

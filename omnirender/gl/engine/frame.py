@@ -406,17 +406,18 @@ class FrameRunner:
         active = [stage for stage in followers[1] if stage.follows_plan(plan)]
         if not active:
             return True  # nothing to draw: the frame's target and state stay as they are for the replay
-        engine, state = self.engine, self.state
+        engine, state, report = self.engine, self.state, self.report
         state.shadow_plan = None
         state.drawing = True
-        self.report.begin_frame(False)
+        report.begin_frame(False)
         try:
             held = all(stage.follow_rows(self, root, plan) for stage in active)
         finally:
             state.drawing = False
-            self.report.close()
-            self._restore_defaults(fbo, size)  # a replay starts from the defaults with the frame's target bound
-            engine.programs.owner = None  # programs the stages drew with may be the plan's: every write again
+            report.close()
+            if report.records:  # passes ran (stages draw with frame.run); else GL is as the frame began
+                self._restore_defaults(fbo, size)  # a replay starts from the defaults with the target bound
+                engine.programs.owner = None  # programs the stages drew with may be the plan's: all writes again
         return held
 
     def _plan_key(

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ...attributes.photometry import srgb_to_linear
+from ...shapes.instances import determinants
 from .layout import PBR, ROW
 
 __all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours", "held", "mask_copies"]
@@ -96,7 +97,7 @@ def instance_rows(
     only when ``may_mirror`` (positions and positive scales never mirror).
     """
     n = len(matrices)
-    models = matrices if local is None else matrices @ local
+    models = matrices if local is None or _is_identity(local) else matrices @ local
     world = models if _is_identity(model) else model @ models
     rows = np.empty((n, ROW.stride), np.float32)
     rows[:] = row
@@ -110,7 +111,7 @@ def instance_rows(
             rows[:, _FOLLOWS_COLOR] = 1.0
         transparent = transparent or bool((rows[:, _ALPHA] < 1.0).any())
     may_mirror = may_mirror or model_mirrors(model) or (local is not None and model_mirrors(local))
-    mirrored = bool(n) and may_mirror and bool((np.linalg.det(world[:, :3, :3]) < 0.0).any())
+    mirrored = bool(n) and may_mirror and bool((determinants(world[:, :3, :3]) < 0.0).any())
     return InstanceRows(rows, models, transparent, mirrored)
 
 
