@@ -185,7 +185,8 @@ def flush_changes() -> None:
         if one:
             touch_one = OWNER_TOUCH[0]
             if touch_one is not None:
-                touch_one(list(one))
+                # (an array's kept owner list as it is: the owners' touch recognises it, no pass over it)
+                touch_one(one if one.__class__ is _Owners else list(one))
             else:
                 for owner in one:
                     owner.touch()
@@ -202,7 +203,10 @@ def flush_changes() -> None:
                 continue
             _tell_whole(changed, held, bulk)
     if bulk is None:
-        owners: list[Any] = list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+        # (one component, a touched TranslationArray: its own list, which the owners' touch recognises)
+        owners: list[Any] = (
+            (batch[0]._owners or []) if n == 1 else list(chain.from_iterable(filter(None, map(_OWNERS_OF, batch))))
+        )
     else:
         owners = bulk.owners
         for held in list(_HELD.values()):

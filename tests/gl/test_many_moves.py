@@ -308,3 +308,31 @@ def test_a_clip_planes_ancestor_moved_once_the_move_plan_exists_compiles_again()
         group_move.offset = (-1.0, 0.0, 0.0)  # and with a node added in the same frame
         scene.add(om.Node("late", [om.Translation(3.0, -3.0, 0.0), om.Sphere(radius=0.5)]))
         assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+
+
+def test_an_arrays_translations_whose_nodes_come_later_move_with_it() -> None:
+    """A TranslationArray whose translations are in the scene only in part: nodes holding the others added
+    later (a splice) move with the array's next touch; a node removed and added back does too."""
+    n = 80
+    positions = np.zeros((n, 3))
+    positions[:, :2] = np.stack(np.meshgrid(np.arange(10.0), np.arange(8.0)), -1).reshape(-1, 2) * 2.0 - (9.0, 7.0)
+    array = om.TranslationArray(positions)
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 30), (0, 0, 0), fov=50), om.DirectionalLight()])
+    sphere = om.Sphere(radius=0.6)
+    nodes = [om.Node(f"b{i}", [array[i], om.Color(0.3 + 0.7 * i / n, 0.6, 0.3), sphere]) for i in range(n)]
+    for node in nodes[:60]:
+        scene.add(node)
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(5):
+            positions[:, 1] += 0.2
+            array.touch()
+            assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene)), frame
+            if frame == 1:
+                for node in nodes[60:]:  # the rest come (a splice each)
+                    scene.add(node)
+                assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+            if frame == 3:
+                scene.remove(nodes[5])
+                e.render(scene, background=(0, 0, 0))
+                scene.add(nodes[5])

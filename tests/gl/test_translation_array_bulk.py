@@ -2,13 +2,14 @@
 
 A touched array reaches the engine as one journal entry; its rows are written
 into every batch row below one of its translations with one numpy operation
-per batch (``gl/engine/bulk.py``) and uploaded as the changed range.  Every
-case below is compared pixel for pixel with a fresh engine: translations
-below a rotated and scaled parent (the linear part ``L`` and the constant
-``c`` of the map), shape-local matrices, transparent items (no batch), an
-item below two translations of one array (the general path), one translation
-assigned between touches, another transform moving in the same frame, and
-nodes added and removed between touches (the map made again).
+per batch (the move plan's translation map, ``gl/engine/translations.py``)
+and uploaded as the changed range.  Every case below is compared pixel for
+pixel with a fresh engine: translations below a rotated and scaled parent
+(the linear part ``L`` and the constant ``c`` of the map), shape-local
+matrices, transparent items (no batch), an item below two translations of one
+array (recomposed from its chain), one translation assigned between touches,
+another transform moving in the same frame, and nodes added and removed
+between touches (the map follows the splices).
 """
 
 from __future__ import annotations

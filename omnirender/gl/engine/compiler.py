@@ -390,7 +390,9 @@ class DrawListCompiler:
                     # (many moved: the pre-evaluation, which walks only the changed paths, costs less than asking)
                     moved, updater.moved = updater.moved, []  # (not held to the next frame: thousands, at times)
                     if updater.placed and (
-                        len(moved) > _ASK_KEPT or not declarations_kept(moved, engine.mask_function)
+                        len(moved) > _ASK_KEPT
+                        or TranslationArray in map(type, moved)  # (an array's thousands of owners)
+                        or not declarations_kept(moved, engine.mask_function)
                     ):
                         declared = engine.preevaluate(scene)
                         if not _same_declarations(engine.declared, declared):

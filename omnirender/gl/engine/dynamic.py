@@ -23,7 +23,6 @@ import numpy as np
 
 from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
-from .bulk import BulkMap
 from .drawlist import set_translations
 from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
 from .layout import ROW
@@ -36,7 +35,7 @@ _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # ro
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
-#: moved transforms from which a frame of only Translations takes the array path (bulk.py)
+#: moved transforms from which a frame of only Translations takes the translation map (translations.py)
 _MANY = 64
 #: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
@@ -108,8 +107,9 @@ class MovePlan:
         self.moved_rows: list[tuple[Any, Any]] = []
         #: whether :attr:`moved_rows` of the last :meth:`apply_few` names every row it rewrote
         self.rows_only = True
-        #: id(TranslationArray) -> (the array, its BulkMap): where its rows land (bulk.py)
-        self.bulk: dict[int, tuple[Any, BulkMap]] = {}
+        #: id(TranslationArray) -> (the array, its translations' places among the matrices, the array rows of
+        #: those places or None: all): made on its first touch after an install, a splice or a replacement
+        self._arrays: dict[int, tuple[Any, np.ndarray, np.ndarray | None]] = {}
         #: where each item's translation column comes from, for frames that move most translations (made on the
         #: first such frame, followed through splices: translations.py)
         self._map: TranslationMap | None = None
@@ -137,7 +137,10 @@ class MovePlan:
 
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
         """Follow the draw list's splice: ``removed`` items leave, ``added`` come, ``moved`` changed rows."""
-        self.bulk.clear()  # rows moved, items came and went: the arrays' maps are made again
+        # (the places an array's translations hold stay theirs: those of arrays with translations the plan did
+        # not hold are looked up again, they may have come)
+        for key in [k for k, (_, _, rows) in self._arrays.items() if rows is not None]:
+            del self._arrays[key]
         first_new = len(self.items)
         gone: list[int] = []
         # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
@@ -227,7 +230,7 @@ class MovePlan:
         item's chain now holds ``new`` at ``old``'s place.  The item's chain indices and the transform -> items
         map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
         :meth:`apply` of the new transforms."""
-        self.bulk.clear()  # the arrays' maps name rows below the old transforms: made again
+        self._arrays.clear()  # an array's translation may have taken another's place: looked up again
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -300,28 +303,41 @@ class MovePlan:
     def apply_arrays(self, arrays: list[Any]) -> tuple[int, list[Any]]:
         """Write the snapshots of touched ``om.TranslationArray`` objects into the rows below them.
 
-        One numpy write per batch (:class:`~.bulk.BulkMap`).  Returns the count
-        of items moved and the translations of the arrays that must take the
-        general path (an item below two translations of one array), for
-        :meth:`apply`.  Call before :meth:`apply` of the same frame:
-        transforms changed one by one since are recomposed from the matrices
-        this leaves.
+        The array's rows go into the plan's matrices at its translations'
+        places, and the translation map (:mod:`.translations`, followed
+        through splices) writes the rows below them, one numpy write per
+        batch; items below two or more translations are recomposed from their
+        chains.  Returns the count of items moved and an empty list (what
+        :meth:`apply` takes on the general path: nothing).  Call before
+        :meth:`apply` of the same frame: transforms changed one by one since
+        are recomposed from the matrices this leaves.
         """
+        found = self._map
+        if found is None:
+            found = self._map = TranslationMap(self)
         count = 0
-        general: list[Any] = []
         for array in arrays:
-            entry = self.bulk.get(id(array))
+            entry = self._arrays.get(id(array))
             if entry is None or entry[0] is not array:
-                entry = self.bulk[id(array)] = (array, BulkMap(self, array))
-            bulk = entry[1]
-            if not bulk.valid:
-                general.extend(array)
+                translations = array[:]
+                n = len(translations)
+                places = np.fromiter(map(self.index.get, map(id, translations), repeat(-1)), np.intp, n)
+                rows = np.flatnonzero(places >= 0)
+                entry = self._arrays[id(array)] = (array, places[rows], None if len(rows) == n else rows)
+            _, positions, rows = entry
+            if not len(positions):
                 continue
-            bulk.apply(self, array.offsets)
-            count += bulk.count
+            offsets = array.offsets
+            self.matrices[positions, :3, 3] = offsets if rows is None else offsets[rows]
+            hit = np.zeros(len(self.matrices), bool)
+            hit[positions] = True
+            count += found.apply(self, hit)
+            multi = found.multi_items()
+            if len(multi):
+                count += self._write_items(multi[hit[self.chain[multi]].any(axis=1)])
             if self.instance_items:
-                count += self._apply_instances(set(bulk.positions.tolist()))
-        return count, general
+                count += self._apply_instances(set(positions.tolist()))
+        return count, []
 
     def apply(self, changed: list[Any]) -> int:
         """Take the new matrices of ``changed`` transforms and rewrite the rows below them; returns the count.
@@ -419,7 +435,7 @@ class MovePlan:
                 affected[i] = None
         if not positions:
             return 0
-        if self.bulk or self._map is not None:
+        if self._map is not None:
             self._follow_maps(positions, affected)
         local, items, plain = self.local, self.items, self._plain
         identity = len(self.transforms)
@@ -494,11 +510,8 @@ class MovePlan:
         return self._write_items(affected)
 
     def _follow_maps(self, positions: Any, affected: np.ndarray | dict[int, None]) -> None:
-        """Transforms at ``positions`` moved other than as translations of a map (matrices already taken): the
-        array maps made from them are dropped; the translation map fills the ``affected`` items again."""
-        for key, (_, bulk) in list(self.bulk.items()):
-            if bulk.fixed[positions].any():  # a transform above or below an array's translation moved
-                del self.bulk[key]
+        """Transforms at ``positions`` moved other than as translations of the map (matrices already taken): the
+        translation map fills the ``affected`` items again where their c or L was made from one of them."""
         found = self._map
         if found is not None and found.stale(positions):
             if not isinstance(affected, np.ndarray):  # (a few moved: the items' indices as a dict's keys)
@@ -708,7 +721,7 @@ class TransformUpdater:
                 return self._apply_moves(changed)
         classes = set(map(type, changed))  # a C-level pass: thousands of moved transforms are one class
         arrays: list[Any] = []
-        if TranslationArray in classes:  # touched arrays: their rows are applied at once (bulk.py)
+        if TranslationArray in classes:  # touched arrays: their rows are applied at once (the translation map)
             arrays = [c for c in changed if c.__class__ is TranslationArray]
             changed = [c for c in changed if c.__class__ is not TranslationArray]
             classes.discard(TranslationArray)

@@ -1,9 +1,10 @@
 """Where every installed item's translation column comes from when many ``om.Translation`` objects move at once.
 
 A simulation moves thousands of nodes per frame through their plain
-``Translation`` objects (``t.offset = row``).  Most items then lie below
-exactly one translation, and their world translation column is an affine
-function of that translation's offset (the formula of :mod:`.bulk`)::
+``Translation`` objects (``t.offset = row``) or through one
+``om.TranslationArray`` (the array written, ``touch()``).  Most items then lie
+below exactly one translation, and their world translation column is an affine
+function of that translation's offset::
 
     M = P @ T(offset) @ S     =>     M[:3, 3] = L @ offset + c,  L = P[:3, :3],  c = L @ S[:3, 3] + P[:3, 3]
 
@@ -283,36 +284,49 @@ class TranslationMap:
             )
         return parts
 
-    def apply(self, plan: Any) -> int:
-        """Write the translation column of every mapped item from the plan's matrices; returns how many.
+    def apply(self, plan: Any, hit: np.ndarray | None = None) -> int:
+        """Write the translation column of the mapped items from the plan's matrices; returns how many.
 
-        The rows' batches are marked as moved (translation columns only) and
-        listed in ``plan.moved_rows``.  Items below several translations are
-        not written here (:meth:`multi_items`).
+        Every mapped item, or with ``hit`` (by place among the plan's matrices:
+        the translations that moved, an array's) those below one of them.  The
+        rows' batches are marked as moved (translation columns only) and listed
+        in ``plan.moved_rows``.  Items below several translations are not
+        written here (:meth:`multi_items`).
         """
         matrices = plan.matrices
         count = 0
         for part in self.parts(plan):
-            world = matrices[part.source, :3, 3]
-            lin = part.linear
+            source, where, constant, lin = part.source, part.where, part.constant, part.linear
+            lo, hi = part.span
+            if hit is not None:
+                chosen = hit[source]
+                if not chosen.all():
+                    if not chosen.any():
+                        continue
+                    source = source[chosen]
+                    where = (np.arange(lo, hi) if isinstance(where, slice) else where)[chosen]
+                    constant = None if constant is None else constant[chosen]
+                    lin = None if lin is None else lin[chosen]
+                    lo, hi = int(where[0]), int(where[-1]) + 1
+            world = matrices[source, :3, 3]
             if lin is not None:  # three scaled columns rather than a batched product (see dynamic.py on BLAS)
                 world = world[:, 0:1] * lin[:, :, 0] + world[:, 1:2] * lin[:, :, 1] + world[:, 2:3] * lin[:, :, 2]
-            if part.constant is not None:
-                world += part.constant
+            if constant is not None:
+                world += constant
             count += len(world)
             if part.batch is None:
-                for item, w in zip(part.items, world, strict=True):  # type: ignore[arg-type]
+                items = part.items if hit is None else [i for i, c in zip(part.items, chosen, strict=True) if c]
+                for item, w in zip(items, world, strict=True):  # type: ignore[arg-type]
                     item.row[_TRANSLATION] = w
                 continue
             batch = part.batch
-            batch.rows[part.where, _TRANSLATION] = world
-            lo, hi = part.span
-            if hi - lo <= 8 and isinstance(part.where, np.ndarray):
-                for w in part.where.tolist():
+            batch.rows[where, _TRANSLATION] = world
+            if hi - lo <= 8 and isinstance(where, np.ndarray):
+                for w in where.tolist():
                     batch.row_changed(w)
             else:
                 batch.moved(lo, hi)  # translation columns only: the upload rewrites just those (drawer.py)
-            plan.moved_rows.append((batch, part.where))
+            plan.moved_rows.append((batch, where))
         return count
 
 
