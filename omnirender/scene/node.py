@@ -882,6 +882,9 @@ def _local_placements(root: Node, mask_fn: Any) -> list[tuple[Any, np.ndarray | 
                         continue
                     firsts[category] = len(out)
                 out.append((item, m))
+        before = node._declared
+        if before is not None and before.mask_fn is mask_fn and _same_placements(before.placements, out):
+            out = before.placements  # the same list: what was made of it (a root's Declarations) is kept
         node._declared = _Local(node._version, node._structure, mask_fn, out, relevant)
     return root._declared.placements  # type: ignore[union-attr]
 
@@ -908,6 +911,18 @@ def declarations_kept(components: Iterable[Any], mask_fn: Any = None) -> bool:
             entry = node._declared
             if entry is None or entry.placements or entry.mask_fn is not mask_fn or entry.structure != node._structure:
                 return False
+    return True
+
+
+def _same_placements(a: list[tuple[Any, Any]], b: list[tuple[Any, Any]]) -> bool:
+    """Whether two local placement lists name the same components at equal matrices (None: the identity)."""
+    if len(a) != len(b):
+        return False
+    for (x, m), (y, n) in zip(a, b, strict=True):
+        if x is not y:
+            return False
+        if m is not n and (m is None or n is None or not bool((m == n).all())):
+            return False
     return True
 
 

@@ -307,3 +307,28 @@ def test_nodes_added_and_removed_between_setter_loops_before_the_translation_map
                     moves.remove(gone.items[0])
                     gone.parent.remove(gone)
                 check(e, scene, f"splice {frame}.{step}")
+
+
+def test_a_moved_light_and_nodes_added_after_it_draw_with_the_light_where_it_is_now():
+    """A root's declarations are kept while its placements are the same components at equal matrices: a
+    moved lamp makes them again (compared with a fresh engine's picture of a copy: nothing the graph caches
+    is shared with it)."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, box = base_scene()
+    lamp = om.Translation(-3.0, 2.0, 3.0)
+    scene.add(om.Node("lamp", [lamp, om.PointLight(intensity=4.0)]))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        scene.add(leaf("a", (0.0, 2.6, 1.0), box, diffuse=(0.9, 0.9, 0.9)))
+        check(e, scene, "added with the lamp where it was")
+        lamp.offset = (3.0, -2.0, 3.0)
+        moved = check(e, scene, "the lamp moved", spliced=False)
+        assert not np.array_equal(moved, before)
+        scene.add(leaf("b", (0.0, -2.6, 1.0), box, diffuse=(0.9, 0.9, 0.9)))
+        check(e, scene, "added after the lamp moved")
+        lamp.offset = (3.0, -2.0, 3.0)  # the same place again: the same declarations
+        check(e, scene, "moved to where it is", spliced=False)
+        scene.remove(scene.child("a"))
+        lamp.offset = (0.0, 0.0, 4.0)
+        check(e, scene, "removed as the lamp moved", spliced=False)
