@@ -247,8 +247,9 @@ def bench_cubes(n: int, frames: int) -> dict[str, float]:
         transforms[k] = node.insert(0, om.Matrix(m))
         engine.render(scene, read_depth=False)
         changed.append(time.perf_counter() - t)
-        # only that cube's node compiled again: its old item removed, its new one added (two rows patched)
-        assert engine.stats["compiled"] == "subtrees" and engine.stats["incremental"] == 2, engine.stats
+        # only that cube's item patched: a transform replaced by a transform is a dirty bit (one row rewritten
+        # in place); were it a subtree splice, its old item removed and its new one added (two rows)
+        assert (engine.stats["compiled"], engine.stats["incremental"]) in {("dirty", 1), ("subtrees", 2)}, engine.stats
         # a steady frame right after, for the ratio under the same load
         omni_t.append(median_time(lambda: engine.render(scene, read_depth=False), 1))
     one_changed = statistics.median(changed)

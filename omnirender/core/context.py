@@ -14,13 +14,15 @@ from typing import Any
 import numpy as np
 
 from .limits import MAX_MAGNITUDE
-from .transform import Transform
+from .transform import Matrix, Rotation, Scaling, Transform, Translation
 
 __all__ = ["RenderingContext"]
 
 _IDENTITY = np.eye(4)
 _IDENTITY.setflags(write=False)
 _F64 = np.dtype(np.float64)
+#: transforms whose own matrix is within the magnitude limit by the checks of their parameters
+_BOUNDED = frozenset((Translation, Rotation, Scaling, Matrix))
 
 
 class RenderingContext:
@@ -83,6 +85,9 @@ class RenderingContext:
             m = t.matrix
             if current is _IDENTITY and m.dtype == _F64 and not m.flags.writeable:
                 current = m  # the first transform's own (read-only) matrix is the product: no multiplication
+                if t.__class__ in _BOUNDED:
+                    matrices.append((t, current, t.version))
+                    continue
             else:
                 current = current @ m
             if not np.abs(current).max() <= MAX_MAGNITUDE:  # NaN fails too

@@ -275,10 +275,11 @@ class Translation(Transform):
         object.__setattr__(self, "_matrix_of", None)  # the offset object the kept matrix was made from
         object.__setattr__(self, "_row", 0)
         object.__setattr__(self, "_synced", 0)  # the array's version its own offset is current for
-        if offset is not None:
-            self.offset = offset
-        else:
-            self.offset = x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
+        # checked and stored by the property's setter, without the version bump and journal entry of an
+        # assignment: nothing can have compiled a translation being made (a node added per frame pays no move)
+        _OFFSET_SETTER(
+            self, offset if offset is not None else x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
+        )
 
     def __setattr__(self, name: str, value: Any) -> None:
         # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames; a
@@ -417,6 +418,7 @@ class Translation(Transform):
 
 
 _OFFSET = attrgetter("_offset")
+_OFFSET_SETTER = Translation.offset.fset  # type: ignore[attr-defined]
 #: whether a translation was ever bound to an array (until then no translation needs its row read first)
 _EVER_BOUND = [False]
 _BOUND = attrgetter("_bound")

@@ -467,7 +467,7 @@ class DrawListCompiler:
         replaced.update(id(r.new) for r in replacements)
         moves: list[Any] = []
         for c in changed:
-            if id(c) in replaced or isinstance(c, Node):
+            if id(c) in replaced or isinstance(c, Node) or not c.owners:  # (outside the scene: changes nothing)
                 continue
             if not (isinstance(c, Transform) and c.static):
                 return None  # a parameter changed beside the replacements: the splice compiles it

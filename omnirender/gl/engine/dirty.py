@@ -65,12 +65,12 @@ DIRTY_TRANSFORM = "transform"
 #: a surface attribute replaced by one of the same role: the rows' surface fields are resolved again
 DIRTY_APPEARANCE = "appearance"
 
-_MODEL = ROW.slice("model")
-_POINT_SIZE = ROW.at("point", "size")
 _SHADING_MODEL = ROW.at("emission", "model")
-#: the row's fields a batch drawn with uniforms for its material shares: all after the model matrix and colour
-_MATERIAL = slice(ROW.offsets["color"] + 4, ROW.stride)
-assert [f.name for f in ROW.fields[:2]] == ["model", "color"]
+#: the row's surface fields (all between the model matrix and the point size, which a DrawStyle decides)
+_SURFACE = slice(ROW.offsets["color"], ROW.offsets["point"])
+#: those a batch drawn with uniforms for its material shares (its colours are per row)
+_MATERIAL = slice(ROW.offsets["color"] + 4, ROW.offsets["point"])
+assert [f.name for f in ROW.fields[:2]] == ["model", "color"] and ROW.fields[-1].name == "point"
 #: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
 _KINDS = frozenset(("mesh", "points", "lines"))
 
@@ -85,7 +85,8 @@ class Replacement(NamedTuple):
 
 
 class Restyle(NamedTuple):
-    """An item's new surface: the compiler's resolved ``surface`` entry and the full ``row`` to write."""
+    """An item's new surface: the compiler's resolved ``surface`` entry and ``row``, the row whose surface fields
+    the item's row takes (its model matrix and point size stay)."""
 
     item: DrawItem
     surface: tuple
@@ -206,8 +207,8 @@ def restyles(
         if found is None:
             return None
         for item in found:
-            if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None:
-                return None
+            if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None or item.techniques:
+                return None  # (a technique's passes may draw what the surface decides their own way)
             pair = pairs.get(id(item))
             if pair is None:
                 app = item.surface[0]
@@ -235,10 +236,7 @@ def restyles(
             or _transparent(new_app, item) != item.transparent
         ):
             return None
-        full = row.copy()
-        full[_MODEL] = item.row[_MODEL]
-        full[_POINT_SIZE] = item.row[_POINT_SIZE]
-        out.append(Restyle(item, entry, full))
+        out.append(Restyle(item, entry, row))
     return out
 
 
@@ -261,16 +259,16 @@ def restyle(changes: list[Restyle]) -> tuple[list[Any], bool]:
         item.surface = surface
         slot = item.slot
         if slot is None:
-            item.row[:] = row
+            item.row[_SURFACE] = row[_SURFACE]
             same = False
             continue
         batch, r = slot
         if batch.uniform and item.row[_MATERIAL].tobytes() != row[_MATERIAL].tobytes():
             same = False
-            item.row[:] = row
+            item.row[_SURFACE] = row[_SURFACE]
             batch.uniform = uniform_material(batch.rows)
         else:
-            item.row[:] = row
+            item.row[_SURFACE] = row[_SURFACE]
         batch.row_changed(r)
         batches[id(batch)] = batch
     return list(batches.values()), same

@@ -249,7 +249,8 @@ class MovePlan:
         taken: list[int] = []
         for key, (old, new, swapped) in below.items():
             k = index.get(key)
-            if k is None or id(new) in index or set(users.get(key, ())) != swapped:
+            found = users.get(key, ())
+            if k is None or id(new) in index or len(found) != len(swapped) or set(found) != swapped:
                 general.append(old)
                 continue
             # no other item lies below the old transform: the new one takes its place (no chain changes)
