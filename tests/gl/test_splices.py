@@ -336,9 +336,8 @@ def test_a_moved_light_and_nodes_added_after_it_draw_with_the_light_where_it_is_
 
 def test_a_node_at_the_address_of_a_node_that_died_is_still_spliced():
     """The compiler maps id(node) -> its occurrence; a node that died leaves its entry behind, and a new node
-    may take its address.  That entry must not make the new node count as met twice in the next full compile
-    (which turned later splices below it into full compiles at random: whenever the allocator reused an
-    address)."""
+    may take its address.  That entry must not make the new node count as met twice when a full compile meets
+    it (which turned later splices below it into full compiles at random: whenever an address was reused)."""
     import gc
     import weakref
 
@@ -346,16 +345,18 @@ def test_a_node_at_the_address_of_a_node_that_died_is_still_spliced():
 
     scene, groups, box = base_scene()
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
         gone = om.Node("gone")
         dead = weakref.ref(gone)
         del gone
         gc.collect()
         assert dead() is None
-        e.render(scene)
-        # what a node that died at this address left behind (another key, a dead reference)
-        e.compiler._occurrence_of[id(groups[0])] = (10_000, dead)
-        scene.add(om.Node("lamp", [om.PointLight(position=(0.0, 0.0, 4.0), intensity=0.5)]))  # a full compile
-        check(e, scene, "a light added", spliced=False)
+        holder = om.Node("holder", [om.Translation(0.0, 2.4, 0.0)])
+        # what a node that died at the new node's address left behind (another key, a dead reference)
+        e.compiler._occurrence_of[id(holder)] = (10_000, dead)
+        groups[0].add(holder)
+        groups[1].add(om.DrawStyle(mode="wireframe"))  # in the same frame: a full compile (no splice follows it)
+        check(e, scene, "a node added in a full compile", spliced=False)
         assert e.stats["compiled"] is True
-        groups[0].add(leaf("new", (0.0, 2.4, 0.0), box, diffuse=(0.2, 0.8, 0.3)))
+        holder.add(leaf("new", (0.0, 0.0, 0.0), box, diffuse=(0.2, 0.8, 0.3)))
         check(e, scene, "a node added below it")
