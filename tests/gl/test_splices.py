@@ -332,3 +332,31 @@ def test_a_moved_light_and_nodes_added_after_it_draw_with_the_light_where_it_is_
         scene.remove(scene.child("a"))
         lamp.offset = (0.0, 0.0, 4.0)
         check(e, scene, "removed as the lamp moved", spliced=False)
+
+
+def test_a_node_at_the_address_of_a_node_that_died_is_still_spliced():
+    """The compiler maps id(node) -> its occurrence; a node that died leaves its entry behind, and a new node
+    may take its address.  That entry must not make the new node count as met twice when a full compile meets
+    it (which turned later splices below it into full compiles at random: whenever an address was reused)."""
+    import gc
+    import weakref
+
+    from omnirender.gl import GLEngine
+
+    scene, groups, box = base_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene)
+        gone = om.Node("gone")
+        dead = weakref.ref(gone)
+        del gone
+        gc.collect()
+        assert dead() is None
+        holder = om.Node("holder", [om.Translation(0.0, 2.4, 0.0)])
+        # what a node that died at the new node's address left behind (another key, a dead reference)
+        e.compiler._occurrence_of[id(holder)] = (10_000, dead)
+        groups[0].add(holder)
+        groups[1].add(om.DrawStyle(mode="wireframe"))  # in the same frame: a full compile (no splice follows it)
+        check(e, scene, "a node added in a full compile", spliced=False)
+        assert e.stats["compiled"] is True
+        holder.add(leaf("new", (0.0, 0.0, 0.0), box, diffuse=(0.2, 0.8, 0.3)))
+        check(e, scene, "a node added below it")

@@ -330,7 +330,9 @@ class DrawListCompiler:
             frames.pop()
             self._node_cache[key] = _NodeEntry(node, own, scope.entries[start:])
             found = self._occurrence_of.get(id(node))
-            several = found is not None and (found[0] != key or found[1]() is not node)
+            # several: this very node met again under another key (an entry of a node that died, whose address
+            # a new node took, says nothing of the new one: it is replaced)
+            several = found is not None and found[1]() is node and found[0] != key
             self._occurrence_of[id(node)] = (-1 if several else key, weakref.ref(node))  # -1: several
 
         return local(), store
@@ -831,6 +833,7 @@ class DrawListCompiler:
             self._node_cache = {k: v for k, v in self._node_cache.items() if v.ref() is not None}
             live = set(self._node_cache)
             self._occurrences = {pair: k for pair, k in self._occurrences.items() if k in live}
+            self._occurrence_of = {n: found for n, found in self._occurrence_of.items() if found[1]() is not None}
             self._prune_limit = max(4096, 2 * len(self._node_cache))
 
     # -- what painters call ------------------------------------------------------------
