@@ -117,14 +117,8 @@ class Node:
         flush_changes()
         own = self._items
         for item in items:
-            if isinstance(item, Node):
-                # a new node has no parent: the item cannot be its ancestor, and it cannot be the node itself
-                item._parents.append(self)
-                _relinked(item)
-            elif isinstance(item, RenderingComponent):
-                item._attach(self)
-            else:
-                self._check_item(item)
+            # (a new node has no parent: the item cannot be its ancestor, and it cannot be the node itself)
+            self._take(item)
             own.append(item)
         if own:
             epoch = _EPOCH[0]
@@ -271,18 +265,23 @@ class Node:
         """Append a component or child node; returns it."""
         return self.insert(len(self._items), item)
 
-    def insert(self, index: int, item: Any) -> Any:
-        """Insert a component or child node at ``index``; returns it."""
-        flush_changes()  # versions noted for later reach the nodes before the declarations' patch reads them
+    def _take(self, item: Any) -> None:
+        """Make ``item`` one of this node's: a child node links its parent, a component its owner; anything
+        else is refused with the reason (``_check_item``)."""
         if isinstance(item, Node):
-            if item is self or item._is_ancestor_of(self):
-                raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
             item._parents.append(self)
             _relinked(item)
         elif isinstance(item, RenderingComponent):
             item._attach(self)
         else:
             self._check_item(item)
+
+    def insert(self, index: int, item: Any) -> Any:
+        """Insert a component or child node at ``index``; returns it."""
+        flush_changes()  # versions noted for later reach the nodes before the declarations' patch reads them
+        if isinstance(item, Node) and (item is self or item._is_ancestor_of(self)):
+            raise ValueError(f"Node {self.path}: adding {item.path} would make a cycle")
+        self._take(item)
         patch = _declaration_patch(self, item)
         n = len(self._items)
         at = min(index, n) if index >= 0 else max(0, n + index)  # where list.insert puts it

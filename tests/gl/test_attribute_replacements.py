@@ -14,39 +14,9 @@ import pytest
 
 import omnirender as om
 
+from .changes import SIZE, fresh, nested_scene
+
 pytestmark = pytest.mark.gl
-
-SIZE = (80, 64)
-
-
-def fresh(scene: om.Node, shadows: bool = False) -> np.ndarray:
-    from omnirender.gl import GLEngine
-
-    with GLEngine(size=SIZE, samples=0, shadows=shadows) as e:
-        return e.render(scene).array
-
-
-def nested_scene() -> tuple[om.Node, list[om.Node], list[om.Node]]:
-    """Groups (a Translation, then a Rotation) of five leaves (a Translation, a Material, a box or a sphere)."""
-    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
-    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
-    groups = [
-        scene.add(om.Node(f"g{g}", [om.Translation(2.5 * g - 3.5, 0.0, 0.0), om.Rotation(10.0 * g, (0, 1, 0))]))
-        for g in range(4)
-    ]
-    leaves = []
-    for g, group in enumerate(groups):
-        for i in range(5):
-            shape = om.Box(size=(0.6, 0.4, 0.5)) if (g + i) % 2 else om.Sphere(radius=0.35)
-            leaves.append(
-                group.add(
-                    om.Node(
-                        f"l{g}_{i}",
-                        [om.Translation(0.0, i - 2.0, 0.0), om.Material(diffuse=(0.2 * i, 0.5, 0.3 * g)), shape],
-                    )
-                )
-            )
-    return scene, groups, leaves
 
 
 def replace(node: om.Node, old: object, new: object) -> None:

@@ -26,6 +26,7 @@ from ...shapes import InstanceSet
 from .drawlist import set_translations
 from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
 from .layout import ROW
+from .spare import extend_held
 from .translations import TranslationMap
 
 __all__ = ["MovePlan", "TransformUpdater"]
@@ -234,11 +235,7 @@ class MovePlan:
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
-        users = self._users
-        if users is None:
-            users = self._users = {}
-            for i, item in enumerate(self.items):
-                _add_user(users, item, i)
+        users = self._users_map()
         index = self.index
         below: dict[int, tuple[Any, Any, set[int]]] = {}  # id(old) -> (old, new, the items swapped)
         for item, old, new in swaps:
@@ -284,21 +281,18 @@ class MovePlan:
         if self._map is not None:
             self._map.replaced(self, taken, swapped_items)
 
+    def _users_map(self) -> dict[int, list[int]]:
+        """id(transform) -> the items below it (their indices), made when first asked after a plan change."""
+        users = self._users
+        if users is None:
+            users = self._users = {}
+            for i, item in enumerate(self.items):
+                _add_user(users, item, i)
+        return users
+
     def _extend(self, name: str, extra: int) -> np.ndarray:
-        """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
-        rows so that a splice appends in place (amortised: a copy only when the storage is full)."""
-        view = getattr(self, name)
-        n = len(view)
-        held = self._stores.get(name)
-        if held is not None and held[1] is view and n + extra <= len(held[0]):
-            store = held[0]
-        else:
-            store = np.empty((max(n + extra, n + n // 4, 16), *view.shape[1:]), view.dtype)
-            store[:n] = view
-        out = store[: n + extra]
-        self._stores[name] = (store, out)
-        setattr(self, name, out)
-        return out
+        """The array attribute ``name`` with ``extra`` more rows, appended in place (:func:`.spare.extend_held`)."""
+        return extend_held(self, self._stores, name, extra)
 
     def apply_arrays(self, arrays: list[Any]) -> tuple[int, list[Any]]:
         """Write the snapshots of touched ``om.TranslationArray`` objects into the rows below them.
@@ -413,11 +407,7 @@ class MovePlan:
         :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
         item without a batch or an instance set moved)."""
         self.rows_only = True
-        users = self._users
-        if users is None:
-            users = self._users = {}
-            for i, item in enumerate(self.items):
-                _add_user(users, item, i)
+        users = self._users_map()
         index = self.index
         matrices = self.matrices
         positions: list[int] = []

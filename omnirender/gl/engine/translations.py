@@ -33,6 +33,7 @@ import numpy as np
 
 from ...core.transform import Translation
 from .layout import ROW
+from .spare import extend_held
 
 __all__ = ["TranslationMap"]
 
@@ -218,20 +219,8 @@ class TranslationMap:
             self.translations += int(flags.sum())
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
-        """The array attribute ``name`` with ``extra`` more rows (their values unset), held in storage with spare
-        rows so that a splice appends in place (amortised: a copy only when the storage is full)."""
-        view = getattr(self, name)
-        n = len(view)
-        held = self._stores.get(name)
-        if held is not None and held[1] is view and n + extra <= len(held[0]):
-            store = held[0]
-        else:
-            store = np.empty((max(n + extra, n + n // 4, 16), *view.shape[1:]), view.dtype)
-            store[:n] = view
-        out = store[: n + extra]
-        self._stores[name] = (store, out)
-        setattr(self, name, out)
-        return out
+        """The array attribute ``name`` with ``extra`` more rows, appended in place (:func:`.spare.extend_held`)."""
+        return extend_held(self, self._stores, name, extra)
 
     def stale(self, places: np.ndarray | list[int]) -> bool:
         """Whether a transform at ``places`` (moved other than through this map) is one some item's c or L
