@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
+from omnirender.attributes.photometry import srgb_to_linear
 from omnirender.colorimetry import cielab, delta_e2000
 from omnirender.formats.gltf import GLTFImportError
 from omnirender.formats.gltf import writer as gltf
@@ -155,6 +156,24 @@ def test_few_colours_are_materials_many_are_instance_colours_and_alpha_is_a_mate
     modes = sorted(doc["materials"][doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"][0]["material"]].get(
         "alphaMode", "OPAQUE") for i in arrays)  # fmt: skip
     assert modes == ["BLEND", "OPAQUE"]
+
+
+def test_each_colour_group_gets_its_own_colour_whatever_address_its_colour_had():
+    """The exporter captures each colour group under a temporary ``om.Color`` and memoises materials by the
+    surface's components: a Color made at a dead group's address (both at version 0) must not find that group's
+    material.  Five groups make the reuse all but certain."""
+    palette = np.array([(1.0, 0.8, 0.1), (0.1, 0.8, 0.3), (0.2, 0.3, 0.9), (0.9, 0.2, 0.5), (0.5, 0.5, 0.5)])
+    colors = palette[np.arange(10) % 5]
+    points = np.column_stack([np.arange(10.0), np.zeros(10), np.zeros(10)])
+    doc, binary = _glb(gltf.to_bytes(om.Node("s", [om.InstanceSet(om.Box(), points, colors=colors)])))
+    arrays = _check_extension(doc, binary)
+    assert len(arrays) == 5
+    for i, found in arrays.items():
+        material = doc["materials"][doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"][0]["material"]]
+        x = found["TRANSLATION"][:, 0].round().astype(int)
+        assert (x % 5 == x[0] % 5).all()
+        expected = srgb_to_linear(palette[x[0] % 5])
+        assert material["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(expected, abs=1e-6)
 
 
 def test_colours_a_shape_ignores_are_not_written_and_only_visible_instances_are():
