@@ -425,3 +425,23 @@ def test_appearances_sampling_no_texture_share_one_texture_set_of_the_same_key()
     assert texture_set(apps[1]) is not shared  # blended: another alpha mode
     assert texture_set(apps[6]) is not texture_set(apps[7])  # another cut-off
     assert texture_set(apps[8]) is not texture_set(apps[8])  # a textured appearance's own set
+
+
+def test_an_item_put_back_at_another_place_or_two_replaced_in_one_node_are_compared_in_full():
+    """``remove`` then ``insert`` at another place is no replacement at its place (a Material now before the
+    transform's place): the subtree compile; two items of one node replaced in one frame: both dirty bits."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        leaf = leaves[6]
+        transform = leaf.items[0]
+        leaf.remove(transform)
+        leaf.insert(1, om.Translation(0.5, 0.5, 0.5))  # [Material, Translation, shape]: another list
+        before = render_checked(e, scene, "subtrees", before).array
+        leaf = leaves[9]
+        replace(leaf, leaf.items[0], om.Matrix(np.array(om.Translation(0.3, -1.0, 0.6).matrix)))
+        replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 0.2, 0.9)))
+        render_checked(e, scene, "dirty", before)
+        assert e.stats["dirty"] == ("appearance", "transform")

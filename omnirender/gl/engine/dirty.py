@@ -131,6 +131,10 @@ def classify(edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], A
     the same object or one of the same :func:`role`.  An empty list: the
     edits left every list as it was.
     """
+    if len(edits) == 2:
+        single = _single(edits, compiled)
+        if single is not _UNKNOWN:
+            return single
     nodes: dict[int, Any] = {}
     for container, op, item, _ in edits:
         if (op != "insert" and op != "remove") or isinstance(item, Node) or not isinstance(container, Node):
@@ -158,11 +162,33 @@ def classify(edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], A
     return out
 
 
+def _single(edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], Any]) -> Any:
+    """:func:`classify` of what applications write to replace one item, ``node.remove(old)`` then
+    ``node.insert(at, new)`` at its place: the node's list is its compiled list with ``new`` at ``at`` (the
+    edits since the compile say so), so only that place is compared.  ``_UNKNOWN`` for other edits."""
+    (node, op, old, at), (other, op2, new, at2) = edits
+    if other is not node or op != "remove" or op2 != "insert" or at != at2 or node.__class__ is not Node:
+        return _UNKNOWN
+    if old is new or isinstance(old, Node) or isinstance(new, Node):
+        return _UNKNOWN
+    entry = compiled(node)
+    if entry is None:
+        return None
+    own = entry.own
+    held = own[at] if at < len(own) else None
+    if held is None or held.__class__ is not tuple or held[0] is not old:
+        return _UNKNOWN  # (the compiled list is not the one the edits started from: compared in full)
+    kind = role(old)
+    if kind is None or kind != role(new):
+        return None
+    return [Replacement(node, old, new, DIRTY_TRANSFORM if kind == DIRTY_TRANSFORM else DIRTY_APPEARANCE, entry)]
+
+
 def _det_sign(t: Any) -> int:
     """The sign of the determinant of ``t``'s matrix (a translation's and a rotation's: 1, unasked)."""
     if t.__class__ is Translation or t.__class__ is Rotation:
         return 1
-    (a, b, c), (d, e, f), (g, h, i) = t.matrix[:3, :3].tolist()
+    (a, b, c, _), (d, e, f, _), (g, h, i, _), _ = t.matrix.tolist()
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     return (det > 0.0) - (det < 0.0)
 
