@@ -35,7 +35,21 @@ __all__ = [
     "MonoAttribute",
     "PolyAttribute",
     "category_of",
+    "version_key",
 ]
+
+
+def version_key(component: Any) -> tuple[Any, int] | None:
+    """``(component, its version)``, or None for None: a key for memos of what was made from a component.
+
+    It changes when the component changes, and it holds the component itself
+    (compared by identity), not its ``id()``: a memo keyed by ``(id, version)``
+    outlives the components it was made from, and a new component made at a
+    dead one's address, at the same version (every new component starts at 0),
+    found the dead one's entry (a glTF export gave a colour group another
+    group's material, at random).
+    """
+    return None if component is None else (component, component.version)
 
 
 class ChangeJournal:

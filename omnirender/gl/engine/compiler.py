@@ -30,7 +30,7 @@ import numpy as np
 from ...attributes import BumpMap, DrawStyle, Fog, Highlight, Material, MultiTexture, Texture
 from ...attributes.photometry import linear_rgb
 from ...attributes.surface import Appearance, appearance_key, decided_by, resolve_appearance
-from ...core.component import ChangeJournal, RenderingComponent
+from ...core.component import ChangeJournal, RenderingComponent, version_key
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform, TranslationArray
@@ -1180,8 +1180,8 @@ class DrawListCompiler:
             plain = False
             key = (
                 appearance_key(stack, texture, layers, bump),
-                None if highlight is None else (id(highlight), highlight.version),
-                None if description is None else (id(description), description.version),
+                version_key(highlight),
+                version_key(description),
             )
         memo = self._surface_memo
         entry = memo.get(key)

@@ -40,6 +40,8 @@ _EYE4_LIST = _EYE4.tolist()
 _MANY = 64
 #: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
+#: splices the updater holds before its plan follows them without a frame of moves (TransformUpdater.splice)
+_HELD_SPLICES = 64
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
 _IDENTITY = object()
 
@@ -646,6 +648,9 @@ class TransformUpdater:
         self._rows_restyled = rows_restyled
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
+        #: the draw list's splices the plan has not followed yet, as (removed, added, moved) in order: a frame
+        #: that adds or removes a node leaves them to the next frame that moves rows (:meth:`_settled`)
+        self._held: list[tuple[list[Any], list[Any], list[Any]]] = []
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
@@ -656,20 +661,46 @@ class TransformUpdater:
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
         self._plan = None
+        self._held = []
 
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
-        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
-        if self._plan is not None:
-            self._plan.splice(removed, added, moved)
+        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists.
+
+        The plan follows it when next asked (:meth:`_settled`: the next frame
+        that moves rows), together with the splices of the frames between,
+        as one :meth:`MovePlan.splice` (:func:`merged_splices`): a frame that
+        only adds and removes nodes pays no update of the plan's arrays and
+        its translation map.  Only the transforms above new items drawn with
+        clip planes are noted now (:meth:`follows` asks them).
+        """
+        plan = self._plan
+        if plan is None:
+            return
+        _note_clipping(plan.clipping, added)
+        held = self._held
+        held.append((removed, added, moved))
+        if len(held) >= _HELD_SPLICES:  # (nothing moves for long: followed now, the held items let go)
+            self._settled()
+
+    def _settled(self) -> MovePlan | None:
+        """The plan (or None), having followed the splices held since the last frame that asked."""
+        plan = self._plan
+        held = self._held
+        if held:
+            self._held = []
+            if plan is not None:
+                plan.splice(*merged_splices(held))
+        return plan
 
     def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
         """Items' transforms replaced by transforms (``(item, old, new)``, :mod:`.dirty`): each chain takes
         ``new`` at ``old``'s place, and the plan follows; :meth:`apply` of the new transforms then recomposes
         their rows."""
+        plan = self._settled()  # (before the chains change: held splices take the items' chains as they were)
         for item, old, new in swaps:
             item.chain = tuple([new if t is old else t for t in item.chain])
-        if self._plan is not None and swaps:
-            self._plan.replace(swaps)
+        if plan is not None and swaps:
+            plan.replace(swaps)
 
     def rows_rewritten(self, batches: list[Any], same: bool) -> None:
         """The surface fields of rows of ``batches`` were rewritten in place (not moved: the bounds, the
@@ -686,7 +717,7 @@ class TransformUpdater:
 
     def plan(self) -> MovePlan:
         """The installed items' :class:`MovePlan` (made now when there is none)."""
-        plan = self._plan
+        plan = self._settled()
         if plan is None:
             plan = self._plan = MovePlan(list(self.index.items()))
         return plan
@@ -708,7 +739,7 @@ class TransformUpdater:
             self.placed = False
             self.moved = []
             return self._install(updates)
-        plan = self._plan
+        plan = self._settled()
         if plan is not None:
             if len(changed) <= _FEW:
                 # an editor's drag, one simulated body: a few static transforms (the lean path, no passes over
@@ -870,6 +901,31 @@ class TransformUpdater:
             else:
                 self._rows_moved(batches)
         return count
+
+
+def merged_splices(splices: list[tuple[list[Any], list[Any], list[Any]]]) -> tuple[list[Any], list[Any], list[Any]]:
+    """One splice (removed, added, moved) doing what ``splices`` do one after the other.
+
+    An item added and removed again in between is neither; a moved item
+    removed later is only removed; added and moved items are taken where
+    they are now (their slots).  The lists hold every item until the merge
+    is done, so no two of them share an ``id``.
+    """
+    if len(splices) == 1:
+        return splices[0]
+    removed: list[Any] = []
+    added: dict[int, Any] = {}
+    moved: dict[int, Any] = {}
+    for gone, came, shifted in splices:
+        for item in gone:
+            if added.pop(id(item), None) is None:
+                removed.append(item)
+            moved.pop(id(item), None)
+        for item in came:
+            added[id(item)] = item
+        for item in shifted:
+            moved[id(item)] = item
+    return removed, list(added.values()), list(moved.values())
 
 
 def _note_clipping(clipping: set[int], items: Any) -> None:
