@@ -257,8 +257,20 @@ class Node:
         self._own += 1
         self._structure += 1
         self._sstamp = epoch
-        if self._parents:
-            _bump_ancestors(self._parents, epoch, "_structure", "_sstamp")
+        parents = self._parents
+        if len(parents) == 1:  # (a chain of single parents, walked as touch walks it; else the general walk)
+            node = parents[0]
+            while node._sstamp != epoch:
+                node._structure += 1
+                node._sstamp = epoch
+                up = node._parents
+                if len(up) != 1:
+                    if up:
+                        _bump_ancestors(up, epoch, "_structure", "_sstamp")
+                    return
+                node = up[0]
+        elif parents:
+            _bump_ancestors(parents, epoch, "_structure", "_sstamp")
 
     # -- contents ---------------------------------------------------------
     def add(self, item: Any) -> Any:

@@ -244,6 +244,8 @@ class MovePlan:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
         users = self._users_map()
         index = self.index
+        if len(swaps) == 1 and self._take_place(*swaps[0], where, users):
+            return
         below: dict[int, tuple[Any, Any, set[int]]] = {}  # id(old) -> (old, new, the items swapped)
         for item, old, new in swaps:
             i = where.get(id(item))
@@ -305,6 +307,27 @@ class MovePlan:
             keep = ~hit
             gone = set(map(id, compress(moved, hit.tolist())))
             self._last = (changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone)
+
+    def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
+        """One transform replaced above one item, the only one below it (a node's transform replaced: the
+        lean case of :meth:`replace`): ``new`` takes ``old``'s place among the matrices, no chain changes.
+        False, with nothing changed, when that does not hold (:meth:`replace` goes the general way)."""
+        i = where.get(id(item))
+        key = id(old)
+        k = self.index.get(key)
+        found = users.get(key)
+        if i is None or k is None or id(new) in self.index or found is None or len(found) != 1 or found[0] != i:
+            return False
+        index = self.index
+        del index[key]
+        index[id(new)] = k
+        self.transforms[k] = new
+        self.matrices[k] = new.matrix
+        users[id(new)] = users.pop(key)
+        self._taken_places([k])
+        if self._map is not None:
+            self._map.replaced(self, [k], np.array(found, np.intp))
+        return True
 
     def _users_map(self) -> dict[int, list[int]]:
         """id(transform) -> the items below it (their indices), made when first asked after a plan change."""
