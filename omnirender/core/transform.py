@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 
 from .component import (  # _PENDING: the list note_later appends to (Translation's setter appends inline)
+    _JOURNALS,
     _PENDING,
     PENDING_LIMIT,
     MonoAttribute,
     RenderingComponent,
     _Owners,
     flush_changes,
-    note_change,
     note_later,
 )
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
@@ -168,10 +168,8 @@ class Transform(MonoAttribute):
         Every reader of a node's version or of a journal sees the change.
         """
         _set_version(self, self._version + 1)
-        if self._owners:
+        if self._owners or _JOURNALS:  # (also in no node while a journal lives: the same transforms, the same batch)
             note_later(self)
-        else:
-            note_change(self)  # in no node: only the journals have to hear of it
 
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
@@ -318,12 +316,12 @@ class Translation(Transform):
                 bound = self._bound
                 if bound is not None:  # its own value holds until the array's next touch
                     _set_synced(self, bound._version)
-                if self._owners:
+                # (also without owners while a journal lives: a loop over the same translations gives the same
+                # batch after one of them left its node, whose owners are patched, not collected again)
+                if self._owners or _JOURNALS:
                     _append(self)
                     if len(_PENDING) > PENDING_LIMIT:
                         flush_changes()
-                else:
-                    note_change(self)
                 return
         RenderingComponent.__setattr__(self, name, value)
 

@@ -146,8 +146,8 @@ class MovePlan:
             del self._arrays[key]
         first_new = len(self.items)
         gone: list[int] = []
-        # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
-        # held every transform of the list)
+        # (the last look-ups stay: a splice keeps every transform's place; they are forgotten below when fresh
+        # transforms come, which may be some the look-ups did not find)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -211,6 +211,7 @@ class MovePlan:
     def _add_transforms(self, fresh: list[Any]) -> int:
         """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
         fresh = list({id(t): t for t in fresh}.values())
+        self._last = None  # (the last look-ups may not have found some of them)
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -234,6 +235,7 @@ class MovePlan:
         map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
         :meth:`apply` of the new transforms."""
         self._arrays.clear()  # an array's translation may have taken another's place: looked up again
+        self._last = None  # (so may any transform of the last look-ups)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -376,7 +378,9 @@ class MovePlan:
             positions = found[keep]
             moved = changed if keep.all() else list(compress(changed, keep.tolist()))
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
-            self._last = (changed, positions, moved, translations) if moved is changed and len(moved) >= _MANY else None
+            # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
+            # splice that brings fresh ones, or a replacement, forgets these look-ups)
+            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
@@ -395,7 +399,11 @@ class MovePlan:
         ``changed`` reuses the last look-ups (where the plan holds them, their classes).
         """
         last = self._last
-        if last is None or len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
+        if last is None:
+            return False
+        if last[0] is changed:  # (a journal's batch drained as a whole: its own list, see ChangeJournal.drain)
+            return True
+        if len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
             return False
         self._last = (changed, *last[1:])
         return True
