@@ -445,3 +445,25 @@ def test_an_item_put_back_at_another_place_or_two_replaced_in_one_node_are_compa
         replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 0.2, 0.9)))
         render_checked(e, scene, "dirty", before)
         assert e.stats["dirty"] == ("appearance", "transform")
+
+
+def test_a_rotating_matrix_replaced_by_a_translation_that_then_moves():
+    """Translation -> rotating Matrix -> Translation on one leaf, then the translation moved by its setter (its
+    moves write only the translation column of its place: the whole matrix must be the new one's)."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    leaf = leaves[7]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        m = np.array(om.Rotation(50.0, (0, 0, 1)).matrix @ om.Scaling(1.6, 0.7, 1.2).matrix)
+        m[:3, 3] = (0.4, -1.0, 0.8)
+        replace(leaf, leaf.items[0], om.Matrix(m))
+        before = render_checked(e, scene, "dirty", before).array
+        moved = om.Translation(-0.2, 1.5, 0.3)
+        replace(leaf, leaf.items[0], moved)
+        before = render_checked(e, scene, "dirty", before).array
+        moved.offset = (0.6, 1.1, -0.4)
+        image = e.render(scene)
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, fresh(scene)) and not np.array_equal(image.array, before)

@@ -41,7 +41,7 @@ from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
 from .drawlist import DrawItem, DrawState, Scope, drawn_transparent
 from .geometry import Geometry
 from .instancing import instance_rows, mask_copies
-from .layout import PBR, PHONG, ROW
+from .layout import ROW, shading_model
 from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, kinds
 
@@ -54,7 +54,6 @@ _MODEL = ROW.slice("model")
 _ASK_KEPT = 64
 _COLOR = ROW.slice("color")
 _SHADING_MODEL = ROW.at("emission", "model")
-_MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
@@ -64,6 +63,9 @@ assert tuple((f.name, f.size) for f in ROW.fields) == tuple(
     zip(_SURFACE_FIELDS, (16, 4, 4, 4, 4, 4, 4, 4), strict=True)
 )
 assert _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
+assert (
+    ROW.at("emission", "model") == ROW.offsets["emission"] + 3 and ROW.at("pbr", "material") == ROW.offsets["pbr"] + 2
+)
 _ZEROS4 = (0.0, 0.0, 0.0, 0.0)
 _ZEROS16 = (0.0,) * 16
 
@@ -1193,29 +1195,30 @@ class DrawListCompiler:
             for tex in app.textures:
                 self._check_texture(tex)
             # the attributes are kept alive with the entry, so the ids in its key stay theirs
-            row = self._material_row(app, highlight)
-            # the shading model and the id of the material description (the deferred pipeline's material table)
-            if description is not None:
-                row[_SHADING_MODEL] = description.model.number
-            row[_MATERIAL_ID] = self.engine.material_table.for_appearance(app, description)
+            # (with the shading model and the id of the material description: the deferred pipeline's table)
+            row = self._material_row(
+                app, highlight, description, self.engine.material_table.for_appearance(app, description)
+            )
             entry = (app, row, texture_set(app), (texture, layers, bump, highlight, description))
             if len(memo) > 256:
                 memo.clear()
             memo[key] = entry
         return entry
 
-    def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item); colours are linear.
+    def _material_row(self, app: Appearance, highlight: Any, description: Any, material: int) -> np.ndarray:
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear;
+        ``material``: the id of its material description in the deferred pipeline's table.
 
         Made from one list of Python floats (one numpy call: a replaced Material makes one per frame)."""
         zeros = _ZEROS4
+        model = shading_model(app.model, description)
         if app.model == "pbr":
             alpha = 1.0 if app.alpha_mode != "blend" else app.alpha
-            specular, emission, ambient = zeros, (*app.emission, PBR), zeros
-            pbr = (app.roughness, app.metallic, 0.0, 0.0)
+            specular, emission, ambient = zeros, (*app.emission, model), zeros
+            pbr = (app.roughness, app.metallic, material, 0.0)
         else:
             alpha = app.alpha
-            specular, emission, pbr = (*app.specular, app.shininess), (*app.emission, PHONG), zeros
+            specular, emission, pbr = (*app.specular, app.shininess), (*app.emission, model), (0.0, 0.0, material, 0.0)
             ambient = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
         lit = zeros if highlight is None else (*linear_rgb(highlight.color), 1.0)
         # the fields in the row's order (_SURFACE_FIELDS), the model matrix zero

@@ -46,7 +46,7 @@ from ...core.transform import Rotation, Transform, Translation
 from ...scene.node import Node
 from .attributes import AlphaTest, Blend
 from .drawlist import DrawItem, drawn_transparent, uniform_material
-from .layout import ROW
+from .layout import ROW, shading_model
 
 __all__ = [
     "DIRTY_TRANSFORM",
@@ -65,7 +65,6 @@ DIRTY_TRANSFORM = "transform"
 #: a surface attribute replaced by one of the same role: the rows' surface fields are resolved again
 DIRTY_APPEARANCE = "appearance"
 
-_SHADING_MODEL = ROW.at("emission", "model")
 #: the row's surface fields (all between the model matrix and the point size, which a DrawStyle decides)
 _SURFACE = slice(ROW.offsets["color"], ROW.offsets["point"])
 #: those a batch drawn with uniforms for its material shares (its colours are per row)
@@ -258,7 +257,9 @@ def restyles(
         if (
             state.kind not in _KINDS
             or state.overlay
-            or row[_SHADING_MODEL] != item.row[_SHADING_MODEL]
+            # (an item's row holds the shading model of the surface entry it was made from: both entries are
+            # of the item's context, its material description included)
+            or shading_model(new_app.model, context[4]) != shading_model(app.model, context[4])
             or new_app.double_sided != app.double_sided
             or not _same_texture_set(new_texset, texset)
             or _transparent(new_app, item) != item.transparent

@@ -322,11 +322,11 @@ class MovePlan:
         del index[key]
         index[id(new)] = k
         self.transforms[k] = new
-        self.matrices[k] = new.matrix
+        self.matrices[k] = new.matrix  # (whole: a translation's next moves write only its column)
         users[id(new)] = users.pop(key)
         self._taken_places([k])
         if self._map is not None:
-            self._map.replaced(self, [k], np.array(found, np.intp))
+            self._map.replaced(self, [k], [i])
         return True
 
     def _users_map(self) -> dict[int, list[int]]:
@@ -504,7 +504,7 @@ class MovePlan:
                     model = model @ matrices[k]
                 if local is not None:
                     model = model @ local[i]
-                where, values = _MODEL, model.T.reshape(16)
+                where, values = _MODEL, model.ravel("F")  # (M transposed, row by row: one numpy call)
             slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
             if slot is None:  # an item without a batch (transparent, overlay): its own row
                 item.row[where] = values
