@@ -122,8 +122,9 @@ class MovePlan:
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
         #: (the list, the places of those found, those found, whether all are plain translations, ids of those not
-        #: found): kept through splices and replacements (see :meth:`_add_transforms`, :meth:`replace`)
-        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None = None
+        #: found, places others took since, which they drop when next used): kept through splices and
+        #: replacements (see :meth:`_add_transforms`, :meth:`_taken_places`)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int], list[int]] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -294,19 +295,29 @@ class MovePlan:
 
     def _taken_places(self, taken: list[int]) -> None:
         """New transforms took the places ``taken`` of replaced ones: the last look-ups drop the old ones (not
-        found now), or are forgotten when a new one is among those they did not find."""
+        found now) when next used (:meth:`_last_lookups`: a frame replacing one transform pays no pass over
+        them), or are forgotten now when a new one is among those they did not find."""
         last = self._last
         if last is None:
             return
-        changed, positions, moved, translations, missing = last
-        if not missing.isdisjoint(map(id, (self.transforms[k] for k in taken))):
+        if not last[4].isdisjoint(map(id, (self.transforms[k] for k in taken))):
             self._last = None
             return
+        last[5].extend(taken)
+
+    def _last_lookups(self) -> tuple[list[Any], np.ndarray, list[Any], bool, set[int], list[int]] | None:
+        """The last look-ups, without the transforms whose places others took since (:meth:`_taken_places`)."""
+        last = self._last
+        if last is None or not last[5]:
+            return last
+        changed, positions, moved, translations, missing, taken = last
         hit = np.isin(positions, taken)
         if hit.any():
             keep = ~hit
-            gone = set(map(id, compress(moved, hit.tolist())))
-            self._last = (changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone)
+            missing = missing | set(map(id, compress(moved, hit.tolist())))
+            positions, moved = positions[keep], list(compress(moved, keep.tolist()))
+        last = self._last = (changed, positions, moved, translations, missing, [])
+        return last
 
     def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
         """One transform replaced above one item, the only one below it (a node's transform replaced: the
@@ -392,7 +403,7 @@ class MovePlan:
             return self.apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
-            _, positions, moved, translations, _ = last
+            _, positions, moved, translations, _, _ = self._last_lookups()  # type: ignore[misc]
         else:
             # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
             found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
@@ -403,7 +414,7 @@ class MovePlan:
             # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
             # splice that brings fresh ones, or a replacement, forgets these look-ups)
             missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
-            self._last = (changed, positions, moved, translations, missing) if len(moved) >= _MANY else None
+            self._last = (changed, positions, moved, translations, missing, []) if len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
