@@ -122,6 +122,8 @@ class MovePlan:
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
         self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
+        #: look-ups forgotten since the last apply of many moves, freed there (:meth:`_forget_last`)
+        self._retired: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -211,7 +213,7 @@ class MovePlan:
     def _add_transforms(self, fresh: list[Any]) -> int:
         """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
         fresh = list({id(t): t for t in fresh}.values())
-        self._last = None  # (the last look-ups may not have found some of them)
+        self._forget_last()  # (the last look-ups may not have found some of them)
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -235,7 +237,7 @@ class MovePlan:
         map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
         :meth:`apply` of the new transforms."""
         self._arrays.clear()  # an array's translation may have taken another's place: looked up again
-        self._last = None  # (so may any transform of the last look-ups)
+        self._forget_last()  # (so may any transform of the last look-ups)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -368,6 +370,7 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self.apply_few(changed)
+        self._retired = None
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations = last
@@ -391,6 +394,14 @@ class MovePlan:
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
         count = self._apply_items(positions)
         return count + self._apply_instances(set(positions.tolist()))
+
+    def _forget_last(self) -> None:
+        """The last look-ups may no longer hold: forgotten now, freed with the next apply of many moves (the lists
+        and arrays of thousands they hold cost a frame that replaced one transform or added one node ~30 us to
+        free; a frame that moves thousands does not see it)."""
+        if self._last is not None:
+            self._retired = self._last
+            self._last = None
 
     def same_as_last(self, changed: list[Any]) -> bool:
         """Whether ``changed`` holds the same transforms, in the same order, as the last :meth:`apply` of many.
