@@ -121,9 +121,9 @@ class MovePlan:
         self._identity[identity] = True
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
-        self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
-        #: look-ups forgotten since the last apply of many moves, freed there (:meth:`_forget_last`)
-        self._retired: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
+        #: (the list, the places of those found, those found, whether all are plain translations, ids of those not
+        #: found): kept through splices and replacements (see :meth:`_add_transforms`, :meth:`replace`)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -213,7 +213,9 @@ class MovePlan:
     def _add_transforms(self, fresh: list[Any]) -> int:
         """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
         fresh = list({id(t): t for t in fresh}.values())
-        self._forget_last()  # (the last look-ups may not have found some of them)
+        last = self._last
+        if last is not None and not last[4].isdisjoint(map(id, fresh)):
+            self._last = None  # (the last look-ups did not find some of them)
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -237,7 +239,6 @@ class MovePlan:
         map follow; a transform new to the plan is taken with its matrix.  The rows are recomposed by the next
         :meth:`apply` of the new transforms."""
         self._arrays.clear()  # an array's translation may have taken another's place: looked up again
-        self._forget_last()  # (so may any transform of the last look-ups)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -265,6 +266,8 @@ class MovePlan:
             self.matrices[k] = new.matrix
             users[id(new)] = users.pop(key)
             taken.append(k)
+        if taken:
+            self._taken_places(taken)
         if self._map is not None:  # (after the chains changed below)
             swapped_items = np.array(sorted({i for _, _, items in below.values() for i in items}), np.intp)
         if not general:
@@ -289,6 +292,22 @@ class MovePlan:
         if self._map is not None:
             self._map.replaced(self, taken, swapped_items)
 
+    def _taken_places(self, taken: list[int]) -> None:
+        """New transforms took the places ``taken`` of replaced ones: the last look-ups drop the old ones (not
+        found now), or are forgotten when a new one is among those they did not find."""
+        last = self._last
+        if last is None:
+            return
+        changed, positions, moved, translations, missing = last
+        if not missing.isdisjoint(map(id, (self.transforms[k] for k in taken))):
+            self._last = None
+            return
+        hit = np.isin(positions, taken)
+        if hit.any():
+            keep = ~hit
+            gone = set(map(id, compress(moved, hit.tolist())))
+            self._last = (changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone)
+
     def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
         """One transform replaced above one item, the only one below it (a node's transform replaced: the
         lean case of :meth:`replace`): ``new`` takes ``old``'s place among the matrices, no chain changes.
@@ -305,6 +324,7 @@ class MovePlan:
         self.transforms[k] = new
         self.matrices[k] = new.matrix  # (whole: a translation's next moves write only its column)
         users[id(new)] = users.pop(key)
+        self._taken_places([k])
         if self._map is not None:
             self._map.replaced(self, [k], [i])
         return True
@@ -370,10 +390,9 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self.apply_few(changed)
-        self._retired = None
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
-            _, positions, moved, translations = last
+            _, positions, moved, translations, _ = last
         else:
             # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
             found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
@@ -383,7 +402,8 @@ class MovePlan:
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
             # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
             # splice that brings fresh ones, or a replacement, forgets these look-ups)
-            self._last = (changed, positions, moved, translations) if len(moved) >= _MANY else None
+            missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
+            self._last = (changed, positions, moved, translations, missing) if len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
@@ -394,14 +414,6 @@ class MovePlan:
             self.matrices[members] = cls.stack_matrices([self.transforms[k] for k in members])
         count = self._apply_items(positions)
         return count + self._apply_instances(set(positions.tolist()))
-
-    def _forget_last(self) -> None:
-        """The last look-ups may no longer hold: forgotten now, freed with the next apply of many moves (the lists
-        and arrays of thousands they hold cost a frame that replaced one transform or added one node ~30 us to
-        free; a frame that moves thousands does not see it)."""
-        if self._last is not None:
-            self._retired = self._last
-            self._last = None
 
     def same_as_last(self, changed: list[Any]) -> bool:
         """Whether ``changed`` holds the same transforms, in the same order, as the last :meth:`apply` of many.
