@@ -122,9 +122,11 @@ class MovePlan:
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
         #: (the list, the places of those found, those found, whether all are plain translations, ids of those not
-        #: found, places others took since, which they drop when next used): kept through splices and
-        #: replacements (see :meth:`_add_transforms`, :meth:`_taken_places`)
-        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int], list[int]] | None = None
+        #: found): kept through splices and replacements (see :meth:`_add_transforms`, :meth:`replace`)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None = None
+        #: places new transforms took since (replacements): dropped from the last look-ups when they are next used
+        #: (:meth:`_current_last`), not in the frame that replaced one (a pass over thousands of look-ups)
+        self._taken: list[int] = []
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -217,6 +219,7 @@ class MovePlan:
         last = self._last
         if last is not None and not last[4].isdisjoint(map(id, fresh)):
             self._last = None  # (the last look-ups did not find some of them)
+            self._taken = []
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -295,28 +298,32 @@ class MovePlan:
 
     def _taken_places(self, taken: list[int]) -> None:
         """New transforms took the places ``taken`` of replaced ones: the last look-ups drop the old ones (not
-        found now) when next used (:meth:`_last_lookups`: a frame replacing one transform pays no pass over
-        them), or are forgotten now when a new one is among those they did not find."""
+        found now) when next used (:meth:`_current_last`), or are forgotten now when a new one is among those
+        they did not find."""
         last = self._last
         if last is None:
             return
         if not last[4].isdisjoint(map(id, (self.transforms[k] for k in taken))):
             self._last = None
+            self._taken = []
             return
-        last[5].extend(taken)
+        self._taken.extend(taken)
 
-    def _last_lookups(self) -> tuple[list[Any], np.ndarray, list[Any], bool, set[int], list[int]] | None:
-        """The last look-ups, without the transforms whose places others took since (:meth:`_taken_places`)."""
+    def _current_last(self) -> tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None:
+        """The last look-ups without the transforms whose places were taken since (:meth:`_taken_places`)."""
         last = self._last
-        if last is None or not last[5]:
-            return last
-        changed, positions, moved, translations, missing, taken = last
-        hit = np.isin(positions, taken)
-        if hit.any():
-            keep = ~hit
-            missing = missing | set(map(id, compress(moved, hit.tolist())))
-            positions, moved = positions[keep], list(compress(moved, keep.tolist()))
-        last = self._last = (changed, positions, moved, translations, missing, [])
+        taken = self._taken
+        if taken:
+            self._taken = []
+            if last is not None:
+                changed, positions, moved, translations, missing = last
+                hit = np.isin(positions, taken)
+                if hit.any():
+                    keep = ~hit
+                    gone = set(map(id, compress(moved, hit.tolist())))
+                    last = self._last = (
+                        changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone
+                    )  # fmt: skip
         return last
 
     def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
@@ -401,9 +408,9 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self.apply_few(changed)
-        last = self._last
+        last = self._current_last()
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
-            _, positions, moved, translations, _, _ = self._last_lookups()  # type: ignore[misc]
+            _, positions, moved, translations, _ = last
         else:
             # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
             found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
@@ -414,7 +421,7 @@ class MovePlan:
             # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
             # splice that brings fresh ones, or a replacement, forgets these look-ups)
             missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
-            self._last = (changed, positions, moved, translations, missing, []) if len(moved) >= _MANY else None
+            self._last = (changed, positions, moved, translations, missing) if len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
