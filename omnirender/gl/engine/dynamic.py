@@ -33,6 +33,7 @@ __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_TX, _TY, _TZ = range(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # its three columns, one by one
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
@@ -97,9 +98,11 @@ class MovePlan:
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
         #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
-        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame and again when
-        #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
-        #: append new items and leave removed ones' places)
+        #: link, no shape-local matrix but the identity): asked of every item with the transform -> items map, of a
+        #: spliced item on its first few-moved frame, and again when its chain is another (a transform replaced);
+        #: while the entry holds, the item's row holds that matrix (the rows follow the chains), so a move writes
+        #: only its translation; an index names one item for the plan's life (splices append new items and leave
+        #: removed ones' places)
         self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
         #: per item index, whether its shape-local matrix is the identity (made from ``local`` at once when first
         #: asked; items spliced in later are asked one by one)
@@ -286,8 +289,11 @@ class MovePlan:
         users = self._users
         if users is None:
             users = self._users = {}
+            plain, translation_only = self._plain, self._translation_only
             for i, item in enumerate(self.items):
                 _add_user(users, item, i)
+                if i not in plain:  # (in the same pass: a frame moving a new item then finds its entry)
+                    plain[i] = (item.chain, translation_only(i, item))
         return users
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
@@ -407,7 +413,9 @@ class MovePlan:
         :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
         item without a batch or an instance set moved)."""
         self.rows_only = True
-        users = self._users_map()
+        users = self._users
+        if users is None:
+            users = self._users_map()
         index = self.index
         matrices = self.matrices
         positions: list[int] = []
@@ -417,12 +425,21 @@ class MovePlan:
             if k is None:
                 continue
             if t.__class__ is Translation:
-                matrices[k, :3, 3] = t.offset  # the rest of a translation's matrix is the identity already
+                # the rest of a translation's matrix is the identity already (three stores: no view of a slice)
+                x, y, z = t.offset
+                m = matrices[k]
+                m[0, 3] = x
+                m[1, 3] = y
+                m[2, 3] = z
             else:
                 matrices[k] = t.matrix
             positions.append(k)
-            for i in users.get(id(t), ()):
-                affected[i] = None
+            found = users.get(id(t))
+            if found:
+                if len(found) == 1:
+                    affected[found[0]] = None
+                else:
+                    affected.update(dict.fromkeys(found))
         if not positions:
             return 0
         if self._map is not None:
@@ -433,38 +450,49 @@ class MovePlan:
         for i in affected:
             item = items[i]
             chain = item.chain
-            only = plain.get(i)
-            if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
-                only = plain[i] = (chain, self._translation_only(i, item))
-            if only[1]:
-                # the model is the translation's matrix, written from its offset in plain floats (rows hold M
-                # transposed; the numbers the product below gives); the whole matrix, not only its translation:
-                # the row may hold another transform's (one replaced in the chain since it was written)
-                x, y, z = chain[0].offset
-                where, values = _MODEL, (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
-            else:
-                links = [k for k in self.chain[i].tolist() if k != identity]
-                model = matrices[links[0]]
-                for k in links[1:]:
-                    model = model @ matrices[k]
-                if local is not None:
-                    model = model @ local[i]
-                where, values = _MODEL, model.T.reshape(16)
             slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
-            if slot is None:  # an item without a batch (transparent, overlay): its own row
-                item.row[where] = values
-                self.rows_only = False
-                continue
-            batch, r = slot
-            batch.rows[r, where] = values
+            only = plain.get(i)
+            if only is not None and only[0] is chain and only[1] and slot is not None:
+                # the item's row was written as this chain's one translation's matrix (below): only the
+                # translation's three numbers change (rows hold M transposed: they lie at 12:15 of the model)
+                batch, r = slot
+                row = batch.rows[r]
+                x, y, z = chain[0].offset
+                row[_TX] = x
+                row[_TY] = y
+                row[_TZ] = z
+            else:
+                if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
+                    only = plain[i] = (chain, self._translation_only(i, item))
+                if only[1]:
+                    # the model is the translation's matrix, written from its offset in plain floats (the
+                    # numbers the product below gives); the whole matrix, not only its translation: the row may
+                    # hold another transform's (one replaced in the chain since it was written)
+                    x, y, z = chain[0].offset
+                    values: Any = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
+                else:
+                    links = [k for k in self.chain[i].tolist() if k != identity]
+                    model = matrices[links[0]]
+                    for k in links[1:]:
+                        model = model @ matrices[k]
+                    if local is not None:
+                        model = model @ local[i]
+                    values = model.T.reshape(16)
+                if slot is None:  # an item without a batch (transparent, overlay): its own row
+                    item.row[_MODEL] = values
+                    self.rows_only = False
+                    continue
+                batch, r = slot
+                batch.rows[r, _MODEL] = values
             batch.row_changed(r)
             found = rows_of.get(id(batch))
             if found is None:
                 rows_of[id(batch)] = (batch, [r])
             else:
                 found[1].append(r)
+        moved_rows = self.moved_rows
         for batch, where in rows_of.values():
-            self.moved_rows.append((batch, np.array(where, np.intp)))
+            moved_rows.append((batch, np.array(where, np.intp)))
         if not self.instance_items:
             return len(affected)
         moved = self._apply_instances(set(positions))
