@@ -73,9 +73,26 @@ def _channel(c: float) -> float:
 
 
 def linear_rgb(rgb: Any) -> tuple[float, float, float]:
-    """The first three values of an sRGB colour as a linear (r, g, b) tuple of Python floats (no numpy: fast)."""
+    """The first three values of an sRGB colour as a linear (r, g, b) tuple of Python floats (no numpy: fast).
+
+    Colours given as tuples (what the attributes hold) are remembered: a material's ambient, specular and
+    emission are most often the same few (a Material replaced per frame converts only its new colour)."""
+    if rgb.__class__ is tuple:
+        found = _LINEAR.get(rgb)
+        if found is not None:
+            return found
     r, g, b = rgb[:3]
-    return (_channel(float(r)), _channel(float(g)), _channel(float(b)))
+    # (+ 0.0: a -0.0 gives 0.0, as the 0.0 it equals as a key does, whichever was remembered first)
+    out = (_channel(float(r)) + 0.0, _channel(float(g)) + 0.0, _channel(float(b)) + 0.0)
+    if rgb.__class__ is tuple:
+        if len(_LINEAR) >= 256:
+            _LINEAR.clear()
+        _LINEAR[rgb] = out
+    return out
+
+
+#: sRGB tuple -> its linear_rgb (bounded: cleared when full)
+_LINEAR: dict[tuple, tuple[float, float, float]] = {}
 
 
 def intensity_scale(light: Any, position: np.ndarray, reference: np.ndarray) -> float:

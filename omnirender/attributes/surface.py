@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ..core import AttributePainter, default_for
+from ..core import AttributePainter, default_for, version_key
 from .appearance import BumpMap, Color, Material, MultiTexture, PBRMaterial, Texture
 from .photometry import linear_rgb, srgb_to_linear
 
@@ -166,23 +166,19 @@ def resolve_surface(stack: Sequence[Any]) -> tuple[Any, Any]:
     return material, color
 
 
-def _version(a: Any) -> Any:
-    return None if a is None else (id(a), a.version)
-
-
 def appearance_key(stack: Sequence[Any], texture: Any = None, layers: Any = None, bump: Any = None) -> tuple:
     """A hashable key that changes when anything :func:`resolve_appearance` reads changes."""
     material, color = resolve_surface(stack)
     slots = material.textures if isinstance(material, PBRMaterial) else ()
     return (
-        _version(material),
-        _version(color),
-        _version(texture),
-        _version(layers),
-        None if layers is None else tuple(_version(layer.texture) for layer in layers.layers),
-        _version(bump),
-        None if bump is None else _version(bump.texture),
-        tuple(_version(t) for t in slots),
+        version_key(material),
+        version_key(color),
+        version_key(texture),
+        version_key(layers),
+        None if layers is None else tuple(version_key(layer.texture) for layer in layers.layers),
+        version_key(bump),
+        None if bump is None else version_key(bump.texture),
+        tuple(version_key(t) for t in slots),
     )
 
 

@@ -4,7 +4,16 @@ This package imports no graphics library and nothing else of omnirender.
 """
 
 from .camera import Camera, look_at_matrix, orthographic_matrix, perspective_matrix
-from .component import Attribute, ChangeJournal, MonoAttribute, PolyAttribute, RenderingComponent, Shape, category_of
+from .component import (
+    Attribute,
+    ChangeJournal,
+    MonoAttribute,
+    PolyAttribute,
+    RenderingComponent,
+    Shape,
+    category_of,
+    version_key,
+)
 from .context import RenderingContext
 from .drops import DroppedContentError, DroppedContentWarning
 from .engine import Engine
@@ -43,6 +52,7 @@ __all__ = [
     "MonoAttribute",
     "PolyAttribute",
     "category_of",
+    "version_key",
     "Handler",
     "ShapePainter",
     "ShapeSimplifier",

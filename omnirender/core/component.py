@@ -20,7 +20,7 @@ import weakref
 from collections import deque
 from collections.abc import Callable
 from itertools import chain
-from operator import attrgetter, is_
+from operator import attrgetter, indexOf, is_
 from typing import Any
 
 __all__ = [
@@ -35,7 +35,21 @@ __all__ = [
     "MonoAttribute",
     "PolyAttribute",
     "category_of",
+    "version_key",
 ]
+
+
+def version_key(component: Any) -> tuple[Any, int] | None:
+    """``(component, its version)``, or None for None: a key for memos of what was made from a component.
+
+    It changes when the component changes, and it holds the component itself
+    (compared by identity), not its ``id()``: a memo keyed by ``(id, version)``
+    outlives the components it was made from, and a new component made at a
+    dead one's address, at the same version (every new component starts at 0),
+    found the dead one's entry (a glTF export gave a colour group another
+    group's material, at random).
+    """
+    return None if component is None else (component, component.version)
 
 
 class ChangeJournal:
@@ -51,6 +65,7 @@ class ChangeJournal:
     __slots__ = ("_changed", "_edits", "_held", "__weakref__")
 
     def __init__(self) -> None:
+        flush_changes()  # changes noted for later before it was made are not its to tell
         changed: dict[int, RenderingComponent] = {}
         edits: list[tuple[Any, str, Any, int] | None] = []
         #: [a batch of changes noted for later told as a whole (_Bulk, or None), the last such batch (kept), the
@@ -69,7 +84,11 @@ class ChangeJournal:
     def drain(self) -> list[RenderingComponent]:
         """The components changed since the last drain, in the order they were told of; empties the journal.
 
-        Changes noted for later (:func:`note_later`) are told first.
+        Changes noted for later (:func:`note_later`) are told first.  The list
+        is the caller's to read, not to modify: when a simulation's batch of
+        changes (see :func:`flush_changes`) is all there is, it is the batch's
+        own list, the same object while the same components move frame after
+        frame (a reader may recognise it by identity).
         """
         flush_changes()
         held = self._held
@@ -166,9 +185,9 @@ def flush_changes() -> None:
     A batch of at least :data:`BULK_MIN` distinct components (a simulation
     loop's setters) is told to a journal with nothing else in it as a whole,
     without a store per component; the same components again, in the same
-    order, with no component gaining or losing an owner since, reuse the
-    owners collected for the last such batch (a simulation moves the same
-    objects every frame).
+    order, reuse the owners collected for the last such batch (a simulation
+    moves the same objects every frame), patched when some of them gained
+    or lost an owner since (a node's transform replaced, a node removed).
     """
     pending = _PENDING
     if not pending:
@@ -218,6 +237,9 @@ def flush_changes() -> None:
     else:
         for owner in owners:
             owner.touch()
+    if bulk is not None and owners.base is not None:  # (told: the owners taken out are not kept alive by it)
+        owners.base = None
+        owners.gone = owners.came = []
 
 
 #: Batches of at least this many components noted for later are told to journals as a whole (flush_changes).
@@ -225,9 +247,22 @@ BULK_MIN = 256
 
 
 class _Owners(list):  # type: ignore[type-arg]
-    """The owners of a batch of components: a list the owners' touch may recognise again (weakly referenced)."""
+    """The owners of a batch of components: a list the owners' touch may recognise again (weakly referenced).
 
-    __slots__ = ("__weakref__",)
+    One made from the last batch's owners when some of its components
+    gained or lost an owner since (:func:`_bulk_of`) says how, until its
+    owners are told: ``base`` (that list), ``gone`` (owners taken out, one
+    entry per occurrence) and ``came`` (owners added); the owners' touch
+    may follow what it kept for ``base`` instead of a pass over the list.
+    """
+
+    __slots__ = ("base", "gone", "came", "__weakref__")
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.base: Any = None
+        self.gone: list[Any] = []
+        self.came: list[Any] = []
 
 
 class _Bulk:
@@ -240,9 +275,11 @@ class _Bulk:
 
     __slots__ = ("components", "owners", "ids", "whole", "__weakref__")
 
-    def __init__(self, components: list[Any]) -> None:
+    def __init__(self, components: list[Any], owners: _Owners | None = None) -> None:
         self.components = components
-        self.owners = _Owners(chain.from_iterable(filter(None, map(_OWNERS_OF, components))))
+        if owners is None:
+            owners = _Owners(chain.from_iterable(filter(None, map(_OWNERS_OF, components))))
+        self.owners = owners
         self.ids: set[int] | None = None
         self.whole = False
 
@@ -255,8 +292,9 @@ class _Bulk:
 
 #: The last batch seen (weakly: the journals told of it keep it), for :func:`_bulk_of`.
 _LAST_BULK: list[Any] = [None]
-#: ids of the components that gained or lost an owner since :func:`_bulk_of` last looked (None: too many)
-_RELINKED: list[list[int] | None] = [[]]
+#: the components that gained or lost an owner since :func:`_bulk_of` last looked, in order: ``(id(component),
+#: a weak reference to the owner or None, +1 gained / -1 lost)`` (None: too many)
+_RELINKED: list[list[tuple[int, Any, int]] | None] = [[]]
 #: components :data:`_RELINKED` lists before it only records that too many changed
 RELINKED_LIMIT = 1024
 #: components told to a journal before a batch told as a whole that it keeps aside (more: the batch is stored
@@ -274,18 +312,54 @@ def _bulk_of(batch: list[Any]) -> _Bulk | None:
     last = ref() if ref is not None else None
     relinked = _RELINKED[0]
     _RELINKED[0] = []
-    if (
-        last is not None
-        and len(last.components) == len(batch)
-        and all(map(is_, batch, last.components))
-        and relinked is not None
-        and (not relinked or (last.distinct() and last.ids.isdisjoint(relinked)))  # type: ignore[union-attr]
-    ):
-        last.whole = last.distinct()
-        return last
+    if last is not None and len(last.components) == len(batch) and all(map(is_, batch, last.components)):
+        if relinked is not None and not relinked:
+            last.whole = last.distinct()
+            return last
+        if relinked is not None and last.distinct():
+            ids = last.ids
+            assert ids is not None
+            mine = [event for event in relinked if event[0] in ids]
+            if not mine:
+                last.whole = True
+                return last
+            owners = _patched(last.owners, mine)
+            if owners is not None:  # (the same components, some with other owners: the owners patched)
+                bulk = _Bulk(last.components, owners)
+                bulk.ids = ids
+                bulk.whole = True
+                _LAST_BULK[0] = weakref.ref(bulk)
+                return bulk
     bulk = _Bulk(batch)
     _LAST_BULK[0] = weakref.ref(bulk)
     return bulk
+
+
+def _patched(owners: _Owners, events: list[tuple[int, Any, int]]) -> _Owners | None:
+    """A copy of ``owners`` with the owners that ``events`` (of components of its batch) say were gained added
+    and those lost taken out (one occurrence each), saying so (:class:`_Owners`); None when an event names an
+    owner that is gone or not among them."""
+    out = _Owners(owners)
+    out.base = owners  # (until told: flush_changes lets it go)
+    for _, ref, sign in events:
+        owner = ref() if ref is not None else None
+        if owner is None:
+            return None
+        if sign > 0:
+            out.append(owner)
+            out.came.append(owner)
+            continue
+        try:
+            at = indexOf(out, owner)
+        except ValueError:
+            return None
+        if out[at] is not owner:  # (an owner that compares equal to another: found again by identity)
+            at = next((i for i, o in enumerate(out) if o is owner), -1)
+            if at < 0:
+                return None
+        del out[at]
+        out.gone.append(owner)
+    return out
 
 
 def _tell_whole(changed: dict[int, Any], held: list[Any], bulk: _Bulk) -> None:
@@ -304,12 +378,16 @@ def _tell_whole(changed: dict[int, Any], held: list[Any], bulk: _Bulk) -> None:
     changed.update(zip(map(id, bulk.components), bulk.components, strict=True))
 
 
-def _relinked(component: Any) -> None:
-    """``component`` gained or lost an owner: a batch holding it collects its owners again."""
+def _relinked(component: Any, owner: Any, sign: int) -> None:
+    """``component`` gained (``sign`` +1) or lost (-1) ``owner``: a batch holding it has its owners patched."""
     found = _RELINKED[0]
     if found is not None:
         if len(found) < RELINKED_LIMIT:
-            found.append(id(component))
+            try:
+                ref = weakref.ref(owner)
+            except TypeError:  # (an owner without weak references: the batch's owners are collected again)
+                ref = None
+            found.append((id(component), ref, sign))
         else:
             _RELINKED[0] = None
 
@@ -337,6 +415,8 @@ def _drain_held(changed: dict[int, Any], held: list[Any]) -> list[Any]:
         changed.clear()
         return out
     held[0] = held[2] = None
+    if not before and not changed:
+        return bulk.components  # (the batch's own list: the same object while the same components move)
     out = list(before) if before else []
     out.extend(bulk.components)
     if changed:
@@ -437,7 +517,7 @@ class RenderingComponent:
         self._detach(owner)
 
     def _attach(self, owner: Any) -> None:
-        _relinked(self)
+        _relinked(self, owner, 1)
         owners = self._owners
         if owners is None:
             object.__setattr__(self, "_owners", [owner])
@@ -445,12 +525,12 @@ class RenderingComponent:
             owners.append(owner)
 
     def _detach(self, owner: Any) -> None:
-        _relinked(self)
         owners = self._owners
         if owners:
             for i, o in enumerate(owners):
                 if o is owner:
                     del owners[i]
+                    _relinked(self, owner, -1)
                     break
 
     # -- pickling and copying ----------------------------------------------

@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 
 from .component import (  # _PENDING: the list note_later appends to (Translation's setter appends inline)
+    _JOURNALS,
     _PENDING,
     PENDING_LIMIT,
     MonoAttribute,
     RenderingComponent,
     _Owners,
     flush_changes,
-    note_change,
     note_later,
 )
 from .limits import MAX_MAGNITUDE, MIN_MAGNITUDE, as_float, check_array_magnitude
@@ -168,10 +168,8 @@ class Transform(MonoAttribute):
         Every reader of a node's version or of a journal sees the change.
         """
         _set_version(self, self._version + 1)
-        if self._owners:
+        if self._owners or _JOURNALS:  # (also in no node while a journal lives: the same transforms, the same batch)
             note_later(self)
-        else:
-            note_change(self)  # in no node: only the journals have to hear of it
 
     def _changed(self) -> None:
         """The parameters changed: forget the matrix (assigning the public parameter touches the owners)."""
@@ -209,19 +207,22 @@ class Matrix(Transform):
         if m.shape != (4, 4):
             raise ValueError(f"Matrix: matrix must be 4x4, got shape {m.shape}")
         rows = m.tolist()  # the checks in Python floats: a tenth of numpy's per-call cost for 16 numbers
-        # (comparisons are False for NaN: a non-finite entry fails this and takes the checks that name it)
-        if not all(-_MAX <= v <= _MAX for row in rows for v in row):
+        (a, b, c, x), (d, e, f, y), (g, h, i, z), last = rows
+        values = (a, b, c, x, d, e, f, y, g, h, i, z, *last)
+        # (a NaN or an infinity makes the sum not finite: then the checks that name it; a finite sum means
+        # every entry is finite, so the largest magnitude decides the bound)
+        if not (math.isfinite(sum(values)) and max(map(abs, values)) <= _MAX):
             if not np.all(np.isfinite(m)):
                 raise ValueError("Matrix: matrix must be finite")
             check_array_magnitude("Matrix", "matrix", m)
-        if not _invertible(m[:3, :3]):
+        if not (_rank3(a, b, c, d, e, f, g, h, i) or _invertible(m[:3, :3])):
             raise ValueError(
                 "Matrix: the upper-left 3x3 part is singular (it flattens space, e.g. all zeros); give an "
                 "invertible matrix (hide a subgraph with a group mask instead of scaling it to nothing)"
             )
-        if rows[3] != [0.0, 0.0, 0.0, 1.0]:
+        if last != [0.0, 0.0, 0.0, 1.0]:
             raise ValueError(
-                f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(rows[3])}; "
+                f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(last)}; "
                 "projective matrices are not supported by every engine"
             )
         self._set_matrix(m)
@@ -231,18 +232,21 @@ class Matrix(Transform):
 
 
 def _invertible(m3: np.ndarray) -> bool:
-    """``np.linalg.matrix_rank(m3) == 3``, without its SVD when the determinant already decides.
+    """``np.linalg.matrix_rank(m3) == 3``, without its SVD when the determinant already decides (:func:`_rank3`)."""
+    return _rank3(*m3.ravel().tolist()) or bool(np.linalg.matrix_rank(m3) == 3)
+
+
+def _rank3(a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float) -> bool:
+    """Whether the 3x3 matrix of rows ``(a, b, c), (d, e, f), (g, h, i)`` surely has rank 3 (False: not known;
+    ``np.linalg.matrix_rank`` decides).
 
     The smallest singular value is at least ``|det| / |m3|_F**2`` and the rank's
     tolerance is ``3 eps`` times the largest, at most ``|m3|_F``: a determinant
     above ``64 eps |m3|_F**3`` (the margin covers its rounding) means rank 3.
     """
-    (a, b, c), (d, e, f), (g, h, i) = m3.tolist()
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     norm = math.sqrt(a * a + b * b + c * c + d * d + e * e + f * f + g * g + h * h + i * i)
-    if abs(det) > 64.0 * _EPS * norm**3:
-        return True
-    return bool(np.linalg.matrix_rank(m3) == 3)
+    return abs(det) > 64.0 * _EPS * norm**3
 
 
 _EPS = float(np.finfo(np.float64).eps)
@@ -312,12 +316,12 @@ class Translation(Transform):
                 bound = self._bound
                 if bound is not None:  # its own value holds until the array's next touch
                     _set_synced(self, bound._version)
-                if self._owners:
+                # (also without owners while a journal lives: a loop over the same translations gives the same
+                # batch after one of them left its node, whose owners are patched, not collected again)
+                if self._owners or _JOURNALS:
                     _append(self)
                     if len(_PENDING) > PENDING_LIMIT:
                         flush_changes()
-                else:
-                    note_change(self)
                 return
         RenderingComponent.__setattr__(self, name, value)
 

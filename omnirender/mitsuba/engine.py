@@ -23,7 +23,7 @@ from ..attributes.conversion import native_to
 from ..attributes.photometry import ambient_total, linear_to_srgb, srgb_to_linear
 from ..attributes.surface import Appearance, appearance_key, engine_appearance, resolve_surface
 from ..attributes.texturing import bake_layers, scaled_image
-from ..core import Camera, Engine, Technique
+from ..core import Camera, Engine, Technique, version_key
 from . import convert
 from ._mi import mitsuba, transform
 from .attributes import BSDF, Emitter
@@ -204,9 +204,9 @@ class MitsubaEngine(Engine):
         user = self.mono(BSDF)
         mirror = self.mono(Mirror)
         key = (
-            None if user is None else (id(user), user.version),
+            version_key(user),
             self._appearance_key(texcoords),
-            None if mirror is None else (id(mirror), mirror.version),
+            version_key(mirror),
             two_sided,
             vertex_colors,
             texcoords,

@@ -36,6 +36,7 @@ import numpy as np
 from ..attributes.photometry import srgb_to_linear
 from ..attributes.surface import Appearance, appearance_key, engine_appearance, vertex_rgba
 from ..attributes.texturing import bake_layers, channel_mean, luminance, normal_to_height, scaled_image
+from ..core import version_key
 from . import sdl
 from .attributes import Finish, Normal, Pigment
 
@@ -108,7 +109,7 @@ def _active_key(engine: Any, uv: bool) -> tuple:
 
     mono = engine.mono
     texture = (mono(Texture), mono(MultiTexture), mono(BumpMap)) if uv else (None, None, None)
-    extra = tuple((id(a), a.version) if a is not None else None for a in (mono(Finish), mono(Pigment), mono(Normal)))
+    extra = tuple(version_key(a) for a in (mono(Finish), mono(Pigment), mono(Normal)))
     return (appearance_key(engine.surface_stack, *texture), extra, uv)
 
 
@@ -173,9 +174,7 @@ def _cut_out(engine: Any, app: Appearance) -> str:
     alpha = tex.image_in("POV-Ray", engine.node_path)[:, :, 3].astype(np.float64) / 255.0 * app.alpha
     mask = np.repeat(np.where(alpha >= app.alpha_cutoff, 255, 0).astype(np.uint8)[:, :, None], 3, 2)
     clamp = _clamps(tex)
-    name = engine.resource(
-        ("mask", id(tex), tex.version, app.alpha_cutoff), _clamp_padded(mask) if clamp else mask, ".png"
-    )
+    name = engine.resource(("mask", version_key(tex), app.alpha_cutoff), _clamp_padded(mask) if clamp else mask, ".png")
     opaque = _texture_body(engine, replace(app, alpha_mode="opaque"), True)
     once = " once" if clamp else ""
     pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)}{once} }}{_uv_transform(tex, engine)}"
@@ -195,7 +194,7 @@ def _metallic_map(engine: Any, app: Appearance, mr: Any) -> str:
     dielectric = replace(app, metallic=0.0, roughness=rough, metallic_roughness_texture=None)
     metal = replace(app, roughness=rough, metallic_roughness_texture=None)
     blue = np.repeat(pixels[:, :, 2:3], 3, axis=2)
-    name = engine.resource(("metallic", id(mr), mr.version), blue, ".png")
+    name = engine.resource(("metallic", version_key(mr)), blue, ".png")
     pattern = f"uv_mapping image_pattern {{ png {sdl.file_name(name)} interpolate 2 }}{_uv_transform(mr)}"
     low, high = _texture_body(engine, dielectric, True), _texture_body(engine, metal, True)
     return f"{pattern} texture_map {{ [0 {low}] [1 {high}] }}"
@@ -232,11 +231,11 @@ def _normal(engine: Any, app: Appearance, uv: bool) -> str:
     if app.bump is not None and app.normal_texture is None:
         tex = app.bump.texture
         heights, size = luminance(tex.image_in("POV-Ray", engine.node_path)), float(app.bump.scale)
-        key = ("bump", id(tex), tex.version)
+        key = ("bump", version_key(tex))
     else:
         tex = app.normal_texture
         heights, size = normal_to_height(tex.image_in("POV-Ray", engine.node_path), app.normal_scale)
-        key = ("normal", id(tex), tex.version, app.normal_scale)
+        key = ("normal", version_key(tex), app.normal_scale)
     if size <= 0.0:
         return ""
     image = np.repeat(np.round(heights * 255.0).astype(np.uint8)[:, :, None], 3, axis=2)
@@ -263,7 +262,7 @@ def _image_file(
     if plain and path is not None and _suffix(path) != "":
         return engine.resource(("path", path), path, suffix=_suffix(path))
     key = (role, id(texture), getattr(texture, "version", 0), tuple(np.round(factor, 6)), mode, cutoff)
-    key += tuple((id(x.texture), x.texture.version, x.blend, x.opacity) for x in layers)
+    key += tuple((version_key(x.texture), x.blend, x.opacity) for x in layers)
     found = engine._resource_names.get(key)
     if found is not None:
         return found

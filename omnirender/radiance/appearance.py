@@ -36,6 +36,7 @@ import numpy as np
 from ..attributes import Material, PBRMaterial, Texture
 from ..attributes.photometry import phong_roughness, srgb_to_linear
 from ..attributes.surface import engine_appearance
+from ..core import version_key
 from . import rad
 from .attributes import Material as RadMaterial
 
@@ -136,7 +137,7 @@ def resolve_look(material: Any, color: Any, vertex_rgba: Any = None) -> Look:
 
 
 def _key(*attrs: Any) -> tuple:
-    return tuple((id(a), a.version) if a is not None else None for a in attrs)
+    return tuple(version_key(a) for a in attrs)
 
 
 def modifier(engine: Any, *, uv: bool = False, vertex_rgba: Any = None, sink: list[str] | None = None) -> str:
@@ -265,11 +266,11 @@ def _uv_expressions(texture: Texture, image: np.ndarray) -> tuple[str, str]:
 def _texture_pattern(engine: Any, texture: Texture, sink: list[str] | None) -> str:
     image = _texture_image(engine, texture)
     u, v = _uv_expressions(texture, image)
-    key = ("texture", id(texture), texture.version, id(sink) if sink is not None else None)
+    key = ("texture", version_key(texture), id(sink) if sink is not None else None)
 
     def make(ident: str) -> str:
         name = engine.add_picture(
-            (id(texture), texture.version, "rgb"),
+            (version_key(texture), "rgb"),
             lambda: _picture(texture, srgb_to_linear(image[:, :, :3].astype(np.float64) / 255.0)),
         )
         return rad.primitive("void", "colorpict", ident, ("red", "green", "blue", name, ".", u, v))
@@ -290,7 +291,7 @@ def _alpha_cutout(
         if cutoff is not None:
             alpha = (alpha >= cutoff).astype(np.float32)
         name = engine.add_picture(
-            (id(texture), texture.version, "alpha", cutoff),
+            (version_key(texture), "alpha", cutoff),
             lambda: _picture(texture, np.repeat(alpha[:, :, None], 3, 2)),
         )
         return rad.primitive("void", "mixpict", ident, (inner, "void", "red", name, ".", u, v))

@@ -26,7 +26,7 @@ from ..attributes.environment import is_scene_background
 from ..attributes.photometry import linear_to_srgb
 from ..attributes.shadowing import check_light_shadows, register_shadowing_warnings
 from ..attributes.surface import engine_appearance, track_surfaces, vertex_rgba
-from ..core import AttributePainter, LightSwitch, ShapePainter, default_for
+from ..core import AttributePainter, LightSwitch, ShapePainter, default_for, version_key
 from ..geometry.clip import clip_segments, clip_triangles, keep_points
 from ..geometry.pixels import pixel_size
 from ..shapes import Box, Cone, Cylinder, Disk, LineSet, PointSet, Polygon, Rectangle, Sphere, TriangleSet
@@ -274,7 +274,7 @@ class TriangleSetPainter(ShapePainter):
         if m is None:
             return
         planes = engine.clip_planes()
-        key = (id(shape), shape.version, m.tobytes(), flat, textured, tuple(r.tobytes() for r in planes))
+        key = (version_key(shape), m.tobytes(), flat, textured, tuple(r.tobytes() for r in planes))
         if colors is None:
             name = engine.add_mesh(key, lambda: _mesh_obj(shape, engine, m, planes, flat, textured))
             if name is not None:
@@ -298,7 +298,7 @@ def _appearance_key(engine: RadianceEngine) -> tuple:
 
     material, color = engine.appearance()
     items = (engine.mono(RadMaterial), engine_appearance(engine).texture, material, color)
-    return tuple((id(a), a.version) if a is not None else None for a in items)
+    return tuple(version_key(a) for a in items)
 
 
 def _mesh_surface(engine: RadianceEngine, file_name: str, mod: str) -> None:

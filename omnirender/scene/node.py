@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import threading
 import weakref
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Iterable, Iterator
-from itertools import chain
+from itertools import chain, repeat
 from operator import attrgetter
 from typing import Any
 
@@ -257,8 +257,20 @@ class Node:
         self._own += 1
         self._structure += 1
         self._sstamp = epoch
-        if self._parents:
-            _bump_ancestors(self._parents, epoch, "_structure", "_sstamp")
+        parents = self._parents
+        if len(parents) == 1:  # (a chain of single parents, walked as touch walks it; else the general walk)
+            node = parents[0]
+            while node._sstamp != epoch:
+                node._structure += 1
+                node._sstamp = epoch
+                up = node._parents
+                if len(up) != 1:
+                    if up:
+                        _bump_ancestors(up, epoch, "_structure", "_sstamp")
+                    return
+                node = up[0]
+        elif parents:
+            _bump_ancestors(parents, epoch, "_structure", "_sstamp")
 
     # -- contents ---------------------------------------------------------
     def add(self, item: Any) -> Any:
@@ -690,7 +702,9 @@ def touch_nodes(owners: list[Any]) -> None:
             owner.touch()
         return
     try:
-        deque(map(_SET_VERSION, owners, map(_PLUS_ONE, map(_VERSION_OF, owners))), 0)
+        # every owner's version moves past its own: to one more than the highest among them (a version only has
+        # to differ from what an observer read; a single value costs no addition per node)
+        deque(map(_SET_VERSION, owners, repeat(max(map(_VERSION_OF, owners)) + 1)), 0)
     except (TypeError, AttributeError):  # not all nodes: each its own way (a node bumped twice moved all the same)
         for owner in owners:
             owner.touch()
@@ -710,30 +724,84 @@ RELINKED_LIMIT = 1024
 _LAST_PARENTS: list[Any] = [None]
 
 
+class _KeptParents:
+    """What :func:`_parents_of` keeps of its last call: the owners (a weak reference to their list, their ids),
+    their distinct parents (id -> weak reference, in order) and, once asked, how many owners each parent has."""
+
+    __slots__ = ("ids", "owners", "parents", "owner_ids", "counts")
+
+    def __init__(self, ids: list[int] | None, owners: Any, parents: dict[int, Any], owner_ids: set[int]) -> None:
+        self.ids = ids
+        self.owners = owners
+        self.parents = parents
+        self.owner_ids = owner_ids
+        self.counts: Counter[int] | None = None
+
+    def alive(self) -> list[Node] | None:
+        parents = [ref() for ref in self.parents.values()]
+        return None if None in parents else parents  # type: ignore[return-value]
+
+
 def _parents_of(owners: list[Node]) -> list[Node]:
     """The distinct parents of ``owners``: those of the last call when the same nodes come again (a simulation
     moves the same nodes every frame) and none of them gained or lost a parent since.
 
     The same list object as the last call's (the owners a change batch kept, ``core.component``) is known
-    without a pass over it."""
-    last = _LAST_PARENTS[0]
+    without a pass over it; a list made from it with a few owners taken out or added (its ``base``, ``gone``
+    and ``came``: some of the batch's components changed hands) is followed from what was kept for it."""
+    last: _KeptParents | None = _LAST_PARENTS[0]
     relinked = _RELINKED[0]
     _RELINKED[0] = []
-    if last is not None and (relinked is None or not last[4].isdisjoint(relinked)):
+    if last is not None and (relinked is None or not last.owner_ids.isdisjoint(relinked)):
         last = None  # one of the owners gained or lost a parent
-    if last is not None and last[3] is not None and last[3]() is owners:
-        parents = [ref() for ref in last[2]]
-        if None not in parents:
-            return parents  # type: ignore[return-value]
+    if last is not None and last.owners is not None:
+        kept = last.owners()
+        if kept is owners:
+            parents = last.alive()
+            if parents is not None:
+                return parents
+        elif kept is not None and getattr(owners, "base", None) is kept:
+            parents = _follow(last, kept, owners)
+            if parents is not None:
+                return parents
     ids = list(map(id, owners))  # ids, not the nodes: the cache keeps no node alive
-    if last is not None and last[0] == ids:
-        parents = [ref() for ref in last[2]]
-        if None not in parents:
-            _LAST_PARENTS[0] = (ids, None, last[2], _weak(owners), last[4])
-            return parents  # type: ignore[return-value]
+    if last is not None and last.ids == ids:
+        parents = last.alive()
+        if parents is not None:
+            last.owners = _weak(owners)
+            return parents
     parents = list(dict.fromkeys(chain.from_iterable(map(_PARENTS_OF, owners))))  # nodes hash by identity
-    _LAST_PARENTS[0] = (ids, None, [weakref.ref(p) for p in parents], _weak(owners), set(ids))
+    _LAST_PARENTS[0] = _KeptParents(ids, _weak(owners), {id(p): weakref.ref(p) for p in parents}, set(ids))
     return parents
+
+
+def _follow(last: _KeptParents, kept: list[Node], owners: Any) -> list[Node] | None:
+    """The distinct parents of ``owners``, made from ``kept`` (the list ``last`` was kept for) by taking out the
+    owners in ``owners.gone`` and adding those in ``owners.came``: each parent's count of owners follows; a parent
+    none is left below leaves.  ``last`` is made ``owners``'; None when a parent died."""
+    counts = last.counts
+    if counts is None:
+        counts = last.counts = Counter(map(id, chain.from_iterable(map(_PARENTS_OF, kept))))
+    parents = last.parents
+    for node in owners.gone:
+        for p in node._parents:
+            k = id(p)
+            left = counts[k] - 1
+            if left > 0:
+                counts[k] = left
+            else:
+                del counts[k]
+                parents.pop(k, None)
+    for node in owners.came:
+        for p in node._parents:
+            k = id(p)
+            counts[k] += 1
+            if k not in parents:
+                parents[k] = weakref.ref(p)
+        last.owner_ids.add(id(node))  # (the owners gone stay in it: a parent change of one asks again, no harm)
+    last.ids = None
+    last.owners = _weak(owners)
+    return last.alive()
 
 
 def _relinked(node: Node) -> None:

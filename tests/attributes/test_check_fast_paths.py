@@ -60,3 +60,24 @@ def test_invertibility_agrees_with_the_matrix_rank():
         assert _invertible(m) == (np.linalg.matrix_rank(m) == 3), m
     with pytest.raises(ValueError, match="singular"):
         om.Matrix(np.diag([1.0, 1e-17, 1.0, 1.0]))
+
+
+@pytest.mark.parametrize(
+    "entry, message", [(float("nan"), "finite"), (float("inf"), "finite"), (-float("inf"), "finite"), (2e15, "at most")]
+)
+@pytest.mark.parametrize("place", [(0, 0), (1, 3), (2, 1)])
+def test_a_matrix_entry_the_fast_check_declines_gets_the_general_message(entry, message, place):
+    m = np.eye(4)
+    m[place] = entry
+    with pytest.raises(ValueError, match=f"Matrix: matrix must be {message}"):
+        om.Matrix(m)
+
+
+def test_matrix_entries_at_the_limit_and_sums_beyond_it_are_decided_as_each_entry():
+    at_limit = np.diag([1e15, -1e15, 1e15, 1.0])
+    at_limit[:3, 3] = (-1e15, 1e15, 0.5)
+    assert np.array_equal(om.Matrix(at_limit).matrix, at_limit)  # the sum of the entries is no entry
+    huge = np.full((4, 4), 1e300)  # the sum overflows: the general checks name the magnitude
+    huge[3] = (0.0, 0.0, 0.0, 1.0)
+    with pytest.raises(ValueError, match="Matrix: matrix must be at most"):
+        om.Matrix(huge)

@@ -32,7 +32,7 @@ def move(translations: list[om.Translation], dy: float) -> None:
 def test_a_batch_is_drained_in_order_once_each_with_changes_told_before_and_after_it() -> None:
     scene, nodes, moves = scene_of()
     color = om.Color(0.5, 0.5, 0.5)
-    loose = om.Translation()  # in no node: told at once, not noted for later
+    loose = om.Translation()  # in no node: noted for later all the same (a journal lives), told first
     journal = ChangeJournal()
     for frame in range(4):
         loose.offset = (float(frame), 0.0, 0.0)  # told before the batch
@@ -90,3 +90,69 @@ def test_every_owner_hears_of_the_batch_also_after_components_and_nodes_moved() 
             moved = id(node) in owners or any(id(c) in owners for c in node.children) or node is scene
             assert (node.version != versions[id(node)]) == moved, (frame, node.path)
         assert journal.drain() == moves
+
+
+def ancestors(node: om.Node) -> set[int]:
+    """ids of ``node``'s ancestors (every path up)."""
+    out: set[int] = set()
+    stack = list(node.parents)
+    while stack:
+        n = stack.pop()
+        if id(n) not in out:
+            out.add(id(n))
+            stack.extend(n.parents)
+    return out
+
+
+def test_a_loop_over_components_that_changed_hands_bumps_exactly_their_owners_and_ancestors() -> None:
+    """The same components set frame after frame while some leave their node (and are still set: the user's
+    list keeps them), go to another node, come back, or their node moves: the batch's owners are patched, not
+    collected again, and still every owner and every ancestor of one is bumped, and no other node (a group whose
+    one moved node lost its translation is not); the journal drains the same list object while nothing else
+    changes."""
+    scene = om.Node("scene")
+    groups = [scene.add(om.Node(f"g{g}")) for g in range(3)]
+    nodes = [groups[i % 2].add(om.Node(f"n{i}", [om.Translation(float(i), 0.0, 0.0), om.Sphere()])) for i in range(N)]
+    solo = groups[2].add(om.Node("solo", [om.Translation(0.0, 5.0, 0.0), om.Sphere()]))
+    spare = scene.add(om.Node("spare", [om.Sphere()]))
+    moves = [node.items[0] for node in (*nodes, solo)]
+    everything = [scene, *groups, *nodes, solo, spare]
+    matrix = om.Matrix(om.Translation(1.0, 2.0, 3.0).matrix)
+    journal = ChangeJournal()
+    drained = None
+    for frame in range(9):
+        if frame == 2:  # the solo node's translation leaves it (the loop goes on setting it): solo and g2 rest
+            solo.remove(moves[-1])
+        if frame == 3:  # it comes to the spare node, below the scene
+            spare.insert(0, moves[-1])
+        if frame == 4:  # two translations change places between nodes of two groups
+            a, b = nodes[4], nodes[7]
+            ta, tb = moves[4], moves[7]
+            a.remove(ta)
+            b.remove(tb)
+            a.insert(0, tb)
+            b.insert(0, ta)
+        if frame == 5:  # a node holding one goes below another group (its parents change: found again)
+            groups[0].remove(nodes[10])
+            groups[2].add(nodes[10])
+        if frame == 6:  # a node's translation replaced by a Matrix (the old one still set by the loop)
+            nodes[12].remove(moves[12])
+            nodes[12].insert(0, matrix)
+        if frame == 7:  # a whole group leaves the scene: its nodes still own theirs (bumped, the scene not by it)
+            scene.remove(groups[1])
+        versions = {id(n): n.version for n in everything}
+        move(moves, 0.1)
+        flush_changes()
+        moved: set[int] = set()
+        for t in moves:
+            for owner in t.owners:
+                moved.add(id(owner))
+                moved |= ancestors(owner)
+        for node in everything:
+            assert (node.version != versions[id(node)]) == (id(node) in moved), (frame, node.path)
+        out = journal.drain()
+        assert out == moves, frame
+        if frame >= 2:
+            assert out is drained, frame  # the batch's own list, patched owners and all
+        drained = out
+        assert journal.drain() == []

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import omnirender as om
+from omnirender.attributes.photometry import srgb_to_linear
 from omnirender.colorimetry import cielab, delta_e2000
 from omnirender.formats.gltf import GLTFImportError
 from omnirender.formats.gltf import writer as gltf
@@ -155,6 +156,36 @@ def test_few_colours_are_materials_many_are_instance_colours_and_alpha_is_a_mate
     modes = sorted(doc["materials"][doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"][0]["material"]].get(
         "alphaMode", "OPAQUE") for i in arrays)  # fmt: skip
     assert modes == ["BLEND", "OPAQUE"]
+
+
+def test_each_colour_group_gets_its_own_colour_whatever_address_its_colour_had():
+    """The exporter captures an instance set's shape under a temporary ``om.Color`` per colour group (white for
+    sets of many colours) and memoises materials by the surface's components.  CI once saw a two-colour set
+    after a many-colour one get the white material for a group: the group's Color was made at the dead white
+    one's address, at the same version.  (Reuse cannot be forced here: tests/core/test_version_key.py tests the
+    rule that prevents it.)"""
+    many = np.linspace(0, 1, COLOR_GROUPS + 4)
+    ramp = np.column_stack([many, np.full(len(many), 0.3), 1 - many])
+    line = np.column_stack([np.arange(len(many), dtype=float), np.zeros(len(many)), np.zeros(len(many))])
+    palette = np.array([(1.0, 0.8, 0.1), (0.1, 0.8, 0.3)])
+    scene = om.Node("s")
+    for k in range(8):
+        scene.add(om.Node(f"ramp{k}", [om.InstanceSet(om.Box(), line, colors=ramp)]))
+        two = om.InstanceSet(om.Sphere(), line[:6] + (0, k + 1, 0), colors=palette[np.arange(6) % 2])
+        scene.add(om.Node(f"two{k}", [two]))
+    doc, binary = _glb(gltf.to_bytes(scene))
+    arrays = _check_extension(doc, binary)
+    checked = 0
+    for i, found in arrays.items():
+        if INSTANCE_COLOR in found:
+            continue  # a many-colour set: white material, colours per instance
+        material = doc["materials"][doc["meshes"][doc["nodes"][i]["mesh"]]["primitives"][0]["material"]]
+        x = found["TRANSLATION"][:, 0].round().astype(int)
+        assert (x % 2 == x[0] % 2).all()
+        expected = srgb_to_linear(palette[x[0] % 2])
+        assert material["pbrMetallicRoughness"]["baseColorFactor"][:3] == pytest.approx(expected, abs=1e-6)
+        checked += 1
+    assert checked == 16
 
 
 def test_colours_a_shape_ignores_are_not_written_and_only_visible_instances_are():

@@ -396,3 +396,74 @@ def test_replacements_below_a_technique_take_the_compile():
         assert_close(after.array, fresh(scene))  # (the technique's pixels as the compile before left them)
         changed = np.abs(after.array.astype(int) - image.array.astype(int)).max(axis=2) > 8
         assert changed.any()  # the restyled leaf shows
+
+
+def test_appearances_sampling_no_texture_share_one_texture_set_of_the_same_key():
+    """A Material replaced per frame makes no texture set: the appearances that sample no texture share one per
+    model and alpha mode, equal to the set made for each (the draw state a replacement must keep)."""
+    from omnirender.attributes.surface import resolve_appearance
+    from omnirender.gl.engine.compiler import TextureSet, texture_set
+
+    texture = om.Texture(np.array([[[255, 0, 0], [0, 0, 255]], [[0, 255, 0], [255, 255, 0]]], np.uint8))
+    stacks = [
+        [om.Material(diffuse=(1.0, 0.0, 0.0))],
+        [om.Material(opacity=0.5)],
+        [om.Material(), om.Color(0.1, 0.2, 0.3)],
+        [om.Color(0.1, 0.2, 0.3, 0.5)],
+        [om.PBRMaterial()],
+        [om.PBRMaterial(opacity=0.4)],
+        [om.PBRMaterial(alpha_mode="mask", alpha_cutoff=0.3)],
+        [om.PBRMaterial(alpha_mode="mask", alpha_cutoff=0.7)],
+        [om.PBRMaterial(base_color_texture=texture)],
+        [om.PBRMaterial(normal_texture=texture)],
+    ]
+    apps = [resolve_appearance(stack) for stack in stacks] + [resolve_appearance([om.Material()], texture=texture)]
+    for app in apps:
+        assert texture_set(app).key == TextureSet(app).key
+    shared = texture_set(apps[0])
+    assert texture_set(resolve_appearance([om.Material(diffuse=(0.0, 1.0, 0.0))])) is shared
+    assert texture_set(apps[1]) is not shared  # blended: another alpha mode
+    assert texture_set(apps[6]) is not texture_set(apps[7])  # another cut-off
+    assert texture_set(apps[8]) is not texture_set(apps[8])  # a textured appearance's own set
+
+
+def test_an_item_put_back_at_another_place_or_two_replaced_in_one_node_are_compared_in_full():
+    """``remove`` then ``insert`` at another place is no replacement at its place (a Material now before the
+    transform's place): the subtree compile; two items of one node replaced in one frame: both dirty bits."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        leaf = leaves[6]
+        transform = leaf.items[0]
+        leaf.remove(transform)
+        leaf.insert(1, om.Translation(0.5, 0.5, 0.5))  # [Material, Translation, shape]: another list
+        before = render_checked(e, scene, "subtrees", before).array
+        leaf = leaves[9]
+        replace(leaf, leaf.items[0], om.Matrix(np.array(om.Translation(0.3, -1.0, 0.6).matrix)))
+        replace(leaf, leaf.items[1], om.Material(diffuse=(1.0, 0.2, 0.9)))
+        render_checked(e, scene, "dirty", before)
+        assert e.stats["dirty"] == ("appearance", "transform")
+
+
+def test_a_rotating_matrix_replaced_by_a_translation_that_then_moves():
+    """Translation -> rotating Matrix -> Translation on one leaf, then the translation moved by its setter (its
+    moves write only the translation column of its place: the whole matrix must be the new one's)."""
+    from omnirender.gl import GLEngine
+
+    scene, groups, leaves = nested_scene()
+    leaf = leaves[7]
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        before = e.render(scene).array
+        m = np.array(om.Rotation(50.0, (0, 0, 1)).matrix @ om.Scaling(1.6, 0.7, 1.2).matrix)
+        m[:3, 3] = (0.4, -1.0, 0.8)
+        replace(leaf, leaf.items[0], om.Matrix(m))
+        before = render_checked(e, scene, "dirty", before).array
+        moved = om.Translation(-0.2, 1.5, 0.3)
+        replace(leaf, leaf.items[0], moved)
+        before = render_checked(e, scene, "dirty", before).array
+        moved.offset = (0.6, 1.1, -0.4)
+        image = e.render(scene)
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, fresh(scene)) and not np.array_equal(image.array, before)

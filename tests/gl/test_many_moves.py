@@ -336,3 +336,70 @@ def test_an_arrays_translations_whose_nodes_come_later_move_with_it() -> None:
                 scene.remove(nodes[5])
                 e.render(scene, background=(0, 0, 0))
                 scene.add(nodes[5])
+
+
+def test_a_simulation_loop_over_translations_that_changed_hands_between_frames() -> None:
+    """A loop over the same translations (enough to be told as one batch, ``component.BULK_MIN``) frame after
+    frame, with between two frames of moves: a node's Translation replaced by a Matrix (the loop still sets the
+    old one, in no node now), a translation taken to another node, a node added and one removed.  The batch's
+    owners are patched, the move plan's look-ups kept or made again; each frame of moves draws what a fresh
+    engine draws, without a compile."""
+    from omnirender.core import component
+
+    n = component.BULK_MIN + 64
+    scene = om.Node("scene", [om.Camera.look_at((0, 0, 40), (0, 0, 0), fov=50), om.DirectionalLight()])
+    positions = np.zeros((n, 3))
+    positions[:, 0] = np.arange(n) % 20 * 1.2 - 11.4
+    positions[:, 1] = np.arange(n) // 20 * 1.2 - 9.0
+    positions[:, 2] = 0.1 + 0.02 * np.arange(n)  # (each at its own depth: boxes the loop moves over others never tie)
+    box = om.Box(size=0.7)
+    group_move = om.Translation(0.0, 0.0, 0.0)  # above a few nodes whose translation the frames replace
+    group = scene.add(om.Node("group", [group_move]))
+    nodes = [
+        (group if i in (22, 56) else scene).add(
+            om.Node(f"b{i}", [om.Translation(offset=positions[i]), om.Color(0.3 + 0.7 * i / n, 0.6, 0.3), box])
+        )
+        for i in range(n)
+    ]
+    # two translations in the loop from the start, in no node until frames 3 and 5 (then they move what they hold)
+    loose = [om.Translation(-14.0, -12.0, 0.0), om.Translation(14.0, -12.0, 0.0)]
+    moves = [node.items[0] for node in nodes] + loose
+    positions = np.concatenate([positions, [t.offset for t in loose]])
+    spare = scene.add(om.Node("spare", [om.Color(1, 1, 1), box]))
+    extra = None
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for frame in range(6):
+            j = 17 * frame + 5
+            node = nodes[j]
+            node.remove(node.items[0])  # (the loop below still sets the translation it held)
+            m = np.eye(4)
+            m[:3, 3] = positions[j] + (0.0, 0.3, 0.0)
+            node.insert(0, om.Matrix(m))
+            if frame == 5:  # one the loop moved in no node replaces a node's translation (taking its place)
+                node = nodes[60]
+                node.remove(node.items[0])
+                node.insert(0, loose[1])
+            e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] == "dirty", frame  # (replacements alone: the move plan's places taken)
+            if frame == 2:  # a translation taken to another node: that node moves with the loop from now on
+                taken = nodes[40].items[0]
+                nodes[40].remove(taken)
+                spare.insert(0, taken)
+            if frame == 3:  # a node added with one the loop moved while it was in no node
+                scene.add(om.Node("came", [loose[0], om.Color(0, 1, 1), box]))
+            if extra is not None:
+                scene.remove(extra)
+            extra = scene.add(om.Node(f"x{frame}", [om.Translation(float(frame), 10.0, 0.0), om.Color(1, 0, 1), box]))
+            e.render(scene, background=(0, 0, 0))
+            positions[:, 1] += 0.1
+            positions[:, 0] -= 0.05
+            positions[-2:, 1] += 1.0
+            for t, row in zip(moves, positions, strict=True):
+                t.offset = row
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False, frame
+            assert np.array_equal(image.array, fresh(scene)), frame
+            group_move.offset = (0.0, -0.5 * frame, 0.0)  # the group's rows recomposed from the plan's matrices
+            image = e.render(scene, background=(0, 0, 0))
+            assert np.array_equal(image.array, fresh(scene)), frame

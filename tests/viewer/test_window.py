@@ -224,12 +224,13 @@ def test_keys_axial_views_wireframe_screenshot_and_quit(window, xinput, tmp_path
 
 
 def test_frame_rate_is_independent_of_a_slow_application_update(window):
+    STEP = 0.6  # seconds per simulated step
     body = window.scene["/scene/left"]
     move = body.items[0]
     calls = []
 
     def update(t):
-        time.sleep(0.4)  # a slow simulation step, computed without any lock
+        time.sleep(STEP)  # a slow simulation step, computed without any lock
         calls.append(t)
         x = -1.3 + 0.5 * len(calls)
         return lambda: setattr(move, "offset", (x, 0, 0))
@@ -238,7 +239,7 @@ def test_frame_rate_is_independent_of_a_slow_application_update(window):
     window.start_updates(update)
     slowest = 0.0
     frames = window.frames
-    deadline = time.monotonic() + 1.0
+    deadline = time.monotonic() + 2.5 * STEP
     while time.monotonic() < deadline:
         window.viewer.camera.orbit(0.0, 0.0)
         window.request_repaint()
@@ -247,8 +248,10 @@ def test_frame_rate_is_independent_of_a_slow_application_update(window):
         slowest = max(slowest, time.monotonic() - t0)
     drawn = window.frames - frames
     assert 1 <= len(calls) <= 3
-    assert drawn >= 8, drawn  # many frames while the update ran its slow steps
-    assert slowest < 0.3  # no frame ever waited for a whole update step (0.4 s)
+    # (margins for a loaded CI machine: a frame takes ~20 ms alone; the property is "frames never wait for a
+    # step", so more frames than steps, and no frame as long as a step)
+    assert drawn >= 5, drawn  # many frames while the update ran its slow steps
+    assert slowest < 0.75 * STEP, slowest  # no frame ever waited for a whole update step
     window.viewer.close()
     moved = centroid_x(red_mask(window.last_frame))
     assert moved > start + 5  # the updates were applied and shown

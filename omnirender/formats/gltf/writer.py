@@ -42,7 +42,7 @@ from ...attributes.environment import is_scene_background
 from ...attributes.photometry import intensity_scale, phong_roughness
 from ...attributes.surface import appearance_key, engine_appearance
 from ...attributes.texturing import bake_layers
-from ...core import AttributePainter, ShapePainter, default_for
+from ...core import AttributePainter, ShapePainter, default_for, version_key
 from ...fileio import atomic_write
 from ...geometry.matrix import transform_points
 from ...geometry.trs import decomposable
@@ -373,7 +373,7 @@ class GLTFEngine(NodeTrackingEngine):
         return info
 
     def texture_index(self, tex: Texture) -> int:
-        key = (id(tex), tex.version)
+        key = version_key(tex)
         found = self._textures.get(key)
         if found is not None:
             return found

@@ -59,7 +59,7 @@ from ...attributes.environment import is_scene_background
 from ...attributes.photometry import intensity_scale, phong_roughness, srgb_to_linear
 from ...attributes.surface import appearance_key, engine_appearance
 from ...attributes.texturing import bake_layers
-from ...core import AttributePainter, ShapePainter, default_for
+from ...core import AttributePainter, ShapePainter, default_for, version_key
 from ...scene import Node
 from ...shapes import Box, Cone, Cylinder, InstanceSet, LineSet, PointSet, Sphere, TriangleSet
 from ..walk import NodeTrackingEngine, track_surfaces
@@ -340,7 +340,7 @@ class USDEngine(NodeTrackingEngine):
 
     def texture_file(self, tex: Texture) -> str:
         """The PNG file of a texture (written once), relative to the stage."""
-        key = (id(tex), tex.version)
+        key = version_key(tex)
         if key in self._textures:
             return self._textures[key]
         from PIL import Image as PILImage

@@ -352,7 +352,7 @@ class DeferredRenderer:
         plan = engine.frame_shadows
         faces = plan.light_faces if plan is not None else {}
         lights = engine.scene_lights
-        key = (tuple((id(light), light.version, m.tobytes()) for light, m in lights), id(plan))
+        key = (tuple((light, light.version, m.tobytes()) for light, m in lights), id(plan))
         if self._lights is None or self._lights[0] != key:
             self._lights = (key, LightTable(lights, faces))
         return self._lights[1]

@@ -30,7 +30,7 @@ import numpy as np
 from ...attributes import BumpMap, DrawStyle, Fog, Highlight, Material, MultiTexture, Texture
 from ...attributes.photometry import linear_rgb
 from ...attributes.surface import Appearance, appearance_key, decided_by, resolve_appearance
-from ...core.component import ChangeJournal, RenderingComponent
+from ...core.component import ChangeJournal, RenderingComponent, version_key
 from ...core.light import LightSwitch
 from ...core.program import DEINSTALL, ENTER, LEAVE, POP, REMOVE, TECHNIQUE, compile_components
 from ...core.transform import Transform, TranslationArray
@@ -41,7 +41,7 @@ from .dirty import DIRTY_TRANSFORM, classify, restyle, restyles, transform_swaps
 from .drawlist import DrawItem, DrawState, Scope, drawn_transparent
 from .geometry import Geometry
 from .instancing import instance_rows, mask_copies
-from .layout import PBR, PHONG, ROW
+from .layout import ROW, shading_model
 from .shaders import LAYER_BLENDS
 from .state import FillMode, LineWidth, kinds
 
@@ -54,13 +54,20 @@ _MODEL = ROW.slice("model")
 _ASK_KEPT = 64
 _COLOR = ROW.slice("color")
 _SHADING_MODEL = ROW.at("emission", "model")
-_MATERIAL_ID = ROW.at("pbr", "material")
 _HIGHLIGHT_ON = ROW.at("highlight", "on")
 _POINT_SIZE = ROW.at("point", "size")
 FOG_MODES = {"linear": 0.0, "exp": 1.0, "exp2": 2.0}
-#: (name, zeros) of each field of the row, in order (surface rows are made from lists of floats)
-_ROW_ZEROS = tuple((f.name, (0.0,) * f.size) for f in ROW.fields)
-assert ROW.fields[-1].name == "point" and _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
+#: the row's fields in the order a surface row is made in (``_material_row``: one list of floats)
+_SURFACE_FIELDS = ("model", "color", "specular", "emission", "ambient", "pbr", "highlight", "point")
+assert tuple((f.name, f.size) for f in ROW.fields) == tuple(
+    zip(_SURFACE_FIELDS, (16, 4, 4, 4, 4, 4, 4, 4), strict=True)
+)
+assert _POINT_SIZE == ROW.offsets["point"]  # (the point size comes first)
+assert (
+    ROW.at("emission", "model") == ROW.offsets["emission"] + 3 and ROW.at("pbr", "material") == ROW.offsets["pbr"] + 2
+)
+_ZEROS4 = (0.0, 0.0, 0.0, 0.0)
+_ZEROS16 = (0.0,) * 16
 
 
 def _uv_matrix(texture: Any) -> tuple[float, ...]:
@@ -126,6 +133,32 @@ class TextureSet:
             self.alpha, self.alpha_uniforms = (), ()
         self.key = (self.textures, self.features, self.uniforms, self.uv1, self.normal, self.alpha,
                     self.alpha_uniforms, self.base)  # fmt: skip
+
+
+#: (model, alpha mode, cut-off of a masked one) -> the one TextureSet of the appearances that sample no texture
+_PLAIN_SETS: dict[tuple[Any, ...], TextureSet] = {}
+
+
+def texture_set(app: Appearance) -> TextureSet:
+    """``TextureSet(app)``; one shared set for the appearances that sample no texture (their sets differ only
+    by what the model and the alpha mode decide): a Material replaced per frame makes none."""
+    if (
+        app.texture is None
+        and not app.layers
+        and app.bump is None
+        and app.normal_texture is None
+        and app.metallic_roughness_texture is None
+        and app.occlusion_texture is None
+        and app.emissive_texture is None
+    ):
+        key = (app.model, app.alpha_mode, app.alpha_cutoff if app.alpha_mode == "mask" else None)
+        found = _PLAIN_SETS.get(key)
+        if found is None:
+            if len(_PLAIN_SETS) > 64:
+                _PLAIN_SETS.clear()
+            found = _PLAIN_SETS[key] = TextureSet(app)
+        return found
+    return TextureSet(app)
 
 
 class _NodeEntry:
@@ -408,7 +441,8 @@ class DrawListCompiler:
                 count = self._replace(scene, edits, changed)
                 if count is not None:
                     self.engine.stats["incremental"] = count
-                    self._compiled = (c[0], scene.version, mask_key, scene.structure_version)
+                    version, structure = scene.versions
+                    self._compiled = (c[0], version, mask_key, structure)
                     self.engine.stats["compiled"] = "dirty"
                     return self.installer.root
                 # nodes added or removed, attributes replaced: compile only the subtrees the edits touch
@@ -462,41 +496,47 @@ class DrawListCompiler:
         rows' surface fields; no subtree compile, no splice.  Returns how many items changed, or None (nothing
         modified) for the splice path.  Other components changed in the same frame may only be static
         transforms (moved with the others)."""
-        replacements = classify(edits, self._own)
+        replacements = classify(edits, self._entry_of)
         if replacements is None:
             return None
-        replaced = {id(r.old) for r in replacements}
-        replaced.update(id(r.new) for r in replacements)
         moves: list[Any] = []
-        for c in changed:
-            if id(c) in replaced or isinstance(c, Node) or not c.owners:  # (outside the scene: changes nothing)
-                continue
-            if not (isinstance(c, Transform) and c.static):
-                return None  # a parameter changed beside the replacements: the splice compiles it
-            moves.append(c)
-        swaps = transform_swaps(replacements, self.entries_of)
+        if changed:
+            replaced = {id(r.old) for r in replacements}
+            replaced.update(id(r.new) for r in replacements)
+            for c in changed:
+                if id(c) in replaced or isinstance(c, Node) or not c.owners:  # (outside the scene: changes nothing)
+                    continue
+                if not (isinstance(c, Transform) and c.static):
+                    return None  # a parameter changed beside the replacements: the splice compiles it
+                moves.append(c)
+        swaps = transform_swaps(replacements)
         if swaps is None:
             return None
         table = self.engine.material_table
         generation, version = table.generation, table.version
-        changes = restyles(replacements, self.entries_of, self.surface_entry)
+        changes = restyles(replacements, self.surface_entry)
         if changes is None or table.generation != generation:
             return None
         # every replacement is handled: from here on the draw list changes
-        self.updater.replace(swaps)
+        if swaps:
+            self.updater.replace(swaps)
         count = 0
         if changes:
             batches, same = restyle(changes)
             self.updater.rows_rewritten(batches, same and table.version == version)
             count += len(changes)
-        news = [r for r in replacements if r.kind == DIRTY_TRANSFORM]
+        news = [r.new for r in replacements if r.kind == DIRTY_TRANSFORM]
         if news or moves:
-            count += self.updater.apply([*(r.new for r in news), *moves]) or 0
+            count += self.updater.apply([*news, *moves] if moves else news) or 0
             engine = self.engine
             # lights or the camera below a replaced or moved transform move with it: the declarations again (not
-            # when no declared component lies below a replaced transform's node and the moved ones declare nothing)
-            below = _declares_below(engine.declared, {id(r.node) for r in news})
-            if below or (moves and not declarations_kept(moves, engine.mask_function)):
+            # when the nodes of the replaced and the moved transforms declare nothing below them: the nodes'
+            # own declaration results say so at once; else the declared components' ancestors are walked)
+            mask_function, declared = engine.mask_function, engine.declared
+            if (
+                (declared is None or not declarations_kept(news, mask_function))
+                and _declares_below(declared, {id(r.node) for r in replacements if r.kind == DIRTY_TRANSFORM})
+            ) or (moves and not declarations_kept(moves, mask_function)):
                 declared = engine.preevaluate(scene)
                 if not _same_declarations(engine.declared, declared):
                     engine.declared = declared
@@ -504,7 +544,7 @@ class DrawListCompiler:
         kinds: set[str] = set()
         for r in replacements:  # each node's entry: compiled with what it holds now
             kinds.add(r.kind)
-            entry = self._node_cache[self._key_of(r.node)]  # (classify found it)
+            entry = r.entry
             entry.own = tuple([x if isinstance(x, Node) else (x, x.version) for x in r.node.items])
             entry.version = r.node.version
         self.engine.stats["dirty"] = tuple(sorted(kinds))
@@ -513,11 +553,8 @@ class DrawListCompiler:
     def entries_of(self, node: Any) -> list[Any] | None:
         """The draw items and scopes ``node``'s one compiled occurrence made (its descendants' included), or
         None when it was not compiled once or its entry is gone."""
-        key = self._key_of(node)
-        entry = None if key is None else self._node_cache.get(key)
-        if entry is None or entry.ref() is not node:
-            return None
-        return entry.entries
+        entry = self._entry_of(node)
+        return None if entry is None else entry.entries
 
     # -- compiling only the subtrees that list edits touched --------------------------------
     def _splice(self, scene: Any, edits: list[Any], changed: list[Any]) -> int | None:
@@ -699,11 +736,19 @@ class DrawListCompiler:
             return None
         return found[0]
 
-    def _own(self, node: Any) -> tuple | None:
-        """The items ``node`` held when it was last compiled, or None when its entry is gone."""
+    def _entry_of(self, node: Any) -> _NodeEntry | None:
+        """What the last compile made of ``node`` (its own items as compiled, its entries), or None when it was
+        not compiled once (or several times) or its entry is gone."""
         key = self._key_of(node)
         entry = None if key is None else self._node_cache.get(key)
         if entry is None or entry.ref() is not node:
+            return None
+        return entry
+
+    def _own(self, node: Any) -> tuple | None:
+        """The items ``node`` held when it was last compiled, or None when its entry is gone."""
+        entry = self._entry_of(node)
+        if entry is None:
             return None
         return tuple(x if isinstance(x, Node) else x[0] for x in entry.own)
 
@@ -1137,8 +1182,8 @@ class DrawListCompiler:
             plain = False
             key = (
                 appearance_key(stack, texture, layers, bump),
-                None if highlight is None else (id(highlight), highlight.version),
-                None if description is None else (id(description), description.version),
+                version_key(highlight),
+                version_key(description),
             )
         memo = self._surface_memo
         entry = memo.get(key)
@@ -1150,36 +1195,47 @@ class DrawListCompiler:
             for tex in app.textures:
                 self._check_texture(tex)
             # the attributes are kept alive with the entry, so the ids in its key stay theirs
-            row = self._material_row(app, highlight)
-            # the shading model and the id of the material description (the deferred pipeline's material table)
-            if description is not None:
-                row[_SHADING_MODEL] = description.model.number
-            row[_MATERIAL_ID] = self.engine.material_table.for_appearance(app, description)
-            entry = (app, row, TextureSet(app), (texture, layers, bump, highlight, description))
+            # (with the shading model and the id of the material description: the deferred pipeline's table)
+            row = self._material_row(
+                app, highlight, description, self.engine.material_table.for_appearance(app, description)
+            )
+            entry = (app, row, texture_set(app), (texture, layers, bump, highlight, description))
             if len(memo) > 256:
                 memo.clear()
             memo[key] = entry
         return entry
 
-    def _material_row(self, app: Appearance, highlight: Any) -> np.ndarray:
-        """A row holding the surface fields (the model matrix is filled per item); colours are linear.
+    def _material_row(self, app: Appearance, highlight: Any, description: Any, material: int) -> np.ndarray:
+        """A row holding the surface fields (the model matrix is filled per item); colours are linear;
+        ``material``: the id of its material description in the deferred pipeline's table.
 
         Made from one list of Python floats (one numpy call: a replaced Material makes one per frame)."""
-        alpha = 1.0 if app.model == "pbr" and app.alpha_mode != "blend" else app.alpha
-        fields: dict[str, tuple[float, ...]] = {"color": (*app.base, alpha)}
+        zeros = _ZEROS4
+        model = shading_model(app.model, description)
         if app.model == "pbr":
-            fields["emission"] = (*app.emission, PBR)
-            fields["pbr"] = (app.roughness, app.metallic, 0.0, 0.0)
+            alpha = 1.0 if app.alpha_mode != "blend" else app.alpha
+            specular, emission, ambient = zeros, (*app.emission, model), zeros
+            pbr = (app.roughness, app.metallic, material, 0.0)
         else:
-            fields["specular"] = (*app.specular, app.shininess)
-            fields["emission"] = (*app.emission, PHONG)
-            fields["ambient"] = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
-        if highlight is not None:
-            fields["highlight"] = (*linear_rgb(highlight.color), 1.0)
-        fields["point"] = (_DEFAULT_POINT_SIZE, 0.0, 0.0, 0.0)
-        values: list[float] = []
-        for name, zeros in _ROW_ZEROS:
-            values.extend(fields.get(name, zeros))
+            alpha = app.alpha
+            specular, emission, pbr = (*app.specular, app.shininess), (*app.emission, model), (0.0, 0.0, material, 0.0)
+            ambient = (*app.ambient, 1.0 if app.ambient_follows_base else 0.0)
+        lit = zeros if highlight is None else (*linear_rgb(highlight.color), 1.0)
+        # the fields in the row's order (_SURFACE_FIELDS), the model matrix zero
+        values = [
+            *_ZEROS16,
+            *app.base,
+            alpha,
+            *specular,
+            *emission,
+            *ambient,
+            *pbr,
+            *lit,
+            _DEFAULT_POINT_SIZE,
+            0.0,
+            0.0,
+            0.0,
+        ]
         return np.array(values, np.float32)
 
 

@@ -46,7 +46,7 @@ from ...core.transform import Rotation, Transform, Translation
 from ...scene.node import Node
 from .attributes import AlphaTest, Blend
 from .drawlist import DrawItem, drawn_transparent, uniform_material
-from .layout import ROW
+from .layout import ROW, shading_model
 
 __all__ = [
     "DIRTY_TRANSFORM",
@@ -65,7 +65,6 @@ DIRTY_TRANSFORM = "transform"
 #: a surface attribute replaced by one of the same role: the rows' surface fields are resolved again
 DIRTY_APPEARANCE = "appearance"
 
-_SHADING_MODEL = ROW.at("emission", "model")
 #: the row's surface fields (all between the model matrix and the point size, which a DrawStyle decides)
 _SURFACE = slice(ROW.offsets["color"], ROW.offsets["point"])
 #: those a batch drawn with uniforms for its material shares (its colours are per row)
@@ -76,12 +75,15 @@ _KINDS = frozenset(("mesh", "points", "lines"))
 
 
 class Replacement(NamedTuple):
-    """``old`` at a place of ``node``'s list was replaced by ``new`` of the same role (``kind``: a dirty bit)."""
+    """``old`` at a place of ``node``'s list was replaced by ``new`` of the same role (``kind``: a dirty bit);
+    ``entry``: what the compile made of the node (its ``own`` items as compiled and the ``entries`` it made,
+    its descendants' included, nested scopes as they are)."""
 
     node: Any
     old: Any
     new: Any
     kind: str
+    entry: Any
 
 
 class Restyle(NamedTuple):
@@ -118,16 +120,20 @@ _ROLES: dict[type, str | None] = {}
 _UNKNOWN = object()
 
 
-def classify(
-    edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], tuple | None]
-) -> list[Replacement] | None:
+def classify(edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], Any]) -> list[Replacement] | None:
     """The frame's list ``edits`` as same-role replacements, or None when they change anything else.
 
-    ``compiled(node)`` gives the items ``node`` held when it was last
-    compiled (None: not compiled once, or its entry is gone); the node's list
-    now must hold as many, each the same object or one of the same
-    :func:`role`.  An empty list: the edits left every list as it was.
+    ``compiled(node)`` gives what the compile made of ``node`` (None: not
+    compiled once, or its entry is gone): its ``own`` items as they were
+    compiled (each a child node or a ``(component, version)`` pair) and the
+    ``entries`` it made.  The node's list now must hold as many items, each
+    the same object or one of the same :func:`role`.  An empty list: the
+    edits left every list as it was.
     """
+    if len(edits) == 2:
+        single = _single(edits, compiled)
+        if single is not _UNKNOWN:
+            return single
     nodes: dict[int, Any] = {}
     for container, op, item, _ in edits:
         if (op != "insert" and op != "remove") or isinstance(item, Node) or not isinstance(container, Node):
@@ -135,51 +141,77 @@ def classify(
         nodes[id(container)] = container
     out: list[Replacement] = []
     for node in nodes.values():
-        before = compiled(node)
-        after = node.items
-        if before is None or len(before) != len(after):
+        entry = compiled(node)
+        if entry is None:
             return None
-        for old, new in zip(before, after, strict=True):
+        before = entry.own
+        after = node.items
+        if len(before) != len(after):
+            return None
+        for held, new in zip(before, after, strict=True):
+            old = held[0] if held.__class__ is tuple else held  # (a child node is held as itself)
             if old is new:
                 continue
             kind = role(old)
             if kind is None or kind != role(new):
                 return None
-            out.append(Replacement(node, old, new, DIRTY_TRANSFORM if kind == DIRTY_TRANSFORM else DIRTY_APPEARANCE))
+            out.append(
+                Replacement(node, old, new, DIRTY_TRANSFORM if kind == DIRTY_TRANSFORM else DIRTY_APPEARANCE, entry)
+            )
     return out
+
+
+def _single(edits: list[tuple[Any, str, Any, int]], compiled: Callable[[Any], Any]) -> Any:
+    """:func:`classify` of what applications write to replace one item, ``node.remove(old)`` then
+    ``node.insert(at, new)`` at its place: the node's list is its compiled list with ``new`` at ``at`` (the
+    edits since the compile say so), so only that place is compared.  ``_UNKNOWN`` for other edits."""
+    (node, op, old, at), (other, op2, new, at2) = edits
+    if other is not node or op != "remove" or op2 != "insert" or at != at2 or node.__class__ is not Node:
+        return _UNKNOWN
+    if old is new or isinstance(old, Node) or isinstance(new, Node):
+        return _UNKNOWN
+    entry = compiled(node)
+    if entry is None:
+        return None
+    own = entry.own
+    held = own[at] if at < len(own) else None
+    if held is None or held.__class__ is not tuple or held[0] is not old:
+        return _UNKNOWN  # (the compiled list is not the one the edits started from: compared in full)
+    kind = role(old)
+    if kind is None or kind != role(new):
+        return None
+    return [Replacement(node, old, new, DIRTY_TRANSFORM if kind == DIRTY_TRANSFORM else DIRTY_APPEARANCE, entry)]
 
 
 def _det_sign(t: Any) -> int:
     """The sign of the determinant of ``t``'s matrix (a translation's and a rotation's: 1, unasked)."""
     if t.__class__ is Translation or t.__class__ is Rotation:
         return 1
-    (a, b, c), (d, e, f), (g, h, i) = t.matrix[:3, :3].tolist()
+    (a, b, c, _), (d, e, f, _), (g, h, i, _), _ = t.matrix.tolist()
     det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
     return (det > 0.0) - (det < 0.0)
 
 
-def transform_swaps(
-    replacements: list[Replacement], entries: Callable[[Any], list[Any] | None]
-) -> list[tuple[DrawItem, Any, Any]] | None:
+def transform_swaps(replacements: list[Replacement]) -> list[tuple[DrawItem, Any, Any]] | None:
     """``(item, old, new)`` for every draw item whose chain holds a replaced transform, or None to decline.
 
-    ``entries(node)`` gives the node's compiled entries (its items and its
-    descendants', nested scopes as they are).  Items whose chain does not
-    hold ``old`` (shapes before it in the list) are not below it.
+    The node's compiled entries are its items and its descendants'; items
+    whose chain does not hold ``old`` (shapes before it in the list) are not
+    below it.
     """
     out: list[tuple[DrawItem, Any, Any]] = []
-    for node, old, new, kind in replacements:
+    for _, old, new, kind, entry in replacements:
         if kind != DIRTY_TRANSFORM:
             continue
         if _det_sign(old) != _det_sign(new):
             return None  # mirrored now (or no more): the culled faces change
-        found = entries(node)
-        if found is None:
-            return None
-        for item in found:
-            if not isinstance(item, DrawItem):
+        for item in entry.entries:
+            if item.__class__ is not DrawItem and not isinstance(item, DrawItem):
                 return None  # a technique's scope (a level of detail keeps the chain above it)
-            count = sum(1 for t in item.chain if t is old)
+            count = 0
+            for t in item.chain:
+                if t is old:
+                    count += 1
             if not count:
                 continue
             if count > 1 or item.instances is not None or item.state.clip or item.techniques:
@@ -193,20 +225,15 @@ def _same_texture_set(a: Any, b: Any) -> bool:
 
 
 def restyles(
-    replacements: list[Replacement],
-    entries: Callable[[Any], list[Any] | None],
-    surface_entry: Callable[[list[Any], tuple], tuple],
+    replacements: list[Replacement], surface_entry: Callable[[list[Any], tuple], tuple]
 ) -> list[Restyle] | None:
     """The new surface of every draw item a replaced Material / PBRMaterial / Color decided, or None to
     decline (an item whose surface is not known, or whose draw state the new surface would change)."""
     pairs: dict[int, list[Any]] = {}  # id(item) -> [item, material, colour] after the replacements so far
-    for node, old, new, kind in replacements:
+    for _, old, new, kind, entry in replacements:
         if kind != DIRTY_APPEARANCE:
             continue
-        found = entries(node)
-        if found is None:
-            return None
-        for item in found:
+        for item in entry.entries:
             if not isinstance(item, DrawItem) or item.surface is None or item.instances is not None or item.techniques:
                 return None  # (a technique's passes may draw what the surface decides their own way)
             pair = pairs.get(id(item))
@@ -230,7 +257,9 @@ def restyles(
         if (
             state.kind not in _KINDS
             or state.overlay
-            or row[_SHADING_MODEL] != item.row[_SHADING_MODEL]
+            # (an item's row holds the shading model of the surface entry it was made from: both entries are
+            # of the item's context, its material description included)
+            or shading_model(new_app.model, context[4]) != shading_model(app.model, context[4])
             or new_app.double_sided != app.double_sided
             or not _same_texture_set(new_texset, texset)
             or _transparent(new_app, item) != item.transparent

@@ -481,7 +481,7 @@ class BatchDrawer:
             # the lights' arrays of an earlier pass with this view while the lights and their placements are the
             # same (kept per view: a shadow map's depth pass does not push out the frame's own)
             kept_key = (key, view.tobytes())
-            stamp = tuple([(id(light), light.version, m.tobytes()) for light, m in lights])
+            stamp = tuple([(light, light.version, m.tobytes()) for light, m in lights])
             kept = self._lights_kept.get(kept_key)
             if kept is not None and kept[0] is switch and kept[1] == stamp and bool(everything) == kept[2]:
                 lu = kept[3]

@@ -32,12 +32,19 @@ __all__ = [
 ]
 
 _MODEL = ROW.slice("model")
-_MATERIAL = np.concatenate(
+_MATERIAL_COLUMNS = np.concatenate(
     [
         np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
         for f in ROW.fields
         if f.name not in ("model", "color")
     ]
+)
+#: the row fields of the material (all but the model matrix and the colour): a slice when they are one run of
+#: columns (every field after the colour: rows[:, _MATERIAL] is then a view, not a gathered copy)
+_MATERIAL: slice | np.ndarray = (
+    slice(int(_MATERIAL_COLUMNS[0]), int(_MATERIAL_COLUMNS[-1]) + 1)
+    if (np.diff(_MATERIAL_COLUMNS) == 1).all()
+    else _MATERIAL_COLUMNS
 )
 
 
@@ -508,8 +515,10 @@ class Batch:
             self.items.append(item)
             item.row = storage[n]
         item.slot = (self, n)
-        if self.uniform and n and not (self.rows[0, _MATERIAL] == self.rows[n, _MATERIAL]).all():
-            self.uniform = False
+        if self.uniform and n:
+            rows = self._rows
+            if rows[0, _MATERIAL].tolist() != rows[n, _MATERIAL].tolist():  # (Python floats: few, compared at once)
+                self.uniform = False
         if self.position is not None:
             if self.drawn == n:  # everything in view: the new row is drawn from the end of the buffer
                 self.position = _appended_place(self.position, n)

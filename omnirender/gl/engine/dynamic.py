@@ -41,6 +41,8 @@ _EYE4_LIST = _EYE4.tolist()
 _MANY = 64
 #: moved transforms up to which a frame recomposes the rows below them one item at a time (MovePlan.apply_few)
 _FEW = 8
+#: splices the updater holds before its plan follows them without a frame of moves (TransformUpdater.splice)
+_HELD_SPLICES = 64
 #: what a plan's list of transforms holds at a place that stays the identity (the identity's old place)
 _IDENTITY = object()
 
@@ -98,8 +100,9 @@ class MovePlan:
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
         #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
-        #: link, no shape-local matrix but the identity): asked of every item with the transform -> items map, of a
-        #: spliced item on its first few-moved frame, and again when its chain is another (a transform replaced);
+        #: link, no shape-local matrix but the identity): asked of every item not moving on the first few-moved
+        #: frame, of an item not asked then on its first few-moved frame, and again when its chain is another (a
+        #: transform replaced);
         #: while the entry holds, the item's row holds that matrix (the rows follow the chains), so a move writes
         #: only its translation; an index names one item for the plan's life (splices append new items and leave
         #: removed ones' places)
@@ -122,7 +125,9 @@ class MovePlan:
         self._identity[identity] = True
         #: the last frame's changed transforms and where the plan holds them (a simulation moves the same ones,
         #: in the same order, every frame: their look-ups are kept while the list is the same, object for object)
-        self._last: tuple[list[Any], np.ndarray, list[Any], bool] | None = None
+        #: (the list, the places of those found, those found, whether all are plain translations, ids of those not
+        #: found): kept through splices and replacements (see :meth:`_add_transforms`, :meth:`replace`)
+        self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -147,8 +152,8 @@ class MovePlan:
             del self._arrays[key]
         first_new = len(self.items)
         gone: list[int] = []
-        # (the last look-ups stay: a splice keeps every transform's place, and they are kept only when the plan
-        # held every transform of the list)
+        # (the last look-ups stay: a splice keeps every transform's place; they are forgotten below when fresh
+        # transforms come, which may be some the look-ups did not find)
         where = self._where
         if where is None:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
@@ -212,6 +217,9 @@ class MovePlan:
     def _add_transforms(self, fresh: list[Any]) -> int:
         """Take transforms the plan does not hold yet (their matrices now); returns the identity's new place."""
         fresh = list({id(t): t for t in fresh}.values())
+        last = self._last
+        if last is not None and not last[4].isdisjoint(map(id, fresh)):
+            self._last = None  # (the last look-ups did not find some of them)
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -240,6 +248,8 @@ class MovePlan:
             where = self._where = {id(it): i for i, it in enumerate(self.items)}
         users = self._users_map()
         index = self.index
+        if len(swaps) == 1 and self._take_place(*swaps[0], where, users):
+            return
         below: dict[int, tuple[Any, Any, set[int]]] = {}  # id(old) -> (old, new, the items swapped)
         for item, old, new in swaps:
             i = where.get(id(item))
@@ -260,6 +270,8 @@ class MovePlan:
             self.matrices[k] = new.matrix
             users[id(new)] = users.pop(key)
             taken.append(k)
+        if taken:
+            self._taken_places(taken)
         if self._map is not None:  # (after the chains changed below)
             swapped_items = np.array(sorted({i for _, _, items in below.values() for i in items}), np.intp)
         if not general:
@@ -284,17 +296,61 @@ class MovePlan:
         if self._map is not None:
             self._map.replaced(self, taken, swapped_items)
 
+    def _taken_places(self, taken: list[int]) -> None:
+        """New transforms took the places ``taken`` of replaced ones: the last look-ups drop the old ones (not
+        found now), or are forgotten when a new one is among those they did not find."""
+        last = self._last
+        if last is None:
+            return
+        changed, positions, moved, translations, missing = last
+        if not missing.isdisjoint(map(id, (self.transforms[k] for k in taken))):
+            self._last = None
+            return
+        hit = np.isin(positions, taken)
+        if hit.any():
+            keep = ~hit
+            gone = set(map(id, compress(moved, hit.tolist())))
+            self._last = (changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone)
+
+    def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
+        """One transform replaced above one item, the only one below it (a node's transform replaced: the
+        lean case of :meth:`replace`): ``new`` takes ``old``'s place among the matrices, no chain changes.
+        False, with nothing changed, when that does not hold (:meth:`replace` goes the general way)."""
+        i = where.get(id(item))
+        key = id(old)
+        k = self.index.get(key)
+        found = users.get(key)
+        if i is None or k is None or id(new) in self.index or found is None or len(found) != 1 or found[0] != i:
+            return False
+        index = self.index
+        del index[key]
+        index[id(new)] = k
+        self.transforms[k] = new
+        self.matrices[k] = new.matrix  # (whole: a translation's next moves write only its column)
+        users[id(new)] = users.pop(key)
+        self._taken_places([k])
+        if self._map is not None:
+            self._map.replaced(self, [k], [i])
+        return True
+
     def _users_map(self) -> dict[int, list[int]]:
         """id(transform) -> the items below it (their indices), made when first asked after a plan change."""
         users = self._users
         if users is None:
             users = self._users = {}
-            plain, translation_only = self._plain, self._translation_only
             for i, item in enumerate(self.items):
                 _add_user(users, item, i)
-                if i not in plain:  # (in the same pass: a frame moving a new item then finds its entry)
-                    plain[i] = (item.chain, translation_only(i, item))
         return users
+
+    def _fill_plain(self, moving: dict[int, None]) -> None:
+        """Every item's :attr:`_plain` entry but those of the items ``moving`` now (a frame moving an item for the
+        first time then finds it).  Every other item's row holds its chain's product: a frame that replaced
+        transforms (their items' chains changed, their rows not yet) applies the new ones at once, and their
+        items are among ``moving``, whose rows :meth:`apply_few` writes in full."""
+        plain, translation_only = self._plain, self._translation_only
+        for i, item in enumerate(self.items):
+            if i not in plain and i not in moving:
+                plain[i] = (item.chain, translation_only(i, item))
 
     def _extend(self, name: str, extra: int) -> np.ndarray:
         """The array attribute ``name`` with ``extra`` more rows, appended in place (:func:`.spare.extend_held`)."""
@@ -350,7 +406,7 @@ class MovePlan:
             return self.apply_few(changed)
         last = self._last
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
-            _, positions, moved, translations = last
+            _, positions, moved, translations, _ = last
         else:
             # look-ups with C-level loops: thousands of moved transforms per frame cost no Python step each
             found = np.fromiter(map(self.index.get, map(id, changed), repeat(-1)), np.intp, len(changed))
@@ -358,7 +414,10 @@ class MovePlan:
             positions = found[keep]
             moved = changed if keep.all() else list(compress(changed, keep.tolist()))
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
-            self._last = (changed, positions, moved, translations) if moved is changed and len(moved) >= _MANY else None
+            # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
+            # splice that brings fresh ones, or a replacement, forgets these look-ups)
+            missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
+            self._last = (changed, positions, moved, translations, missing) if len(moved) >= _MANY else None
         if not len(positions):
             return 0
         if translations:
@@ -377,7 +436,11 @@ class MovePlan:
         ``changed`` reuses the last look-ups (where the plan holds them, their classes).
         """
         last = self._last
-        if last is None or len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
+        if last is None:
+            return False
+        if last[0] is changed:  # (a journal's batch drained as a whole: its own list, see ChangeJournal.drain)
+            return True
+        if len(last[0]) != len(changed) or not all(map(is_, changed, last[0])):
             return False
         self._last = (changed, *last[1:])
         return True
@@ -414,7 +477,8 @@ class MovePlan:
         item without a batch or an instance set moved)."""
         self.rows_only = True
         users = self._users
-        if users is None:
+        fill = users is None  # the first few-moved frame: every other item's entry of _plain too (below)
+        if fill:
             users = self._users_map()
         index = self.index
         matrices = self.matrices
@@ -442,6 +506,8 @@ class MovePlan:
                     affected.update(dict.fromkeys(found))
         if not positions:
             return 0
+        if fill:
+            self._fill_plain(affected)
         if self._map is not None:
             self._follow_maps(positions, affected)
         local, items, plain = self.local, self.items, self._plain
@@ -477,7 +543,7 @@ class MovePlan:
                         model = model @ matrices[k]
                     if local is not None:
                         model = model @ local[i]
-                    values = model.T.reshape(16)
+                    values = model.ravel("F")  # (M transposed, row by row: one numpy call)
                 if slot is None:  # an item without a batch (transparent, overlay): its own row
                     item.row[_MODEL] = values
                     self.rows_only = False
@@ -652,6 +718,9 @@ class TransformUpdater:
         self._rows_restyled = rows_restyled
         self._instance_state = instance_state
         self._plan: MovePlan | None = None
+        #: the draw list's splices the plan has not followed yet, as (removed, added, moved) in order: a frame
+        #: that adds or removes a node leaves them to the next frame that moves rows (:meth:`_settled`)
+        self._held: list[tuple[list[Any], list[Any], list[Any]]] = []
         #: whether the last :meth:`apply` moved transforms (else only instance sets' arrays changed, which
         #: place no light or camera: the compiler then keeps the scene's declarations)
         self.placed = True
@@ -662,20 +731,46 @@ class TransformUpdater:
     def forget(self) -> None:
         """A new draw list was installed: the plan is made again on the next move."""
         self._plan = None
+        self._held = []
 
     def splice(self, removed: list[Any], added: list[Any], moved: list[Any]) -> None:
-        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists."""
-        if self._plan is not None:
-            self._plan.splice(removed, added, moved)
+        """Follow the draw list's splice (items removed, added, moved to other rows) when a plan exists.
+
+        The plan follows it when next asked (:meth:`_settled`: the next frame
+        that moves rows), together with the splices of the frames between,
+        as one :meth:`MovePlan.splice` (:func:`merged_splices`): a frame that
+        only adds and removes nodes pays no update of the plan's arrays and
+        its translation map.  Only the transforms above new items drawn with
+        clip planes are noted now (:meth:`follows` asks them).
+        """
+        plan = self._plan
+        if plan is None:
+            return
+        _note_clipping(plan.clipping, added)
+        held = self._held
+        held.append((removed, added, moved))
+        if len(held) >= _HELD_SPLICES:  # (nothing moves for long: followed now, the held items let go)
+            self._settled()
+
+    def _settled(self) -> MovePlan | None:
+        """The plan (or None), having followed the splices held since the last frame that asked."""
+        plan = self._plan
+        held = self._held
+        if held:
+            self._held = []
+            if plan is not None:
+                plan.splice(*merged_splices(held))
+        return plan
 
     def replace(self, swaps: list[tuple[Any, Any, Any]]) -> None:
         """Items' transforms replaced by transforms (``(item, old, new)``, :mod:`.dirty`): each chain takes
         ``new`` at ``old``'s place, and the plan follows; :meth:`apply` of the new transforms then recomposes
         their rows."""
+        plan = self._settled()  # (before the chains change: held splices take the items' chains as they were)
         for item, old, new in swaps:
             item.chain = tuple([new if t is old else t for t in item.chain])
-        if self._plan is not None and swaps:
-            self._plan.replace(swaps)
+        if plan is not None and swaps:
+            plan.replace(swaps)
 
     def rows_rewritten(self, batches: list[Any], same: bool) -> None:
         """The surface fields of rows of ``batches`` were rewritten in place (not moved: the bounds, the
@@ -692,7 +787,7 @@ class TransformUpdater:
 
     def plan(self) -> MovePlan:
         """The installed items' :class:`MovePlan` (made now when there is none)."""
-        plan = self._plan
+        plan = self._settled()
         if plan is None:
             plan = self._plan = MovePlan(list(self.index.items()))
         return plan
@@ -714,7 +809,7 @@ class TransformUpdater:
             self.placed = False
             self.moved = []
             return self._install(updates)
-        plan = self._plan
+        plan = self._settled()
         if plan is not None:
             if len(changed) <= _FEW:
                 # an editor's drag, one simulated body: a few static transforms (the lean path, no passes over
@@ -876,6 +971,31 @@ class TransformUpdater:
             else:
                 self._rows_moved(batches)
         return count
+
+
+def merged_splices(splices: list[tuple[list[Any], list[Any], list[Any]]]) -> tuple[list[Any], list[Any], list[Any]]:
+    """One splice (removed, added, moved) doing what ``splices`` do one after the other.
+
+    An item added and removed again in between is neither; a moved item
+    removed later is only removed; added and moved items are taken where
+    they are now (their slots).  The lists hold every item until the merge
+    is done, so no two of them share an ``id``.
+    """
+    if len(splices) == 1:
+        return splices[0]
+    removed: list[Any] = []
+    added: dict[int, Any] = {}
+    moved: dict[int, Any] = {}
+    for gone, came, shifted in splices:
+        for item in gone:
+            if added.pop(id(item), None) is None:
+                removed.append(item)
+            moved.pop(id(item), None)
+        for item in came:
+            added[id(item)] = item
+        for item in shifted:
+            moved[id(item)] = item
+    return removed, list(added.values()), list(moved.values())
 
 
 def _note_clipping(clipping: set[int], items: Any) -> None:

@@ -12,15 +12,23 @@ highlighted.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ["Field", "InstanceLayout", "ROW", "SHADING_MODELS", "PHONG", "PBR", "UNLIT"]
+__all__ = ["Field", "InstanceLayout", "ROW", "SHADING_MODELS", "PHONG", "PBR", "UNLIT", "shading_model"]
 
 #: Shading models (the ``model`` component of the ``emission`` field, and the MODEL shader define).
 PHONG, PBR, UNLIT = 0, 1, 2
 SHADING_MODELS = {"phong": PHONG, "pbr": PBR, "unlit": UNLIT}
+
+
+def shading_model(appearance_model: str, description: Any) -> int:
+    """The shading model a surface row holds: the material description's (the deferred pipeline's), else
+    :data:`PBR` for a metallic-roughness appearance (``Appearance.model``), else :data:`PHONG`."""
+    if description is not None:
+        return description.model.number
+    return PBR if appearance_model == "pbr" else PHONG
 
 
 class Field(NamedTuple):

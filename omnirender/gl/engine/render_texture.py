@@ -33,6 +33,7 @@ import numpy as np
 
 from ...attributes import Texture
 from ...attributes._params import Param
+from ...core import version_key
 from ...core.camera import Camera
 
 __all__ = ["RenderTexture", "PipelineCycleError", "OFFLINE_ENGINES", "pipeline_scene", "visit"]
@@ -131,8 +132,7 @@ class RenderTexture(Texture):
 
     def content_key(self) -> tuple:
         """What the image depends on directly: the scene's and camera's versions, the size."""
-        camera = None if self._camera is None else (id(self._camera), self._camera.version)
-        return (id(self._scene), self._scene.version, camera, self._size)
+        return (version_key(self._scene), version_key(self._camera), self._size)
 
     # -- engines that render the pipeline themselves -------------------------------------------
     def image_array(self) -> np.ndarray:

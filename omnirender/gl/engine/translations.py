@@ -118,8 +118,9 @@ class TranslationMap:
         self.fill(plan, np.arange(n))
 
     # -- following the plan ----------------------------------------------------------
-    def refill(self, items: np.ndarray) -> None:
-        """The items ``items`` (indices) are filled again (:meth:`fill`) before the map is next read."""
+    def refill(self, items: np.ndarray | list[int]) -> None:
+        """The items ``items`` (indices: an array, or a list of a few) are filled again (:meth:`fill`) before
+        the map is next read (made an array then: a frame replacing one transform makes none)."""
         self._pending.append(items)
         self._parts = None
         self._multi_items = None
@@ -127,7 +128,7 @@ class TranslationMap:
     def _flush(self) -> None:
         pending = self._pending
         if pending:
-            items = pending[0] if len(pending) == 1 else np.unique(np.concatenate(pending))
+            items = np.asarray(pending[0], np.intp) if len(pending) == 1 else np.unique(np.concatenate(pending))
             self._pending = []
             self.fill(self._plan, items)
 
@@ -197,7 +198,7 @@ class TranslationMap:
                 self._extend("linear", extra)[-extra:] = _EYE3
         self.refill(np.arange(first_new, n))  # (rows moved: grouped again when next read)
 
-    def replaced(self, plan: Any, places: list[int], items: np.ndarray) -> None:
+    def replaced(self, plan: Any, places: list[int], items: np.ndarray | list[int]) -> None:
         """Follow :meth:`MovePlan.replace`: transforms at ``places`` are others now, the chains of ``items``
         (indices) changed or hold them."""
         self._grow(plan)

@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from ...core import version_key
 from ...core.camera import look_at_matrix, orthographic_matrix, perspective_matrix
 from ..engine.attributes import ScissorTest
 from ..engine.drawlist import Batch, Scope, Segment, world_bounds
@@ -473,8 +474,8 @@ class ShadowMapStage(FrameStage):
         if self._fitted is None or self._fitted[0] is not bounds:  # the index keeps the bounds while they hold
             self._fitted = (bounds, *fit_bounds(*bounds))
         lo, hi = self._fitted[1], self._fitted[2]
-        key = (id(settings), settings.version, lo.tobytes(), hi.tobytes(),
-               tuple((id(light), light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
+        key = (version_key(settings), lo.tobytes(), hi.tobytes(),
+               tuple((light, light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
         plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
         select = self._select(engine, root) if installed else casts_shadows
         if plan is None or self._cache[3] is not select:
