@@ -510,8 +510,7 @@ class MovePlan:
             self._fill_plain(affected)
         if self._map is not None:
             self._follow_maps(positions, affected)
-        local, items, plain = self.local, self.items, self._plain
-        identity = len(self.transforms)
+        items, plain = self.items, self._plain
         rows_of: dict[int, tuple[Any, list[int]]] = {}
         for i in affected:
             item = items[i]
@@ -530,20 +529,7 @@ class MovePlan:
             else:
                 if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
                     only = plain[i] = (chain, self._translation_only(i, item))
-                if only[1]:
-                    # the model is the translation's matrix, written from its offset in plain floats (the
-                    # numbers the product below gives); the whole matrix, not only its translation: the row may
-                    # hold another transform's (one replaced in the chain since it was written)
-                    x, y, z = chain[0].offset
-                    values: Any = (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
-                else:
-                    links = [k for k in self.chain[i].tolist() if k != identity]
-                    model = matrices[links[0]]
-                    for k in links[1:]:
-                        model = model @ matrices[k]
-                    if local is not None:
-                        model = model @ local[i]
-                    values = model.ravel("F")  # (M transposed, row by row: one numpy call)
+                values = self._model_row(i, chain, only[1])
                 if slot is None:  # an item without a batch (transparent, overlay): its own row
                     item.row[_MODEL] = values
                     self.rows_only = False
@@ -565,6 +551,24 @@ class MovePlan:
         if moved:
             self.rows_only = False
         return len(affected) + moved
+
+    def _model_row(self, i: int, chain: tuple[Any, ...], translation_only: bool) -> Any:
+        """Item ``i``'s model matrix as the 16 numbers of its row (M transposed): with ``translation_only``, its
+        chain's one translation's matrix written from its offset in plain floats (the numbers the product
+        gives); the whole matrix, not only its translation: the row may hold another transform's (one replaced
+        in the chain since it was written)."""
+        if translation_only:
+            x, y, z = chain[0].offset
+            return (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
+        identity = len(self.transforms)
+        matrices = self.matrices
+        links = [k for k in self.chain[i].tolist() if k != identity]
+        model = matrices[links[0]]
+        for k in links[1:]:
+            model = model @ matrices[k]
+        if self.local is not None:
+            model = model @ self.local[i]
+        return model.ravel("F")  # (M transposed, row by row: one numpy call)
 
     def _translation_only(self, i: int, item: Any) -> bool:
         """Whether item ``i``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no
