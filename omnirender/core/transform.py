@@ -225,7 +225,10 @@ class Matrix(Transform):
                 f"Matrix: the bottom row must be (0, 0, 0, 1) (an affine transform), got {tuple(last)}; "
                 "projective matrices are not supported by every engine"
             )
-        self._set_matrix(m)
+        # stored without the version bump and journal entry of a change: nothing can have compiled a matrix being
+        # made (as a Translation being made; a node's transform replaced per frame tells no journal of it)
+        m.setflags(write=False)
+        _set_matrix(self, m)
 
     def parameters(self) -> dict:
         return {"matrix": self._matrix.tolist()}

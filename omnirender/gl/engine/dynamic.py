@@ -128,6 +128,9 @@ class MovePlan:
         #: (the list, the places of those found, those found, whether all are plain translations, ids of those not
         #: found): kept through splices and replacements (see :meth:`_add_transforms`, :meth:`replace`)
         self._last: tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None = None
+        #: places new transforms took since (replacements): dropped from the last look-ups when they are next used
+        #: (:meth:`_current_last`), not in the frame that replaced one (a pass over thousands of look-ups)
+        self._taken: list[int] = []
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -220,6 +223,7 @@ class MovePlan:
         last = self._last
         if last is not None and not last[4].isdisjoint(map(id, fresh)):
             self._last = None  # (the last look-ups did not find some of them)
+            self._taken = []
         identity = len(self.transforms)
         # the identity's place stays an identity (the padding of every chain and the removed items' chains
         # keep pointing at it: no pass over them); the fresh matrices and the new identity follow it
@@ -298,19 +302,33 @@ class MovePlan:
 
     def _taken_places(self, taken: list[int]) -> None:
         """New transforms took the places ``taken`` of replaced ones: the last look-ups drop the old ones (not
-        found now), or are forgotten when a new one is among those they did not find."""
+        found now) when next used (:meth:`_current_last`), or are forgotten now when a new one is among those
+        they did not find."""
         last = self._last
         if last is None:
             return
-        changed, positions, moved, translations, missing = last
-        if not missing.isdisjoint(map(id, (self.transforms[k] for k in taken))):
+        if not last[4].isdisjoint(map(id, (self.transforms[k] for k in taken))):
             self._last = None
+            self._taken = []
             return
-        hit = np.isin(positions, taken)
-        if hit.any():
-            keep = ~hit
-            gone = set(map(id, compress(moved, hit.tolist())))
-            self._last = (changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone)
+        self._taken.extend(taken)
+
+    def _current_last(self) -> tuple[list[Any], np.ndarray, list[Any], bool, set[int]] | None:
+        """The last look-ups without the transforms whose places were taken since (:meth:`_taken_places`)."""
+        last = self._last
+        taken = self._taken
+        if taken:
+            self._taken = []
+            if last is not None:
+                changed, positions, moved, translations, missing = last
+                hit = np.isin(positions, taken)
+                if hit.any():
+                    keep = ~hit
+                    gone = set(map(id, compress(moved, hit.tolist())))
+                    last = self._last = (
+                        changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone
+                    )  # fmt: skip
+        return last
 
     def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
         """One transform replaced above one item, the only one below it (a node's transform replaced: the
@@ -404,7 +422,7 @@ class MovePlan:
             return 0
         if len(changed) <= _FEW:
             return self.apply_few(changed)
-        last = self._last
+        last = self._current_last()
         if last is not None and last[0] is changed:  # the same transforms as last frame (same_as_last)
             _, positions, moved, translations, _ = last
         else:
