@@ -599,10 +599,11 @@ class Batch:
     def row_changed(self, index: int) -> None:
         """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
         self.moved_range = None
-        if self.dirty is None and self.sparse is None:
+        sparse = self.sparse
+        if sparse is None and self._dirty is None:
             self.sparse = [index]
-        elif self.sparse is not None and len(self.sparse) < 32:
-            self.sparse.append(index)
+        elif sparse is not None and len(sparse) < 32:
+            sparse.append(index)
         else:
             self.version += 1
             self._log(index, index + 1)

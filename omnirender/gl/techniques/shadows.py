@@ -363,6 +363,9 @@ class ShadowMapStage(FrameStage):
     ``partial`` and ``kept`` (faces), ``pixels`` (texels redrawn by partial
     updates) and ``regions`` (face index, (x, y, width, height) atlas texels from
     the bottom-left corner, of each partial update).
+
+    It forgets nothing when placements change (no :meth:`changed`): the
+    engine's render index keeps the casters' bounds and journal up to date.
     """
 
     name = "shadow maps"
@@ -380,9 +383,6 @@ class ShadowMapStage(FrameStage):
         self._selected: tuple[Any, int, Any] | None = None
         #: (the casters' bounds, the bounds fitted to them) of the last frame
         self._fitted: tuple[Any, np.ndarray, np.ndarray] | None = None
-
-    def changed(self) -> None:
-        """Nothing to forget: the engine's render index keeps the casters' bounds and journal up to date."""
 
     def replayable(self, engine: Any) -> bool:
         """What it draws follows the draw list, lights and settings: a frame whose atlas faces were all kept
