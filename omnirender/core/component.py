@@ -202,8 +202,9 @@ def flush_changes() -> None:
             changed[id(component)] = component
         one = component._owners
         if one:
-            touch_one = OWNER_TOUCH[0]
-            if touch_one is not None:
+            if len(one) == 1:  # one owner: its own touch (what the owners' touch does for a few), no list made
+                one[0].touch()
+            elif (touch_one := OWNER_TOUCH[0]) is not None:
                 # (an array's kept owner list as it is: the owners' touch recognises it, no pass over it)
                 touch_one(one if one.__class__ is _Owners else list(one))
             else:

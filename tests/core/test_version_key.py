@@ -33,7 +33,7 @@ def test_equal_components_have_different_keys():
 
 def test_a_memo_keeps_the_components_of_its_keys_alive():
     memo = {version_key(om.Material(diffuse=(1, 0, 0))): "red"}
-    (material, _), = memo
+    ((material, _),) = memo
     alive = weakref.ref(material)
     del material
     gc.collect()

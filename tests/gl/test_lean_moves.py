@@ -227,6 +227,41 @@ def test_a_moved_node_whose_translation_is_replaced_then_moves_by_its_new_transf
             assert np.array_equal(image.array, fresh(scene)), name
 
 
+def test_a_transform_replaced_before_any_move_then_moved_draws_as_a_fresh_engine():
+    """An item asked whether its row is its one Translation's matrix (then a move writes only the translation)
+    is asked when its row holds that: a node compiled with a rotating Matrix whose Matrix is replaced by a
+    Translation before any move, then moved, draws without the rotation; so do a node whose Translation is
+    replaced by that Matrix and back, and nodes never moved before or moved twice."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    spin = np.eye(4)
+    spin[:3, :3] = [[0.0, -1.6, 0.0], [0.5, 0.0, 0.0], [0.0, 0.0, 1.0]]
+    for name in ("p2", "p3"):
+        node = nodes[name]
+        spin[:3, 3] = node.items[0].offset
+        node.remove(node.items[0])
+        node.insert(0, om.Matrix(spin))
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        node = nodes["p2"]
+        node.remove(node.items[0])  # the first change: the transform -> items map is made for it
+        node.insert(0, om.Translation(-0.8, -1.2, 0.6))
+        image = e.render(scene, read_depth=False)
+        assert np.array_equal(image.array, fresh(scene))
+        for frame, name in enumerate(("p2", "p0", "p0", "p2", "p3")):
+            node = nodes[name]
+            if name == "p3" and isinstance(node.items[0], om.Matrix):
+                node.remove(node.items[0])
+                node.insert(0, om.Translation(1.0, -1.0, 0.2))
+                e.render(scene, read_depth=False)
+            t = node.items[0]
+            t.offset = (t.offset[0] + 0.2, t.offset[1] + 0.1 * frame, 0.3)
+            image = e.render(scene, read_depth=False)
+            assert e.stats["compiled"] is False, name
+            assert np.array_equal(image.array, fresh(scene)), (frame, name)
+
+
 def test_a_splice_after_a_lean_move_patches_the_declarations_instead_of_walking_every_child(monkeypatch):
     """The lean path leaves the root's declaration result at an older version (nothing it declares moved); a
     node added to or removed from the root afterwards still patches that result (its lists are a guide), so
@@ -341,3 +376,25 @@ def test_one_moved_node_reaches_every_engine_drawing_the_scene():
             image = e.render(scene, read_depth=False)
             assert e.stats["compiled"] is False and e.stats["incremental"] == 1
             assert np.array_equal(image.array, fresh(scene))
+
+
+def test_a_highlight_after_moves_and_a_highlighted_node_moved_draw_as_a_fresh_engine():
+    """Whether some row of a batch is highlighted is kept while only model matrices change (moves): a node
+    moved, then highlighted (its Material replaced by a highlighting one: a dirty bit), then moved again, and
+    the highlight taken away, each draw as a fresh engine's picture."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        node = nodes["p3"]
+        for step in range(5):
+            if step == 1:
+                node.insert(2, om.Highlight(color=(1.0, 0.9, 0.1)))  # the node's shape highlighted
+            if step == 4:
+                node.remove(node.items[2])
+            t = node.items[0]
+            t.offset = (t.offset[0], t.offset[1] + 0.15, 0.2 * step)
+            nodes["p1"].items[0].offset = (-1.9, -1.5 + 0.1 * step, 0.0)
+            image = e.render(scene, read_depth=False)
+            assert np.array_equal(image.array, fresh(scene)), step

@@ -599,10 +599,11 @@ class Batch:
     def row_changed(self, index: int) -> None:
         """Row ``index`` must be uploaded (kept as a sparse list while short, else as the dirty range)."""
         self.moved_range = None
-        if self.dirty is None and self.sparse is None:
+        sparse = self.sparse
+        if sparse is None and self._dirty is None:
             self.sparse = [index]
-        elif self.sparse is not None and len(self.sparse) < 32:
-            self.sparse.append(index)
+        elif sparse is not None and len(sparse) < 32:
+            sparse.append(index)
         else:
             self.version += 1
             self._log(index, index + 1)
@@ -615,6 +616,14 @@ class Batch:
             return
         self.version += 1
         self._log(index, index + 1)
+
+    def row_moved(self, index: int) -> None:
+        """Row ``index``'s model matrix alone changed (a move): :meth:`row_changed`, and the answer to whether
+        some row is highlighted holds (``highlight_seen``: the drawer does not read every row again)."""
+        seen = self.highlight_seen
+        self.row_changed(index)
+        if seen is not None and seen[0] == self.version - 1:
+            self.highlight_seen = (self.version, seen[1])
 
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""

@@ -33,6 +33,7 @@ __all__ = ["MovePlan", "TransformUpdater"]
 
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
+_TX, _TY, _TZ = range(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # its three columns, one by one
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
@@ -99,9 +100,12 @@ class MovePlan:
         #: followed through splices): a frame moving a few transforms finds their items without a pass over all
         self._users: dict[int, list[int]] | None = None
         #: index in items -> (the item's chain, whether its model is that chain's one Translation's matrix: one
-        #: link, no shape-local matrix but the identity): asked on the item's first few-moved frame and again when
-        #: its chain is another (a transform replaced); an index names one item for the plan's life (splices
-        #: append new items and leave removed ones' places)
+        #: link, no shape-local matrix but the identity): asked of every item not moving on the first few-moved
+        #: frame, of an item not asked then on its first few-moved frame, and again when its chain is another (a
+        #: transform replaced);
+        #: while the entry holds, the item's row holds that matrix (the rows follow the chains), so a move writes
+        #: only its translation; an index names one item for the plan's life (splices append new items and leave
+        #: removed ones' places)
         self._plain: dict[int, tuple[tuple[Any, ...], bool]] = {}
         #: per item index, whether its shape-local matrix is the identity (made from ``local`` at once when first
         #: asked; items spliced in later are asked one by one)
@@ -356,6 +360,16 @@ class MovePlan:
                 _add_user(users, item, i)
         return users
 
+    def _fill_plain(self, moving: dict[int, None]) -> None:
+        """Every item's :attr:`_plain` entry but those of the items ``moving`` now (a frame moving an item for the
+        first time then finds it).  Every other item's row holds its chain's product: a frame that replaced
+        transforms (their items' chains changed, their rows not yet) applies the new ones at once, and their
+        items are among ``moving``, whose rows :meth:`apply_few` writes in full."""
+        plain, translation_only = self._plain, self._translation_only
+        for i, item in enumerate(self.items):
+            if i not in plain and i not in moving:
+                plain[i] = (item.chain, translation_only(i, item))
+
     def _extend(self, name: str, extra: int) -> np.ndarray:
         """The array attribute ``name`` with ``extra`` more rows, appended in place (:func:`.spare.extend_held`)."""
         return extend_held(self, self._stores, name, extra)
@@ -480,7 +494,10 @@ class MovePlan:
         :attr:`rows_only` says afterwards whether :attr:`moved_rows` names every row rewritten (False when an
         item without a batch or an instance set moved)."""
         self.rows_only = True
-        users = self._users_map()
+        users = self._users
+        fill = users is None  # the first few-moved frame: every other item's entry of _plain too (below)
+        if fill:
+            users = self._users_map()
         index = self.index
         matrices = self.matrices
         positions: list[int] = []
@@ -490,60 +507,86 @@ class MovePlan:
             if k is None:
                 continue
             if t.__class__ is Translation:
-                matrices[k, :3, 3] = t.offset  # the rest of a translation's matrix is the identity already
+                # the rest of a translation's matrix is the identity already (three stores: no view of a slice)
+                x, y, z = t.offset
+                m = matrices[k]
+                m[0, 3] = x
+                m[1, 3] = y
+                m[2, 3] = z
             else:
                 matrices[k] = t.matrix
             positions.append(k)
-            for i in users.get(id(t), ()):
-                affected[i] = None
+            found = users.get(id(t))
+            if found:
+                if len(found) == 1:
+                    affected[found[0]] = None
+                else:
+                    affected.update(dict.fromkeys(found))
         if not positions:
             return 0
+        if fill:
+            self._fill_plain(affected)
         if self._map is not None:
             self._follow_maps(positions, affected)
-        local, items, plain = self.local, self.items, self._plain
-        identity = len(self.transforms)
+        items, plain = self.items, self._plain
         rows_of: dict[int, tuple[Any, list[int]]] = {}
         for i in affected:
             item = items[i]
             chain = item.chain
-            only = plain.get(i)
-            if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
-                only = plain[i] = (chain, self._translation_only(i, item))
-            if only[1]:
-                # the model is the translation's matrix, written from its offset in plain floats (rows hold M
-                # transposed; the numbers the product below gives); the whole matrix, not only its translation:
-                # the row may hold another transform's (one replaced in the chain since it was written)
-                x, y, z = chain[0].offset
-                where, values = _MODEL, (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
-            else:
-                links = [k for k in self.chain[i].tolist() if k != identity]
-                model = matrices[links[0]]
-                for k in links[1:]:
-                    model = model @ matrices[k]
-                if local is not None:
-                    model = model @ local[i]
-                where, values = _MODEL, model.ravel("F")  # (M transposed, row by row: one numpy call)
             slot = item.slot  # (batch, row): what batch_of and row_of hold for it, without numpy look-ups
-            if slot is None:  # an item without a batch (transparent, overlay): its own row
-                item.row[where] = values
-                self.rows_only = False
-                continue
-            batch, r = slot
-            batch.rows[r, where] = values
-            batch.row_changed(r)
+            only = plain.get(i)
+            if only is not None and only[0] is chain and only[1] and slot is not None:
+                # the item's row was written as this chain's one translation's matrix (below): only the
+                # translation's three numbers change (rows hold M transposed: they lie at 12:15 of the model)
+                batch, r = slot
+                row = batch.rows[r]
+                x, y, z = chain[0].offset
+                row[_TX] = x
+                row[_TY] = y
+                row[_TZ] = z
+            else:
+                if only is None or only[0] is not chain:  # (a replaced transform gives the item another chain)
+                    only = plain[i] = (chain, self._translation_only(i, item))
+                values = self._model_row(i, chain, only[1])
+                if slot is None:  # an item without a batch (transparent, overlay): its own row
+                    item.row[_MODEL] = values
+                    self.rows_only = False
+                    continue
+                batch, r = slot
+                batch.rows[r, _MODEL] = values
+            batch.row_moved(r)  # (its model alone: whether some row is highlighted holds)
             found = rows_of.get(id(batch))
             if found is None:
                 rows_of[id(batch)] = (batch, [r])
             else:
                 found[1].append(r)
+        moved_rows = self.moved_rows
         for batch, where in rows_of.values():
-            self.moved_rows.append((batch, np.array(where, np.intp)))
+            moved_rows.append((batch, np.array(where, np.intp)))
         if not self.instance_items:
             return len(affected)
         moved = self._apply_instances(set(positions))
         if moved:
             self.rows_only = False
         return len(affected) + moved
+
+    def _model_row(self, i: int, chain: tuple[Any, ...], translation_only: bool) -> Any:
+        """Item ``i``'s model matrix as the 16 numbers of its row (M transposed): with ``translation_only``, its
+        chain's one translation's matrix written from its offset in plain floats (the numbers the product
+        gives); the whole matrix, not only its translation: the row may hold another transform's (one replaced
+        in the chain since it was written)."""
+        if translation_only:
+            x, y, z = chain[0].offset
+            return (1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0)
+        identity = len(self.transforms)
+        matrices = self.matrices
+        links = [k for k in self.chain[i].tolist() if k != identity]
+        model = matrices[links[0]]
+        for k in links[1:]:
+            model = model @ matrices[k]
+        if self.local is not None:
+            model = model @ self.local[i]
+        return model.ravel("F")  # (M transposed, row by row: one numpy call)
 
     def _translation_only(self, i: int, item: Any) -> bool:
         """Whether item ``i``'s model matrix is its chain's one ``Translation``'s matrix (no other link; no

@@ -104,6 +104,10 @@ class FrameRunner:
         self._restyles: tuple[Any, ...] | None = None
         #: (stages, those of them that override FrameStage.follow_rows): what runs before a replay after moves
         self._followers: tuple[tuple[Any, ...], list[Any]] | None = None
+        #: (stages, those of them that override FrameStage.changed): what :meth:`rows_moved` tells
+        self._forgetters: tuple[tuple[Any, ...], list[Any]] | None = None
+        #: (plan, stages, the followers that follow that plan): what runs before the plan's replays after moves
+        self._active: tuple[Any, tuple[Any, ...], list[Any]] | None = None
         #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
         self._resized: dict[int, Any] = {}
 
@@ -177,10 +181,15 @@ class FrameRunner:
                 self.placements_changed()
                 return
             self._follows = follows
-        for stage in stages:
+        forgetters = self._forgetters
+        if forgetters is None or forgetters[0] is not stages:
+            base = FrameStage.changed
+            forgetters = self._forgetters = (stages, [s for s in stages if type(s).changed is not base])
+        for stage in forgetters[1]:  # (the stages that forget something: a drag calls no empty method per frame)
             stage.changed()
+        moved = self._moved
         for batch in batches:
-            self._moved[id(batch)] = batch
+            moved[id(batch)] = batch
 
     def rows_restyled(self, batches: list[Any]) -> None:
         """Only the surface fields of rows of ``batches`` changed in place (a Material replaced by one drawn
@@ -399,11 +408,15 @@ class FrameRunner:
         """Before a plan is replayed after rows moved in place: the stages that keep something up to date with
         rows (:meth:`~.stages.FrameStage.follow_rows`: the shadow maps' regions the moved casters cover) draw it
         now; False when one says the plan's draws no longer hold (the frame is drawn in full)."""
-        followers = self._followers
-        if followers is None or followers[0] is not stages:
-            base = FrameStage.follow_rows
-            followers = self._followers = (stages, [s for s in stages if type(s).follow_rows is not base])
-        active = [stage for stage in followers[1] if stage.follows_plan(plan)]
+        found = self._active
+        if found is None or found[0] is not plan or found[1] is not stages:
+            followers = self._followers
+            if followers is None or followers[0] is not stages:
+                base = FrameStage.follow_rows
+                followers = self._followers = (stages, [s for s in stages if type(s).follow_rows is not base])
+            # (asked once per recorded plan: FrameStage.follows_plan)
+            found = self._active = (plan, stages, [stage for stage in followers[1] if stage.follows_plan(plan)])
+        active = found[2]
         if not active:
             return True  # nothing to draw: the frame's target and state stay as they are for the replay
         engine, state, report = self.engine, self.state, self.report

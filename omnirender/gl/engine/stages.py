@@ -84,7 +84,8 @@ class FrameStage:
     def follows_plan(self, plan: Any) -> bool:
         """Whether :meth:`follow_rows` has anything to draw before ``plan`` is replayed (True by default); a
         stage saying False is not called, and when none says True the frame is replayed without binding its
-        target again or writing every uniform (e.g. shadow maps the recorded frame did not draw)."""
+        target again or writing every uniform (e.g. shadow maps the recorded frame did not draw).  Asked once
+        per recorded plan: the answer must depend on the plan only."""
         return True
 
     def release(self) -> None:

@@ -154,16 +154,16 @@ class Mirrors(GLTechnique):
 
 
 class MirrorStage(FrameStage):
-    """The frame stage of the planar mirrors, after the frame technique (it reflects what that drew)."""
+    """The frame stage of the planar mirrors, after the frame technique (it reflects what that drew).
+
+    It forgets nothing when placements change (no :meth:`changed`): the engine's render index finds the
+    mirrors once per draw list, and the planes are read from the rows every frame.
+    """
 
     name = "mirrors"
 
     def __init__(self) -> None:
         self._warned = False
-
-    def changed(self) -> None:
-        """Nothing to forget: the engine's render index finds the mirrors once per draw list, and the planes
-        are read from the rows every frame."""
 
     def replayable(self, engine: Any) -> bool:
         """What it draws follows the draw list, lights and settings; a frame that draws anything here is
