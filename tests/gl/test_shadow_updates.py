@@ -32,6 +32,16 @@ def grid_scene(light: om.Light | None = None) -> tuple[om.Node, list[om.Node], o
     return scene, nodes, box
 
 
+@pytest.fixture(autouse=True, params=[True, False], ids=["picked", "every-caster"])
+def partial_picks(request, monkeypatch):
+    """Every test with both ways of a partial update: the casters meeting the region picked (software
+    rasterisers) and every caster drawn under the region's scissor (GPUs): the same maps, texel for texel."""
+    from omnirender.gl.techniques.shadows import ShadowMapStage
+
+    monkeypatch.setattr(ShadowMapStage, "partial_picks", request.param)
+    return request.param
+
+
 def engine():
     from omnirender.gl import GLEngine
 

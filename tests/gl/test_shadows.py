@@ -220,3 +220,20 @@ def test_pass_data_validation():
         om.gl.Shader(defines={"lower": True})
     with pytest.raises(ValueError, match="depth_test"):
         om.gl.FullScreen("vec4 effect(vec2 uv) { return vec4(1.0); }", depth_test=True)
+
+
+def test_partial_shadow_updates_pick_casters_only_on_a_software_rasteriser():
+    """The default way of a partial shadow-map update follows the GL renderer: llvmpipe and softpipe pay for
+    every vertex a scissor rejects (the casters meeting the region are picked), a GPU does not (every caster is
+    drawn under the region's scissor)."""
+    from omnirender.gl.techniques.shadows import software_rasterizer
+
+    class Ctx:
+        def __init__(self, renderer: str) -> None:
+            self.info = {"GL_RENDERER": renderer}
+
+    assert software_rasterizer(Ctx("llvmpipe (LLVM 15.0.6, 256 bits)"))
+    assert software_rasterizer(Ctx("softpipe"))
+    assert not software_rasterizer(Ctx("NVIDIA H200/PCIe/SSE2"))
+    assert not software_rasterizer(Ctx("NOOP"))
+    assert not software_rasterizer(Ctx("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 17.0.6, DRM 3.57)"))

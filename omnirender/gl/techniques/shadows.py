@@ -166,7 +166,8 @@ class ShadowMaps(GLTechnique):
 class _Face:
     """One map of the atlas: a light camera (view, projection), its tile, texel size, whether it is drawn."""
 
-    __slots__ = ("view", "proj", "texel", "drawn", "tile", "matrix", "rows", "ortho", "signature", "template")
+    __slots__ = ("view", "proj", "texel", "drawn", "tile", "matrix", "rows", "ortho", "signature", "template",
+                 "every")  # fmt: skip
 
     def __init__(self, view: np.ndarray, proj: np.ndarray, texel: tuple[float, float], drawn: bool = True) -> None:
         self.view, self.proj, self.texel, self.drawn = view, proj, texel, drawn
@@ -179,6 +180,8 @@ class _Face:
         #: what its texels depend on (:func:`_signature`, set with its tile) and its partial passes' pattern
         self.signature = b""
         self.template: Pass | None = None
+        #: (the full passes' select, the pattern of its partial passes that draw every caster) (_every_caster_pass)
+        self.every: tuple[Any, Pass] | None = None
 
 
 class _MapPasses(GLTechnique):
@@ -370,6 +373,13 @@ class ShadowMapStage(FrameStage):
 
     name = "shadow maps"
 
+    #: how a partial update draws the region of a face: True picks the casters whose boxes meet it (their rows
+    #: copied into a batch of their own: what a software rasteriser, which pays for every vertex, needs); False
+    #: draws every caster under the region's scissor (one draw per batch, nothing picked per row: what a GPU,
+    #: which clips what the scissor rejects for nearly nothing, needs); None (the default) decides by the GL
+    #: renderer (llvmpipe, softpipe: True; else False)
+    partial_picks: bool | None = None
+
     def __init__(self) -> None:
         self._cache: Any = None  # (key, plan, its technique, the select it was made with)
         #: what the atlas holds: its description and, per tile, the signature of the face drawn into it
@@ -413,6 +423,13 @@ class ShadowMapStage(FrameStage):
         for _, batch in self._scratch.values():
             batch.release()
         self._scratch.clear()
+
+    def _picks(self, engine: Any) -> bool:
+        """Whether partial updates pick the casters meeting the region (:attr:`partial_picks`)."""
+        picks = self.partial_picks
+        if picks is None:
+            picks = self.partial_picks = software_rasterizer(engine.ctx)
+        return picks
 
     def _select(self, engine: Any, root: Scope) -> Any:
         """The full passes' item predicate: ``casts_shadows``, or None when every opaque batch of the draw list
@@ -511,19 +528,34 @@ class ShadowMapStage(FrameStage):
             calls += frame.run(_MapPasses([_face_pass(plan, k, face, select) for k, face in full]), root)
             report["full"] = len(full)
         if partial:
-            casters = engine.index.caster_boxes() if installed else None
-            for k, face, region in partial:
+            calls += self._draw_partial(frame, root, plan, partial, select, report)
+        return calls
+
+    def _draw_partial(
+        self, frame: Any, root: Scope, plan: ShadowPlan, partial: list[tuple[int, _Face, tuple[int, int, int, int]]],
+        select: Any, report: dict[str, Any],
+    ) -> int:  # fmt: skip
+        """Redraw the changed ``region`` of each ``(k, face, region)`` of ``partial`` (:attr:`partial_picks`: the
+        casters meeting it picked, or every caster under its scissor); returns the draw calls."""
+        engine = frame.engine
+        calls = 0
+        picks = self._picks(engine)
+        if not picks:  # every caster drawn under the regions' scissors: one run, nothing picked
+            calls = frame.run(_MapPasses([_every_caster_pass(plan, *p, select) for p in partial]), root)
+        casters = engine.index.caster_boxes() if picks and engine.root_scope is not None else None
+        for k, face, region in partial:
+            if picks:
                 if casters is None:  # some caster is not in a batch: the face is drawn in full
                     calls += frame.run(_MapPasses([_face_pass(plan, k, face, select)]), root)
                     report["full"] += 1
                     continue
                 scope = self._casters_in(casters, face, face.signature, plan.resolution, region)
                 calls += frame.run(_MapPasses([_partial_pass(plan, k, face, region)]), scope)
-                col, row = face.tile
-                r = plan.resolution
-                report["partial"] += 1
-                report["pixels"] += region[2] * region[3]
-                report["regions"].append((k, (col * r + region[0], row * r + region[1], region[2], region[3])))
+            col, row = face.tile
+            r = plan.resolution
+            report["partial"] += 1
+            report["pixels"] += region[2] * region[3]
+            report["regions"].append((k, (col * r + region[0], row * r + region[1], region[2], region[3])))
         return calls
 
     def _casters_in(
@@ -701,6 +733,29 @@ def _partial_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int,
     col, row = face.tile
     x, y, w, h = region
     return template.scissored((col * r + x, plan.target.size[1] - (row * r + y) - h, w, h))
+
+
+def _every_caster_pass(plan: ShadowPlan, k: int, face: _Face, region: tuple[int, int, int, int], select: Any) -> Pass:
+    """The depth pass that redraws ``region`` of face ``k`` drawing every caster ``select`` picks (the full pass
+    of the face under the region's scissor and clear box: :attr:`ShadowMapStage.partial_picks` False); derived
+    from the face's full pass, made once per face and select."""
+    every = face.every
+    if every is None or every[0] is not select:
+        every = face.every = (select, _face_pass(plan, k, face, select))
+    r = plan.resolution
+    col, row = face.tile
+    x, y, w, h = region
+    return every[1].scissored((col * r + x, plan.target.size[1] - (row * r + y) - h, w, h), every[1].name + " partial")
+
+
+#: GL renderers that rasterise on the CPU (substrings of GL_RENDERER, lower case): every vertex costs CPU time
+_SOFTWARE = ("llvmpipe", "softpipe", "swrast", "software")
+
+
+def software_rasterizer(ctx: Any) -> bool:
+    """Whether ``ctx`` renders on the CPU (llvmpipe, softpipe): drawing what a scissor rejects costs time there."""
+    renderer = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return any(name in renderer for name in _SOFTWARE)
 
 
 _DEPTH_ONLY = Shader(depth_only=True)
