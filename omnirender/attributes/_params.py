@@ -41,13 +41,16 @@ Check = Callable[[str, str, Any], Any]
 class Param:
     """A validated public parameter stored in the private slot ``_<name>``."""
 
-    __slots__ = ("name", "slot", "check", "doc")
+    __slots__ = ("name", "slot", "check", "doc", "last")
 
     def __init__(self, check: Check, doc: str = "") -> None:
         self.check = check
         self.doc = doc
         self.name = ""
         self.slot = ""
+        #: ``(value, checked)`` of the last immutable value a constructor checked (:func:`assign_new`): the same
+        #: object again (a default left out, a constant the application passes every time) is not checked again
+        self.last: tuple[Any, Any] | None = None
 
     def __set_name__(self, owner: type, name: str) -> None:
         self.name = name
@@ -99,7 +102,20 @@ def assign_new(obj: Any, values: tuple[tuple[str, Any], ...]) -> None:
     owner = cls.__name__
     for name, value in values:
         param = getattr(cls, name)
-        object.__setattr__(obj, param.slot, param.check(owner, name, value))
+        last = param.last
+        if last is not None and last[0] is value:  # (the memo holds the value: its identity is its own)
+            checked = last[1]
+        else:
+            checked = param.check(owner, name, value)
+            kind = value.__class__
+            if kind in _IMMUTABLE or (kind is tuple and all(c.__class__ in _NUMBERS for c in value)):
+                param.last = (value, checked)
+        object.__setattr__(obj, param.slot, checked)
+
+
+#: kinds of values whose check gives the same result for the same object, always (assign_new's memo)
+_IMMUTABLE = frozenset((float, int, bool, str, type(None)))
+_NUMBERS = frozenset((float, int))
 
 
 class Parameterised:

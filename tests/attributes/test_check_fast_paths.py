@@ -81,3 +81,22 @@ def test_matrix_entries_at_the_limit_and_sums_beyond_it_are_decided_as_each_entr
     huge[3] = (0.0, 0.0, 0.0, 1.0)
     with pytest.raises(ValueError, match="Matrix: matrix must be at most"):
         om.Matrix(huge)
+
+
+def test_a_constructor_value_given_again_is_stored_as_its_first_check_gave_it():
+    """The same immutable object again (a default, a constant) is not checked again, and gives the same value;
+    a list given again is checked again (it may have changed), a bad value is refused every time."""
+    shared = (0.25, 0.5, 1)
+    first = om.Material(diffuse=shared, shininess=12)
+    again = om.Material(diffuse=shared, shininess=12)
+    assert again.diffuse == first.diffuse == (0.25, 0.5, 1.0) and all(type(c) is float for c in again.diffuse)
+    assert again.shininess == first.shininess == 12.0 and om.Material().ambient == (0.2, 0.2, 0.2)
+    colour = [0.1, 0.2, 0.3]
+    assert om.Material(diffuse=colour).diffuse == (0.1, 0.2, 0.3)
+    colour[0] = 2.0
+    with pytest.raises(ValueError, match=r"Material: diffuse values must be in \[0, 1\]"):
+        om.Material(diffuse=colour)
+    bad = (0.5, float("nan"), 0.5)
+    for _ in range(2):
+        with pytest.raises(ValueError, match="Material: diffuse"):
+            om.Material(diffuse=bad)

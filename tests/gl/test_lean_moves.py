@@ -376,3 +376,25 @@ def test_one_moved_node_reaches_every_engine_drawing_the_scene():
             image = e.render(scene, read_depth=False)
             assert e.stats["compiled"] is False and e.stats["incremental"] == 1
             assert np.array_equal(image.array, fresh(scene))
+
+
+def test_a_highlight_after_moves_and_a_highlighted_node_moved_draw_as_a_fresh_engine():
+    """Whether some row of a batch is highlighted is kept while only model matrices change (moves): a node
+    moved, then highlighted (its Material replaced by a highlighting one: a dirty bit), then moved again, and
+    the highlight taken away, each draw as a fresh engine's picture."""
+    from omnirender.gl import GLEngine
+
+    scene, nodes = scene_of_kinds()
+    with GLEngine(size=SIZE, samples=0, shadows=False) as e:
+        e.render(scene, read_depth=False)
+        node = nodes["p3"]
+        for step in range(5):
+            if step == 1:
+                node.insert(2, om.Highlight(color=(1.0, 0.9, 0.1)))  # the node's shape highlighted
+            if step == 4:
+                node.remove(node.items[2])
+            t = node.items[0]
+            t.offset = (t.offset[0], t.offset[1] + 0.15, 0.2 * step)
+            nodes["p1"].items[0].offset = (-1.9, -1.5 + 0.1 * step, 0.0)
+            image = e.render(scene, read_depth=False)
+            assert np.array_equal(image.array, fresh(scene)), step

@@ -862,20 +862,21 @@ def _takes_offsets(batch: Batch, state: DrawState, features: tuple) -> bool:
 
 
 def _highlighted(batch: Batch) -> bool:
-    """Whether some row of ``batch`` is highlighted; an instance set's answer is kept while its version holds.
+    """Whether some row of ``batch`` is highlighted; the answer is kept while the batch's version holds.
 
-    (Its rows change only through changes that count a version, and a move
-    keeps the answer: :meth:`Batch.moved`.  Reading the rows would also write
-    the translations a move left pending, a strided pass over every row.)
+    (Rows change only through changes that count a version, new rows forget
+    the answer, and a move keeps it: :meth:`Batch.moved`, :meth:`Batch.row_moved`.
+    Reading the rows is a strided pass over every row (a pass redrawing a
+    region of a shadow map after one moved caster paid it for 10,000 rows);
+    for an instance set it would also write the translations a move left
+    pending.)
     """
-    if batch.items and batch.items[0].instances is not None:
-        seen = batch.highlight_seen
-        if seen is not None and seen[0] == batch.version:
-            return seen[1]
-        flag = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
-        batch.highlight_seen = (batch.version, flag)
-        return flag
-    return bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+    seen = batch.highlight_seen
+    if seen is not None and seen[0] == batch.version:
+        return seen[1]
+    flag = bool((batch.rows[:, _HIGHLIGHT_ON] > 0.0).any())
+    batch.highlight_seen = (batch.version, flag)
+    return flag
 
 
 def _upload_instance_set(batch: Batch, columns: np.ndarray, order: np.ndarray | None, everything: bool = False) -> None:

@@ -617,6 +617,14 @@ class Batch:
         self.version += 1
         self._log(index, index + 1)
 
+    def row_moved(self, index: int) -> None:
+        """Row ``index``'s model matrix alone changed (a move): :meth:`row_changed`, and the answer to whether
+        some row is highlighted holds (``highlight_seen``: the drawer does not read every row again)."""
+        seen = self.highlight_seen
+        self.row_changed(index)
+        if seen is not None and seen[0] == self.version - 1:
+            self.highlight_seen = (self.version, seen[1])
+
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""
         self.changed(index, index + 1)

@@ -559,7 +559,7 @@ class MovePlan:
                     continue
                 batch, r = slot
                 batch.rows[r, _MODEL] = values
-            batch.row_changed(r)
+            batch.row_moved(r)  # (its model alone: whether some row is highlighted holds)
             found = rows_of.get(id(batch))
             if found is None:
                 rows_of[id(batch)] = (batch, [r])
