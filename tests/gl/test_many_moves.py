@@ -376,6 +376,12 @@ def test_a_simulation_loop_over_translations_that_changed_hands_between_frames()
             m = np.eye(4)
             m[:3, 3] = positions[j] + (0.0, 0.3, 0.0)
             node.insert(0, om.Matrix(m))
+            if frame == 1:  # many replaced in one frame (their places dropped from the plan's look-ups at once)
+                for k in range(100, 112):
+                    m = np.eye(4)
+                    m[:3, 3] = positions[k] - (0.0, 0.3, 0.0)
+                    nodes[k].remove(nodes[k].items[0])
+                    nodes[k].insert(0, om.Matrix(m))
             if frame == 5:  # one the loop moved in no node replaces a node's translation (taking its place)
                 node = nodes[60]
                 node.remove(node.items[0])

@@ -322,12 +322,16 @@ class MovePlan:
             if last is not None:
                 changed, positions, moved, translations, missing = last
                 hit = np.isin(positions, taken)
-                if hit.any():
-                    keep = ~hit
+                found = np.flatnonzero(hit).tolist()
+                if len(found) > _FEW:
+                    keep = (~hit).tolist()
                     gone = set(map(id, compress(moved, hit.tolist())))
-                    last = self._last = (
-                        changed, positions[keep], list(compress(moved, keep.tolist())), translations, missing | gone
-                    )  # fmt: skip
+                    moved = list(compress(moved, keep))
+                elif found:  # (a few: taken out of a copy by index, no pass over the thousands kept)
+                    moved = list(moved)
+                    gone = {id(moved.pop(i)) for i in reversed(found)}
+                if found:
+                    last = self._last = (changed, np.delete(positions, found), moved, translations, missing | gone)
         return last
 
     def _take_place(self, item: Any, old: Any, new: Any, where: dict[int, int], users: dict[int, list[int]]) -> bool:
@@ -434,8 +438,9 @@ class MovePlan:
             translations = len(moved) >= _MANY and set(map(type, moved)) == {Translation}
             # (kept also when some are not the plan's: one that comes with a splice is a fresh transform, and a
             # splice that brings fresh ones, or a replacement, forgets these look-ups)
-            missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
-            self._last = (changed, positions, moved, translations, missing) if len(moved) >= _MANY else None
+            if len(moved) >= _MANY:  # (a few moved, e.g. the transforms a frame's replacements brought: kept as is)
+                missing = set() if moved is changed else set(map(id, compress(changed, (~keep).tolist())))
+                self._last = (changed, positions, moved, translations, missing)
         if not len(positions):
             return 0
         if translations:
