@@ -160,19 +160,19 @@ class RenderIndex:
                 _uncount(high, old[1], hi.tolist())
             counts = (low, high)
         if new is not None and len(new[0]):
-            a, b = _column_min(new[0]), _column_max(new[1])
+            bound_lo, bound_hi, grown = _grown_bounds(lo, hi, new[0], new[1])
             if counts is not None:
                 low, high = counts
-                bound_lo, bound_hi = np.minimum(lo, a).tolist(), np.maximum(hi, b).tolist()
+                was_lo, was_hi = lo.tolist(), hi.tolist()
                 for k in range(3):
-                    if bound_lo[k] < lo[k]:
+                    if bound_lo[k] < was_lo[k]:
                         low[k] = 0  # a new bound: the rows on it are counted below
-                    if bound_hi[k] > hi[k]:
+                    if bound_hi[k] > was_hi[k]:
                         high[k] = 0
                 _uncount(low, new[0], bound_lo, -1)
                 _uncount(high, new[1], bound_hi, -1)
-            if (a < lo).any() or (b > hi).any():
-                lo, hi = np.minimum(lo, a), np.maximum(hi, b)
+            if grown:
+                lo, hi = np.array(bound_lo), np.array(bound_hi)
                 cached = ((lo, hi),)  # a new tuple: the bounds changed
         if counts is not None:
             self._extremes = counts
@@ -394,6 +394,23 @@ def _uncount(counts: list[int], boxes: np.ndarray, bound: list[float], sign: int
         return
     for k in range(3):
         counts[k] -= sign * int(np.count_nonzero(boxes[:, k] == bound[k]))
+
+
+def _grown_bounds(
+    lo: np.ndarray, hi: np.ndarray, new_lo: np.ndarray, new_hi: np.ndarray
+) -> tuple[list[float], list[float], bool]:
+    """The bounds ``[lo, hi]`` grown to take the boxes ``[new_lo, new_hi]`` ((N, 3)) as lists of floats, and
+    whether they grew; a few boxes (what moved in a frame) in Python floats, no numpy call per axis."""
+    if len(new_lo) <= 8:
+        was_lo, was_hi = lo.tolist(), hi.tolist()
+        lows, highs = new_lo.tolist(), new_hi.tolist()
+        a = [min(row[k] for row in lows) for k in range(3)]
+        b = [max(row[k] for row in highs) for k in range(3)]
+        grown = any(a[k] < was_lo[k] or b[k] > was_hi[k] for k in range(3))
+        return [min(was_lo[k], a[k]) for k in range(3)], [max(was_hi[k], b[k]) for k in range(3)], grown
+    a, b = _column_min(new_lo), _column_max(new_hi)
+    grown = bool((a < lo).any() or (b > hi).any())
+    return np.minimum(lo, a).tolist(), np.maximum(hi, b).tolist(), grown
 
 
 def _column_min(a: np.ndarray) -> np.ndarray:
