@@ -409,3 +409,32 @@ def test_a_simulation_loop_over_translations_that_changed_hands_between_frames()
             group_move.offset = (0.0, -0.5 * frame, 0.0)  # the group's rows recomposed from the plan's matrices
             image = e.render(scene, background=(0, 0, 0))
             assert np.array_equal(image.array, fresh(scene)), frame
+
+
+def test_a_drag_after_a_setter_loop_moves_one_transform_at_a_time_through_the_map() -> None:
+    """After a setter loop made the translation map, one moved transform a frame (the few-moves path): a child
+    below two translations, a parent whose children's rows are made from it, a plain translation, the rotation."""
+    scene, moves, parents, spin = nested()
+    with engine() as e:
+        e.render(scene, background=(0, 0, 0))
+        for t in moves:  # the map is made by a frame of many moves
+            x, y, z = t.offset
+            t.offset = (x + 0.1, y - 0.2, z)
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        odd_child = moves[12]  # group 1's second child: below the rotation and its own translation
+        for frame, t in enumerate([moves[1], parents[1], odd_child, moves[2], parents[0]]):
+            x, y, z = t.offset
+            t.offset = (x - 0.3, y + 0.4 * (frame + 1), z)
+            image = e.render(scene, background=(0, 0, 0))
+            assert e.stats["compiled"] is False and e.stats["incremental"] >= 1
+            assert np.array_equal(image.array, fresh(scene)), frame
+        spin.angle = 45.0
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        moves[3].offset = (0.5, 0.5, 0.0)
+        assert np.array_equal(e.render(scene, background=(0, 0, 0)).array, fresh(scene))
+        for t in moves:  # a setter loop again: the map followed what the drag moved other than through it
+            x, y, z = t.offset
+            t.offset = (x, y + 0.3, z)
+        image = e.render(scene, background=(0, 0, 0))
+        assert e.stats["compiled"] is False
+        assert np.array_equal(image.array, fresh(scene))

@@ -307,7 +307,6 @@ class BatchDrawer:
             or batch.offsets is not None
             or batch.capacity < n
             or batch.geometry.buffers is None
-            or (batch.items and batch.items[0].instances is not None)
         ):
             return False
         if not (batch.sparse or batch.dirty is not None):

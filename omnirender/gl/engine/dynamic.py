@@ -531,7 +531,9 @@ class MovePlan:
             return 0
         if fill:
             self._fill_plain(affected)
-        if self._map is not None:
+        found_map = self._map
+        if found_map is not None and found_map.stale(positions):  # (_follow_maps, asked here: a drag's frames
+            # after a simulation's, which made the map, call no method that returns at once)
             self._follow_maps(positions, affected)
         items, plain = self.items, self._plain
         rows_of: dict[int, tuple[Any, list[int]]] = {}

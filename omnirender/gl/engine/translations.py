@@ -228,7 +228,10 @@ class TranslationMap:
         was made from."""
         fixed = self.fixed
         if places.__class__ is list and len(places) <= 8:  # a few moved (MovePlan.apply_few): no fancy index
-            return any(fixed[k] for k in places)
+            for k in places:  # (a plain loop: no generator for any() to drain, one element for a drag)
+                if fixed[k]:
+                    return True
+            return False
         return bool(fixed[places].any())
 
     # -- writing rows ----------------------------------------------------------------
