@@ -65,6 +65,8 @@ class ChangeJournal:
     __slots__ = ("_changed", "_edits", "_held", "__weakref__")
 
     def __init__(self) -> None:
+        if _FORGOTTEN:
+            _prune_journals()
         flush_changes()  # changes noted for later before it was made are not its to tell
         changed: dict[int, RenderingComponent] = {}
         edits: list[tuple[Any, str, Any, int] | None] = []
@@ -90,6 +92,8 @@ class ChangeJournal:
         own list, the same object while the same components move frame after
         frame (a reader may recognise it by identity).
         """
+        if _FORGOTTEN:
+            _prune_journals()
         flush_changes()
         held = self._held
         if held[0] is not None:  # a simulation loop's batch told as a whole (see flush_changes)
@@ -105,6 +109,8 @@ class ChangeJournal:
         could not be described): the reader must assume anything changed.
         Empties the log.
         """
+        if _FORGOTTEN:
+            _prune_journals()
         edits = list(self._edits)
         self._edits.clear()
         return None if None in edits else edits  # type: ignore[return-value]
@@ -130,14 +136,35 @@ EDIT_LIMIT = 4096
 _HELD: dict[int, list[Any]] = {}
 
 
+#: Journals collected and not yet taken out of the registries: (dict, edit list, held) of each.
+_FORGOTTEN: list[tuple[dict, list, list]] = []
+
+
 def _forget_journal(changed: dict[int, RenderingComponent], edits: list, held: list) -> None:
-    if _HELD.get(id(changed)) is held:
-        del _HELD[id(changed)]
-    for registry, own in ((_JOURNALS, changed), (_EDIT_LOGS, edits)):
-        for i, d in enumerate(registry):
-            if d is own:
-                del registry[i]
-                break
+    """A journal was collected: queue its dict and edit list for :func:`_prune_journals`.
+
+    Finalizers run whenever the garbage collector does, which is often in the
+    middle of a loop over :data:`_JOURNALS` or :data:`_EDIT_LOGS` (a store
+    into each journal allocates).  Removing an entry there shifted the list
+    under that loop, which then skipped the next journal: a live engine missed
+    an edit or a change at random (a new node not drawn, about once in a few
+    hundred frames of the splice tests).  So nothing is removed here.
+    """
+    _FORGOTTEN.append((changed, edits, held))
+
+
+def _prune_journals() -> None:
+    """Take the collected journals out of the registries; called where no loop over them runs (a journal
+    made, drained, or a list edit told)."""
+    while _FORGOTTEN:
+        changed, edits, held = _FORGOTTEN.pop()
+        if _HELD.get(id(changed)) is held:
+            del _HELD[id(changed)]
+        for registry, own in ((_JOURNALS, changed), (_EDIT_LOGS, edits)):
+            for i, d in enumerate(registry):
+                if d is own:
+                    del registry[i]
+                    break
 
 
 def note_change(what: Any) -> None:
@@ -436,6 +463,8 @@ def note_edit(container: Any, op: str, item: Any, index: int) -> None:
     """Tell the live journals that ``container``'s list changed: ``op`` ("insert", "remove", or another word for
     a change they cannot follow) of ``item`` at ``index``.  Nodes call it; engines read it with
     :meth:`ChangeJournal.drain_edits` to update only what the edit touches."""
+    if _FORGOTTEN:
+        _prune_journals()
     for log in _EDIT_LOGS:
         if len(log) < EDIT_LIMIT:
             log.append((container, op, item, index))

@@ -156,3 +156,27 @@ def test_a_loop_over_components_that_changed_hands_bumps_exactly_their_owners_an
             assert out is drained, frame  # the batch's own list, patched owners and all
         drained = out
         assert journal.drain() == []
+
+
+def test_a_collected_journal_leaves_the_registries_between_loops_not_inside_one():
+    """A journal's finalizer runs whenever the garbage collector does, often inside a loop over the journals
+    (a store into each allocates).  It used to delete the journal's entries there, shifting the list under
+    the loop, which then skipped the next journal: a live engine missed a list edit at random (a new node not
+    drawn, about once in a few hundred frames).  Now the finalizer only queues; the next drain removes."""
+    import gc
+
+    dead = om.ChangeJournal()
+    live = om.ChangeJournal()
+    changed, log = dead._changed, dead._edits
+
+    def registered() -> tuple[bool, bool]:
+        return any(d is changed for d in component._JOURNALS), any(e is log for e in component._EDIT_LOGS)
+
+    del dead
+    gc.collect()
+    assert registered() == (True, True)  # nothing shifted inside the collector
+    node = om.Node("n")
+    node.add(om.Node("child"))  # (told to every registered log, the collected one's too)
+    edits = live.drain_edits()
+    assert [(op, item.name) for _, op, item, _ in edits] == [("insert", "child")]
+    assert registered() == (False, False)  # out at the drain
