@@ -12,14 +12,13 @@ from omnirender.colorimetry import cielab, delta_e2000
 
 from .scenes import SCENES, stage
 from .test_references import (
-    ALIASED_ALLOWED,
-    ALLOWED,
     MULTISAMPLED_ONLY,
     RASTER_RULES,
     REFERENCE_SAMPLES,
     REFERENCES,
     SIZE,
     TOLERANCE,
+    allowed,
     mismatches,
 )
 from .test_techniques import load_example
@@ -67,7 +66,7 @@ def test_every_reference_scene_renders_within_its_tolerance():
             aliased = engine.samples < REFERENCE_SAMPLES  # the rules of test_references.compare
             diff = mismatches(expected, image.array.astype(np.int16), aliased or name in RASTER_RULES)
             bad = (diff > TOLERANCE).mean()
-            if bad > (ALIASED_ALLOWED if aliased else ALLOWED):
+            if bad > allowed(name, aliased):
                 failures.append(f"{name}: {bad:.2%} of the pixels differ by more than {TOLERANCE}")
         passes = [p["name"] for p in engine.stats["passes"]]
     finally:

@@ -147,6 +147,7 @@ def test_instance_positions_upload_only_the_positions_buffer(writes, dtype):
     camera = om.Camera.look_at((0, 5, 12), (0, 0, 0), fov=45)
     scene = om.Node("scene", [camera, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), balls])
     with GLEngine(size=SIZE, samples=0) as e:
+        e.drawer.sorts_instances = True  # culled and drawn front to back (a software rasteriser's way) on any GL
         e.render(scene)
         for step in range(2):
             positions[:, 1] += 0.1

@@ -11,6 +11,8 @@ What conforming OpenGL drivers may draw differently is allowed for, and only tha
 * scenes in ``RASTER_RULES`` have pixels decided by rules the OpenGL specification leaves to the driver
   (which pixels a wide line covers, derivative precision, texel selection at glyph edges): a pixel there
   matches when it matches the reference at itself or one of its eight neighbours (a one-pixel shift);
+* a few of them (``RASTER_ALLOWED``) leave so many pixels to the driver that more than ``ALLOWED`` of them
+  may mismatch even so; each names its own fraction and why;
 * the references were drawn with 4x multisampling (``REFERENCE_SAMPLES``); on a driver without it
   (Mesa's softpipe) every edge pixel is all one surface or the other where the reference blends them,
   so every scene is compared with the neighbour rule and ``ALIASED_ALLOWED`` (2%) of the pixels
@@ -53,6 +55,15 @@ RASTER_RULES = {
     "shape_points": "a disc's rim: pixel centres at the circle's distance round either way with the driver's "
     "floating-point precision of the projected centre",
 }
+#: Scenes allowed more mismatched pixels than ``ALLOWED`` on a multisampling driver, and why.
+RASTER_ALLOWED = {
+    "wireframe": (
+        0.012,
+        "multisampled one-pixel lines: which samples a line covers is the driver's (OpenGL 4.6, 14.5.4), so edge "
+        "pixels blend line and background in other proportions, not only one pixel apart (NVIDIA H200: 0.64% "
+        "of the pixels differ by up to 26 after the neighbour rule)",
+    ),
+}
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references"
 ACTUAL = HERE / "actual"
@@ -82,6 +93,13 @@ def mismatches(expected: np.ndarray, actual: np.ndarray, neighbours: bool) -> np
     return diff
 
 
+def allowed(name: str, aliased: bool) -> float:
+    """The fraction of pixels of scene ``name`` that may mismatch (see the module docstring)."""
+    if aliased:
+        return ALIASED_ALLOWED
+    return RASTER_ALLOWED[name][0] if name in RASTER_ALLOWED else ALLOWED
+
+
 def compare(name: str, image, samples: int = REFERENCE_SAMPLES) -> None:
     """Compare ``image`` (drawn with ``samples`` multisampling) with reference ``name`` (see the module docstring)."""
     from PIL import Image as PILImage
@@ -99,10 +117,9 @@ def compare(name: str, image, samples: int = REFERENCE_SAMPLES) -> None:
     assert expected.shape == actual.shape, f"{name}: size {actual.shape} differs from reference {expected.shape}"
     aliased = samples < REFERENCE_SAMPLES
     diff = mismatches(expected, actual, neighbours=aliased or name in RASTER_RULES)
-    allowed = ALIASED_ALLOWED if aliased else ALLOWED
     bad = diff > TOLERANCE
     y, x = np.unravel_index(int(np.argmax(diff)), diff.shape)
-    assert bad.mean() <= allowed, (
+    assert bad.mean() <= allowed(name, aliased), (
         f"{name}: {int(bad.sum())} pixels ({bad.mean():.2%}) differ by more than {TOLERANCE}"
         + (" (from every neighbour)" if aliased or name in RASTER_RULES else "")
         + f"; largest difference {int(diff.max())} at (x={x}, y={y}); actual image in {ACTUAL / (name + '.png')}"
