@@ -179,3 +179,56 @@ def test_the_replayed_pass_writes_no_uniform_the_frame_plan_reads():
         assert e.stats["shadow_maps"]["replayed"] == 1
         assert e.programs.owner is e.frame_runner.plan
         same_as_fresh(e, image, scene)
+
+
+def test_the_highlight_answer_follows_splices():
+    """Whether some row of a batch is highlighted (it picks the program variant) is kept through rows appended
+    and removed: a highlighted node added to the casters' batch is drawn highlighted, also after another row
+    left, and when it leaves the rest are drawn without; every picture is a fresh engine's."""
+    from omnirender.gl.engine.drawlist import Batch
+
+    scene, nodes, box = grid_scene()
+    with engine() as e:
+        lit = om.Node("lit", [om.Translation(0.2, 2.0, 0.1), om.Highlight(color=(1.0, 1.0, 0.0)), om.Material(), box])
+        image = steady_then(e, scene, lambda: scene.add(lit))
+        (batch,) = [b for s in e.root_scope.walk() for part in s.parts or () if hasattr(part, "batches")
+                    for b in part.batches if isinstance(b, Batch) and b.size > 60]  # fmt: skip
+        assert batch.highlight_seen is None or batch.highlight_seen[1]
+        same_as_fresh(e, image, scene)
+        plain = om.Node("plain", [om.Translation(-0.2, 2.0, -0.1), om.Material(), box])
+        image = steady_then(e, scene, lambda: scene.add(plain))
+        same_as_fresh(e, image, scene)
+        image = steady_then(e, scene, lambda: scene.remove(nodes.pop(10)))  # the highlighted row stays
+        same_as_fresh(e, image, scene)
+
+        def restyle(node: om.Node) -> None:  # a Material replaced: the row's surface rewritten in place
+            index = next(i for i, it in enumerate(node.items) if isinstance(it, om.Material))
+            node.remove(node.items[index])
+            node.insert(index, om.Material(diffuse=(0.2, 0.9, 0.3)))
+
+        for node in (lit, nodes[3]):
+            image = steady_then(e, scene, lambda node=node: restyle(node))
+            assert e.stats["compiled"] == "dirty"
+            assert batch.highlight_seen == (batch.version, True)  # kept: no row's highlight changed
+            same_as_fresh(e, image, scene)
+        image = steady_then(e, scene, lambda: scene.remove(lit))
+        assert batch.highlight_seen is None or not batch.highlight_seen[1]
+        same_as_fresh(e, image, scene)
+
+
+def test_boxes_kept_with_spare_rows_are_the_same_boxes():
+    """The render index keeps every caster row's box in storage with spare rows (``row_boxes(spare=True)``) so
+    a splice's appended row is written in place: the same boxes as without, and an append copies nothing."""
+    from omnirender.gl.engine.index import _appended, row_boxes
+
+    rng = np.random.default_rng(5)
+    rows = rng.uniform(-2.0, 2.0, (300, 64)).astype(np.float32)
+
+    class Geometry:  # what row_boxes reads of a GPU geometry: its local bounds
+        bounds = ((-0.1, -0.55, -0.25), (0.3, 0.15, 0.85))
+
+    lo, hi = row_boxes(Geometry, rows)
+    lo2, hi2 = row_boxes(Geometry, rows, spare=True)
+    assert np.array_equal(lo, lo2) and np.array_equal(hi, hi2)
+    grown = _appended(lo2, lo[:1])
+    assert np.shares_memory(grown, lo2) and np.array_equal(grown, np.concatenate([lo, lo[:1]]))
