@@ -43,3 +43,23 @@ def nested_scene() -> tuple[om.Node, list[om.Node], list[om.Node]]:
                 )
             )
     return scene, groups, leaves
+
+
+def box_grid(
+    count: int,
+    columns: int,
+    box_size: float,
+    eye: tuple[float, float, float],
+    fov: float = 40.0,
+    light: tuple[float, float, float] = (-0.4, -0.6, -1.0),
+) -> tuple[om.Node, list[om.Node]]:
+    """``count`` nodes of a Translation, a default Material and one shared box, ``columns`` to a row of a grid
+    centred on the origin (unit spacing, z = 0), seen from ``eye``; returns the scene and the nodes."""
+    scene = om.Node("scene", [om.Camera.look_at(eye, (0, 0, 0), fov=fov), om.DirectionalLight(direction=light)])
+    box = om.Box(size=box_size)
+    rows = -(-count // columns)
+    nodes = []
+    for i in range(count):
+        place = om.Translation(i % columns - (columns - 1) / 2, i // columns - (rows - 1) / 2, 0.0)
+        nodes.append(scene.add(om.Node(f"b{i}", [place, om.Material(), box])))
+    return scene, nodes

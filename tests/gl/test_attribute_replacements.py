@@ -14,7 +14,7 @@ import pytest
 
 import omnirender as om
 
-from .changes import SIZE, fresh, nested_scene
+from .changes import SIZE, box_grid, fresh, nested_scene
 
 pytestmark = pytest.mark.gl
 
@@ -219,13 +219,7 @@ def test_a_material_replaced_in_a_batch_of_one_material_draws_the_batch_anew():
     """Boxes sharing one material are drawn with it as uniforms; a different one makes the rows differ."""
     from omnirender.gl import GLEngine
 
-    scene = om.Node("scene", [om.Camera.look_at((0, 4, 12), (0, 0, 0), fov=45)])
-    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
-    box = om.Box(size=0.8)
-    nodes = [
-        scene.add(om.Node(f"b{i}", [om.Translation(i % 4 - 1.5, i // 4 - 1.0, 0), om.Material(), box]))
-        for i in range(12)
-    ]
+    scene, nodes = box_grid(12, 4, 0.8, eye=(0, 4, 12), fov=45)
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         before = e.render(scene).array
         (batch,) = e.batches
@@ -475,13 +469,7 @@ def test_a_setter_loop_that_still_moves_the_replaced_translations():
     must not write a replaced translation into the place its Matrix took (dropped when next used)."""
     from omnirender.gl import GLEngine
 
-    scene = om.Node("scene", [om.Camera.look_at((0, 0, 30), (0, 0, 0), fov=40)])
-    scene.add(om.DirectionalLight(direction=(-0.3, -0.5, -1.0)))
-    box = om.Box(size=0.5)
-    nodes = [
-        scene.add(om.Node(f"b{i}", [om.Translation(i % 18 - 8.5, i // 18 - 8.0, 0), om.Material(), box]))
-        for i in range(300)
-    ]
+    scene, nodes = box_grid(300, 18, 0.5, eye=(0, 0, 30), light=(-0.3, -0.5, -1.0))
     moves = [node.items[0] for node in nodes]
     positions = np.array([t.offset for t in moves])
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:

@@ -13,7 +13,7 @@ import pytest
 
 import omnirender as om
 
-from .changes import SIZE, fresh, nested_scene
+from .changes import SIZE, box_grid, fresh, nested_scene
 
 pytestmark = pytest.mark.gl
 
@@ -89,13 +89,8 @@ def test_moves_after_splices_find_the_new_items_and_skip_the_removed():
 def test_splices_in_a_root_of_one_segment_keep_the_entries_items_and_index_in_one_order():
     from omnirender.gl import GLEngine
 
-    scene = om.Node("scene", [om.Camera.look_at((9, 7, 14), (0, 0, 0), fov=40)])
-    scene.add(om.DirectionalLight(direction=(-0.4, -0.6, -1.0)))
-    box = om.Box(size=0.7)
-    nodes = [
-        scene.add(om.Node(f"b{i}", [om.Translation(i % 8 - 3.5, i // 8 - 2.0, 0.0), om.Material(), box]))
-        for i in range(40)
-    ]
+    scene, nodes = box_grid(40, 8, 0.7, eye=(9, 7, 14))
+    box = nodes[0].items[2]
     glass = scene.add(om.Node("glass", [om.Translation(0, 3, 1), om.Color(0.5, 0.5, 1, 0.4), om.Sphere(radius=0.5)]))
     with GLEngine(size=SIZE, samples=0, shadows=True) as e:
         e.render(scene)
