@@ -53,6 +53,7 @@ run bench/deferred.py --frames 3
 run bench/postfx.py --frames 3
 run bench/splats.py --timer wall --size 1920 1080 --frames 5
 run bench/instance_order.py --quick
+run bench/shadow_probe.py --frames 10
 if "$PY" -c "import sys; sys.exit(0)" && ls /usr/lib/*/dri/swrast_dri.so /usr/lib/*/libgallium* >/dev/null 2>&1; then
     run bench/frame_cost.py --cpu --quick --timer wall
 else
