@@ -24,7 +24,7 @@ import numpy as np
 from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .drawlist import set_translations
-from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
+from .instancing import InstanceRows, held, instance_rows, mask_copies, moved_instance_rows, set_arrays
 from .layout import ROW
 from .spare import extend_held
 from .translations import TranslationMap
@@ -951,12 +951,17 @@ class TransformUpdater:
             items = plan.sources.get(id(shape))
             if not items:
                 return None
-            positions = _positions_only(shape, items)
-            if positions is not None:
-                moves = [_moved_world(item, positions) for item in items]
+            moved = _transforms_only(shape, items)
+            if moved is not None and moved.ndim == 2:  # positions
+                moves = [_moved_world(item, moved) for item in items]
                 # not finite (or beyond float32): the full path, whose compile names the instance and the node
                 if _finite(moves):
                     out.extend(zip(items, moves, strict=True))
+                    continue
+            elif moved is not None:  # matrices: the rows' model columns written, their colours kept
+                made = self._moved_matrices(items, moved)
+                if made is not None:
+                    out.extend(zip(items, made, strict=True))
                     continue
             try:
                 matrices, colors, may_mirror = set_arrays(shape)
@@ -980,6 +985,22 @@ class TransformUpdater:
                 ):
                     return None
                 out.append((item, made))
+        return out
+
+    def _moved_matrices(self, items: list[Any], matrices: np.ndarray) -> list[InstanceRows] | None:
+        """Rows for the items of a matrix instance set whose matrices alone changed (:func:`_transforms_only`):
+        each item's rows with the new model columns (:func:`moved_instance_rows`), or None where the full path
+        must decide (a bad matrix, or a mirroring that changes the item's GL state)."""
+        matrices = np.array(matrices, dtype=np.float64)  # a copy: the items keep them as their models
+        out = []
+        for item in items:
+            template = item.template
+            made = moved_instance_rows(
+                item.instances, template.local, item.transparent, _chain_matrix(item.chain), matrices
+            )
+            if made is None or self._instance_state(template, made.mirrored) is not item.state:
+                return None
+            out.append(made)
         return out
 
     def _apply_few(self, plan: MovePlan, changed: list[Any]) -> int:
@@ -1073,20 +1094,21 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
-#: "the set has no colours" in :func:`_positions_only` (None there means "not read yet")
+#: "the set has no colours" in :func:`_transforms_only` (None there means "not read yet")
 _NO_COLORS = np.empty((0, 4))
 
 
-def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
-    """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
+def _transforms_only(shape: Any, items: list[Any]) -> np.ndarray | None:
+    """The set's (N, 3) positions or (N, 4, 4) matrices when only they can have changed since its rows were
+    made, else None.
 
-    That is: positions, the same count, scales and visibility mask (both
+    That is: positions (or matrices, without scales), the same count, scales and visibility mask (both
     unwritten since, by ``written_at``, or equal to the rows' copies of them;
-    then the visible instances' positions)
+    then the visible instances' transforms)
     and the same colours as the items' rows were made from (colours are compared, so
     their conversion to linear is done once, not every frame, unless the set's
     touches since then named only other arrays: ``touch("transforms")``).  Whether they
-    are finite is checked on what :func:`_moved_world` makes of them.
+    are finite is checked on what :func:`_moved_world` or :func:`moved_instance_rows` makes of them.
     """
     scaled = shape.scales is not None
     visible = shape.visible
@@ -1111,7 +1133,7 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     t = np.asarray(t)
     if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
         t = t.astype(np.float64)
-    if t.ndim != 2 or t.shape[1] != 3:
+    if not (t.ndim == 2 and t.shape[1] == 3) and not (t.ndim == 3 and t.shape[1:] == (4, 4) and not scaled):
         return None
     if visible is not None:
         try:
