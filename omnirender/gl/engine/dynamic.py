@@ -34,6 +34,8 @@ __all__ = ["MovePlan", "TransformUpdater"]
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _TX, _TY, _TZ = range(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # its three columns, one by one
+#: a 4x4 matrix's flat places of its translation column (rows 0-2, column 3)
+_COLUMN3 = np.array([3, 7, 11], np.intp)
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
@@ -131,6 +133,9 @@ class MovePlan:
         #: places new transforms took since (replacements): dropped from the last look-ups when they are next used
         #: (:meth:`_current_last`), not in the frame that replaced one (a pass over thousands of look-ups)
         self._taken: list[int] = []
+        #: (positions, the matrices, their flat view, the flat places of those positions' translation columns):
+        #: how :meth:`_put_translations` writes many translations (the objects held: compared by identity)
+        self._flat: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -483,14 +488,28 @@ class MovePlan:
             found = self._map = TranslationMap(self)
         if 2 * len(moved) < found.translations:
             return None
-        self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
-        count = found.apply(self)
+        offsets = Translation.stack_offsets(moved)
+        self._put_translations(positions, offsets)
+        count = found.apply(self, moved=(positions, offsets))
         multi = found.multi_items()
         if len(multi):
             hit = np.zeros(len(self.matrices), bool)
             hit[positions] = True
             count += self._write_items(multi[hit[self.chain[multi]].any(axis=1)])
         return count + (self._apply_instances(set(positions.tolist())) if self.instance_items else 0)
+
+    def _put_translations(self, positions: np.ndarray, offsets: np.ndarray) -> None:
+        """``matrices[positions, :3, 3] = offsets``: through the flat places of those columns, kept while
+        ``positions`` is the same object (the last look-ups, :meth:`same_as_last`) and the matrices are."""
+        matrices = self.matrices
+        flat = self._flat
+        if flat is None or flat[0] is not positions or flat[1] is not matrices:
+            if not matrices.flags.c_contiguous:  # (no flat view to write through)
+                matrices[positions, :3, 3] = offsets
+                return
+            places = (positions[:, None] * 16 + _COLUMN3).ravel()
+            flat = self._flat = (positions, matrices, matrices.reshape(-1), places)
+        flat[2][flat[3]] = offsets.reshape(-1)
 
     def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
