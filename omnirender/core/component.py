@@ -196,6 +196,8 @@ def note_later(component: RenderingComponent) -> None:
     first (``Node.version`` and every other observation of the graph,
     :meth:`ChangeJournal.drain`, list edits of nodes).
     """
+    if component.__class__.__eq__ is not _IDENTITY_EQ:
+        _VALUE_EQ[0] = True  # (see _VALUE_EQ)
     _PENDING.append(component)
     if len(_PENDING) > PENDING_LIMIT:
         flush_changes()
@@ -339,7 +341,7 @@ def _bulk_of(batch: list[Any]) -> _Bulk | None:
     last = ref() if ref is not None else None
     relinked = _RELINKED[0]
     _RELINKED[0] = []
-    if last is not None and len(last.components) == len(batch) and all(map(is_, batch, last.components)):
+    if last is not None and len(last.components) == len(batch) and _same_objects(batch, last.components):
         if relinked is not None and not relinked:
             last.whole = last.distinct()
             return last
@@ -360,6 +362,23 @@ def _bulk_of(batch: list[Any]) -> _Bulk | None:
     bulk = _Bulk(batch)
     _LAST_BULK[0] = weakref.ref(bulk)
     return bulk
+
+
+#: Whether something noted for later compares by value (its class defines ``__eq__``): a component class that
+#: does (``RenderingComponent.__init_subclass__``), or anything else given to :func:`note_later` that does
+_VALUE_EQ = [False]
+_IDENTITY_EQ = object.__eq__
+
+
+def _same_objects(a: list[Any], b: list[Any]) -> bool:
+    """Whether the lists ``a`` and ``b`` (of one length) hold the same objects in the same order.
+
+    A list comparison (one C loop whose item test is an identity test first) while nothing noted for later
+    compares by value: two distinct objects then compare unequal.  Otherwise a pass of identity tests.
+    """
+    if _VALUE_EQ[0]:
+        return all(map(is_, a, b))
+    return a == b
 
 
 def _patched(owners: _Owners, events: list[tuple[int, Any, int]]) -> _Owners | None:
@@ -490,6 +509,11 @@ class RenderingComponent:
     def __init__(self) -> None:
         object.__setattr__(self, "_version", 0)
         object.__setattr__(self, "_owners", None)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.__eq__ is not _IDENTITY_EQ:  # batches of its changes are compared object by object (_same_objects)
+            _VALUE_EQ[0] = True
 
     def __setattr__(self, name: str, value: Any) -> None:
         object.__setattr__(self, name, value)

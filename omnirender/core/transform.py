@@ -277,73 +277,67 @@ class Translation(Transform):
         offset: Sequence[float] | None = None,
     ) -> None:
         super().__init__()
-        object.__setattr__(self, "_bound", None)  # the TranslationArray whose row it views (see there)
-        object.__setattr__(self, "_matrix", None)
-        object.__setattr__(self, "_matrix_of", None)  # the offset object the kept matrix was made from
-        object.__setattr__(self, "_row", 0)
-        object.__setattr__(self, "_synced", 0)  # the array's version its own offset is current for
-        # checked and stored by the property's setter, without the version bump and journal entry of an
-        # assignment: nothing can have compiled a translation being made (a node added per frame pays no move)
-        _OFFSET_SETTER(
+        self._bound = None  # the TranslationArray whose row it views (see there)
+        self._matrix = None
+        self._matrix_of = None  # the offset object the kept matrix was made from
+        self._row = 0
+        self._synced = 0  # the array's version its own offset is current for
+        # checked and stored without the version bump and journal entry of an assignment: nothing can have
+        # compiled a translation being made (a node added per frame pays no move)
+        self._offset = _checked_offset(
             self, offset if offset is not None else x if isinstance(x, (Sequence, np.ndarray)) else (x, y, z)
         )
 
-    def __setattr__(self, name: str, value: Any) -> None:
-        # a simulation loop's ``t.offset = row``: checked and stored here, without the property's frames; a
-        # numpy row or three Python floats without a call to plain_triple (the other plain inputs take it)
-        if name == "offset":
-            cls = value.__class__
-            if cls is _NDARRAY:
-                try:
-                    x, y, z = value.tolist()  # shape (3,): three Python numbers; any other shape fails or nests
-                except (TypeError, ValueError):
-                    x = None
-            elif cls is tuple and len(value) == 3:
-                x, y, z = value
-            else:
-                x = None
-            # three Python floats whose squares sum to at most _MAX2 are each within the limit (NaN compares
-            # False, an infinity or an overflow gives one: they take the validating path, as a sum above it does)
-            if (
-                x.__class__ is float
-                and y.__class__ is float
-                and z.__class__ is float
-                and x * x + y * y + z * z <= _MAX2
-            ):
-                offset = (x, y, z)
-            else:
-                offset = plain_triple(value)
-            if offset is not None:  # Transform.touch, inline: a version bump and one list append
-                _set_offset(self, offset)  # (the kept matrix is of another offset object now: see matrix)
-                _set_version(self, self._version + 1)
-                bound = self._bound
-                if bound is not None:  # its own value holds until the array's next touch
-                    _set_synced(self, bound._version)
-                # (also without owners while a journal lives: a loop over the same translations gives the same
-                # batch after one of them left its node, whose owners are patched, not collected again)
-                if self._owners or _JOURNALS:
-                    _append(self)
-                    if len(_PENDING) > PENDING_LIMIT:
-                        flush_changes()
-                return
-        RenderingComponent.__setattr__(self, name, value)
+    #: Attributes are stored as they are: ``offset`` is a property that touches itself, and every other slot is
+    #: private (a simulation loop's ``t.offset = row`` runs one Python function, not ``__setattr__`` and then
+    #: the property; subclasses that add public parameters get the components' ``__setattr__`` back)
+    __setattr__ = object.__setattr__
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "__setattr__" not in cls.__dict__:
+            cls.__setattr__ = _subclass_setattr  # type: ignore[method-assign,assignment]
 
     @property
     def offset(self) -> tuple[float, float, float]:
         if self._bound is not None:
             self._sync()
-        return self._offset
+        offset = self._offset
+        return offset if offset.__class__ is tuple else tuple(offset)
 
     @offset.setter
     def offset(self, value: Sequence[float]) -> None:
-        offset = plain_triple(value)  # a simulation loop's case: three numbers, a numpy row
-        if offset is None:
-            offset = tuple(float(c) for c in finite_vector(_named(self), "offset", value, 3))
-        _set_offset(self, offset)
-        _set_matrix(self, None)  # made again when somebody asks (assigning the public parameter touches)
+        # a simulation loop's ``t.offset = row``: a numpy row or three Python floats checked here, inline (the
+        # other plain inputs take plain_triple, the rest the validating path, which writes the message)
+        if value.__class__ is _NDARRAY:
+            try:
+                offset = value.tolist()  # shape (3,): three Python numbers; any other shape fails or nests
+                x, y, z = offset
+            except (TypeError, ValueError):
+                x = None
+        elif value.__class__ is tuple and len(value) == 3:  # type: ignore[arg-type]
+            x, y, z = offset = value  # type: ignore[misc]
+        else:
+            x = None
+        # three Python floats whose squares sum to at most _MAX2 are each within the limit (NaN compares False,
+        # an infinity or an overflow gives one: they take the validating path, as a sum above it does); the
+        # list that tolist() made is kept as it is (nobody else holds it; ``offset`` reads it as a tuple)
+        if x.__class__ is float and y.__class__ is float and z.__class__ is float and x * x + y * y + z * z <= _MAX2:
+            self._offset = offset
+        else:
+            self._offset = _checked_offset(self, value)
+        # Transform.touch, inline: a version bump and one list append (the kept matrix is of another offset
+        # object now: see matrix)
+        self._version += 1
         bound = self._bound
-        if bound is not None:
-            _set_synced(self, bound._version)
+        if bound is not None:  # its own value holds until the array's next touch
+            self._synced = bound._version
+        # (also without owners while a journal lives: a loop over the same translations gives the same batch
+        # after one of them left its node, whose owners are patched, not collected again)
+        if self._owners or _JOURNALS:
+            _append(self)
+            if len(_PENDING) > PENDING_LIMIT:
+                flush_changes()
 
     @property
     def version(self) -> int:
@@ -425,12 +419,31 @@ class Translation(Transform):
 
 
 _OFFSET = attrgetter("_offset")
-_OFFSET_SETTER = Translation.offset.fset  # type: ignore[attr-defined]
 #: whether a translation was ever bound to an array (until then no translation needs its row read first)
 _EVER_BOUND = [False]
 _BOUND = attrgetter("_bound")
 _set_synced = Translation._synced.__set__  # type: ignore[attr-defined]
 _append = _PENDING.append
+_SUBCLASS_SETATTR = RenderingComponent.__setattr__
+
+
+def _subclass_setattr(self: Translation, name: str, value: Any) -> None:
+    """``__setattr__`` of a subclass of ``Translation``: ``offset`` touches itself, other public names touch."""
+    if name == "offset":
+        object.__setattr__(self, name, value)
+    else:
+        _SUBCLASS_SETATTR(self, name, value)
+
+
+def _checked_offset(translation: Translation, value: Any) -> tuple[float, float, float]:
+    """``value`` as an offset (three Python floats), or the validating path's ValueError naming the translation
+    and its node."""
+    offset = plain_triple(value)
+    if offset is None:
+        offset = tuple(float(c) for c in finite_vector(_named(translation), "offset", value, 3))
+    return offset  # type: ignore[return-value]
+
+
 _set_version = RenderingComponent._version.__set__  # type: ignore[attr-defined]
 _set_offset = Translation._offset.__set__  # type: ignore[attr-defined]
 _set_matrix = Transform._matrix.__set__  # type: ignore[attr-defined]

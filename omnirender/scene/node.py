@@ -20,7 +20,7 @@ import threading
 import weakref
 from collections import Counter, deque
 from collections.abc import Iterable, Iterator
-from itertools import chain, repeat
+from itertools import chain, count, repeat
 from operator import attrgetter
 from typing import Any
 
@@ -229,6 +229,7 @@ class Node:
         epoch = _EPOCH[0]
         self._version += 1
         self._stamp = epoch
+        _TOUCHED()  # (a version moved by at most one per call: touch_nodes bounds versions by it)
         parents = self._parents
         if not parents:
             return
@@ -703,16 +704,54 @@ def touch_nodes(owners: list[Any]) -> None:
         return
     try:
         # every owner's version moves past its own: to one more than the highest among them (a version only has
-        # to differ from what an observer read; a single value costs no addition per node)
-        deque(map(_SET_VERSION, owners, repeat(max(map(_VERSION_OF, owners)) + 1)), 0)
+        # to differ from what an observer read; a single value costs no addition per node), a bound of which is
+        # known without reading them when the same owners come again (_version_bound)
+        top = _version_bound(owners)
+        if top is None:
+            top = max(map(_VERSION_OF, owners))
+        deque(map(_SET_VERSION, owners, repeat(top + 1)), 0)
     except (TypeError, AttributeError):  # not all nodes: each its own way (a node bumped twice moved all the same)
+        _KEPT_TOP[0] = None
         for owner in owners:
             owner.touch()
         return
+    _keep_top(owners, top + 1)
     epoch = _EPOCH[0]
     for parent in _parents_of(owners):
         if parent._stamp != epoch:
             parent.touch()
+
+
+#: counts calls that may raise a node's version by one: each :meth:`Node.touch` raises its node and each ancestor
+#: at most once (returns the count, counting itself)
+_TOUCHED = count().__next__
+#: the highest version :func:`touch_nodes` gave any node
+_TOP = [0]
+#: what :func:`touch_nodes` gave its last owners: (a weak reference to their list, the version, ``_TOUCHED()`` then)
+_KEPT_TOP: list[tuple[Any, int, int] | None] = [None]
+
+
+def _version_bound(owners: list[Any]) -> int | None:
+    """An upper bound of the versions of ``owners``, read from none of them, when they are the list the last
+    :func:`touch_nodes` set (the same object: a change batch's kept owners, see ``core.component``): each had
+    the version it gave them; since then another :func:`touch_nodes` set some to at most :data:`_TOP`, and each
+    :meth:`Node.touch` raised each by at most one (nothing else writes a live node's version).  None otherwise."""
+    kept = _KEPT_TOP[0]
+    if kept is None or kept[0]() is not owners:
+        return None
+    return max(kept[1], _TOP[0]) + (_TOUCHED() - kept[2])
+
+
+def _keep_top(owners: list[Any], version: int) -> None:
+    """:func:`touch_nodes` gave every one of ``owners`` ``version``: kept for :func:`_version_bound`."""
+    if version > _TOP[0]:
+        _TOP[0] = version
+    try:
+        ref = weakref.ref(owners)
+    except TypeError:  # (a plain list: not kept)
+        _KEPT_TOP[0] = None
+        return
+    _KEPT_TOP[0] = (ref, version, _TOUCHED())
 
 
 #: ids of the nodes that gained or lost a parent since :func:`_parents_of` last looked (None: too many); the

@@ -200,7 +200,7 @@ class InstanceSet(Shape):
             )
         _check_finite(_rows(t), "transforms")  # the application's rows, as it wrote them
         if t.ndim == 3 and len(m):
-            singular = np.nonzero(np.abs(determinants(m[:, :3, :3])) < _SINGULAR)[0]
+            singular = np.nonzero(np.abs(determinants(m[:, :3, :3])) < SINGULAR)[0]
             if len(singular):
                 raise ValueError(
                     f"InstanceSet: the transform of instance {int(singular[0])} is singular (it flattens the shape, "
@@ -260,7 +260,7 @@ class InstanceSet(Shape):
 
 
 #: |det| of an instance matrix's 3x3 part below which it counts as singular (a scale of about 1e-4 per axis).
-_SINGULAR = 1e-12
+SINGULAR = 1e-12
 
 
 def determinants(m: np.ndarray) -> np.ndarray:

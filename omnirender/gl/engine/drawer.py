@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .attributes import Blend, CullFace, DepthMask
-from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, uniform_material
+from .drawlist import Batch, DrawItem, DrawState, Scope, Segment, scatter_translations, uniform_material
 from .frame_state import FrameState
 from .geometry import Geometry
 from .glenum import GL_RGBA8, GL_SRGB8_ALPHA8, GL_TRIANGLES_ADJACENCY
@@ -851,7 +851,7 @@ def _upload_rows(batch: Batch, columns: np.ndarray, position: np.ndarray | None)
     model = batch.layout.offsets.get("model")
     if packed is not None and model is not None and batch.moved_range == (batch.version, lo, hi):
         places: Any = slice(lo, hi) if position is None else position[lo:hi]
-        packed[places, model + 12 : model + 15] = rows[lo:hi, _TRANSLATION]
+        scatter_translations(packed, model + 12, places, rows[lo:hi])
         first, last = (lo, hi) if position is None else (int(places.min()), int(places.max()) + 1)
         batch.buffer.write(packed[first:last], offset=first * stride)
     elif position is None:

@@ -334,6 +334,32 @@ def set_translations(rows: np.ndarray, world: np.ndarray) -> None:
         rows[:, _ROW_TRANSLATION_COLUMNS] = world
 
 
+#: (column, floats per record) -> a record of that many float32s seen as one field ``t`` of three at ``column``
+_TRIPLE_AT: dict[tuple[int, int], np.dtype] = {}
+
+
+def scatter_translations(packed: np.ndarray, column: int, places: np.ndarray | slice, rows: np.ndarray) -> None:
+    """``packed[places, column:column + 3] = rows[:, _TRANSLATION]``: the translations of ``rows`` (full rows,
+    float32) into records ``places`` of ``packed`` (float32, the buffer's layout), each moved as 12 bytes
+    rather than three strided floats (a sorted batch's moved rows lie anywhere in its buffer)."""
+    if not (
+        packed.flags.c_contiguous
+        and packed.dtype == np.float32
+        and packed.ndim == 2
+        and rows.flags.c_contiguous
+        and rows.dtype == np.float32
+    ):
+        packed[places, column : column + 3] = rows[:, _ROW_TRANSLATION_COLUMNS]
+        return
+    key = (column, packed.shape[1])
+    record = _TRIPLE_AT.get(key)
+    if record is None:
+        record = _TRIPLE_AT[key] = np.dtype(
+            {"names": ["t"], "formats": [_TRIPLE], "offsets": [column * 4], "itemsize": packed.shape[1] * 4}
+        )
+    packed.view(record)[:, 0]["t"][places] = rows.view(_ROW_TRANSLATION)[:, 0]["t"]
+
+
 class Batch:
     """Opaque items sharing geometry and state, drawn with one instanced call.
 

@@ -24,7 +24,7 @@ import numpy as np
 from ...core.transform import Transform, Translation, TranslationArray
 from ...shapes import InstanceSet
 from .drawlist import set_translations
-from .instancing import InstanceRows, held, instance_rows, mask_copies, set_arrays
+from .instancing import InstanceRows, held, instance_rows, mask_copies, moved_instance_rows, set_arrays
 from .layout import ROW
 from .spare import extend_held
 from .translations import TranslationMap
@@ -34,6 +34,8 @@ __all__ = ["MovePlan", "TransformUpdater"]
 _MODEL = ROW.slice("model")
 _TRANSLATION = slice(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # rows hold M transposed
 _TX, _TY, _TZ = range(ROW.offsets["model"] + 12, ROW.offsets["model"] + 15)  # its three columns, one by one
+#: a 4x4 matrix's flat places of its translation column (rows 0-2, column 3)
+_COLUMN3 = np.array([3, 7, 11], np.intp)
 _EYE4 = np.eye(4)
 _EYE3 = np.eye(3)
 _EYE4_LIST = _EYE4.tolist()
@@ -131,6 +133,9 @@ class MovePlan:
         #: places new transforms took since (replacements): dropped from the last look-ups when they are next used
         #: (:meth:`_current_last`), not in the frame that replaced one (a pass over thousands of look-ups)
         self._taken: list[int] = []
+        #: (positions, the matrices, their flat view, the flat places of those positions' translation columns):
+        #: how :meth:`_put_translations` writes many translations (the objects held: compared by identity)
+        self._flat: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
         #: attribute name -> (storage with spare rows, the view the attribute holds): splices append in place
         self._stores: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.batches: list[Any] = []
@@ -483,14 +488,28 @@ class MovePlan:
             found = self._map = TranslationMap(self)
         if 2 * len(moved) < found.translations:
             return None
-        self.matrices[positions, :3, 3] = Translation.stack_offsets(moved)
-        count = found.apply(self)
+        offsets = Translation.stack_offsets(moved)
+        self._put_translations(positions, offsets)
+        count = found.apply(self, moved=(positions, offsets))
         multi = found.multi_items()
         if len(multi):
             hit = np.zeros(len(self.matrices), bool)
             hit[positions] = True
             count += self._write_items(multi[hit[self.chain[multi]].any(axis=1)])
         return count + (self._apply_instances(set(positions.tolist())) if self.instance_items else 0)
+
+    def _put_translations(self, positions: np.ndarray, offsets: np.ndarray) -> None:
+        """``matrices[positions, :3, 3] = offsets``: through the flat places of those columns, kept while
+        ``positions`` is the same object (the last look-ups, :meth:`same_as_last`) and the matrices are."""
+        matrices = self.matrices
+        flat = self._flat
+        if flat is None or flat[0] is not positions or flat[1] is not matrices:
+            if not matrices.flags.c_contiguous:  # (no flat view to write through)
+                matrices[positions, :3, 3] = offsets
+                return
+            places = (positions[:, None] * 16 + _COLUMN3).ravel()
+            flat = self._flat = (positions, matrices, matrices.reshape(-1), places)
+        flat[2][flat[3]] = offsets.reshape(-1)
 
     def apply_few(self, changed: list[Any]) -> int:
         """A few transforms moved (an editor's drag, one simulated body): the items below them, found through
@@ -932,12 +951,17 @@ class TransformUpdater:
             items = plan.sources.get(id(shape))
             if not items:
                 return None
-            positions = _positions_only(shape, items)
-            if positions is not None:
-                moves = [_moved_world(item, positions) for item in items]
+            moved = _transforms_only(shape, items)
+            if moved is not None and moved.ndim == 2:  # positions
+                moves = [_moved_world(item, moved) for item in items]
                 # not finite (or beyond float32): the full path, whose compile names the instance and the node
                 if _finite(moves):
                     out.extend(zip(items, moves, strict=True))
+                    continue
+            elif moved is not None:  # matrices: the rows' model columns written, their colours kept
+                made = self._moved_matrices(items, moved)
+                if made is not None:
+                    out.extend(zip(items, made, strict=True))
                     continue
             try:
                 matrices, colors, may_mirror = set_arrays(shape)
@@ -961,6 +985,22 @@ class TransformUpdater:
                 ):
                     return None
                 out.append((item, made))
+        return out
+
+    def _moved_matrices(self, items: list[Any], matrices: np.ndarray) -> list[InstanceRows] | None:
+        """Rows for the items of a matrix instance set whose matrices alone changed (:func:`_transforms_only`):
+        each item's rows with the new model columns (:func:`moved_instance_rows`), or None where the full path
+        must decide (a bad matrix, or a mirroring that changes the item's GL state)."""
+        matrices = np.array(matrices, dtype=np.float64)  # a copy: the items keep them as their models
+        out = []
+        for item in items:
+            template = item.template
+            made = moved_instance_rows(
+                item.instances, template.local, item.transparent, _chain_matrix(item.chain), matrices
+            )
+            if made is None or self._instance_state(template, made.mirrored) is not item.state:
+                return None
+            out.append(made)
         return out
 
     def _apply_few(self, plan: MovePlan, changed: list[Any]) -> int:
@@ -1054,20 +1094,21 @@ def _chain_matrix(chain: tuple[Any, ...]) -> np.ndarray:
     return m
 
 
-#: "the set has no colours" in :func:`_positions_only` (None there means "not read yet")
+#: "the set has no colours" in :func:`_transforms_only` (None there means "not read yet")
 _NO_COLORS = np.empty((0, 4))
 
 
-def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
-    """The set's (N, 3) positions when only they can have changed since its rows were made, else None.
+def _transforms_only(shape: Any, items: list[Any]) -> np.ndarray | None:
+    """The set's (N, 3) positions or (N, 4, 4) matrices when only they can have changed since its rows were
+    made, else None.
 
-    That is: positions, the same count, scales and visibility mask (both
+    That is: positions (or matrices, without scales), the same count, scales and visibility mask (both
     unwritten since, by ``written_at``, or equal to the rows' copies of them;
-    then the visible instances' positions)
+    then the visible instances' transforms)
     and the same colours as the items' rows were made from (colours are compared, so
     their conversion to linear is done once, not every frame, unless the set's
     touches since then named only other arrays: ``touch("transforms")``).  Whether they
-    are finite is checked on what :func:`_moved_world` makes of them.
+    are finite is checked on what :func:`_moved_world` or :func:`moved_instance_rows` makes of them.
     """
     scaled = shape.scales is not None
     visible = shape.visible
@@ -1092,7 +1133,7 @@ def _positions_only(shape: Any, items: list[Any]) -> np.ndarray | None:
     t = np.asarray(t)
     if t.dtype != np.float32 and t.dtype != np.float64:  # float32 is kept: uploaded as it is (_write_positions)
         t = t.astype(np.float64)
-    if t.ndim != 2 or t.shape[1] != 3:
+    if not (t.ndim == 2 and t.shape[1] == 3) and not (t.ndim == 3 and t.shape[1:] == (4, 4) and not scaled):
         return None
     if visible is not None:
         try:

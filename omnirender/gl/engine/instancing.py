@@ -14,10 +14,21 @@ from typing import Any
 import numpy as np
 
 from ...attributes.photometry import srgb_to_linear
-from ...shapes.instances import determinants
+from ...shapes.instances import SINGULAR, determinants
 from .layout import PBR, ROW
 
-__all__ = ["InstanceRows", "instance_rows", "set_arrays", "PROBE", "takes_instance_colours", "held", "mask_copies"]
+__all__ = [
+    "InstanceRows",
+    "instance_rows",
+    "moved_instance_rows",
+    "instance_world",
+    "write_models",
+    "set_arrays",
+    "PROBE",
+    "takes_instance_colours",
+    "held",
+    "mask_copies",
+]
 
 _MODEL = ROW.slice("model")
 _COLOR = ROW.slice("color")
@@ -97,13 +108,10 @@ def instance_rows(
     only when ``may_mirror`` (positions and positive scales never mirror).
     """
     n = len(matrices)
-    models = matrices if local is None or _is_identity(local) else matrices @ local
-    world = models if _is_identity(model) else model @ models
+    models, world = instance_world(local, model, matrices)
     rows = np.empty((n, ROW.stride), np.float32)
     rows[:] = row
-    with np.errstate(over="ignore"):
-        rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(n, 16)
-    _check_float32(rows[:, _MODEL], world)
+    write_models(rows, world)
     if colors is not None and takes_instance_colours(row):
         rows[:, _COLOR.start : _COLOR.start + 3] = srgb_to_linear(colors[:, :3])
         rows[:, _ALPHA] = colors[:, 3] * row[_ALPHA]
@@ -113,6 +121,62 @@ def instance_rows(
     may_mirror = may_mirror or model_mirrors(model) or (local is not None and model_mirrors(local))
     mirrored = bool(n) and may_mirror and bool((determinants(world[:, :3, :3]) < 0.0).any())
     return InstanceRows(rows, models, transparent, mirrored)
+
+
+def moved_instance_rows(
+    before: np.ndarray,
+    local: np.ndarray | None,
+    transparent: bool,
+    model: np.ndarray,
+    matrices: np.ndarray,
+) -> InstanceRows | None:
+    """Rows for new ``matrices`` of a set whose rows ``before`` were made from the same colours, count, scales
+    and visibility mask: a copy of them with the model columns written, so the colours are converted once, not
+    on every move.
+
+    None when the full path must decide (it names the instance and the node): a matrix not finite, singular
+    (as :meth:`InstanceSet.matrices` refuses) or beyond float32 after ``model``.  The mirroring is the sign of
+    the determinants of ``matrices`` times those of ``model`` and ``local``: one product per instance.
+    """
+    n = len(matrices)
+    if n != len(before):
+        return None
+    det = determinants(matrices[:, :3, :3])
+    if not np.isfinite(det).all() or (np.abs(det) < SINGULAR).any():
+        return None
+    models, world = instance_world(local, model, matrices)
+    rows = before.copy()
+    try:
+        write_models(rows, world)
+    except ValueError:
+        return None
+    sign = -1.0 if model_mirrors(model) != (local is not None and model_mirrors(local)) else 1.0
+    mirrored = bool(n) and bool((det * sign < 0.0).any())
+    return InstanceRows(rows, models, transparent, mirrored)
+
+
+def instance_world(local: np.ndarray | None, model: np.ndarray, matrices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The instances' matrices after the template's ``local`` (what ``InstanceRows.models`` holds) and their
+    world matrices after the chain's ``model``: the one rule both row makers follow."""
+    n = len(matrices)
+    if local is None or _is_identity(local):
+        models = matrices
+    else:  # one (4N, 4) @ (4, 4) product: numpy's stacked matmul of small matrices takes 5x longer
+        models = (np.ascontiguousarray(matrices).reshape(4 * n, 4) @ local).reshape(n, 4, 4)
+    return models, models if _is_identity(model) else model @ models
+
+
+def write_models(rows: np.ndarray, world: np.ndarray) -> None:
+    """Write ``world`` (N, 4, 4) into the rows' model columns (transposed, float32); ValueError naming the first
+    instance beyond float32's range."""
+    with np.errstate(over="ignore"):
+        rows[:, _MODEL] = world.transpose(0, 2, 1).reshape(len(world), 16)
+    if len(world) and not (-_FLOAT32_MAX <= world.min() and world.max() <= _FLOAT32_MAX):  # NaN compares False
+        _check_float32(rows[:, _MODEL], world)
+
+
+#: float32's largest finite value: a float64 beyond it becomes infinite in the rows
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def _check_float32(models: np.ndarray, world: np.ndarray) -> None:

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ...core.transform import Translation
+from .drawlist import set_translations
 from .layout import ROW
 from .spare import extend_held
 
@@ -44,7 +45,7 @@ _EYE3 = np.eye(3)
 class _Part:
     """The rows of one batch (or the loose items, ``batch`` None) the map writes."""
 
-    __slots__ = ("batch", "where", "span", "source", "constant", "linear", "items")
+    __slots__ = ("batch", "where", "span", "source", "constant", "linear", "items", "_picks")
 
     def __init__(
         self,
@@ -66,6 +67,23 @@ class _Part:
         self.linear = linear
         #: the loose items themselves (no batch: each writes its own row)
         self.items = items
+        #: (the places of the last moved translations, the index into them of each row's source, or None when
+        #: some source is not among them): :meth:`picks_of`'s answer for that object
+        self._picks: tuple[np.ndarray, np.ndarray | None] | None = None
+
+    def picks_of(self, positions: np.ndarray, places: int) -> np.ndarray | None:
+        """Where each row's translation is among ``positions`` (places among the plan's ``places`` matrices of
+        the translations that moved, in their order), or None when some row's is not among them.  Kept for
+        the same ``positions`` object (a simulation's look-ups, kept while the same translations move)."""
+        kept = self._picks
+        if kept is not None and kept[0] is positions:
+            return kept[1]
+        at = np.full(places, -1, np.intp)
+        at[positions] = np.arange(len(positions))
+        picks = at[self.source]
+        found = None if (picks < 0).any() else picks
+        self._picks = (positions, found)
+        return found
 
 
 class TranslationMap:
@@ -277,20 +295,30 @@ class TranslationMap:
             )
         return parts
 
-    def apply(self, plan: Any, hit: np.ndarray | None = None) -> int:
+    def apply(
+        self, plan: Any, hit: np.ndarray | None = None, moved: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> int:
         """Write the translation column of the mapped items from the plan's matrices; returns how many.
 
         Every mapped item, or with ``hit`` (by place among the plan's matrices:
         the translations that moved, an array's) those below one of them.  The
         rows' batches are marked as moved (translation columns only) and listed
         in ``plan.moved_rows``.  Items below several translations are not
-        written here (:meth:`multi_items`).
+        written here (:meth:`multi_items`).  ``moved``: ``(places, offsets)`` of
+        translations just written into the matrices; a part whose rows all lie
+        below them reads the offsets (compact) instead of the matrices' columns.
         """
         matrices = plan.matrices
         count = 0
         for part in self.parts(plan):
-            source, where, constant, lin = part.source, part.where, part.constant, part.linear
+            source, where = part.source, part.where
             lo, hi = part.span
+            if hit is None and moved is not None:
+                picks = part.picks_of(moved[0], len(matrices))
+                if picks is not None:
+                    world = moved[1].take(picks, axis=0)
+                    count += self._write(plan, part, world, where, lo, hi, None)
+                    continue
             if hit is not None:
                 chosen = hit[source]
                 if not chosen.all():
@@ -298,29 +326,42 @@ class TranslationMap:
                         continue
                     source = source[chosen]
                     where = (np.arange(lo, hi) if isinstance(where, slice) else where)[chosen]
-                    constant = None if constant is None else constant[chosen]
-                    lin = None if lin is None else lin[chosen]
                     lo, hi = int(where[0]), int(where[-1]) + 1
             world = matrices[source, :3, 3]
-            if lin is not None:  # three scaled columns rather than a batched product (see dynamic.py on BLAS)
-                world = world[:, 0:1] * lin[:, :, 0] + world[:, 1:2] * lin[:, :, 1] + world[:, 2:3] * lin[:, :, 2]
-            if constant is not None:
-                world += constant
-            count += len(world)
-            if part.batch is None:
-                items = part.items if hit is None else [i for i, c in zip(part.items, chosen, strict=True) if c]
-                for item, w in zip(items, world, strict=True):  # type: ignore[arg-type]
-                    item.row[_TRANSLATION] = w
-                continue
-            batch = part.batch
-            batch.rows[where, _TRANSLATION] = world
-            if hi - lo <= 8 and isinstance(where, np.ndarray):
-                for w in where.tolist():
-                    batch.row_changed(w)
-            else:
-                batch.moved(lo, hi)  # translation columns only: the upload rewrites just those (drawer.py)
-            plan.moved_rows.append((batch, where))
+            count += self._write(plan, part, world, where, lo, hi, None if hit is None else chosen)
         return count
+
+    @staticmethod
+    def _write(
+        plan: Any, part: _Part, world: np.ndarray, where: Any, lo: int, hi: int, chosen: np.ndarray | None
+    ) -> int:
+        """Rows ``where`` (``lo:hi``) of ``part`` (those ``chosen`` of it) take ``world`` (the translations'
+        offsets below them) through their ``L`` and ``c``; returns how many."""
+        lin, constant = part.linear, part.constant
+        if chosen is not None and not chosen.all():
+            lin = None if lin is None else lin[chosen]
+            constant = None if constant is None else constant[chosen]
+        if lin is not None:  # three scaled columns rather than a batched product (see dynamic.py on BLAS)
+            world = world[:, 0:1] * lin[:, :, 0] + world[:, 1:2] * lin[:, :, 1] + world[:, 2:3] * lin[:, :, 2]
+        if constant is not None:
+            world += constant  # (world is a copy: a fancy index, a take or the product above)
+        if part.batch is None:
+            items = part.items if chosen is None else [i for i, c in zip(part.items, chosen, strict=True) if c]
+            for item, w in zip(items, world, strict=True):  # type: ignore[arg-type]
+                item.row[_TRANSLATION] = w
+            return len(world)
+        batch = part.batch
+        if where.__class__ is slice:  # (one range: written as 12-byte records, not three strided columns)
+            set_translations(batch.rows[where], world.astype(np.float32))
+        else:
+            batch.rows[where, _TRANSLATION] = world
+        if hi - lo <= 8 and isinstance(where, np.ndarray):
+            for w in where.tolist():
+                batch.row_changed(w)
+        else:
+            batch.moved(lo, hi)  # translation columns only: the upload rewrites just those (drawer.py)
+        plan.moved_rows.append((batch, where))
+        return len(world)
 
 
 def _translations(transforms: list[Any], places: int) -> np.ndarray:
