@@ -69,6 +69,7 @@ DIRTY_APPEARANCE = "appearance"
 _SURFACE = slice(ROW.offsets["color"], ROW.offsets["point"])
 #: those a batch drawn with uniforms for its material shares (its colours are per row)
 _MATERIAL = slice(ROW.offsets["color"] + 4, ROW.offsets["point"])
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
 assert [f.name for f in ROW.fields[:2]] == ["model", "color"] and ROW.fields[-1].name == "point"
 #: draw kinds whose draw state the compiler makes from the surface alone (a painter's own kinds decline)
 _KINDS = frozenset(("mesh", "points", "lines"))
@@ -292,12 +293,13 @@ def restyle(changes: list[Restyle]) -> tuple[list[Any], bool]:
             same = False
             continue
         batch, r = slot
+        highlight = float(item.row[_HIGHLIGHT_ON]) != float(row[_HIGHLIGHT_ON])
         if batch.uniform and item.row[_MATERIAL].tobytes() != row[_MATERIAL].tobytes():
             same = False
             item.row[_SURFACE] = row[_SURFACE]
             batch.uniform = uniform_material(batch.rows)
         else:
             item.row[_SURFACE] = row[_SURFACE]
-        batch.row_changed(r)
+        batch.row_restyled(r, highlight)  # (whether some row is highlighted is kept unless this one's changed)
         batches[id(batch)] = batch
     return list(batches.values()), same

@@ -223,7 +223,7 @@ class BatchDrawer:
         mode = GL_TRIANGLES_ADJACENCY if volume else self._mode(batch.geometry, state.kind)
         vao.render(mode, instances=n)
         if recorder is not None:
-            recorder.end_draw(raster, len(state.clip), vao, mode, n)
+            recorder.end_draw(raster, len(state.clip), vao, mode, n, batch)
         self.report.count(1, n)
         return 1
 
@@ -325,6 +325,36 @@ class BatchDrawer:
                 return False
         _upload_rows(batch, self._columns(batch.layout), position)
         return True
+
+    def redraw_key(self, batch: Batch) -> tuple[Any, ...] | None:
+        """What a draw of ``batch`` in another camera's pass (every row, from its buffers) depends on besides the
+        pass: its buffers, layout and geometry and what picks its program variant (a shared material, a
+        highlighted row); None when such a draw cannot be issued again as recorded with the rows as they are
+        (rows not uploaded yet, one row, an instance set, or the draw would sort or pack again first).
+
+        Two equal keys of the same batch: the recorded draw (vertex array, program, uniforms) draws the
+        batch's current rows as :meth:`_draw_batch` would, with ``batch.size`` instances
+        (``FrameRunner.replay_draws``)."""
+        n = batch.size
+        if (
+            n <= 1
+            or batch.buffer is None
+            or batch.layout is None
+            or batch.offsets is not None
+            or batch.capacity < n
+            or batch.sparse
+            or batch.dirty is not None
+            or batch.geometry.buffers is None
+            or self.drawers.get(batch.state.kind) is not None
+            or (batch.items and batch.items[0].instances is not None)
+        ):
+            return None
+        if n >= SORT_MIN and not batch.state.special:
+            position = batch.position
+            if position is None or len(position) != n:
+                return None  # its draw would sort and pack it again
+        geometry = tuple(batch.geometry.buffers.values())  # (a snapshot: a geometry uploaded again has new ones)
+        return (batch.buffer, batch.layout, geometry, batch.uniform, _highlighted(batch))
 
     def _upload_moved_instances(self, batch: Batch, n: int) -> bool:
         """:meth:`upload_moved` for an instance set's batch: its moved positions uploaded as its draw in the

@@ -32,6 +32,7 @@ __all__ = [
 ]
 
 _MODEL = ROW.slice("model")
+_HIGHLIGHT_ON = ROW.at("highlight", "on")
 _MATERIAL_COLUMNS = np.concatenate(
     [
         np.arange(ROW.offsets[f.name], ROW.offsets[f.name] + f.size)
@@ -530,6 +531,7 @@ class Batch:
 
     def append_row(self, item: DrawItem) -> int:
         """Add ``item`` as the last row (its row becomes a view of it); returns the row's index."""
+        seen = self._highlight_now()
         n = len(self.rows)
         storage = self.storage
         if storage is None or n == len(storage):
@@ -554,6 +556,8 @@ class Batch:
             else:
                 self.position = None  # culled: sorted and culled again
         self.row_changed(n)
+        if seen is not None:  # whether some row is highlighted: the answer before, or the new row's
+            self.highlight_seen = (self.version, seen or float(self._rows[n, _HIGHLIGHT_ON]) > 0.0)
         return n
 
     def remove_row(self, index: int) -> int | None:
@@ -563,6 +567,7 @@ class Batch:
         row view follow it.  In the GPU buffer the row drawn last takes the
         removed row's place (sorted batches), so one row is uploaded.
         """
+        seen = self._highlight_now()
         last = len(self.rows) - 1
         removed = self.items[index]
         removed.row = removed.row.copy()
@@ -605,7 +610,14 @@ class Batch:
         if self.sparse is not None:
             self.sparse = [i for i in self.sparse if i < last]
         self.version += 1
+        if seen is False:  # no row was highlighted: none is (one that was may have left: asked again)
+            self.highlight_seen = (self.version, False)
         return moved
+
+    def _highlight_now(self) -> bool | None:
+        """Whether some row is highlighted, as last seen while it holds (``highlight_seen``), else None."""
+        seen = self.highlight_seen
+        return seen[1] if seen is not None and seen[0] == self.version else None
 
     def _row_at(self, place: int) -> tuple[int, np.ndarray | None]:
         """The row drawn at buffer ``place`` and the inverse of ``position`` (made here once, then kept by the row
@@ -650,6 +662,14 @@ class Batch:
         self.row_changed(index)
         if seen is not None and seen[0] == self.version - 1:
             self.highlight_seen = (self.version, seen[1])
+
+    def row_restyled(self, index: int, highlight: bool) -> None:
+        """Row ``index``'s surface fields changed (a replaced ``Material``): :meth:`row_changed`; whether some row
+        is highlighted holds as for a move unless ``highlight`` (the row's own highlight changed)."""
+        if highlight:
+            self.row_changed(index)
+        else:
+            self.row_moved(index)
 
     def mark(self, index: int) -> None:
         """Row ``index`` changed."""

@@ -46,7 +46,7 @@ from .drawlist import Scope
 from .frame_state import FrameState, ProjectionInfo
 from .imagespace import FullScreenPrograms, RenderTarget
 from .passes import Composed, FullScreen, Pass, Target
-from .plan import FramePlan, FrameRecorder, PlanKey
+from .plan import FramePlan, FrameRecorder, PlanKey, RecordedPass
 from .report import PassRecord, PassReport
 from .stages import FrameStage, StageList
 from .state import FillMode, GLCalls, RasterApplier, defaults
@@ -55,6 +55,15 @@ from .targets import FrameTargets
 __all__ = ["FrameRunner", "PassRecord", "ProjectionInfo"]
 
 _OVER = ("src_alpha", "one_minus_src_alpha", "add")  # blending of a full-screen pass with blend=True
+
+
+def _scissor(description: Pass) -> Any:
+    """The ScissorTest box a pass description sets (None: none)."""
+    index = ScissorTest.index
+    for kind, value in description.state_values:
+        if kind == index:
+            return value
+    return None
 
 
 class FrameRunner:
@@ -110,6 +119,8 @@ class FrameRunner:
         self._active: tuple[Any, tuple[Any, ...], list[Any]] | None = None
         #: id(batch) -> batch whose row count a splice changed since: the replay's draws of it take the new count
         self._resized: dict[int, Any] = {}
+        #: (plan, ids of the uniforms its draws write): what :meth:`replay_draws` asks of the plan being kept
+        self._plan_uniforms: tuple[Any, set[int]] | None = None
 
     def placements_changed(self) -> None:
         """Items moved or the draw list changed: every stage forgets what it derived from placements
@@ -534,9 +545,10 @@ class FrameRunner:
         if outer is None:
             outer = Composed()
         engine = self.engine
-        if self.state.recorder is not None and not type(technique).__dict__.get("replayable", False):
+        recorder = self.state.recorder
+        if recorder is not None and not recorder.draws_only and not type(technique).__dict__.get("replayable", False):
             # a technique's pass control is the application's code: it may draw other passes next frame
-            self.state.recorder.taint(f"technique {type(technique).__name__} is not replayable")
+            recorder.taint(f"technique {type(technique).__name__} is not replayable")
         engine.enter_technique(technique)
         calls = 0
         try:
@@ -561,19 +573,130 @@ class FrameRunner:
             engine.leave_technique(technique)
         return calls
 
+    def run_recorded(self, technique: Any, scope: Scope) -> tuple[int, RecordedPass | None]:
+        """Run ``technique`` over ``scope`` as :meth:`run` does while recording its draws; returns the draw calls
+        and, when it ran one pass that draws the opaque batches of its scope (``scopes="items"``, no select,
+        mask, full-screen or own draw) and every draw can be issued again as recorded, a
+        :class:`~.plan.RecordedPass` for :meth:`replay_draws` (else None).
+
+        For a stage that redraws a part of its target frame after frame (the shadow maps' partial updates):
+        only while a frame is drawn and not recorded itself (a stage's ``follow_rows``)."""
+        state = self.state
+        if state.recorder is not None or not state.drawing:
+            return self.run(technique, scope), None
+        recorder = state.recorder = FrameRecorder(draws_only=True)
+        try:
+            calls = self.run(technique, scope)
+        finally:
+            state.recorder = None
+        if recorder.tainted is not None or len(recorder.passes) != 1:
+            return calls, None
+        (description,) = recorder.passes
+        if (
+            description.scopes != "items"
+            or description.items != {"opaque"}
+            or description.select is not None
+            or description.mask is not None
+            or description.fullscreen is not None
+            or description.custom is not None
+            or description.technique is not None
+        ):
+            return calls, None
+        box = _scissor(description)
+        redraw_key = self.drawer.redraw_key
+        keys = []
+        for op in recorder.ops:
+            key = redraw_key(op.batch) if op.batch is not None else None
+            if key is None or op.n != op.batch.size or op.raster[ScissorTest.index] != box:
+                return calls, None
+            keys.append(key)
+        return calls, RecordedPass(description, recorder.ops, keys)
+
+    def replay_draws(self, recorded: RecordedPass, scope: Scope, box: tuple[int, int, int, int]) -> int | None:
+        """Issue the draws of ``recorded`` (:meth:`run_recorded`) again as its pass limited to the pixel rectangle
+        ``box`` (x, y, width, height from the target's top-left corner, as :meth:`Pass.scissored` takes it): its
+        target bound with its viewport, its clear (if any) of ``box``, each draw under ``box``'s scissor with the
+        uniforms, textures and vertex arrays recorded and its batch's current row count; afterwards GL is at
+        its defaults with the frame's target bound.  Returns the draw calls, or None with nothing drawn when the
+        recording no longer holds: ``scope`` has other batches to draw, or a batch's draw would do more than it
+        did (``BatchDrawer.redraw_key``)."""
+        description = recorded.description
+        root = self.engine.root_scope
+        source = root if description.source == "scene" and root is not None else scope
+        batches = recorded.batches
+        k = 0
+        for part_scope in source.walk():
+            for part in part_scope.parts or ():
+                if isinstance(part, Scope):
+                    continue
+                for batch in part.batches:
+                    if not batch.size:
+                        continue  # (not drawn)
+                    if k >= len(batches) or batch is not batches[k]:
+                        return None
+                    k += 1
+        if k != len(batches):
+            return None
+        redraw_key = self.drawer.redraw_key
+        for batch, key in zip(batches, recorded.keys, strict=True):
+            if redraw_key(batch) != key:
+                return None
+        applier = self.state.applier
+        fbo, size = applier.gl.framebuffer, applier.gl.size
+        try:
+            if description.target is not None:
+                target = self.targets.get(description.target, self.state.target_size)
+                applier.bind(target.fbo, target.size, description.viewport)
+            elif description.viewport is not None:
+                applier.viewport(description.viewport)
+            box = tuple(box)
+            if description.clear is not None:
+                self._clear(description.clear, box)
+            index = ScissorTest.index
+            for op in recorded.ops:
+                raster = op.raster
+                applier.apply((*raster[:index], box, *raster[index + 1 :]))
+                applier.clip_planes(op.clip)
+                for texture, unit in op.textures:
+                    texture.use(unit)
+                for uniform, value, raw in op.writes:
+                    if raw:
+                        uniform.write(value)
+                    else:
+                        uniform.value = value
+                op.vao.render(op.mode, instances=op.batch.size)
+        finally:
+            self._restore_defaults(fbo, size)
+        plan = self.plan
+        programs = self.engine.programs
+        if plan is not None and programs.owner is plan:
+            # the plan's uniforms hold the values it left unless these draws wrote some of them
+            found = self._plan_uniforms
+            if found is None or found[0] is not plan:
+                found = self._plan_uniforms = (plan, {id(u) for op in plan.ops for u, _, _ in op.writes})
+            if not found[1].isdisjoint(recorded.uniforms):
+                programs.owner = None
+        return len(recorded.ops)
+
     def _execute(self, technique: Any, description: Pass, scope: Scope, outer: Composed, item_level: bool) -> int:
         composed = outer.then(description)
         state = self.state
-        if state.recorder is not None and (
-            description.target is not None
-            or description.viewport is not None
-            or description.front_face != "ccw"
-            or description.camera is not None
-            or description.clear is not None
-            or description.fullscreen is not None
-            or description.custom is not None
+        if (
+            state.recorder is not None
+            and not state.recorder.draws_only
+            and (
+                description.target is not None
+                or description.viewport is not None
+                or description.front_face != "ccw"
+                or description.camera is not None
+                or description.clear is not None
+                or description.fullscreen is not None
+                or description.custom is not None
+            )
         ):
             state.recorder.taint(f"pass {description.name!r} sets a target, viewport, camera, clear or its own draw")
+        if state.recorder is not None and state.recorder.draws_only:
+            state.recorder.passes.append(description)
         record = PassRecord(
             name="/".join(composed.names),
             technique=type(technique).__name__,
@@ -746,12 +869,13 @@ class FrameRunner:
         self.state.applier.viewport(saved[0])
         self.state.target_size = saved[1]
 
-    def _clear(self, clear: Any) -> None:
+    def _clear(self, clear: Any, box: tuple[int, int, int, int] | None = None) -> None:
         """A pass's ``Clear``: colour, depth and stencil of the bound target (every channel and bit; no scissor,
-        or the clear's ``box``)."""
+        or the clear's ``box``, or ``box`` when given)."""
         applier = self.state.applier
         fbo = applier.gl.framebuffer
-        box = clear.box  # None: the whole target
+        if box is None:
+            box = clear.box  # None: the whole target
         if clear.color is None and clear.depth is not None and self.raw.available:
             # depth alone: moderngl's clear applies the framebuffer's own colour masks (a detected framebuffer's
             # clear colour would be lost), so clear only the depth buffer with a raw call

@@ -117,7 +117,7 @@ class RenderIndex:
             if not follow and 2 * (len(where) if count is None else count) > len(batch.rows):
                 # most rows moved and no old place is needed: every row's box, read from the rows as they lie
                 # (no gather of the moved rows and scatter of their boxes; the others' come out the same)
-                boxes[id(batch)] = (batch, *row_boxes(batch.geometry, batch.rows))
+                boxes[id(batch)] = (batch, *row_boxes(batch.geometry, batch.rows, spare=True))
                 continue
             # a run of rows (a bound array's) stays a slice: views and block copies, not gathers of every row
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
@@ -378,7 +378,7 @@ class RenderIndex:
     def _batch_boxes(self, batch: Any) -> tuple[np.ndarray, np.ndarray]:
         found = self._boxes.get(id(batch))
         if found is None or found[0] is not batch or len(found[1]) != len(batch.rows):
-            lo, hi = row_boxes(batch.geometry, batch.rows)
+            lo, hi = row_boxes(batch.geometry, batch.rows, spare=True)
             found = self._boxes[id(batch)] = (batch, lo, hi)
         return found[1], found[2]
 
@@ -423,11 +423,13 @@ def _column_max(a: np.ndarray) -> np.ndarray:
     return np.array([a[:, 0].max(), a[:, 1].max(), a[:, 2].max()])
 
 
-def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre).
 
     Column by column: numpy's batched (3,) @ (N, 3, 3) products are several times slower for thousands of rows;
-    a few rows (a splice's, a moved item's) in plain floats, the same operations in the same order.
+    a few rows (a splice's, a moved item's) in plain floats, the same operations in the same order.  With
+    ``spare`` (boxes kept while rows are appended) both are prefixes of storage with spare rows after them, where
+    :func:`_appended` writes appended rows' boxes without copying the others.
     """
     if len(rows) <= _FEW_ROWS:
         return _few_row_boxes(geometry, rows)
@@ -437,14 +439,19 @@ def row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # contiguous float64 rows (the same values), read many times; the boxes come out as (N, 3) views of (3, N)
     m = rows[:, _MODEL].T.astype(np.float64)
     a = np.abs(m[:12])
-    lo = np.empty((3, len(rows)))
-    hi = np.empty((3, len(rows)))
+    n = len(rows)
+    if spare:  # (N, 3) prefixes of storage with spare rows, written column by column (strided: a little slower)
+        lo = np.empty((n + n // 8 + 16, 3))[:n]
+        hi = np.empty((n + n // 8 + 16, 3))[:n]
+    else:
+        lo = np.empty((3, n)).T
+        hi = np.empty((3, n)).T
     for k in range(3):
         center = m[k] * c[0] + m[4 + k] * c[1] + m[8 + k] * c[2] + m[12 + k]
         half = a[k] * e[0] + a[4 + k] * e[1] + a[8 + k] * e[2]
-        np.subtract(center, half, out=lo[k])
-        np.add(center, half, out=hi[k])
-    return lo.T, hi.T
+        np.subtract(center, half, out=lo[:, k])
+        np.add(center, half, out=hi[:, k])
+    return lo, hi
 
 
 #: rows up to which :func:`row_boxes` computes in Python floats (numpy's per-call cost is more for so few)

@@ -512,6 +512,11 @@ class Pass:
         object.__setattr__(self, name, tuple(values))
         return tuple(out)
 
+    @property
+    def state_values(self) -> tuple[tuple[int, Any], ...]:
+        """The GL state the pass sets, as (state kind index, captured value) pairs in order."""
+        return self._state
+
     def scissored(self, box: tuple[int, int, int, int], name: str | None = None) -> Pass:
         """This pass limited to the pixel rectangle ``box`` (x, y, width, height from the target's top-left
         corner): its ``ScissorTest`` is ``box`` and its clear, if any, clears only ``box``; ``name`` renames it.

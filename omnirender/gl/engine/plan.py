@@ -49,7 +49,7 @@ from typing import Any
 
 from .state import defaults, kinds
 
-__all__ = ["FramePlan", "FrameRecorder", "PlanKey", "RecordingProgram", "DrawOp"]
+__all__ = ["FramePlan", "FrameRecorder", "PlanKey", "RecordingProgram", "DrawOp", "RecordedPass"]
 
 
 class PlanKey:
@@ -71,7 +71,7 @@ class PlanKey:
 class DrawOp:
     """One recorded draw call: GL state, textures, uniform writes, then ``vao.render(mode, instances=n)``."""
 
-    __slots__ = ("raster", "clip", "textures", "writes", "needed", "vao", "mode", "n", "changes")
+    __slots__ = ("raster", "clip", "textures", "writes", "needed", "vao", "mode", "n", "changes", "batch")
 
     def __init__(self) -> None:
         self.raster: tuple[Any, ...] = ()
@@ -88,6 +88,8 @@ class DrawOp:
         #: (apply, value) of the state kinds whose value differs from the draw before (the first: from the
         #: defaults a frame begins with)
         self.changes: list[tuple[Any, Any]] = []
+        #: the batch drawn (None: not said)
+        self.batch: Any = None
 
 
 class RecordingUniform:
@@ -140,13 +142,18 @@ class RecordingProgram:
 class FrameRecorder:
     """Collects a frame's draw calls while it is drawn; ``taint(why)`` when the frame does what it cannot replay."""
 
-    __slots__ = ("ops", "tainted", "_op")
+    __slots__ = ("ops", "tainted", "_op", "draws_only", "passes")
 
-    def __init__(self) -> None:
+    def __init__(self, draws_only: bool = False) -> None:
         self.ops: list[DrawOp] = []
         #: why this frame cannot be replayed (None: it can)
         self.tainted: str | None = None
         self._op: DrawOp | None = None
+        #: only the draws are recorded: the passes' own targets, viewports, cameras and clears, and whether
+        #: their techniques replay, are the caller's (``FrameRunner.run_recorded``)
+        self.draws_only = draws_only
+        #: the pass descriptions executed while it recorded (kept only when ``draws_only``)
+        self.passes: list[Any] = []
 
     def taint(self, why: str) -> None:
         if self.tainted is None:
@@ -164,13 +171,13 @@ class FrameRecorder:
             return
         self._op.textures.append((texture, unit))
 
-    def end_draw(self, raster: tuple[Any, ...], clip: int, vao: Any, mode: int, n: int) -> None:
-        """The draw call was issued with ``raster`` applied and ``clip`` clip distances."""
+    def end_draw(self, raster: tuple[Any, ...], clip: int, vao: Any, mode: int, n: int, batch: Any = None) -> None:
+        """The draw call of ``batch`` was issued with ``raster`` applied and ``clip`` clip distances."""
         op = self._op
         if op is None:
             self.taint("a draw the recorder did not see start")
             return
-        op.raster, op.clip, op.vao, op.mode, op.n = raster, clip, vao, mode, n
+        op.raster, op.clip, op.vao, op.mode, op.n, op.batch = raster, clip, vao, mode, n, batch
         self.ops.append(op)
         self._op = None
 
@@ -250,3 +257,20 @@ class FramePlan:
             apply(gl, value)
         applier.current = list(defaults())
         clip_planes(0)
+
+
+class RecordedPass:
+    """The draws of one pass, recorded (``FrameRunner.run_recorded``) to be issued again by
+    ``FrameRunner.replay_draws`` under another scissor box: the pass's description, its draw operations and,
+    per operation, what its batch's draw depended on (``BatchDrawer.redraw_key``)."""
+
+    __slots__ = ("description", "ops", "keys", "batches", "uniforms")
+
+    def __init__(self, description: Any, ops: list[DrawOp], keys: list[tuple[Any, ...]]) -> None:
+        self.description = description
+        self.ops = ops
+        self.keys = keys
+        #: the batches drawn, in order
+        self.batches = [op.batch for op in ops]
+        #: ids of the uniforms the draws write (held alive by ``ops``)
+        self.uniforms = {id(uniform) for op in ops for uniform, _, _ in op.writes}

@@ -167,7 +167,7 @@ class _Face:
     """One map of the atlas: a light camera (view, projection), its tile, texel size, whether it is drawn."""
 
     __slots__ = ("view", "proj", "texel", "drawn", "tile", "matrix", "rows", "ortho", "signature", "template",
-                 "every")  # fmt: skip
+                 "every", "recorded")  # fmt: skip
 
     def __init__(self, view: np.ndarray, proj: np.ndarray, texel: tuple[float, float], drawn: bool = True) -> None:
         self.view, self.proj, self.texel, self.drawn = view, proj, texel, drawn
@@ -182,6 +182,8 @@ class _Face:
         self.template: Pass | None = None
         #: (the full passes' select, the pattern of its partial passes that draw every caster) (_every_caster_pass)
         self.every: tuple[Any, Pass] | None = None
+        #: the draws of its last partial pass that drew every caster, recorded (``FrameRunner.run_recorded``)
+        self.recorded: Any = None
 
 
 class _MapPasses(GLTechnique):
@@ -475,7 +477,7 @@ class ShadowMapStage(FrameStage):
 
     def draw(self, frame: Any, root: Scope) -> int:
         engine = frame.engine
-        report = {"full": 0, "partial": 0, "kept": 0, "pixels": 0, "regions": []}
+        report = {"full": 0, "partial": 0, "kept": 0, "pixels": 0, "regions": [], "replayed": 0}
         engine.stats["shadow_maps"] = report
         installed = engine.root_scope is not None
         changes = engine.index.take_caster_changes() if installed else None
@@ -540,8 +542,8 @@ class ShadowMapStage(FrameStage):
         engine = frame.engine
         calls = 0
         picks = self._picks(engine)
-        if not picks:  # every caster drawn under the regions' scissors: one run, nothing picked
-            calls = frame.run(_MapPasses([_every_caster_pass(plan, *p, select) for p in partial]), root)
+        if not picks:  # every caster drawn under the regions' scissors, nothing picked
+            calls = self._draw_every(frame, root, plan, partial, select, report)
         casters = engine.index.caster_boxes() if picks and engine.root_scope is not None else None
         for k, face, region in partial:
             if picks:
@@ -556,6 +558,35 @@ class ShadowMapStage(FrameStage):
             report["partial"] += 1
             report["pixels"] += region[2] * region[3]
             report["regions"].append((k, (col * r + region[0], row * r + region[1], region[2], region[3])))
+        return calls
+
+    def _draw_every(
+        self, frame: Any, root: Scope, plan: ShadowPlan, partial: list[tuple[int, _Face, tuple[int, int, int, int]]],
+        select: Any, report: dict[str, Any],
+    ) -> int:  # fmt: skip
+        """Redraw the regions of ``partial`` drawing every caster under each region's scissor; returns the draw
+        calls.  Between the frame's own passes (``follow_rows``, before a recorded frame is replayed) a face's
+        pass is recorded once and its draws issued again under each new region's scissor
+        (``FrameRunner.replay_draws``: no pass, technique or drawer work per frame) while the casters' batches
+        and their draws hold; ``report["replayed"]`` counts those."""
+        if frame.state.recorder is not None:  # inside a frame being recorded: the passes as they are
+            return frame.run(_MapPasses([_every_caster_pass(plan, *p, select) for p in partial]), root)
+        calls = 0
+        r = plan.resolution
+        for k, face, region in partial:
+            found = face.recorded
+            made = None
+            if found is not None and found[0] is face.every and found[0][0] is select:
+                col, row = face.tile
+                x, y, w, h = region
+                made = frame.replay_draws(found[1], root, (col * r + x, plan.target.size[1] - (row * r + y) - h, w, h))
+            if made is None:
+                description = _every_caster_pass(plan, k, face, region, select)
+                made, recorded = frame.run_recorded(_MapPasses([description]), root)
+                face.recorded = None if recorded is None else (face.every, recorded)
+            else:
+                report["replayed"] += 1
+            calls += made
         return calls
 
     def _casters_in(
