@@ -733,13 +733,23 @@ _KEPT_TOP: list[tuple[Any, int, int] | None] = [None]
 
 def _version_bound(owners: list[Any]) -> int | None:
     """An upper bound of the versions of ``owners``, read from none of them, when they are the list the last
-    :func:`touch_nodes` set (the same object: a change batch's kept owners, see ``core.component``): each had
-    the version it gave them; since then another :func:`touch_nodes` set some to at most :data:`_TOP`, and each
-    :meth:`Node.touch` raised each by at most one (nothing else writes a live node's version).  None otherwise."""
+    :func:`touch_nodes` set (the same object: a change batch's kept owners, see ``core.component``), or that list
+    patched (its ``base``, with the owners that ``came`` read): each had the version it gave them; since then
+    another :func:`touch_nodes` set some to at most :data:`_TOP`, and each :meth:`Node.touch` raised each by at
+    most one (nothing else writes a live node's version).  None otherwise."""
     kept = _KEPT_TOP[0]
-    if kept is None or kept[0]() is not owners:
+    if kept is None:
         return None
-    return max(kept[1], _TOP[0]) + (_TOUCHED() - kept[2])
+    last = kept[0]()
+    if last is owners:
+        return max(kept[1], _TOP[0]) + (_TOUCHED() - kept[2])
+    if last is None or getattr(owners, "base", None) is not last:
+        return None
+    # that list with a few owners taken out or added (``core.component._Owners``: some of the batch's components
+    # changed hands): the owners added are read
+    top = max(kept[1], _TOP[0]) + (_TOUCHED() - kept[2])
+    came = owners.came  # type: ignore[attr-defined]
+    return max(top, max(map(_VERSION_OF, came))) if came else top
 
 
 def _keep_top(owners: list[Any], version: int) -> None:

@@ -67,23 +67,27 @@ class _Part:
         self.linear = linear
         #: the loose items themselves (no batch: each writes its own row)
         self.items = items
-        #: (the places of the last moved translations, the index into them of each row's source, or None when
-        #: some source is not among them): :meth:`picks_of`'s answer for that object
-        self._picks: tuple[np.ndarray, np.ndarray | None] | None = None
+        #: (the places of the last moved translations, :meth:`picks_of`'s answer for that object)
+        self._picks: tuple[np.ndarray, tuple[np.ndarray, np.ndarray | None]] | None = None
 
-    def picks_of(self, positions: np.ndarray, places: int) -> np.ndarray | None:
+    def picks_of(self, positions: np.ndarray, places: int) -> tuple[np.ndarray, np.ndarray | None]:
         """Where each row's translation is among ``positions`` (places among the plan's ``places`` matrices of
-        the translations that moved, in their order), or None when some row's is not among them.  Kept for
-        the same ``positions`` object (a simulation's look-ups, kept while the same translations move)."""
+        the translations that moved, in their order; 0 where it is not among them) and which rows' is not
+        (indices, None: none).  Kept for the same ``positions`` object (a simulation's look-ups, kept while the
+        same translations move)."""
         kept = self._picks
         if kept is not None and kept[0] is positions:
             return kept[1]
         at = np.full(places, -1, np.intp)
         at[positions] = np.arange(len(positions))
         picks = at[self.source]
-        found = None if (picks < 0).any() else picks
-        self._picks = (positions, found)
-        return found
+        absent = picks < 0
+        missing = None
+        if absent.any():
+            missing = np.flatnonzero(absent)
+            picks[missing] = 0
+        self._picks = (positions, (picks, missing))
+        return picks, missing
 
 
 class TranslationMap:
@@ -314,11 +318,12 @@ class TranslationMap:
             source, where = part.source, part.where
             lo, hi = part.span
             if hit is None and moved is not None:
-                picks = part.picks_of(moved[0], len(matrices))
-                if picks is not None:
-                    world = moved[1].take(picks, axis=0)
-                    count += self._write(plan, part, world, where, lo, hi, None)
-                    continue
+                picks, missing = part.picks_of(moved[0], len(matrices))
+                world = moved[1].take(picks, axis=0)
+                if missing is not None:  # (rows below translations that did not move: their matrices' columns)
+                    world[missing] = matrices[source[missing], :3, 3]
+                count += self._write(plan, part, world, where, lo, hi, None)
+                continue
             if hit is not None:
                 chosen = hit[source]
                 if not chosen.all():
