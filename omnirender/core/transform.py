@@ -168,7 +168,7 @@ class Transform(MonoAttribute):
         Every reader of a node's version or of a journal sees the change.
         """
         _set_version(self, self._version + 1)
-        if self._owners or _JOURNALS:  # (also in no node while a journal lives: the same transforms, the same batch)
+        if _JOURNALS or self._owners:  # (also in no node while a journal lives: the same transforms, the same batch)
             note_later(self)
 
     def _changed(self) -> None:
@@ -333,8 +333,9 @@ class Translation(Transform):
         if bound is not None:  # its own value holds until the array's next touch
             self._synced = bound._version
         # (also without owners while a journal lives: a loop over the same translations gives the same batch
-        # after one of them left its node, whose owners are patched, not collected again)
-        if self._owners or _JOURNALS:
+        # after one of them left its node, whose owners are patched, not collected again; the journals asked
+        # first: while an engine lives the owner list, elsewhere in memory, is not read, a cache miss a call)
+        if _JOURNALS or self._owners:
             _append(self)
             if len(_PENDING) > PENDING_LIMIT:
                 flush_changes()
