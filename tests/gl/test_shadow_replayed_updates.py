@@ -252,7 +252,7 @@ def test_a_few_moved_rows_keep_the_index_boxes_bounds_and_journal_exact():
             lo_before, hi_before = (a.copy() for a in index._batch_boxes(batch))
             for k in picked:
                 x, y, z = nodes[k].items[0].offset
-                far = 3.0 if frame % 3 == 0 else 0.3  # now and then beyond the bounds, else inside them
+                far = 6.0 if frame % 3 == 0 else 0.3  # now and then beyond the bounds (the floor), else inside
                 nodes[k].items[0].offset = (x + rng.uniform(-far, far), y + rng.uniform(-0.2, 0.2), z)
             e.compile(scene)
             journal = index.take_caster_changes()
@@ -298,3 +298,40 @@ def test_a_face_redrawn_in_full_replays_the_recording_under_its_tile(monkeypatch
             assert (report["full"], report["partial"], report["replayed"]) == (1, 0, 1)
             assert e.stats["replayed"]
             same_as_fresh(e, image, scene)
+
+
+def test_splices_keep_the_index_boxes_and_bounds_exact():
+    """Nodes removed and added frame after frame (the render index follows the removed and appended rows' boxes
+    in Python floats): every kept box is the box computed from the rows and the casters' bounds are those
+    computed afresh, also when the row that leaves was the only one on the bounds."""
+    from omnirender.gl.engine.index import row_boxes
+    from omnirender.gl.techniques.shadows import caster_bounds
+
+    scene, nodes, box = grid_scene()
+    rng = np.random.default_rng(9)
+    with engine() as e:
+        steady_then(e, scene, lambda: None)
+        index = e.index
+        far = None
+        for frame in range(10):
+            if far is not None:  # the one node beyond the others leaves: the bounds shrink back
+                scene.remove(far)
+                far = None
+            else:  # one beyond every other node (the floor too) on the low side of x and y: new bounds
+                place = om.Translation(-6.0 - 0.1 * frame, -0.3, 0.0)
+                far = scene.add(om.Node(f"far{frame}", [place, om.Material(), box]))
+            scene.remove(nodes.pop(int(rng.integers(len(nodes)))))
+            p = (rng.uniform(-2.0, 2.0), rng.uniform(0.8, 1.7), rng.uniform(-2.0, 2.0))
+            nodes.append(scene.add(om.Node(f"s{frame}", [om.Translation(*p), om.Material(), box])))
+            e.render(scene)
+            assert e.stats["compiled"] == "subtrees"
+            batch = next(it.slot[0] for it in index.items() if it.slot is not None and it.slot[0].size > 60)
+            lo, hi = index._batch_boxes(batch)
+            want_lo, want_hi = row_boxes(batch.geometry, batch.rows)
+            np.testing.assert_array_equal(lo, want_lo)
+            np.testing.assert_array_equal(hi, want_hi)
+            bounds = index.caster_bounds()[0]
+            fresh = caster_bounds(e.root_scope)
+            np.testing.assert_array_equal(bounds[0], fresh[0])
+            np.testing.assert_array_equal(bounds[1], fresh[1])
+            e.render(scene)

@@ -225,8 +225,8 @@ class RenderIndex:
                         self._journal = self._casters = None  # the removed row's place is not known
                     lo = hi = None
                     continue
-                if caster:
-                    old = (lo[index : index + 1].copy(), hi[index : index + 1].copy())
+                if caster:  # (one box as lists of floats: what the journal and the bounds take fastest)
+                    old = ([lo[index].tolist()], [hi[index].tolist()])
                     self._follow_casters(old, None)
                     if self._room(1):
                         self._note(CasterChange(batch, *old, False, np.array([index]), True))
@@ -234,7 +234,7 @@ class RenderIndex:
                 lo[index], hi[index] = lo[last], hi[last]
                 lo, hi = lo[:-1], hi[:-1]
             else:
-                a, b = row_boxes(batch.geometry, batch.rows[index : index + 1])
+                a, b = _few_boxes(batch.geometry, [batch.rows[index, _MODEL].tolist()])
                 if caster:
                     self._follow_casters(None, (a, b))
                     if self._room(1):
@@ -479,11 +479,11 @@ def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.
     if len(rows) <= _FEW_ROWS:
         return _few_row_boxes(geometry, rows)
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
-    c, e = (b0 + b1) / 2.0, (b1 - b0) / 2.0
+    (c0, c1, c2), (e0, e1, e2) = ((b0 + b1) / 2.0).tolist(), ((b1 - b0) / 2.0).tolist()
     # each row holds M transposed: M[k, j] is column 4 j + k of the model; the model columns are copied once into
-    # contiguous float64 rows (the same values), read many times; the boxes come out as (N, 3) views of (3, N)
+    # contiguous float64 rows (the same values), read many times; the sums go through three reused scratch rows
+    # (no (12, N) array of magnitudes, no new array per product), in the order the few-row path sums
     m = rows[:, _MODEL].T.astype(np.float64)
-    a = np.abs(m[:12])
     n = len(rows)
     if spare:  # (N, 3) prefixes of storage with spare rows, written column by column (strided: a little slower)
         lo = np.empty((n + n // 8 + 16, 3))[:n]
@@ -491,9 +491,16 @@ def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.
     else:
         lo = np.empty((3, n)).T
         hi = np.empty((3, n)).T
+    center, half, term = np.empty(n), np.empty(n), np.empty(n)
+    mul, add = np.multiply, np.add
     for k in range(3):
-        center = m[k] * c[0] + m[4 + k] * c[1] + m[8 + k] * c[2] + m[12 + k]
-        half = a[k] * e[0] + a[4 + k] * e[1] + a[8 + k] * e[2]
+        mul(m[k], c0, out=center)
+        add(center, mul(m[4 + k], c1, out=term), out=center)
+        add(center, mul(m[8 + k], c2, out=term), out=center)
+        add(center, m[12 + k], out=center)
+        mul(np.abs(m[k], out=half), e0, out=half)
+        add(half, mul(np.abs(m[4 + k], out=term), e1, out=term), out=half)
+        add(half, mul(np.abs(m[8 + k], out=term), e2, out=term), out=half)
         np.subtract(center, half, out=lo[:, k])
         np.add(center, half, out=hi[:, k])
     return lo, hi
@@ -529,7 +536,7 @@ def _few_boxes(geometry: Any, models: list[list[float]]) -> tuple[list[list[floa
     return lows, highs
 
 
-def _appended(a: np.ndarray, new: np.ndarray) -> np.ndarray:
+def _appended(a: np.ndarray, new: Any) -> np.ndarray:
     """``np.concatenate([a, new])`` written into spare rows after ``a`` when its storage has them, else into new
     storage with spare rows: a splice appending one row per frame copies no list of boxes.
 
