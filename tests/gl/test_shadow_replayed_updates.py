@@ -232,3 +232,69 @@ def test_boxes_kept_with_spare_rows_are_the_same_boxes():
     assert np.array_equal(lo, lo2) and np.array_equal(hi, hi2)
     grown = _appended(lo2, lo[:1])
     assert np.shares_memory(grown, lo2) and np.array_equal(grown, np.concatenate([lo, lo[:1]]))
+
+
+def test_a_few_moved_rows_keep_the_index_boxes_bounds_and_journal_exact():
+    """One to four casters moved per frame (the render index follows them in Python floats): every row's kept
+    box is the box computed from the rows, the casters' bounds are those computed afresh, and the journal's old
+    and new boxes are where the rows were and are, frame after frame (also moves onto and off the bounds)."""
+    from omnirender.gl.engine.index import row_boxes
+    from omnirender.gl.techniques.shadows import caster_bounds
+
+    scene, nodes, _ = grid_scene()
+    rng = np.random.default_rng(3)
+    with engine() as e:
+        steady_then(e, scene, lambda: None)
+        index = e.index
+        for frame in range(12):
+            picked = rng.choice(len(nodes), size=1 + frame % 4, replace=False)
+            batch = next(it.slot[0] for it in index.items() if it.slot is not None and it.slot[0].size > 60)
+            lo_before, hi_before = (a.copy() for a in index._batch_boxes(batch))
+            for k in picked:
+                x, y, z = nodes[k].items[0].offset
+                far = 3.0 if frame % 3 == 0 else 0.3  # now and then beyond the bounds, else inside them
+                nodes[k].items[0].offset = (x + rng.uniform(-far, far), y + rng.uniform(-0.2, 0.2), z)
+            e.compile(scene)
+            journal = index.take_caster_changes()
+            lo, hi = index._batch_boxes(batch)
+            want_lo, want_hi = row_boxes(batch.geometry, batch.rows)
+            np.testing.assert_array_equal(lo, want_lo)
+            np.testing.assert_array_equal(hi, want_hi)
+            bounds = index.caster_bounds()[0]
+            fresh = caster_bounds(e.root_scope)
+            np.testing.assert_array_equal(bounds[0], fresh[0])
+            np.testing.assert_array_equal(bounds[1], fresh[1])
+            assert journal is not None and len(journal) == 2
+            left, took = journal
+            rows = [int(r) for r in left.rows]
+            assert not left.new and took.new and rows == [int(r) for r in took.rows] and len(rows) == len(picked)
+            np.testing.assert_array_equal(np.array(left.lows()), lo_before[rows])
+            np.testing.assert_array_equal(np.array(left.highs()), hi_before[rows])
+            np.testing.assert_array_equal(np.array(took.lows()), want_lo[rows])
+            np.testing.assert_array_equal(np.array(took.highs()), want_hi[rows])
+            e.render(scene)
+
+
+def test_a_face_redrawn_in_full_replays_the_recording_under_its_tile(monkeypatch):
+    """Every caster moved a little (inside the fitted bounds) with every region redrawn in full: the face is
+    redrawn, before the recorded frame is replayed, by the recorded pass under its whole tile's scissor; the
+    maps and the picture are a fresh engine's."""
+    from omnirender.gl.techniques import shadows
+
+    scene, nodes, _ = grid_scene()
+    with engine() as e:
+        steady_then(e, scene, lambda: nodes[4].items[0].__setattr__("offset", (-0.1, 1.7, -2.4)))
+        assert e.stats["shadow_maps"]["partial"] == 1  # recorded
+        monkeypatch.setattr(shadows, "PARTIAL_MAX", 0.0)  # any region: the face in full
+
+        def all_moved(step: float) -> None:
+            for i, node in enumerate(nodes):
+                x, y, z = node.items[0].offset
+                node.items[0].offset = (x, y + step * (i % 3 - 1), z)
+
+        for step in (0.01, -0.01, 0.02):
+            image = steady_then(e, scene, lambda step=step: all_moved(step))
+            report = e.stats["shadow_maps"]
+            assert (report["full"], report["partial"], report["replayed"]) == (1, 0, 1)
+            assert e.stats["replayed"]
+            same_as_fresh(e, image, scene)

@@ -42,16 +42,25 @@ JOURNAL_ROWS = 512
 
 
 class CasterChange:
-    """Boxes of a shadow-casting batch's rows that changed: ``lo``, ``hi`` (N, 3) world boxes, ``new`` (False:
-    the places the rows left, True: the places they took), ``rows`` their row indices and ``edit``: False for
-    rows moved in place; True for a row removed (the last row moved into its place) or appended."""
+    """Boxes of a shadow-casting batch's rows that changed: ``lo``, ``hi`` world boxes ((N, 3) arrays, or for a few
+    rows lists of [x, y, z] lists: :meth:`lows` and :meth:`highs` give lists either way), ``new`` (False: the
+    places the rows left, True: the places they took), ``rows`` their row indices and ``edit``: False for rows
+    moved in place; True for a row removed (the last row moved into its place) or appended."""
 
     __slots__ = ("batch", "lo", "hi", "new", "rows", "edit")
 
-    def __init__(
-        self, batch: Any, lo: np.ndarray, hi: np.ndarray, new: bool, rows: np.ndarray, edit: bool = False
-    ) -> None:
+    def __init__(self, batch: Any, lo: Any, hi: Any, new: bool, rows: np.ndarray, edit: bool = False) -> None:
         self.batch, self.lo, self.hi, self.new, self.rows, self.edit = batch, lo, hi, new, rows, edit
+
+    def lows(self) -> list[list[float]]:
+        """The boxes' lower corners as lists of floats."""
+        lo = self.lo
+        return lo if isinstance(lo, list) else lo.tolist()
+
+    def highs(self) -> list[list[float]]:
+        """The boxes' upper corners as lists of floats."""
+        hi = self.hi
+        return hi if isinstance(hi, list) else hi.tolist()
 
 
 class RenderIndex:
@@ -114,6 +123,9 @@ class RenderIndex:
                     self._journal = self._casters = None  # the old places are not known
                 continue
             follow = caster and (self._casters is not None or self._journal is not None)
+            if follow and count is None and len(where) <= _FEW_ROWS:
+                self._moved_few(batch, found, where)  # what a frame moves: Python floats, few numpy calls
+                continue
             if not follow and 2 * (len(where) if count is None else count) > len(batch.rows):
                 # most rows moved and no old place is needed: every row's box, read from the rows as they lie
                 # (no gather of the moved rows and scatter of their boxes; the others' come out the same)
@@ -132,11 +144,27 @@ class RenderIndex:
             found[1][where] = lo
             found[2][where] = hi
 
-    def _follow_casters(
-        self, old: tuple[np.ndarray, np.ndarray] | None, new: tuple[np.ndarray, np.ndarray] | None
-    ) -> None:
-        """Caster rows left the boxes ``old`` and took ``new`` ((lo, hi) (N, 3) arrays or None): the casters'
-        bounds follow without a pass over every caster while some row stays on each side of them.
+    def _moved_few(self, batch: Any, found: tuple[Any, np.ndarray, np.ndarray], where: np.ndarray) -> None:
+        """:meth:`moved` of a few rows ``where`` of a shadow-casting batch whose boxes ``found`` are kept and whose
+        moves the journal follows: the old and new boxes as lists of floats (the journal takes them so)."""
+        rows = batch.rows
+        places = where.tolist()
+        lows, highs = _few_boxes(batch.geometry, [rows[i, _MODEL].tolist() for i in places])
+        store_lo, store_hi = found[1], found[2]
+        old_lo = [store_lo[i].tolist() for i in places]
+        old_hi = [store_hi[i].tolist() for i in places]
+        self._follow_casters((old_lo, old_hi), (lows, highs))
+        if self._room(len(places)):
+            self._note(CasterChange(batch, old_lo, old_hi, False, where))
+            self._note(CasterChange(batch, lows, highs, True, where))
+        for i, a, b in zip(places, lows, highs, strict=True):
+            store_lo[i] = a
+            store_hi[i] = b
+
+    def _follow_casters(self, old: tuple[Any, Any] | None, new: tuple[Any, Any] | None) -> None:
+        """Caster rows left the boxes ``old`` and took ``new`` ((lo, hi) (N, 3) arrays, lists of [x, y, z] lists
+        for a few, or None): the casters' bounds follow without a pass over every caster while some row stays on
+        each side of them.
 
         The rows on each bound are counted (:meth:`caster_bounds`): a box that
         left a bound takes one off its count, a box on it (or beyond: a new
@@ -150,7 +178,7 @@ class RenderIndex:
         lo, hi = cached[0]
         counts = self._extremes
         if counts is None:
-            if old is not None and len(old[0]) and not ((old[0] > lo).all() and (old[1] < hi).all()):
+            if old is not None and len(old[0]) and not _inside(old, lo, hi):
                 self._casters = None  # a row on the bounds left: they may shrink
                 return
         else:
@@ -383,11 +411,20 @@ class RenderIndex:
         return found[1], found[2]
 
 
-def _uncount(counts: list[int], boxes: np.ndarray, bound: list[float], sign: int = 1) -> None:
-    """Take the rows of ``boxes`` (N, 3) that lie on ``bound`` (per axis) off ``counts`` (``sign`` -1: add them);
-    a few rows in Python floats, many column by column."""
-    if len(boxes) <= 8:
-        for row in boxes.tolist():
+def _inside(boxes: tuple[Any, Any], lo: np.ndarray, hi: np.ndarray) -> bool:
+    """Whether the boxes (lo, hi) ((N, 3) arrays or lists of corners) lie strictly inside the bounds [lo, hi]."""
+    a, b = boxes
+    if isinstance(a, list):
+        low, high = lo.tolist(), hi.tolist()
+        return all(r[k] > low[k] for r in a for k in range(3)) and all(r[k] < high[k] for r in b for k in range(3))
+    return bool((a > lo).all() and (b < hi).all())
+
+
+def _uncount(counts: list[int], boxes: Any, bound: list[float], sign: int = 1) -> None:
+    """Take the rows of ``boxes`` ((N, 3), or a list of corners) that lie on ``bound`` (per axis) off ``counts``
+    (``sign`` -1: add them); a few rows in Python floats, many column by column."""
+    if isinstance(boxes, list) or len(boxes) <= 8:
+        for row in boxes if isinstance(boxes, list) else boxes.tolist():
             for k in range(3):
                 if row[k] == bound[k]:
                     counts[k] -= sign
@@ -396,18 +433,26 @@ def _uncount(counts: list[int], boxes: np.ndarray, bound: list[float], sign: int
         counts[k] -= sign * int(np.count_nonzero(boxes[:, k] == bound[k]))
 
 
-def _grown_bounds(
-    lo: np.ndarray, hi: np.ndarray, new_lo: np.ndarray, new_hi: np.ndarray
-) -> tuple[list[float], list[float], bool]:
-    """The bounds ``[lo, hi]`` grown to take the boxes ``[new_lo, new_hi]`` ((N, 3)) as lists of floats, and
-    whether they grew; a few boxes (what moved in a frame) in Python floats, no numpy call per axis."""
-    if len(new_lo) <= 8:
+def _grown_bounds(lo: np.ndarray, hi: np.ndarray, new_lo: Any, new_hi: Any) -> tuple[list[float], list[float], bool]:
+    """The bounds ``[lo, hi]`` grown to take the boxes ``[new_lo, new_hi]`` ((N, 3), or lists of corners) as lists
+    of floats, and whether they grew; a few boxes (what moved in a frame) in Python floats, no numpy call per
+    axis."""
+    if isinstance(new_lo, list) or len(new_lo) <= 8:
         was_lo, was_hi = lo.tolist(), hi.tolist()
-        lows, highs = new_lo.tolist(), new_hi.tolist()
-        a = [min(row[k] for row in lows) for k in range(3)]
-        b = [max(row[k] for row in highs) for k in range(3)]
-        grown = any(a[k] < was_lo[k] or b[k] > was_hi[k] for k in range(3))
-        return [min(was_lo[k], a[k]) for k in range(3)], [max(was_hi[k], b[k]) for k in range(3)], grown
+        lows = new_lo if isinstance(new_lo, list) else new_lo.tolist()
+        highs = new_hi if isinstance(new_hi, list) else new_hi.tolist()
+        grown = False
+        for row in lows:  # (plain loops: a few rows, no generator per axis)
+            for k in range(3):
+                if row[k] < was_lo[k]:
+                    was_lo[k] = row[k]
+                    grown = True
+        for row in highs:
+            for k in range(3):
+                if row[k] > was_hi[k]:
+                    was_hi[k] = row[k]
+                    grown = True
+        return was_lo, was_hi, grown
     a, b = _column_min(new_lo), _column_max(new_hi)
     grown = bool((a < lo).any() or (b > hi).any())
     return np.minimum(lo, a).tolist(), np.maximum(hi, b).tolist(), grown
@@ -460,18 +505,28 @@ _FEW_ROWS = 4
 
 def _few_row_boxes(geometry: Any, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`row_boxes` of a few rows: the same sums of float64 products, each row's 16 numbers as floats."""
+    lo, hi = _few_boxes(geometry, rows[:, _MODEL].tolist())
+    return np.array(lo).reshape(-1, 3), np.array(hi).reshape(-1, 3)
+
+
+def _few_boxes(geometry: Any, models: list[list[float]]) -> tuple[list[list[float]], list[list[float]]]:
+    """The world boxes of ``geometry`` placed by a few rows' ``models`` (each its 16 model numbers as floats):
+    lists of [x, y, z] corners, the sums of float64 products :func:`row_boxes` makes, in the same order."""
     (x0, y0, z0), (x1, y1, z1) = (np.asarray(b, dtype=np.float64).tolist() for b in geometry.bounds)
     c0, c1, c2 = (x0 + x1) / 2.0, (y0 + y1) / 2.0, (z0 + z1) / 2.0
     e0, e1, e2 = (x1 - x0) / 2.0, (y1 - y0) / 2.0, (z1 - z0) / 2.0
-    lo: list[float] = []
-    hi: list[float] = []
-    for m in rows[:, _MODEL].tolist():  # each row holds M transposed: M[k, j] is m[4 j + k]
+    lows: list[list[float]] = []
+    highs: list[list[float]] = []
+    for m in models:  # each row holds M transposed: M[k, j] is m[4 j + k]
+        lo, hi = [], []
         for k in range(3):
             center = m[k] * c0 + m[4 + k] * c1 + m[8 + k] * c2 + m[12 + k]
             half = abs(m[k]) * e0 + abs(m[4 + k]) * e1 + abs(m[8 + k]) * e2
             lo.append(center - half)
             hi.append(center + half)
-    return np.array(lo).reshape(-1, 3), np.array(hi).reshape(-1, 3)
+        lows.append(lo)
+        highs.append(hi)
+    return lows, highs
 
 
 def _appended(a: np.ndarray, new: np.ndarray) -> np.ndarray:

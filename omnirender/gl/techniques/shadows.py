@@ -366,8 +366,12 @@ class ShadowMapStage(FrameStage):
 
     ``engine.stats["shadow_maps"]`` says what each frame did: ``full``,
     ``partial`` and ``kept`` (faces), ``pixels`` (texels redrawn by partial
-    updates) and ``regions`` (face index, (x, y, width, height) atlas texels from
-    the bottom-left corner, of each partial update).
+    updates), ``regions`` (face index, (x, y, width, height) atlas texels from
+    the bottom-left corner, of each partial update) and ``replayed`` (faces whose
+    update issued a recorded pass's draws again: where a partial update draws
+    every caster, before a recorded frame is replayed, the face's pass is
+    recorded once and replayed under each new region's scissor,
+    ``FrameRunner.replay_draws``).
 
     It forgets nothing when placements change (no :meth:`changed`): the
     engine's render index keeps the casters' bounds and journal up to date.
@@ -383,7 +387,8 @@ class ShadowMapStage(FrameStage):
     partial_picks: bool | None = None
 
     def __init__(self) -> None:
-        self._cache: Any = None  # (key, plan, its technique, the select it was made with)
+        #: (key, plan, its technique, the select it was made with, the inputs (_memo) and fit it was found for)
+        self._cache: Any = None
         #: what the atlas holds: its description and, per tile, the signature of the face drawn into it
         self._atlas: Target | None = None
         self._held: dict[tuple[int, int], bytes] = {}
@@ -395,6 +400,9 @@ class ShadowMapStage(FrameStage):
         self._selected: tuple[Any, int, Any] | None = None
         #: (the casters' bounds, the bounds fitted to them) of the last frame
         self._fitted: tuple[Any, np.ndarray, np.ndarray] | None = None
+        #: (root, index version, engine.shadows, declarations, size, (component, version) of the settings and
+        #: lights, settings, lights) of the last frame (:meth:`_inputs`)
+        self._memo: tuple[Any, ...] | None = None
 
     def replayable(self, engine: Any) -> bool:
         """What it draws follows the draw list, lights and settings: a frame whose atlas faces were all kept
@@ -453,6 +461,29 @@ class ShadowMapStage(FrameStage):
         self._selected = (root, index.version, select)
         return select
 
+    def _inputs(self, engine: Any, root: Scope, installed: bool) -> tuple[ShadowMaps | None, list[Any]]:
+        """The frame's shadow-map settings (:func:`frame_settings`) and its lights that cast shadows with their
+        matrices; kept while the draw list (root, index version), the engine's switch, the pre-evaluated
+        declarations, the image size and the versions of the settings and lights hold."""
+        memo = self._memo
+        if (
+            installed
+            and memo is not None
+            and memo[0] is root
+            and memo[1] == engine.index.version
+            and memo[2] == engine.shadows
+            and memo[3] is engine.declared
+            and memo[4] == engine.size
+            and all(component.version == version for component, version in memo[5])
+        ):
+            return memo[6], memo[7]
+        settings = frame_settings(root if installed else None, engine.shadows)
+        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
+        versions = tuple((c, c.version) for c in (settings, *(light for light, _ in lights)) if c is not None)
+        self._memo = (root, engine.index.version, engine.shadows, engine.declared, tuple(engine.size), versions,
+                      settings, lights) if installed else None  # fmt: skip
+        return settings, lights
+
     def _forget(self) -> int:
         self._atlas = None
         self._held = {}
@@ -481,25 +512,31 @@ class ShadowMapStage(FrameStage):
         engine.stats["shadow_maps"] = report
         installed = engine.root_scope is not None
         changes = engine.index.take_caster_changes() if installed else None
-        settings = frame_settings(root if installed else None, engine.shadows)
-        if settings is None:
-            return self._forget()
-        lights = [(light, m) for light, m in engine.scene_lights if getattr(light, "casts_shadows", False)]
-        if not lights:
+        settings, lights = self._inputs(engine, root, installed)
+        if settings is None or not lights:
             return self._forget()
         bounds = engine.index.caster_bounds()[0] if installed else caster_bounds(root)
         if bounds is None:
             return self._forget()
-        if self._fitted is None or self._fitted[0] is not bounds:  # the index keeps the bounds while they hold
-            self._fitted = (bounds, *fit_bounds(*bounds))
-        lo, hi = self._fitted[1], self._fitted[2]
-        key = (version_key(settings), lo.tobytes(), hi.tobytes(),
-               tuple((light, light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
-        plan = self._cache[1] if self._cache is not None and self._cache[0] == key else None
+        fitted = self._fitted
+        if fitted is None or fitted[0] is not bounds:  # the index keeps the bounds while they hold
+            fitted = self._fitted = (bounds, *fit_bounds(*bounds))
+        lo, hi = fitted[1], fitted[2]
+        cached = self._cache
+        if cached is not None and self._memo is not None and cached[4] is self._memo and cached[5] is fitted:
+            plan = cached[1]  # the same inputs as the frame before: the same key
+        else:
+            key = (version_key(settings), lo.tobytes(), hi.tobytes(),
+                   tuple((light, light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
+            plan = cached[1] if cached is not None and cached[0] == key else None
+            if plan is not None:
+                cached = self._cache = (key, plan, cached[2], cached[3], self._memo, fitted)
         select = self._select(engine, root) if installed else casts_shadows
         if plan is None or self._cache[3] is not select:
+            key = (version_key(settings), lo.tobytes(), hi.tobytes(),
+                   tuple((light, light.version, m.tobytes()) for light, m in lights), tuple(engine.size))  # fmt: skip
             plan = ShadowPlan(settings, lights, (lo, hi), tuple(engine.size)) if plan is None else plan
-            self._cache = (key, plan, plan.technique(select), select)
+            self._cache = (key, plan, plan.technique(select), select, self._memo, fitted)
         technique = self._cache[2]
         if technique is None:
             return self._forget()
@@ -527,7 +564,12 @@ class ShadowMapStage(FrameStage):
                 partial.append((k, face, region))
         calls = 0
         if full:
-            calls += frame.run(_MapPasses([_face_pass(plan, k, face, select) for k, face in full]), root)
+            if frame.state.recorder is None and not self._picks(engine):  # (between a recorded frame's passes)
+                r = plan.resolution  # a whole tile is the every-caster pass under the tile's scissor
+                calls += self._draw_every(frame, root, plan, [(k, face, (0, 0, r, r)) for k, face in full], select,
+                                          report)  # fmt: skip
+            else:
+                calls += frame.run(_MapPasses([_face_pass(plan, k, face, select) for k, face in full]), root)
             report["full"] = len(full)
         if partial:
             calls += self._draw_partial(frame, root, plan, partial, select, report)
@@ -568,7 +610,8 @@ class ShadowMapStage(FrameStage):
         calls.  Between the frame's own passes (``follow_rows``, before a recorded frame is replayed) a face's
         pass is recorded once and its draws issued again under each new region's scissor
         (``FrameRunner.replay_draws``: no pass, technique or drawer work per frame) while the casters' batches
-        and their draws hold; ``report["replayed"]`` counts those."""
+        and their draws hold; ``report["replayed"]`` counts those.  A region of a whole tile redraws the face
+        in full (the every-caster pass is the face's full pass under its tile's scissor)."""
         if frame.state.recorder is not None:  # inside a frame being recorded: the passes as they are
             return frame.run(_MapPasses([_every_caster_pass(plan, *p, select) for p in partial]), root)
         calls = 0
@@ -650,11 +693,13 @@ class _Rects:
             self.flags = np.zeros((2, self.rect.shape[1]), bool)
             self.flags[0, :n], self.flags[1, :n] = behind, away
 
-    def _put(self, where: Any, lo: np.ndarray, hi: np.ndarray) -> None:
+    def _put(self, where: Any, lo: Any, hi: Any) -> None:
         if len(lo) <= _FEW:  # a few rows (what moved): their floats written in place
             rows = range(where.start, where.stop) if isinstance(where, slice) else np.asarray(where).tolist()
             rect, flags = self.rect, self.flags
-            for i, r in zip(rows, _few_rects(self.face, lo.tolist(), hi.tolist()), strict=True):
+            lows = lo if isinstance(lo, list) else lo.tolist()
+            highs = hi if isinstance(hi, list) else hi.tolist()
+            for i, r in zip(rows, _few_rects(self.face, lows, highs), strict=True):
                 rect[0, i], rect[1, i], rect[2, i], rect[3, i] = r[0], r[1], r[2], r[3]
                 if flags is not None:
                     flags[0, i], flags[1, i] = r[4], r[5]
@@ -803,10 +848,10 @@ def _changed_boxes(changes: list[Any]) -> tuple[list[list[float]], list[list[flo
     if not changes:
         return [], []
     if len(changes) == 1 or all(c.new for c in changes) or not any(c.new for c in changes):
-        return [a for c in changes for a in c.lo.tolist()], [b for c in changes for b in c.hi.tolist()]
+        return [a for c in changes for a in c.lows()], [b for c in changes for b in c.highs()]
     if len(changes) == 2 and changes[0].batch is changes[1].batch and len(changes[0].lo) == len(changes[1].lo) == 1:
         a, b = changes  # one row left and one came (a replaced Material): the same box cancels
-        lows, highs = a.lo.tolist() + b.lo.tolist(), a.hi.tolist() + b.hi.tolist()
+        lows, highs = a.lows() + b.lows(), a.highs() + b.highs()
         if lows[0] == lows[1] and highs[0] == highs[1] and _depth_only_state(a.batch):
             return [], []
         return lows, highs
@@ -817,7 +862,7 @@ def _changed_boxes(changes: list[Any]) -> tuple[list[list[float]], list[list[flo
     for c in changes:
         if c.new:
             continue
-        for a, b in zip(c.lo.tolist(), c.hi.tolist(), strict=True):
+        for a, b in zip(c.lows(), c.highs(), strict=True):
             left.setdefault((id(c.batch), (*a, *b)), []).append(len(lows))
             olds.append(len(lows))
             lows.append(a)
@@ -827,7 +872,7 @@ def _changed_boxes(changes: list[Any]) -> tuple[list[list[float]], list[list[flo
         if not c.new:
             continue
         same = _depth_only_state(c.batch)
-        for a, b in zip(c.lo.tolist(), c.hi.tolist(), strict=True):
+        for a, b in zip(c.lows(), c.highs(), strict=True):
             found = left.get((id(c.batch), (*a, *b))) if same else None
             if found:
                 cancelled.add(found.pop())
