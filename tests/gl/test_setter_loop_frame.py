@@ -219,3 +219,46 @@ def test_a_batch_of_value_equal_components_is_not_taken_for_the_last_one() -> No
     drained = journal.drain()
     assert len(drained) == n and all(x is y for x, y in zip(drained, b, strict=True))
     assert other.version > 0
+
+
+def test_owners_that_are_not_plain_nodes_are_told_their_own_way_every_loop() -> None:
+    """A node subclass and an owner that is not a node (anything with ``touch()``) among a loop's owners: the
+    plain nodes' versions are written at once, the others keep their own ways, loop after loop."""
+
+    class Watcher:
+        """An owner that is not a node; it has a ``_version`` a blind write would silently replace."""
+
+        def __init__(self) -> None:
+            self._version = 0
+            self.touched = 0
+
+        def touch(self) -> None:
+            self.touched += 1
+
+    class Tagged(om.Node):
+        __slots__ = ("writes",)
+
+        def __setattr__(self, name: str, value) -> None:  # noqa: ANN001
+            if name == "_version":
+                object.__setattr__(self, "writes", getattr(self, "writes", 0) + 1)
+            super().__setattr__(name, value)
+
+    n = 300
+    moves = [om.Translation() for _ in range(n)]
+    nodes = [(Tagged if i % 50 == 0 else om.Node)(f"b{i}", [t]) for i, t in enumerate(moves)]
+    om.Node("scene", nodes)
+    watcher = Watcher()
+    moves[7].attach_owner(watcher)
+    journal = ChangeJournal()  # noqa: F841 - alive, as an engine's
+    for frame in range(4):
+        before = [node.version for node in nodes]
+        for t in moves:
+            t.offset = (float(frame), 1.0, 2.0)
+        assert all(node.version > v for node, v in zip(nodes, before, strict=True))
+        assert watcher.touched == frame + 1 and watcher._version == 0
+    moves[7].detach_owner(watcher)
+    for frame in range(4, 7):  # only nodes now, some of them a subclass: still every version moves
+        before = [node.version for node in nodes]
+        for t in moves:
+            t.offset = (float(frame), 1.0, 2.0)
+        assert all(node.version > v for node, v in zip(nodes, before, strict=True))

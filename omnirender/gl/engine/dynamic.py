@@ -326,7 +326,12 @@ class MovePlan:
             self._taken = []
             if last is not None:
                 changed, positions, moved, translations, missing = last
-                hit = np.isin(positions, taken)
+                if len(taken) <= _FEW:  # (a frame's few replacements: a comparison each, no sort of the places)
+                    hit = positions == taken[0]
+                    for k in taken[1:]:
+                        hit |= positions == k
+                else:
+                    hit = np.isin(positions, taken)
                 found = np.flatnonzero(hit).tolist()
                 if len(found) > _FEW:
                     keep = (~hit).tolist()
