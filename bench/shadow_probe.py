@@ -25,8 +25,10 @@ steady frame on a GPU"): shadows off; default shadows; shadows with hard
 (1-tap) filtering; shadows with a 64-texel map; a light that casts no
 shadows on a shadowed engine (no atlas bound, the shadow-free program);
 default shadows with frame replay switched off (every frame drawn in full:
-the stage keeps the atlas); 100 nodes with and without shadows (does the
-extra cost scale with the scene?).  "steady" frames follow each other;
+the stage keeps the atlas); default shadows with the maps redrawn in full
+every frame (what the engine before the change tracker did, whose steady
+frames cost the same with and without shadows on the H200); 100 nodes with
+and without shadows (does the extra cost scale with the scene?).  "steady" frames follow each other;
 "after" frames are the first steady frame after all 10,000 moved (what
 ``frame_cost.py``'s interleaved "steady" measures).
 
@@ -141,8 +143,10 @@ def default_settings(**settings: Any) -> Iterator[None]:
 
 
 def measure(label: str, n: int, shadows: bool, frames: int, log: DebugLog, *, replay: bool = True,
-            light_shadows: bool = True, profile: bool = False) -> None:  # fmt: skip
-    """Print one configuration's figures (see the module's docstring)."""
+            light_shadows: bool = True, profile: bool = False, redraw_maps: bool = False) -> None:  # fmt: skip
+    """Print one configuration's figures (see the module's docstring); ``redraw_maps``: the shadow stage forgets
+    its atlas before every frame, so every frame draws the maps in full (what the engine before the change
+    tracker did; such a frame is not recorded)."""
     scene, nodes, positions, _ = node_scene(n)
     if not light_shadows:
         light = scene.items[1]
@@ -156,7 +160,13 @@ def measure(label: str, n: int, shadows: bool, frames: int, log: DebugLog, *, re
             time_query = ctx.query(time=True)
             sample_query = ctx.query(samples=True)
         log.take()
-        render = lambda: engine.render(scene, read_depth=False)  # noqa: E731
+        stage = next((st for st in engine.stages if isinstance(st, shadow_module.ShadowMapStage)), None)
+        forget = stage._forget if redraw_maps and stage is not None else (lambda: 0)  # (a probe's reach inside)
+
+        def render() -> None:
+            forget()
+            engine.render(scene, read_depth=False)
+
         for _ in range(3):
             render()
         warm = log.take()
@@ -172,6 +182,7 @@ def measure(label: str, n: int, shadows: bool, frames: int, log: DebugLog, *, re
 
         def split(out: dict[str, list[float]]) -> None:
             engine.compile(scene)
+            forget()
             t0 = time.perf_counter()
             with engine.current():
                 with sample_query:
@@ -272,6 +283,17 @@ def main() -> int:
                 lambda: measure(
                     "default shadows, frame replay off (every frame drawn in full)", N, True, f, log, replay=False
                 ),
+            ),
+            (
+                "maps redrawn",
+                lambda: measure(
+                    "default shadows, the maps redrawn in full every frame (as before the change tracker)",
+                    N,
+                    True,
+                    f,
+                    log,
+                    redraw_maps=True,
+                ),  # fmt: skip
             ),
             ("100 off", lambda: measure("100 nodes, shadows off", 100, False, f, log)),
             ("100 on", lambda: measure("100 nodes, default shadows", 100, True, f, log)),

@@ -335,3 +335,31 @@ def test_splices_keep_the_index_boxes_and_bounds_exact():
             np.testing.assert_array_equal(bounds[0], fresh[0])
             np.testing.assert_array_equal(bounds[1], fresh[1])
             e.render(scene)
+
+
+@pytest.mark.parametrize("where", ["top", "subgraph"])
+def test_a_shadowmaps_technique_replays_and_follows_its_settings(where):
+    """A scene with an ``om.gl.ShadowMaps`` (its settings for the receivers after it, or shadows off for a
+    subgraph) replays its steady frames like one without; changing the technique's settings draws the next frame
+    in full, and every picture is a fresh engine's."""
+    scene, nodes, box = grid_scene()
+    camera, light, floor = scene.items[:3]
+    technique = om.gl.ShadowMaps(softness=2.0)
+    if where == "top":
+        root = om.Node("root", [camera, light, technique, floor, *nodes])
+    else:  # the first 20 boxes neither receive shadows nor are they shadowed
+        group = om.Node("group", [om.gl.ShadowMaps(enabled=False), *nodes[:20]])
+        root = om.Node("root", [camera, light, technique, floor, group, *nodes[20:]])
+    with engine() as e:
+        for _ in range(3):
+            e.render(root)
+        assert e.stats["replayed"] and e.frame_runner.not_recorded is None
+        for softness, bias in ((0.0, 2.0), (3.0, 4.0), (1.0, 0.5)):
+            technique.softness, technique.bias = softness, bias
+            image = e.render(root)
+            assert not e.stats["replayed"]
+            same_as_fresh(e, image, root)
+            e.render(root)
+            image = e.render(root)
+            assert e.stats["replayed"]
+            same_as_fresh(e, image, root)

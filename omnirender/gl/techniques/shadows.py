@@ -120,6 +120,9 @@ class ShadowMaps(GLTechnique):
     """
 
     __slots__ = ("enabled", "resolution", "softness", "bias", "normal_offset")
+    #: its one pass is data made from its fields (a shader's uniforms and defines): a steady frame may replay it
+    #: (``gl/engine/plan.py``); a changed field counts a version, and the frame after it is drawn in full
+    replayable = True
 
     @property
     def deferred_inline(self) -> bool:
