@@ -25,9 +25,12 @@ pytestmark = pytest.mark.gl
 SIZE = (96, 72)
 
 
-def scene_of(n: int = 90, rotated: bool = False) -> tuple[om.Node, list[om.Translation], np.ndarray]:
+def scene_of(
+    n: int = 90, rotated: bool = False, placed: bool = False
+) -> tuple[om.Node, list[om.Translation], np.ndarray]:
     """n boxes, each below its own Translation (a shared box, a colour each); with ``rotated`` every third node
-    also holds a Rotation after its translation (a shape-local part of its map's constant)."""
+    also holds a Rotation after its translation, with ``placed`` every fourth an om.Matrix (a turn and a shift)
+    before it (its map's L and c are not the identity and zero)."""
     scene = om.Node("scene", [om.Camera.look_at((0, 0, 32), (0, 0, 0), fov=50), om.DirectionalLight()])
     rng = np.random.default_rng(7)
     positions = np.zeros((n, 3))
@@ -40,6 +43,10 @@ def scene_of(n: int = 90, rotated: bool = False) -> tuple[om.Node, list[om.Trans
         t = om.Translation(offset=positions[i])
         moves.append(t)
         items: list = [t]
+        if placed and i % 4 == 1:
+            m = om.Rotation(angle=25.0, axis=(0, 1, 1)).matrix.copy()
+            m[:3, 3] = (0.3, -0.2, 0.5)
+            items.insert(0, om.Matrix(m))
         if rotated and i % 3 == 0:
             items.append(om.Rotation(angle=30.0, axis=(0, 0, 1)))
         items += [om.Color(0.3 + 0.7 * i / n, 0.6, 0.3), box]
@@ -94,11 +101,11 @@ def rows_match_transforms(engine, moves: list[om.Translation]) -> None:  # noqa:
             assert np.allclose(row[model].reshape(4, 4).T, m, atol=1e-5)
 
 
-@pytest.mark.parametrize("rotated", [False, True])
-def test_setter_loops_leave_buffers_rows_and_pictures_as_a_fresh_engine_has_them(rotated: bool) -> None:
+@pytest.mark.parametrize("rotated, placed", [(False, False), (True, False), (False, True), (True, True)])
+def test_setter_loops_leave_buffers_rows_and_pictures_as_a_fresh_engine_has_them(rotated: bool, placed: bool) -> None:
     from omnirender.gl import GLEngine
 
-    scene, moves, positions = scene_of(rotated=rotated)
+    scene, moves, positions = scene_of(rotated=rotated, placed=placed)
     rng = np.random.default_rng(3)
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         e.render(scene, background=(0, 0, 0))

@@ -105,6 +105,7 @@ class TranslationMap:
         "fixed",
         "translation",
         "translations",
+        "offset_constants",
         "_parts",
         "_multi_items",
         "_plan",
@@ -122,6 +123,8 @@ class TranslationMap:
         self._pending: list[np.ndarray] = []
         self.source = np.full(n, -1, np.intp)
         self.constant = np.zeros((n, 3))
+        #: whether some item's c was ever made other than zero (until then every part's c is None: not gathered)
+        self.offset_constants = False
         #: L per item, made when a first item's L is not the identity
         self.linear: np.ndarray | None = None
         #: items below two or more translations: recomposed from their chains
@@ -191,6 +194,8 @@ class TranslationMap:
                 linear[above] = matrices[links[above], :3, :3] @ linear[above]
                 any_linear = True
         self.constant[items] = point
+        if not self.offset_constants and point.any():
+            self.offset_constants = True
         if any_linear and not (linear == _EYE3).all():
             if self.linear is None:
                 self.linear = np.broadcast_to(_EYE3, (len(self.source), 3, 3)).copy()
@@ -285,14 +290,14 @@ class TranslationMap:
         for part in groups:
             items = chosen[part]
             b = int(plan.batch_of[items[0]])
-            constant = self.constant[items]
+            constant = self.constant[items] if self.offset_constants else None
             linear = None if self.linear is None else self.linear[items]
             parts.append(
                 _Part(
                     None if b < 0 else plan.batches[b],
                     np.arange(len(items)) if b < 0 else plan.row_of[items],
                     self.source[items],
-                    constant if constant.any() else None,
+                    constant if constant is not None and constant.any() else None,
                     None if linear is None or (linear == _EYE3).all() else linear,
                     [plan.items[i] for i in items.tolist()] if b < 0 else None,
                 )
