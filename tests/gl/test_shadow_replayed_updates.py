@@ -363,3 +363,27 @@ def test_a_shadowmaps_technique_replays_and_follows_its_settings(where):
             image = e.render(root)
             assert e.stats["replayed"]
             same_as_fresh(e, image, root)
+
+
+def test_alpha_tested_casters_follow_their_texture():
+    """Casters cut out by an alpha test of their texture (the depth-only draw binds the texture): moved, their
+    texture's image replaced, moved again, each after a steady frame: the maps and the picture are a fresh
+    engine's (a recorded draw would bind a texture made again for the new image: such draws are not kept)."""
+    scene, nodes, box = grid_scene()
+    checker = np.zeros((8, 8, 4), np.uint8)
+    checker[..., :3] = 255
+    checker[..., 3] = np.where((np.indices((8, 8)).sum(axis=0) % 2) == 0, 255, 0)
+    texture = om.Texture(checker, filter="nearest", mipmap=False)
+    group = scene.add(om.Node("cutouts", [texture, om.Color(1, 1, 1), om.gl.AlphaTest("greater", 0.5)]))
+    cut = [group.add(om.Node(f"c{i}", [om.Translation(-1.5 + i, 2.6, 0.5), om.Box(size=0.8)])) for i in range(4)]
+    with engine() as e:
+        image = steady_then(e, scene, lambda: cut[1].items[0].__setattr__("offset", (-0.4, 2.6, 0.6)))
+        same_as_fresh(e, image, scene)
+        solid = checker.copy()
+        solid[..., 3] = 255
+        image = steady_then(e, scene, lambda: texture.__setattr__("image", solid))
+        same_as_fresh(e, image, scene)
+        image = steady_then(e, scene, lambda: cut[2].items[0].__setattr__("offset", (0.6, 2.5, 0.6)))
+        same_as_fresh(e, image, scene)
+        image = steady_then(e, scene, lambda: cut[2].items[0].__setattr__("offset", (0.7, 2.5, 0.6)))
+        same_as_fresh(e, image, scene)

@@ -577,7 +577,7 @@ class FrameRunner:
         """Run ``technique`` over ``scope`` as :meth:`run` does while recording its draws; returns the draw calls
         and, when it ran one pass that draws the opaque batches of its scope (``scopes="items"``, no select,
         mask, full-screen or own draw) and every draw can be issued again as recorded, a
-        :class:`~.plan.RecordedPass` for :meth:`replay_draws` (else None).
+        :class:`~.plan.RecordedPass` for :meth:`replay_draws` (else None; draws that bind textures are not kept).
 
         For a stage that redraws a part of its target frame after frame (the shadow maps' partial updates):
         only while a frame is drawn and not recorded itself (a stage's ``follow_rows``)."""
@@ -607,8 +607,8 @@ class FrameRunner:
         keys = []
         for op in recorder.ops:
             key = redraw_key(op.batch) if op.batch is not None else None
-            if key is None or op.n != op.batch.size or op.raster[ScissorTest.index] != box:
-                return calls, None
+            if key is None or op.n != op.batch.size or op.raster[ScissorTest.index] != box or op.textures:
+                return calls, None  # (textures: an alpha-tested caster's, made again when its image changes)
             keys.append(key)
         return calls, RecordedPass(description, recorder.ops, keys)
 
