@@ -387,3 +387,35 @@ def test_alpha_tested_casters_follow_their_texture():
         same_as_fresh(e, image, scene)
         image = steady_then(e, scene, lambda: cut[2].items[0].__setattr__("offset", (0.7, 2.5, 0.6)))
         same_as_fresh(e, image, scene)
+
+
+def test_many_moved_rows_keep_the_bounds_and_the_rows_on_them_exact():
+    """Every caster moved (the render index makes every row's box again, counting the rows on each side of the
+    bounds while it makes them), then a few at a time: the casters' bounds are those computed afresh and the
+    counts of rows on each bound are the rows whose boxes lie there, frame after frame."""
+    from omnirender.gl.techniques.shadows import caster_bounds
+
+    scene, nodes, _ = grid_scene()
+    rng = np.random.default_rng(4)
+    with engine() as e:
+        steady_then(e, scene, lambda: None)
+        index = e.index
+        for frame in range(8):
+            picked = range(len(nodes)) if frame % 2 == 0 else rng.choice(len(nodes), size=3, replace=False)
+            for k in picked:
+                x, y, z = nodes[k].items[0].offset
+                step = 6.0 if frame % 4 == 0 else 0.2  # now and then beyond the floor: bounds of casters alone
+                nodes[k].items[0].offset = (x + rng.uniform(-step, step), y, z + rng.uniform(-step, step))
+            e.render(scene)
+            bounds = index.caster_bounds()[0]
+            fresh = caster_bounds(e.root_scope)
+            np.testing.assert_array_equal(bounds[0], fresh[0])
+            np.testing.assert_array_equal(bounds[1], fresh[1])
+            low, high = [0, 0, 0], [0, 0, 0]
+            for batch in {it.slot[0] for it in index.items() if it.slot is not None}:
+                a, b = index._batch_boxes(batch)
+                for k in range(3):
+                    low[k] += int(np.count_nonzero(a[:, k] == bounds[0][k]))
+                    high[k] += int(np.count_nonzero(b[:, k] == bounds[1][k]))
+            assert index._extremes == (low, high)
+            e.render(scene)

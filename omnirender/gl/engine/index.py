@@ -82,8 +82,9 @@ class RenderIndex:
         #: with the casters' bounds: per axis, how many batch rows' boxes lie on the lower and on the upper bound
         #: (a row leaving the bounds shrinks them only when it was the last there); None: not counted
         self._extremes: tuple[list[int], list[int]] | None = None
-        #: id(batch) -> (batch, lo, hi): each row's world box, kept up to date row by row
-        self._boxes: dict[int, tuple[Any, np.ndarray, np.ndarray]] = {}
+        #: id(batch) -> (batch, lo, hi, extremes): each row's world box, kept up to date row by row, and while
+        #: the boxes are as made, per axis their least and greatest value with the rows on them (else None)
+        self._boxes: dict[int, tuple[Any, np.ndarray, np.ndarray, Any]] = {}
         #: the casters' changed boxes since the shadow stage last read them; None: everything changed
         self._journal: list[CasterChange] | None = None
         self._journal_rows = 0
@@ -129,7 +130,7 @@ class RenderIndex:
             if not follow and 2 * (len(where) if count is None else count) > len(batch.rows):
                 # most rows moved and no old place is needed: every row's box, read from the rows as they lie
                 # (no gather of the moved rows and scatter of their boxes; the others' come out the same)
-                boxes[id(batch)] = (batch, *row_boxes(batch.geometry, batch.rows, spare=True))
+                boxes[id(batch)] = _kept_boxes(batch)
                 continue
             # a run of rows (a bound array's) stays a slice: views and block copies, not gathers of every row
             lo, hi = row_boxes(batch.geometry, batch.rows[where])
@@ -143,8 +144,10 @@ class RenderIndex:
                     self._note(CasterChange(batch, lo, hi, True, where))
             found[1][where] = lo
             found[2][where] = hi
+            if found[3] is not None:
+                boxes[id(batch)] = (batch, found[1], found[2], None)  # (their extremes are not known now)
 
-    def _moved_few(self, batch: Any, found: tuple[Any, np.ndarray, np.ndarray], where: np.ndarray) -> None:
+    def _moved_few(self, batch: Any, found: tuple[Any, np.ndarray, np.ndarray, Any], where: np.ndarray) -> None:
         """:meth:`moved` of a few rows ``where`` of a shadow-casting batch whose boxes ``found`` are kept and whose
         moves the journal follows: the old and new boxes as lists of floats (the journal takes them so)."""
         rows = batch.rows
@@ -160,6 +163,8 @@ class RenderIndex:
         for i, a, b in zip(places, lows, highs, strict=True):
             store_lo[i] = a
             store_hi[i] = b
+        if found[3] is not None:
+            self._boxes[id(batch)] = (batch, store_lo, store_hi, None)  # (their extremes are not known now)
 
     def _follow_casters(self, old: tuple[Any, Any] | None, new: tuple[Any, Any] | None) -> None:
         """Caster rows left the boxes ``old`` and took ``new`` ((lo, hi) (N, 3) arrays, lists of [x, y, z] lists
@@ -242,7 +247,7 @@ class RenderIndex:
                 if lo is not None:
                     lo, hi = _appended(lo, a), _appended(hi, b)
         if lo is not None and len(lo) == len(batch.rows):
-            self._boxes[id(batch)] = (batch, lo, hi)
+            self._boxes[id(batch)] = (batch, lo, hi, None)
         else:
             self._boxes.pop(id(batch), None)
 
@@ -357,7 +362,12 @@ class RenderIndex:
                 for batch in part.batches:
                     if batch.items and len(batch.rows) and not batch.items[0].transparent and casts_shadows(batch):
                         a, b = self._batch_boxes(batch)
+                        extremes = self._boxes[id(batch)][3]
                         for k in range(3):
+                            if extremes is not None:  # (counted when the boxes were made)
+                                low[k] += extremes[1][k] if extremes[0][k] == lo[k] else 0
+                                high[k] += extremes[3][k] if extremes[2][k] == hi[k] else 0
+                                continue
                             low[k] += int(np.count_nonzero(a[:, k] == lo[k]))
                             high[k] += int(np.count_nonzero(b[:, k] == hi[k]))
         return low, high
@@ -373,7 +383,7 @@ class RenderIndex:
 
         if self.root is None:
             return None
-        boxes: list[tuple[np.ndarray, np.ndarray]] = []
+        boxes: list[tuple[np.ndarray, np.ndarray, Any]] = []
         for scope in self.root.walk():
             if scope.parts is None:  # not planned (not installed): item by item
                 for item in scope.items():
@@ -385,15 +395,15 @@ class RenderIndex:
                     continue
                 for batch in part.batches:  # a batch's items share geometry and state: one test each
                     if batch.items and len(batch.rows) and keep(batch.items[0]):
-                        boxes.append(self._batch_boxes(batch))
+                        boxes.append((*self._batch_boxes(batch), self._boxes[id(batch)][3]))
                 for item in part.others:
                     if keep(item):
                         add(item.geometry, item.rows())
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
-        for a, b in boxes:
-            lo = np.minimum(lo, _column_min(a))
-            hi = np.maximum(hi, _column_max(b))
+        for a, b, extremes in boxes:
+            lo = np.minimum(lo, _column_min(a) if extremes is None else extremes[0])
+            hi = np.maximum(hi, _column_max(b) if extremes is None else extremes[2])
         for geometry, rows in parts.values():
             found = rows_bounds(geometry, rows[0] if len(rows) == 1 else np.concatenate(rows))
             if found is not None:
@@ -406,8 +416,7 @@ class RenderIndex:
     def _batch_boxes(self, batch: Any) -> tuple[np.ndarray, np.ndarray]:
         found = self._boxes.get(id(batch))
         if found is None or found[0] is not batch or len(found[1]) != len(batch.rows):
-            lo, hi = row_boxes(batch.geometry, batch.rows, spare=True)
-            found = self._boxes[id(batch)] = (batch, lo, hi)
+            found = self._boxes[id(batch)] = _kept_boxes(batch)
         return found[1], found[2]
 
 
@@ -468,6 +477,15 @@ def _column_max(a: np.ndarray) -> np.ndarray:
     return np.array([a[:, 0].max(), a[:, 1].max(), a[:, 2].max()])
 
 
+def _kept_boxes(batch: Any) -> tuple[Any, np.ndarray, np.ndarray, Any]:
+    """The render index's entry of ``batch``'s row boxes: (batch, lo, hi, extremes) with spare rows, extremes
+    counted while the boxes are made (many rows; a few: None, counted when asked)."""
+    rows = batch.rows
+    if len(rows) <= _FEW_ROWS:
+        return (batch, *row_boxes(batch.geometry, rows), None)
+    return (batch, *_many_boxes(batch.geometry, rows, True, True))
+
+
 def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Each row's world box of ``geometry``: ``(lo, hi)``, both (N, 3) (``|M| e`` about the transformed centre).
 
@@ -478,6 +496,16 @@ def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.
     """
     if len(rows) <= _FEW_ROWS:
         return _few_row_boxes(geometry, rows)
+    lo, hi, _ = _many_boxes(geometry, rows, spare, False)
+    return lo, hi
+
+
+def _many_boxes(
+    geometry: Any, rows: np.ndarray, spare: bool, extremes: bool
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, list[int], np.ndarray, list[int]] | None]:
+    """:func:`row_boxes` of many rows; with ``extremes`` also, per axis, the least lower and the greatest upper
+    value and how many rows have them ((mins, counts, maxs, counts)), taken from contiguous columns before they
+    are written into the (strided) boxes."""
     b0, b1 = (np.asarray(b, dtype=np.float64) for b in geometry.bounds)
     (c0, c1, c2), (e0, e1, e2) = ((b0 + b1) / 2.0).tolist(), ((b1 - b0) / 2.0).tolist()
     # each row holds M transposed: M[k, j] is column 4 j + k of the model; the model columns are copied once into
@@ -493,6 +521,9 @@ def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.
         hi = np.empty((3, n)).T
     center, half, term = np.empty(n), np.empty(n), np.empty(n)
     mul, add = np.multiply, np.add
+    found: tuple[np.ndarray, list[int], np.ndarray, list[int]] | None = None
+    if extremes:
+        found = (np.empty(3), [0, 0, 0], np.empty(3), [0, 0, 0])
     for k in range(3):
         mul(m[k], c0, out=center)
         add(center, mul(m[4 + k], c1, out=term), out=center)
@@ -501,9 +532,17 @@ def row_boxes(geometry: Any, rows: np.ndarray, spare: bool = False) -> tuple[np.
         mul(np.abs(m[k], out=half), e0, out=half)
         add(half, mul(np.abs(m[4 + k], out=term), e1, out=term), out=half)
         add(half, mul(np.abs(m[8 + k], out=term), e2, out=term), out=half)
-        np.subtract(center, half, out=lo[:, k])
-        np.add(center, half, out=hi[:, k])
-    return lo, hi
+        if found is None:
+            np.subtract(center, half, out=lo[:, k])
+            np.add(center, half, out=hi[:, k])
+            continue
+        for column, sign, at in ((lo, np.subtract, 0), (hi, np.add, 2)):
+            sign(center, half, out=term)
+            column[:, k] = term
+            value = term.min() if at == 0 else term.max()
+            found[at][k] = value
+            found[at + 1][k] = int(np.count_nonzero(term == value))
+    return lo, hi, found
 
 
 #: rows up to which :func:`row_boxes` computes in Python floats (numpy's per-call cost is more for so few)
