@@ -203,14 +203,22 @@ def test_a_slow_renderer_never_slows_the_application_loop():
         with RenderThreads(scene, [client]) as threads:
             loaded, longest = run_app(frames, threads, materials, moves)
             assert client.wait_for(frames)
-        # latest wins: the client skipped most snapshots, drew the last one, never one twice or out of order
-        assert client.dropped > frames / 2 and len(drawn) < frames / 3 and drawn[-1] == frames
-        assert drawn == sorted(set(drawn))
-        assert longest < 0.05  # publishing never waits for the 100 ms renderer
-        results.append((alone, loaded))
-        if loaded >= 0.9 * min(alone, 60.0):
+        # never one snapshot twice or out of order, and the last one drawn: whatever the machine's load
+        assert drawn == sorted(set(drawn)) and drawn[-1] == frames
+        # timing, retried with the rest: latest wins (the client skipped most snapshots), publishing never
+        # waits for the 100 ms renderer, and the loop keeps its rate
+        timing = {
+            "skipped most": client.dropped > frames / 2 and len(drawn) < frames / 3,
+            "publishing never waited": longest < 0.05,
+            "rate kept": loaded >= 0.9 * min(alone, 60.0),
+        }
+        results.append((round(alone, 1), round(loaded, 1), round(longest, 3), client.dropped, len(drawn)))
+        if all(timing.values()):
             return
-    pytest.fail(f"the application loop slowed by more than 10 % beside the renderer: (alone, loaded) {results}")
+    pytest.fail(
+        "beside a 100 ms renderer the application loop slowed by more than 10 %, waited, or the client drew "
+        f"too many snapshots in every attempt: (alone Hz, loaded Hz, longest publish s, dropped, drawn) {results}"
+    )
 
 
 def test_render_client_errors_reach_the_application():
