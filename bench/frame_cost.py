@@ -215,7 +215,11 @@ def bench_nodes(n: int, frames: int, shadows: bool) -> dict[str, float]:
 def steady_gpu_time(engine: GLEngine, render: Callable[[], object], frames: int = 5) -> float:
     """The GPU time of a steady frame (a GL timer query around it; median of ``frames``), in seconds: on a GPU
     it tells the GPU's speed during the block (the same frame took 0.57-2.5 ms on an H200 as its clocks
-    changed), 0 under the no-op driver."""
+    changed), 0 under the no-op driver and on software rasterisers."""
+    from omnirender.gl.engine.drawer import sorts_instances
+
+    if sorts_instances(str(engine.ctx.info.get("GL_RENDERER", ""))):
+        return 0.0  # a software rasteriser: its "GPU" is the CPU that drew the frame, nothing to tell apart
     times = []
     for _ in range(frames):
         query = engine.ctx.query(time=True)
