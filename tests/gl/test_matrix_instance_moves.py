@@ -40,6 +40,12 @@ def colours(n: int, seed: int = 4) -> np.ndarray:
     return np.random.default_rng(seed).uniform(0.15, 1.0, (n, 3))
 
 
+def lit(*items: object) -> om.Node:
+    """A scene of ``items`` seen from above and in front, under a directional light."""
+    view = om.Camera.look_at((0, 4, 9), (0, 0, 0), fov=50)
+    return om.Node("scene", [view, om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), *items])
+
+
 @pytest.fixture
 def paths(monkeypatch):
     """How the engine made the set's rows: 'full' (``instance_rows``) or 'moved' (``moved_instance_rows``)."""
@@ -129,10 +135,7 @@ def test_a_matrix_that_mirrors_or_bad_matrices_go_through_the_full_path(paths):
     n = 30
     matrices = spinning(n, 0.0)
     boxes = om.InstanceSet(om.Box(size=(0.6, 0.3, 0.4)), matrices, colors=colours(n))
-    scene = om.Node(
-        "scene",
-        [om.Camera.look_at((0, 4, 9), (0, 0, 0), fov=50), om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), boxes],
-    )
+    scene = lit(boxes)
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         e.render(scene)
         paths.clear()
@@ -174,10 +177,7 @@ def test_new_colours_or_another_mask_make_the_rows_again(paths):
     visible = np.ones(n, bool)
     visible[::5] = False
     boxes = om.InstanceSet(om.Box(size=0.4), matrices, colors=tint, visible=visible)
-    scene = om.Node(
-        "scene",
-        [om.Camera.look_at((0, 4, 9), (0, 0, 0), fov=50), om.DirectionalLight(direction=(-0.4, -0.6, -1.0)), boxes],
-    )
+    scene = lit(boxes)
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         e.render(scene)
         paths.clear()
@@ -207,14 +207,7 @@ def test_a_set_under_a_mirroring_transform_stays_on_the_moved_path(paths):
     n = 40
     matrices = spinning(n, 0.0)
     boxes = om.InstanceSet(om.Box(size=(0.6, 0.3, 0.4), center=(0.2, 0.0, 0.0)), matrices, colors=colours(n))
-    scene = om.Node(
-        "scene",
-        [
-            om.Camera.look_at((0, 4, 9), (0, 0, 0), fov=50),
-            om.DirectionalLight(direction=(-0.4, -0.6, -1.0)),
-            om.Node("mirrored", [om.Scaling((-1.0, 1.0, 1.0)), boxes]),
-        ],
-    )
+    scene = lit(om.Node("mirrored", [om.Scaling((-1.0, 1.0, 1.0)), boxes]))
     with GLEngine(size=SIZE, samples=0, shadows=False) as e:
         e.render(scene)
         paths.clear()

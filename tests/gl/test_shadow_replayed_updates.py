@@ -18,6 +18,8 @@ import pytest
 
 import omnirender as om
 
+from .test_shadow_updates import atlas, engine
+
 pytestmark = pytest.mark.gl
 
 SIZE = (96, 72)
@@ -47,19 +49,21 @@ def grid_scene(light: om.Light | None = None, count: int = 72) -> tuple[om.Node,
     return scene, nodes, box
 
 
-def engine():
-    from omnirender.gl import GLEngine
+def assert_boxes_exact(e, batch) -> tuple[np.ndarray, np.ndarray]:
+    """The render index's boxes of ``batch``'s rows and its caster bounds equal ones computed afresh; returns the
+    rows' boxes (lows, highs)."""
+    from omnirender.gl.engine.index import row_boxes
+    from omnirender.gl.techniques.shadows import caster_bounds
 
-    return GLEngine(size=SIZE, samples=0)
-
-
-def atlas(e) -> np.ndarray:
-    from omnirender.gl.techniques.shadows import ATLAS
-
-    with e.current():  # another engine's context may be current (a fresh engine's)
-        target = e.target(ATLAS)
-        w, h = target.size
-        return np.frombuffer(target.depth.read(), np.float32).reshape(h, w).copy()
+    lo, hi = e.index._batch_boxes(batch)
+    want_lo, want_hi = row_boxes(batch.geometry, batch.rows)
+    np.testing.assert_array_equal(lo, want_lo)
+    np.testing.assert_array_equal(hi, want_hi)
+    bounds = e.index.caster_bounds()[0]
+    fresh = caster_bounds(e.root_scope)
+    np.testing.assert_array_equal(bounds[0], fresh[0])
+    np.testing.assert_array_equal(bounds[1], fresh[1])
+    return want_lo, want_hi
 
 
 def same_as_fresh(e, image, scene) -> None:
@@ -238,8 +242,6 @@ def test_a_few_moved_rows_keep_the_index_boxes_bounds_and_journal_exact():
     """One to four casters moved per frame (the render index follows them in Python floats): every row's kept
     box is the box computed from the rows, the casters' bounds are those computed afresh, and the journal's old
     and new boxes are where the rows were and are, frame after frame (also moves onto and off the bounds)."""
-    from omnirender.gl.engine.index import row_boxes
-    from omnirender.gl.techniques.shadows import caster_bounds
 
     scene, nodes, _ = grid_scene()
     rng = np.random.default_rng(3)
@@ -256,14 +258,7 @@ def test_a_few_moved_rows_keep_the_index_boxes_bounds_and_journal_exact():
                 nodes[k].items[0].offset = (x + rng.uniform(-far, far), y + rng.uniform(-0.2, 0.2), z)
             e.compile(scene)
             journal = index.take_caster_changes()
-            lo, hi = index._batch_boxes(batch)
-            want_lo, want_hi = row_boxes(batch.geometry, batch.rows)
-            np.testing.assert_array_equal(lo, want_lo)
-            np.testing.assert_array_equal(hi, want_hi)
-            bounds = index.caster_bounds()[0]
-            fresh = caster_bounds(e.root_scope)
-            np.testing.assert_array_equal(bounds[0], fresh[0])
-            np.testing.assert_array_equal(bounds[1], fresh[1])
+            want_lo, want_hi = assert_boxes_exact(e, batch)
             assert journal is not None and len(journal) == 2
             left, took = journal
             rows = [int(r) for r in left.rows]
@@ -304,8 +299,6 @@ def test_splices_keep_the_index_boxes_and_bounds_exact():
     """Nodes removed and added frame after frame (the render index follows the removed and appended rows' boxes
     in Python floats): every kept box is the box computed from the rows and the casters' bounds are those
     computed afresh, also when the row that leaves was the only one on the bounds."""
-    from omnirender.gl.engine.index import row_boxes
-    from omnirender.gl.techniques.shadows import caster_bounds
 
     scene, nodes, box = grid_scene()
     rng = np.random.default_rng(9)
@@ -326,14 +319,7 @@ def test_splices_keep_the_index_boxes_and_bounds_exact():
             e.render(scene)
             assert e.stats["compiled"] == "subtrees"
             batch = next(it.slot[0] for it in index.items() if it.slot is not None and it.slot[0].size > 60)
-            lo, hi = index._batch_boxes(batch)
-            want_lo, want_hi = row_boxes(batch.geometry, batch.rows)
-            np.testing.assert_array_equal(lo, want_lo)
-            np.testing.assert_array_equal(hi, want_hi)
-            bounds = index.caster_bounds()[0]
-            fresh = caster_bounds(e.root_scope)
-            np.testing.assert_array_equal(bounds[0], fresh[0])
-            np.testing.assert_array_equal(bounds[1], fresh[1])
+            assert_boxes_exact(e, batch)
             e.render(scene)
 
 

@@ -300,14 +300,7 @@ class BatchDrawer:
         n = batch.size
         if batch.items and batch.items[0].instances is not None:
             return self._upload_moved_instances(batch, n)
-        if (
-            n <= 1
-            or batch.buffer is None
-            or batch.layout is None
-            or batch.offsets is not None
-            or batch.capacity < n
-            or batch.geometry.buffers is None
-        ):
+        if not _packed(batch, n):
             return False
         if not (batch.sparse or batch.dirty is not None):
             return True
@@ -337,14 +330,9 @@ class BatchDrawer:
         (``FrameRunner.replay_draws``)."""
         n = batch.size
         if (
-            n <= 1
-            or batch.buffer is None
-            or batch.layout is None
-            or batch.offsets is not None
-            or batch.capacity < n
+            not _packed(batch, n)
             or batch.sparse
             or batch.dirty is not None
-            or batch.geometry.buffers is None
             or self.drawers.get(batch.state.kind) is not None
             or (batch.items and batch.items[0].instances is not None)
         ):
@@ -808,6 +796,19 @@ def _order_aged(batch: Batch) -> bool:
     one sort per so many moves)."""
     kept = batch.depth_order
     return kept is not None and batch.version - kept[2] >= RESORT_AFTER
+
+
+def _packed(batch: Batch, n: int) -> bool:
+    """Whether ``batch``'s ``n`` rows are drawn from its own packed instance buffer (more than one row, a layout,
+    room for them all, no separate offsets buffer, geometry uploaded): the rows a recorded draw reads."""
+    return (
+        n > 1
+        and batch.buffer is not None
+        and batch.layout is not None
+        and batch.offsets is None
+        and batch.capacity >= n
+        and batch.geometry.buffers is not None
+    )
 
 
 def _may_enter_view(batch: Batch, n: int) -> bool:
